@@ -1,0 +1,110 @@
+//! Assembly: move an approximate initial guess onto `Phi(q, t) = 0` with the least change, holding
+//! the coordinates the user marks as given; then make the velocities consistent,
+//! `Phi_q qdot = nu`, again with the least change and the given velocities held.
+//!
+//! Each Newton step is the minimum-norm solution of `Phi_q,F dq_F = -Phi` over the free
+//! coordinates `F` (Gauss-Newton on an underdetermined system, Haug 1989 section 4.6), computed by
+//! the SVD so that redundant rows and remaining freedom are both handled; a backtracking line
+//! search on `|Phi|_2` keeps a rough guess from diverging.
+
+use super::{min_norm_solve, select_columns};
+use crate::error::{Error, Result};
+use crate::system::System;
+use faer::Mat;
+
+/// Newton iterations allowed from a rough guess.
+const MAX_ITERATIONS: usize = 60;
+/// Step halvings tried by the line search before a full step is taken anyway.
+const MAX_HALVINGS: usize = 12;
+
+/// An assembled configuration and how far it moved from the guess.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Assembly {
+    /// (n) assembled positions.
+    pub q: Vec<f64>,
+    /// (n) consistent velocities.
+    pub qdot: Vec<f64>,
+    /// Newton iterations taken.
+    pub iterations: usize,
+    /// Max-norm of `Phi` at `q`.
+    pub residual: f64,
+    /// Max-norm of `Phi_q qdot - nu` at `q`.
+    pub velocity_residual: f64,
+    /// (n) `q - q_guess`.
+    pub change: Vec<f64>,
+}
+
+/// Assemble `sys` at time `t` from `q0`, `qdot0`. `given: (2n)` marks the positions (first `n`)
+/// and velocities (last `n`) to hold. `tolerance` is the max-norm of `Phi` to reach.
+pub fn assemble(sys: &mut System<'_>, q0: &[f64], qdot0: &[f64], given: &[bool], t: f64, tolerance: f64) -> Result<Assembly> {
+    let (n, m) = (sys.n, sys.m);
+    let free: Vec<usize> = (0..n).filter(|&k| !given[k]).collect();
+    let mut q = q0.to_vec();
+    let mut phi = vec![0.0; m];
+    let mut jac = Mat::<f64>::zeros(m, n);
+    sys.phi(&q, t, &mut phi);
+    let mut iterations = 0;
+    let norm2 = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let maxabs = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let fail = |sys: &System<'_>, phi: &[f64], iterations: usize, hint: &str| {
+        let (row, residual) = sys.worst_row(phi);
+        Error::Assembly { iterations, residual, row, hint: hint.to_string() }
+    };
+    while maxabs(&phi) > tolerance {
+        if iterations == MAX_ITERATIONS || !phi.iter().all(|x| x.is_finite()) {
+            return Err(fail(sys, &phi, iterations, "the initial guess may be too far from an assembled configuration, or the joints, drivers and given coordinates cannot all hold at once (check lengths, points and given values)"));
+        }
+        iterations += 1;
+        sys.jacobian_dense(&q, t, jac.as_mut());
+        let jf = select_columns(jac.as_ref(), &free);
+        let rhs: Vec<f64> = phi.iter().map(|x| -x).collect();
+        let Some(dq) = min_norm_solve(jf.as_ref(), &rhs) else {
+            return Err(fail(sys, &phi, iterations, "the Jacobian is not finite at the guess"));
+        };
+        let before = norm2(&phi);
+        let mut alpha = 1.0;
+        let mut trial = q.clone();
+        for _ in 0..=MAX_HALVINGS {
+            trial.copy_from_slice(&q);
+            for (k, &c) in free.iter().enumerate() {
+                trial[c] += alpha * dq[k];
+            }
+            sys.phi(&trial, t, &mut phi);
+            if norm2(&phi) < before {
+                break;
+            }
+            alpha *= 0.5;
+        }
+        if norm2(&phi) >= before {
+            return Err(fail(sys, &phi, iterations, "Newton cannot reduce the residual further: the constraints, drivers and given coordinates conflict, or the guess is near a singular position"));
+        }
+        q = trial;
+    }
+    let residual = maxabs(&phi);
+    // Velocities: least change from the guess, given ones held.
+    sys.jacobian_dense(&q, t, jac.as_mut());
+    let mut nu = vec![0.0; m];
+    sys.nu(&q, t, &mut nu);
+    let mut qdot = qdot0.to_vec();
+    let free_v: Vec<usize> = (0..n).filter(|&k| !given[n + k]).collect();
+    let r: Vec<f64> = (0..m).map(|i| nu[i] - (0..n).map(|j| jac[(i, j)] * qdot[j]).sum::<f64>()).collect();
+    let jf = select_columns(jac.as_ref(), &free_v);
+    let dv = min_norm_solve(jf.as_ref(), &r).ok_or_else(|| fail(sys, &phi, iterations, "the Jacobian is not finite"))?;
+    for (k, &c) in free_v.iter().enumerate() {
+        qdot[c] += dv[k];
+    }
+    let vres: Vec<f64> = (0..m).map(|i| (0..n).map(|j| jac[(i, j)] * qdot[j]).sum::<f64>() - nu[i]).collect();
+    let velocity_residual = maxabs(&vres);
+    let scale = 1.0 + maxabs(&qdot);
+    if velocity_residual > 1e-8 * scale {
+        let (row, res) = sys.worst_row(&vres);
+        return Err(Error::Assembly {
+            iterations,
+            residual: res,
+            row,
+            hint: "the given velocities conflict with the joints and drivers (velocity equations Phi_q qdot = nu cannot hold)".into(),
+        });
+    }
+    let change = q.iter().zip(q0).map(|(a, b)| a - b).collect();
+    Ok(Assembly { q, qdot, iterations, residual, velocity_residual, change })
+}

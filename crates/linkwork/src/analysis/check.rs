@@ -1,0 +1,117 @@
+//! Checks of a mechanism: degrees of freedom from the numerical rank of `Phi_q` at the assembled
+//! configuration (and Gruebler's count beside it), and the redundant rows by name.
+//!
+//! Rows are examined in model order (joints in file order, then drivers): a row that is a linear
+//! combination of the rows before it is redundant. This names the later of two parallel links as
+//! the redundant one, as a designer reading the file would.
+
+use super::{assemble, Assembly, RANK_TOLERANCE};
+use crate::error::{Error, Result, RowName};
+use crate::model::Model;
+use crate::system::System;
+use faer::{Mat, MatRef};
+
+/// Degrees of freedom and redundancy of one set of active constraints.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SystemCheck {
+    /// Which drivers were active.
+    pub drivers: Vec<String>,
+    /// Number of equations `m`.
+    pub equations: usize,
+    /// Gruebler's count `n - m` (ignores redundancy).
+    pub gruebler_dof: i64,
+    /// Rank of `Phi_q` at the assembled configuration.
+    pub rank: usize,
+    /// Degrees of freedom `n - rank`.
+    pub dof: usize,
+    /// Rows that depend on earlier rows.
+    pub redundant: Vec<RowName>,
+    /// The assembled configuration.
+    pub assembly: Assembly,
+}
+
+/// Everything `linkwork check` reports.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct CheckReport {
+    /// Model title.
+    pub model: String,
+    /// Body names.
+    pub bodies: Vec<String>,
+    /// Number of coordinates `n = 3 bodies`.
+    pub coordinates: usize,
+    /// The mechanism alone (joints, no drivers).
+    pub mechanism: SystemCheck,
+    /// Each analysis, with its drivers.
+    pub analyses: Vec<(String, SystemCheck)>,
+}
+
+/// Greedy independent rows of `jac (m x n)` in order: modified Gram-Schmidt, twice for accuracy.
+/// Returns `(independent, redundant)` row indices.
+pub fn independent_rows(jac: MatRef<'_, f64>) -> (Vec<usize>, Vec<usize>) {
+    let (m, n) = (jac.nrows(), jac.ncols());
+    let scale = (0..m).map(|i| (0..n).map(|j| jac[(i, j)].powi(2)).sum::<f64>().sqrt()).fold(0.0f64, f64::max);
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    let (mut keep, mut drop) = (Vec::new(), Vec::new());
+    for i in 0..m {
+        let mut v: Vec<f64> = (0..n).map(|j| jac[(i, j)]).collect();
+        let norm0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        for _ in 0..2 {
+            for b in &basis {
+                let d: f64 = v.iter().zip(b).map(|(x, y)| x * y).sum();
+                v.iter_mut().zip(b).for_each(|(x, y)| *x -= d * y);
+            }
+        }
+        let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if norm <= RANK_TOLERANCE.sqrt() * norm0.max(scale) || norm == 0.0 {
+            drop.push(i);
+        } else {
+            v.iter_mut().for_each(|x| *x /= norm);
+            basis.push(v);
+            keep.push(i);
+        }
+    }
+    (keep, drop)
+}
+
+/// Assemble the model with the joints and the given drivers and examine its Jacobian there.
+pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) -> Result<SystemCheck> {
+    let mut sys = System::new(model, drivers);
+    let n = model.n();
+    let given: Vec<bool> = if hold_given {
+        let pos = model.bodies.iter().flat_map(|b| [b.given[0], b.given[1], b.given[2]]);
+        let vel = model.bodies.iter().flat_map(|b| [b.given[3], b.given[4], b.given[5]]);
+        pos.chain(vel).collect()
+    } else {
+        vec![false; 2 * n]
+    };
+    let assembly = assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t, super::SolverSettings::default().tolerance)?;
+    let mut jac = Mat::<f64>::zeros(sys.m, n);
+    sys.jacobian_dense(&assembly.q, t, jac.as_mut());
+    let (keep, drop) = independent_rows(jac.as_ref());
+    Ok(SystemCheck {
+        drivers: drivers.iter().map(|&d| model.drivers[d].name.clone()).collect(),
+        equations: sys.m,
+        gruebler_dof: n as i64 - sys.m as i64,
+        rank: keep.len(),
+        dof: n - keep.len(),
+        redundant: drop.iter().map(|&r| sys.row_name(r)).collect(),
+        assembly,
+    })
+}
+
+/// Check the mechanism alone (given coordinates held) and with each analysis's drivers.
+pub fn check(model: &Model) -> Result<CheckReport> {
+    let mechanism = check_system(model, &[], true, 0.0)?;
+    let analyses = model
+        .analyses
+        .values()
+        .map(|a| Ok((a.name.clone(), check_system(model, &a.drivers, false, a.t_start)?)))
+        .collect::<Result<Vec<_>, Error>>()?;
+    Ok(CheckReport {
+        model: model.name.clone(),
+        bodies: model.bodies.iter().map(|b| b.name.clone()).collect(),
+        coordinates: model.n(),
+        mechanism,
+        analyses,
+    })
+}

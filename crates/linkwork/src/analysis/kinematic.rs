@@ -1,0 +1,342 @@
+//! Kinematic analysis of a fully driven mechanism (Haug 1989 chapter 4; Nikravesh 2018 chapter 8).
+//!
+//! At each output time: Newton-Raphson on `Phi(q, t) = 0` from the predictor
+//! `q + h qdot + h^2/2 qddot`, then the linear solves `Phi_q qdot = nu` and `Phi_q qddot = gamma`
+//! with the factorization of `Phi_q` at the converged position. Between output times the solver
+//! takes sub-steps: no body may turn more than `max_rotation` in one, and a sub-step whose Newton
+//! iteration fails, or whose correction is larger than half the predicted motion (a jump to the
+//! other assembly branch), is halved. The square system keeps the independent rows only; rows
+//! found redundant at assembly hold implicitly and are reported.
+//!
+//! One sparse symbolic factorization per analysis; one numeric factorization per sub-step (it
+//! also serves as the chord-Newton matrix of the next sub-step); nothing is allocated in the time
+//! loop except the growth of the output columns, reserved up front.
+
+use super::{assemble, independent_rows, Assembly};
+use crate::error::{Error, Problem, RowName};
+use crate::linalg::{FactorError, SparseLu};
+use crate::model::{Analysis, Model};
+use crate::results::{Failure, Results};
+use crate::system::{Pattern, System};
+use faer::Mat;
+
+/// What the kinematic solver did.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct KinematicStats {
+    /// Output points written (including the initial one).
+    pub output_points: usize,
+    /// Accepted sub-steps.
+    pub substeps: usize,
+    /// Rejected sub-steps (Newton failure or branch jump), each followed by halving.
+    pub rejected_substeps: usize,
+    /// Newton iterations in all attempts.
+    pub newton_iterations: usize,
+    /// Numeric LU factorizations.
+    pub factorizations: usize,
+    /// Largest `|Phi|` accepted at an output point.
+    pub max_residual: f64,
+    /// Largest 1-norm condition estimate of the driven Jacobian at an output point.
+    pub max_condition: f64,
+    /// Rows left out of the square system because they repeat earlier rows.
+    pub redundant_rows: Vec<RowName>,
+    /// Assembly at the start time.
+    pub assembly_iterations: usize,
+    /// Largest change assembly made to the initial guess.
+    pub assembly_max_change: f64,
+}
+
+/// Why a Newton attempt failed.
+struct NewtonFailure {
+    residual: f64,
+    row: usize,
+    iterations: usize,
+}
+
+/// State and buffers of one kinematic analysis.
+struct Solver<'m> {
+    sys: System<'m>,
+    /// (n) independent rows of the system, ascending.
+    rows: Vec<usize>,
+    lu: SparseLu,
+    /// (m) full residual / right-hand side buffer.
+    full: Vec<f64>,
+    /// (n) right-hand side in the independent rows.
+    rhs: Vec<f64>,
+    /// (n) position, velocity and acceleration at `t`.
+    q: Vec<f64>,
+    qdot: Vec<f64>,
+    qddot: Vec<f64>,
+    /// (n) Newton iterate of the sub-step being tried.
+    trial: Vec<f64>,
+    t: f64,
+    tolerance: f64,
+    max_iterations: usize,
+    stats: KinematicStats,
+}
+
+impl Solver<'_> {
+    fn factor_error(&self, e: FactorError) -> Error {
+        match e {
+            FactorError::StructurallySingular { column } => Error::Singular {
+                time: self.t,
+                rows: vec![],
+                detail: format!("no equation determines coordinate {column} (the driven Jacobian is structurally singular)"),
+            },
+            FactorError::OutOfMemory => Error::Io { path: String::new(), message: "out of memory while factorizing".into() },
+        }
+    }
+
+    /// Factorize `Phi_q` at `q`.
+    fn factor_at(&mut self, q_is_trial: bool, t: f64) -> Result<(), Error> {
+        let q = if q_is_trial { &self.trial } else { &self.q };
+        let (pattern, values) = self.lu.pattern_and_values();
+        pattern.fill(&mut self.sys, q, t, values);
+        self.stats.factorizations += 1;
+        self.lu.factor().map_err(|e| self.factor_error(e))
+    }
+
+    /// With `Phi_q` factorized at `(q, t)`: `qdot` from `nu` and `qddot` from `gamma`.
+    fn velocities(&mut self) {
+        self.sys.nu(&self.q, self.t, &mut self.full);
+        gather(&self.full, &self.rows, &mut self.rhs);
+        self.lu.solve(&mut self.rhs);
+        self.qdot.copy_from_slice(&self.rhs);
+        self.sys.gamma(&self.q, &self.qdot, self.t, &mut self.full);
+        gather(&self.full, &self.rows, &mut self.rhs);
+        self.lu.solve(&mut self.rhs);
+        self.qddot.copy_from_slice(&self.rhs);
+    }
+
+    /// Newton on `trial` at time `t`, starting from the current factorization (chord steps).
+    /// The Jacobian is refactorized at the iterate when the observed contraction `rho` would need
+    /// more than three further chord steps to reach the tolerance (`r rho^3 > tol`): a chord step
+    /// costs a residual and a solve, a refactorization several solves.
+    fn newton(&mut self, t: f64) -> Result<Result<(), NewtonFailure>, Error> {
+        let mut previous = f64::INFINITY;
+        for it in 0..=self.max_iterations {
+            self.sys.phi(&self.trial, t, &mut self.full);
+            gather(&self.full, &self.rows, &mut self.rhs);
+            let (row, r) = worst(&self.rhs);
+            if r <= self.tolerance {
+                self.stats.max_residual = self.stats.max_residual.max(r);
+                return Ok(Ok(()));
+            }
+            if it == self.max_iterations || !r.is_finite() || r > 1e3 * previous.min(1e300) {
+                return Ok(Err(NewtonFailure { residual: r, row: self.rows[row], iterations: it }));
+            }
+            let rho = r / previous;
+            if r * rho * rho * rho > self.tolerance {
+                self.factor_at(true, t)?;
+            }
+            previous = r;
+            self.stats.newton_iterations += 1;
+            self.lu.solve(&mut self.rhs);
+            for (x, d) in self.trial.iter_mut().zip(&self.rhs) {
+                *x -= d;
+            }
+        }
+        unreachable!("the loop returns at it == max_iterations")
+    }
+
+    /// The rows of the smallest singular value of the driven Jacobian at `q`, and the ratio of
+    /// the smallest to the largest singular value.
+    fn diagnose(&mut self) -> (f64, Vec<RowName>) {
+        let n = self.sys.n;
+        let mut jac = Mat::<f64>::zeros(self.sys.m, n);
+        self.sys.jacobian_dense(&self.q, self.t, jac.as_mut());
+        let sq = Mat::from_fn(self.rows.len(), n, |i, j| jac[(self.rows[i], j)]);
+        let Ok(svd) = sq.svd() else { return (0.0, vec![]) };
+        let s = svd.S().column_vector();
+        let k = s.nrows() - 1; // singular values come in decreasing order
+        let ratio = if s[0] > 0.0 { s[k] / s[0] } else { 0.0 };
+        let u = svd.U();
+        let umax = (0..u.nrows()).map(|i| u[(i, k)].abs()).fold(0.0f64, f64::max);
+        let rows = (0..u.nrows()).filter(|&i| u[(i, k)].abs() >= 0.2 * umax).map(|i| self.sys.row_name(self.rows[i])).collect();
+        (ratio, rows)
+    }
+}
+
+/// `out[k] = full[rows[k]]`.
+fn gather(full: &[f64], rows: &[usize], out: &mut [f64]) {
+    for (o, &r) in out.iter_mut().zip(rows) {
+        *o = full[r];
+    }
+}
+
+/// Index and absolute value of the largest entry.
+fn worst(v: &[f64]) -> (usize, f64) {
+    v.iter().enumerate().fold((0, 0.0f64), |(bk, bx), (k, x)| if x.abs() > bx || x.is_nan() { (k, x.abs()) } else { (bk, bx) })
+}
+
+fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+}
+
+/// Run a kinematic analysis. On failure the results up to the last good output time are kept.
+pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
+    let mut results = Results::new(model, analysis);
+    let fail = |results: Results, error: Error| Box::new(Failure { error, results });
+    let settings = analysis.settings;
+    let n = model.n();
+    let mut sys = System::new(model, &analysis.drivers);
+    let t0 = analysis.t_start;
+    // The drivers determine every coordinate, so nothing is held: least change from the guess.
+    let given = vec![false; 2 * n];
+    let assembly: Assembly = match assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t0, settings.tolerance) {
+        Ok(a) => a,
+        Err(e) => return Err(fail(results, e)),
+    };
+    let mut jac = Mat::<f64>::zeros(sys.m, n);
+    sys.jacobian_dense(&assembly.q, t0, jac.as_mut());
+    let (rows, redundant) = independent_rows(jac.as_ref());
+    if rows.len() < n {
+        let dof = n - rows.len();
+        let problem = Problem::new(
+            format!("analyses.{}.drivers", analysis.name),
+            format!(
+                "a kinematic analysis needs a fully driven model, but {dof} degree(s) of freedom remain with these drivers ({n} coordinates, {} independent equations): add {dof} driver(s)",
+                rows.len()
+            ),
+        );
+        return Err(fail(results, Error::Model(vec![problem])));
+    }
+    let pattern = Pattern::new(&sys, &rows);
+    let lu = match SparseLu::new(pattern) {
+        Ok(lu) => lu,
+        Err(_) => return Err(fail(results, Error::Io { path: String::new(), message: "out of memory in the symbolic factorization".into() })),
+    };
+    let m = sys.m;
+    let mut s = Solver {
+        sys,
+        rows,
+        lu,
+        full: vec![0.0; m],
+        rhs: vec![0.0; n],
+        q: assembly.q.clone(),
+        qdot: vec![0.0; n],
+        qddot: vec![0.0; n],
+        trial: vec![0.0; n],
+        t: t0,
+        tolerance: settings.tolerance,
+        max_iterations: settings.max_iterations,
+        stats: KinematicStats {
+            redundant_rows: redundant.iter().map(|&r| jac_row_name(model, analysis, r)).collect(),
+            assembly_iterations: assembly.iterations,
+            assembly_max_change: assembly.change.iter().fold(0.0f64, |a, x| a.max(x.abs())),
+            max_residual: assembly.residual,
+            ..Default::default()
+        },
+    };
+    let h = analysis.step;
+    let count = ((analysis.t_end - t0) / h + 1e-9).floor() as usize;
+    let mut times: Vec<f64> = (0..=count).map(|k| t0 + k as f64 * h).collect();
+    if analysis.t_end - times[count] > 1e-9 * h {
+        times.push(analysis.t_end);
+    }
+    results.reserve(times.len());
+
+    let outcome = (|| -> Result<(), Error> {
+        s.factor_at(false, t0)?;
+        s.velocities();
+        check_condition(&mut s, settings.singular_condition)?;
+        results.push(t0, &s.q, &s.qdot, &s.qddot);
+        let mut dt = h;
+        let mut q_pred = vec![0.0; n];
+        for &target in &times[1..] {
+            let span = target - s.t;
+            dt = dt.min(span);
+            while s.t < target {
+                let mut step = dt.min(target - s.t);
+                if target - s.t - step <= 1e-12 * h {
+                    step = target - s.t;
+                }
+                let wmax = model.bodies.iter().map(|b| s.qdot[3 * b.index + 2].abs()).fold(0.0f64, f64::max);
+                if wmax * step > settings.max_rotation {
+                    step = settings.max_rotation / wmax;
+                }
+                let t_new = if step == target - s.t { target } else { s.t + step };
+                for k in 0..n {
+                    q_pred[k] = s.q[k] + step * s.qdot[k] + 0.5 * step * step * s.qddot[k];
+                }
+                s.trial.copy_from_slice(&q_pred);
+                let motion = max_abs_diff(&q_pred, &s.q);
+                let failure = match s.newton(t_new)? {
+                    Ok(()) if max_abs_diff(&s.trial, &q_pred) <= 0.5 * motion + 100.0 * settings.tolerance => None,
+                    Ok(()) => Some(None),
+                    Err(f) => Some(Some(f)),
+                };
+                match failure {
+                    None => {
+                        std::mem::swap(&mut s.q, &mut s.trial);
+                        s.t = t_new;
+                        s.factor_at(false, t_new)?;
+                        s.velocities();
+                        s.stats.substeps += 1;
+                        dt = (2.0 * step).min(h);
+                    }
+                    Some(newton) => {
+                        s.stats.rejected_substeps += 1;
+                        s.factor_at(false, s.t)?;
+                        dt = 0.5 * step;
+                        if dt < settings.min_substep * h {
+                            return Err(give_up(&mut s, t_new, step, newton));
+                        }
+                    }
+                }
+            }
+            check_condition(&mut s, settings.singular_condition)?;
+            results.push(target, &s.q, &s.qdot, &s.qddot);
+        }
+        Ok(())
+    })();
+    s.stats.output_points = results.len();
+    results.set_kinematic_stats(&s.stats, &assembly);
+    match outcome {
+        Ok(()) => Ok(results),
+        Err(e) => Err(fail(results, e)),
+    }
+}
+
+/// A row name in the analysis's system (used before the solver exists).
+fn jac_row_name(model: &Model, analysis: &Analysis, row: usize) -> RowName {
+    System::new(model, &analysis.drivers).row_name(row)
+}
+
+fn check_condition(s: &mut Solver<'_>, limit: f64) -> Result<(), Error> {
+    let cond = s.lu.condition_estimate();
+    s.stats.max_condition = s.stats.max_condition.max(cond);
+    if cond > limit {
+        let (ratio, rows) = s.diagnose();
+        return Err(Error::Singular {
+            time: s.t,
+            rows,
+            detail: format!("the driven Jacobian is nearly singular (condition estimate {cond:.3e}, smallest/largest singular value {ratio:.3e}): a dead centre or lost degree of freedom"),
+        });
+    }
+    Ok(())
+}
+
+/// The smallest sub-step failed: a singular position (no assembled position beyond `s.t`) or a
+/// plain convergence failure.
+fn give_up(s: &mut Solver<'_>, t_new: f64, step: f64, newton: Option<NewtonFailure>) -> Error {
+    let (ratio, rows) = s.diagnose();
+    if ratio < 1e-3 {
+        return Error::Singular {
+            time: s.t,
+            rows,
+            detail: format!(
+                "no assembled position beyond this time (lock-up or dead centre): the driven Jacobian is nearly singular, smallest/largest singular value {ratio:.3e}, and Newton fails with sub-steps down to {step:.3e} s"
+            ),
+        };
+    }
+    match newton {
+        Some(f) => Error::Convergence { time: t_new, residual: f.residual, row: s.sys.row_name(f.row), iterations: f.iterations, substep: step },
+        None => Error::Convergence {
+            time: t_new,
+            residual: 0.0,
+            row: rows.into_iter().next().unwrap_or(RowName { element: "?".into(), equation: "?".into() }),
+            iterations: s.max_iterations,
+            substep: step,
+        },
+    }
+}

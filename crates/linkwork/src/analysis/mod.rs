@@ -1,0 +1,77 @@
+//! Analyses: assembly of an initial guess, checks (degrees of freedom, redundant rows), and
+//! kinematic analysis. Each reads a compiled [`crate::model::Model`] and writes
+//! [`crate::results::Results`].
+
+mod assembly;
+mod check;
+mod kinematic;
+
+pub use assembly::{assemble, Assembly};
+pub use check::{check, independent_rows, CheckReport, SystemCheck};
+pub use kinematic::{run_kinematic, KinematicStats};
+
+use faer::{Mat, MatRef};
+
+/// Settings of the position solver, with the reason for each default.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct SolverSettings {
+    /// Newton has converged when the max-norm of `Phi` is below this, m or rad. Default `1e-12`:
+    /// about 1000 ulps of a metre-sized mechanism, so that positions are good to about ten digits
+    /// after the Jacobian's amplification, and still reachable in double precision.
+    pub tolerance: f64,
+    /// Newton iterations per attempt before a sub-step is halved. Default 12: from a
+    /// second-order predictor Newton needs 2 to 4; more means the step left the branch.
+    pub max_iterations: usize,
+    /// Largest rotation of any body within one sub-step, rad. Default 0.35: the predictor's error
+    /// is then about `0.35^3 / 6 ~ 7e-3` rad, well inside Newton's region of convergence, so the
+    /// solution cannot jump to the other assembly branch; 0.2 cost 40% more time on the
+    /// quick-return benchmark with the same results (`docs/performance.md`).
+    pub max_rotation: f64,
+    /// Smallest sub-step, as a fraction of the output step, before the analysis gives up.
+    /// Default `1e-8` (27 halvings): a mechanism that needs more is at a singular position, and
+    /// stopping this close to it makes the singular value that proves it small (`~sqrt(1e-8)`).
+    pub min_substep: f64,
+    /// 1-norm condition estimate of the driven Jacobian above which a position counts as
+    /// singular. Default `1e10`: velocities and accelerations would lose more than ten of
+    /// sixteen digits.
+    pub singular_condition: f64,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings { tolerance: 1e-12, max_iterations: 12, max_rotation: 0.35, min_substep: 1e-8, singular_condition: 1e10 }
+    }
+}
+
+/// Relative size of a singular value (to the largest) below which it counts as zero when
+/// finding the rank of `Phi_q`: `1e-9` sits far above rounding (`~1e-16 * cond`) and far below
+/// any physical ratio of a well-posed mechanism.
+pub const RANK_TOLERANCE: f64 = 1e-9;
+
+/// Minimum-norm least-squares solution `x (cols)` of `a x = b` by the SVD, dropping singular values
+/// below `RANK_TOLERANCE` times the largest. `None` when the SVD fails (non-finite input).
+pub(crate) fn min_norm_solve(a: MatRef<'_, f64>, b: &[f64]) -> Option<Vec<f64>> {
+    let (m, n) = (a.nrows(), a.ncols());
+    if n == 0 || m == 0 {
+        return Some(vec![0.0; n]);
+    }
+    let svd = a.thin_svd().ok()?;
+    let (u, s, v) = (svd.U(), svd.S().column_vector(), svd.V());
+    let smax = (0..s.nrows()).map(|k| s[k]).fold(0.0f64, f64::max);
+    let mut x = vec![0.0; n];
+    for k in 0..s.nrows() {
+        if s[k] <= RANK_TOLERANCE * smax || s[k] == 0.0 {
+            continue;
+        }
+        let c: f64 = (0..m).map(|i| u[(i, k)] * b[i]).sum::<f64>() / s[k];
+        for (j, xj) in x.iter_mut().enumerate() {
+            *xj += v[(j, k)] * c;
+        }
+    }
+    Some(x)
+}
+
+/// The columns `cols` of `a`, as a new matrix.
+pub(crate) fn select_columns(a: MatRef<'_, f64>, cols: &[usize]) -> Mat<f64> {
+    Mat::from_fn(a.nrows(), cols.len(), |i, j| a[(i, cols[j])])
+}

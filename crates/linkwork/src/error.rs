@@ -1,0 +1,134 @@
+//! Typed errors that carry their context: the path in the model file, or the joint, row and time
+//! of a solver failure. Expected numerical events (a singular Jacobian at a lock-up) are errors,
+//! never panics.
+
+use std::fmt;
+
+/// One problem found in a model file: where (a dotted path into the file, such as
+/// `joints.B.body_j`) and what was expected.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Problem {
+    /// Dotted path of the offending field in the model file (empty for the whole file).
+    pub path: String,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
+impl Problem {
+    /// A problem at `path`.
+    pub fn new(path: impl Into<String>, message: impl Into<String>) -> Problem {
+        Problem { path: path.into(), message: message.into() }
+    }
+}
+
+impl fmt::Display for Problem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.path.is_empty() {
+            write!(f, "{}", self.message)
+        } else {
+            write!(f, "{}: {}", self.path, self.message)
+        }
+    }
+}
+
+/// A constraint row, named by its joint (or driver) and equation, e.g. `B_slot.line`.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct RowName {
+    /// Name of the joint, driver or constraint in the model file.
+    pub element: String,
+    /// Name of the equation within it (`x`, `y`, `line`, `angle`, ...).
+    pub equation: String,
+}
+
+impl fmt::Display for RowName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}.{}", self.element, self.equation)
+    }
+}
+
+/// Everything that can go wrong, by kind.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum Error {
+    /// The model file (or Python model) is invalid; every problem found is listed.
+    #[error("{}", format_problems(.0))]
+    Model(Vec<Problem>),
+    /// The initial guess could not be moved onto `Phi = 0`.
+    #[error("assembly failed after {iterations} iterations: residual {residual:.3e} (largest in {row}); {hint}")]
+    Assembly {
+        /// Newton iterations taken.
+        iterations: usize,
+        /// Max-norm of `Phi` at the best point found.
+        residual: f64,
+        /// The row with the largest residual.
+        row: RowName,
+        /// What the user can do about it.
+        hint: String,
+    },
+    /// The constraint Jacobian lost rank during an analysis: a dead centre, lock-up or a lost
+    /// degree of freedom.
+    #[error("singular position at t = {time:.6} s: {detail}; rows involved: {}", join(.rows))]
+    Singular {
+        /// Time of the last configuration examined.
+        time: f64,
+        /// The rows (joint and equation) that become dependent.
+        rows: Vec<RowName>,
+        /// Numbers behind the verdict (singular values, condition estimate).
+        detail: String,
+    },
+    /// Newton's method on the positions did not converge, even with the smallest sub-step.
+    #[error("position solution did not converge at t = {time:.6} s: residual {residual:.3e} in {row} after {iterations} iterations with a sub-step of {substep:.3e} s")]
+    Convergence {
+        /// Time the solver was trying to reach.
+        time: f64,
+        /// Max-norm of `Phi` at the last iterate.
+        residual: f64,
+        /// The row with the largest residual.
+        row: RowName,
+        /// Newton iterations in the last attempt.
+        iterations: usize,
+        /// The sub-step that last failed.
+        substep: f64,
+    },
+    /// Reading or writing a file failed.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file.
+        path: String,
+        /// What the operating system said.
+        message: String,
+    },
+}
+
+impl Error {
+    /// The joints (and drivers) named by a solver error, in order and without repeats.
+    pub fn elements(&self) -> Vec<String> {
+        let rows: Vec<&RowName> = match self {
+            Error::Singular { rows, .. } => rows.iter().collect(),
+            Error::Convergence { row, .. } | Error::Assembly { row, .. } => vec![row],
+            _ => vec![],
+        };
+        let mut out: Vec<String> = Vec::new();
+        for r in rows {
+            if !out.contains(&r.element) {
+                out.push(r.element.clone());
+            }
+        }
+        out
+    }
+}
+
+fn join(rows: &[RowName]) -> String {
+    rows.iter().map(|r| r.to_string()).collect::<Vec<_>>().join(", ")
+}
+
+fn format_problems(problems: &[Problem]) -> String {
+    let mut s = format!("the model has {} problem(s):", problems.len());
+    for p in problems {
+        s.push_str("\n  ");
+        s.push_str(&p.to_string());
+    }
+    s
+}
+
+/// Shorthand for results in this crate.
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,962 @@
+//! Tests of parsing, evaluation and derivatives.
+
+use super::*;
+use std::f64::consts::{E, LN_2, PI};
+
+/// Resolver for one-letter test variables: `x`/`t` -> 0, `y` -> 1, `z` -> 2,
+/// `a` -> 0, `b` -> 1, `c` -> 2, and the crank coordinates.
+fn test_resolve(name: &str) -> Result<usize, String> {
+    match name {
+        "x" | "t" | "a" | "crank.x" => Ok(0),
+        "y" | "b" | "crank.y" => Ok(1),
+        "z" | "c" | "crank.phi" => Ok(2),
+        _ => Err("expected <body>.x, <body>.y, <body>.phi or t".to_string()),
+    }
+}
+
+fn parse(src: &str) -> Expr {
+    Expr::parse(src, &mut test_resolve).unwrap_or_else(|e| panic!("{src}: {e}"))
+}
+
+fn parse_err(src: &str) -> ExprError {
+    match Expr::parse(src, &mut test_resolve) {
+        Ok(e) => panic!("{src}: expected an error, got {e:?}"),
+        Err(e) => e,
+    }
+}
+
+fn val(src: &str) -> f64 {
+    parse(src).eval::<f64>(&[0.0; 3])
+}
+
+/// `|a - b| <= tol * (1 + |b|)`: relative for large values, absolute near zero.
+fn close(a: f64, b: f64, tol: f64) -> bool {
+    (a - b).abs() <= tol * (1.0 + b.abs())
+}
+
+#[track_caller]
+fn assert_close(what: &str, a: f64, b: f64, tol: f64) {
+    assert!(
+        close(a, b, tol),
+        "{what}: got {a:e}, expected {b:e} (tol {tol:e})"
+    );
+}
+
+// ---------------------------------------------------------------- values
+
+#[test]
+fn numbers_and_constants() {
+    assert_eq!(val("2"), 2.0);
+    assert_eq!(val("0.5"), 0.5);
+    assert_eq!(val(".5"), 0.5);
+    assert_eq!(val("1."), 1.0);
+    assert_eq!(val("1e-3"), 1e-3);
+    assert_eq!(val("2.5E+2"), 250.0);
+    assert_eq!(val("6.1506"), 6.1506);
+    assert_eq!(val("pi"), PI);
+    assert_eq!(val("e"), E);
+    assert_eq!(val("  \t2\n"), 2.0);
+}
+
+#[test]
+fn precedence_and_associativity() {
+    assert_eq!(val("2^3^2"), 512.0);
+    assert_eq!(val("2**3**2"), 512.0);
+    assert_eq!(val("(2^3)^2"), 64.0);
+    assert_eq!(val("-2^2"), -4.0);
+    assert_eq!(val("(-2)^2"), 4.0);
+    assert_eq!(val("2*3+4"), 10.0);
+    assert_eq!(val("2+3*4"), 14.0);
+    assert_eq!(val("(1+2)*3"), 9.0);
+    assert_eq!(val("8/4/2"), 1.0);
+    assert_eq!(val("8-4-2"), 2.0);
+    assert_eq!(val("2^-1"), 0.5);
+    assert_eq!(val("2*-3"), -6.0);
+    assert_eq!(val("--3"), 3.0);
+    assert_eq!(val("+-+3"), -3.0);
+    assert_eq!(val("-3^2*2"), -18.0);
+    assert_eq!(val("2^3*2"), 16.0);
+    assert_eq!(val("2 ^ 2 ^ -1"), 2f64.sqrt());
+    assert_eq!(val("2^-2*3"), 0.75);
+    assert_eq!(val("2^-2^2"), 1.0 / 16.0);
+    assert_eq!(val("2^(1+1)^2"), 16.0);
+    assert_eq!(val("2*3^2"), 18.0);
+    assert_eq!(val("-(1+2)*3"), -9.0);
+    assert_eq!(val("1 - -1"), 2.0);
+    assert_eq!(val("8/2*4"), 16.0);
+    assert_eq!(val("1-2+3-4"), -2.0);
+    assert_eq!(val("2*3-4/2+1"), 5.0);
+    assert_eq!(val("((2))"), 2.0);
+    assert_eq!(parse("-x*y").eval(&[2.0, 3.0]), -6.0);
+    assert_eq!(parse("-x^2").eval(&[3.0]), -9.0);
+    assert_eq!(parse("x*-y^2").eval(&[2.0, 3.0]), -18.0);
+}
+
+#[test]
+fn function_values() {
+    let cases: &[(&str, f64)] = &[
+        ("sin(0.5)", 0.5f64.sin()),
+        ("cos(0.5)", 0.5f64.cos()),
+        ("tan(0.5)", 0.5f64.tan()),
+        ("asin(0.5)", 0.5f64.asin()),
+        ("acos(0.5)", 0.5f64.acos()),
+        ("atan(0.5)", 0.5f64.atan()),
+        ("atan2(1, -1)", 0.75 * PI),
+        ("sinh(0.5)", 0.5f64.sinh()),
+        ("cosh(0.5)", 0.5f64.cosh()),
+        ("tanh(0.5)", 0.5f64.tanh()),
+        ("exp(0.5)", 0.5f64.exp()),
+        ("log(e)", 1.0),
+        ("log(0.5)", -LN_2),
+        ("sqrt(2)", 2f64.sqrt()),
+        ("abs(-3)", 3.0),
+        ("min(2, -3)", -3.0),
+        ("max(2, -3)", 2.0),
+        ("sign(-0.2)", -1.0),
+        ("sign(0)", 0.0),
+        ("sign(7)", 1.0),
+        ("pow(2, 10)", 1024.0),
+        ("pow(4, 0.5)", 2.0),
+        ("sin (pi/2)", 1.0),
+        ("atan2(1 + 1, 2*1)", PI / 4.0),
+        ("max(min(1, 2), 0)", 1.0),
+        ("pow(2, 1 + 1)^2", 16.0),
+        ("min(-(2 + 1), sin(0)) * 2", -6.0),
+        ("2 * sqrt(exp(log(4)))", 4.0),
+    ];
+    for &(src, expected) in cases {
+        assert_close(src, val(src), expected, 1e-15);
+    }
+}
+
+#[test]
+fn variables_and_slots() {
+    let e = parse("crank.x^2 + crank.y^2 - 0.5625");
+    assert_eq!(e.slots(), &[0, 1]);
+    assert!(!e.is_constant());
+    assert_eq!(e.constant_value(), None);
+    assert_close("circle", e.eval(&[0.6, 0.45]), 0.0, 1e-15);
+    assert_eq!(e.source(), "crank.x^2 + crank.y^2 - 0.5625");
+    assert_eq!(e.to_string(), "crank.x^2 + crank.y^2 - 0.5625");
+
+    // slots are sorted and distinct whatever the order of appearance
+    let e = parse("z * x + z - y*x");
+    assert_eq!(e.slots(), &[0, 1, 2]);
+    assert_eq!(e.eval(&[2.0, 3.0, 5.0]), 5.0 * 2.0 + 5.0 - 3.0 * 2.0);
+
+    // arbitrary (sparse) slot numbers from the resolver
+    let e = Expr::parse("q.x * 2 + r.phi", &mut |n| match n {
+        "q.x" => Ok(7),
+        "r.phi" => Ok(3),
+        _ => Err(String::new()),
+    })
+    .unwrap();
+    assert_eq!(e.slots(), &[3, 7]);
+    let mut vars = [0.0; 8];
+    vars[7] = 1.5;
+    vars[3] = 0.25;
+    assert_eq!(e.eval(&vars), 3.25);
+}
+
+#[test]
+fn constants_fold() {
+    let e = parse("2*pi*(1 + 3^2) - sqrt(16)");
+    assert!(e.is_constant());
+    assert_eq!(e.slots(), &[] as &[usize]);
+    assert_eq!(e.constant_value(), Some(2.0 * PI * 10.0 - 4.0));
+    // a constant can be evaluated with no variables at all, over every scalar type
+    assert_eq!(e.eval::<f64>(&[]), 2.0 * PI * 10.0 - 4.0);
+    assert_eq!(e.eval::<Dual>(&[]), Dual::new(2.0 * PI * 10.0 - 4.0, 0.0));
+    let h = e.eval::<HyperDual>(&[]);
+    assert_eq!((h.e1, h.e2, h.e12), (0.0, 0.0, 0.0));
+    // folding never drops a variable
+    let e = parse("0*x");
+    assert_eq!(e.slots(), &[0]);
+    assert_eq!(e.eval(&[Dual::variable(3.0)]), Dual::new(0.0, 0.0));
+}
+
+#[test]
+fn resolver_is_not_called_for_builtins() {
+    let mut seen = Vec::new();
+    let e = Expr::parse("pi*e + sin(t) + atan2(t, 1) + t", &mut |n| {
+        seen.push(n.to_string());
+        Ok(0)
+    })
+    .unwrap();
+    assert_eq!(seen, ["t", "t", "t"]);
+    assert_eq!(e.slots(), &[0]);
+    // dotted names are never constants or functions
+    let e = Expr::parse("pi.x + e.y", &mut |n| match n {
+        "pi.x" => Ok(0),
+        "e.y" => Ok(1),
+        _ => Err(String::new()),
+    })
+    .unwrap();
+    assert_eq!(e.eval(&[1.0, 2.0]), 3.0);
+}
+
+#[test]
+fn dual_values_are_bit_identical_to_f64() {
+    // The value part of every scalar type is computed with the same floating-point
+    // operations, so results agree exactly (not just to rounding).
+    let srcs = [
+        "exp(-x^2)*cos(3*x) + atan2(x, 0.3) - log(1 + x^2)/sqrt(2 + x)",
+        "x^x + 2^x + pow(x, 2.5) + min(x, 0.4) * max(x, tanh(x)) + abs(x - 1) * sign(x)",
+        "asin(x/2) + acos(x/3) + atan(x) + sinh(x) / cosh(x) + tan(x) / (1 + x)",
+    ];
+    for src in srcs {
+        let e = parse(src);
+        for x in [0.1, 0.35, 0.8, 1.3] {
+            let f = e.eval(&[x]);
+            assert_eq!(e.eval(&[Dual::variable(x)]).v, f, "{src}");
+            assert_eq!(e.eval(&[HyperDual::variable(x)]).v, f, "{src}");
+        }
+    }
+}
+
+// ---------------------------------------------------------------- derivatives
+
+/// A one-variable test case: source in `x`, the points to check, and the closed-form
+/// value, first and second derivative.
+struct Case {
+    src: &'static str,
+    points: &'static [f64],
+    f: fn(f64) -> f64,
+    d1: fn(f64) -> f64,
+    d2: fn(f64) -> f64,
+}
+
+fn cases() -> Vec<Case> {
+    fn sq(x: f64) -> f64 {
+        x * x
+    }
+    vec![
+        Case {
+            src: "sin(x)",
+            points: &[-2.0, 0.0, 0.7, 3.0],
+            f: f64::sin,
+            d1: f64::cos,
+            d2: |x| -x.sin(),
+        },
+        Case {
+            src: "sin(4*x)",
+            points: &[-0.3, 0.0, 0.9],
+            f: |x| (4.0 * x).sin(),
+            d1: |x| 4.0 * (4.0 * x).cos(),
+            d2: |x| -16.0 * (4.0 * x).sin(),
+        },
+        Case {
+            src: "cos(x)",
+            points: &[-2.0, 0.0, 0.7, 3.0],
+            f: f64::cos,
+            d1: |x| -x.sin(),
+            d2: |x| -x.cos(),
+        },
+        Case {
+            src: "tan(x)",
+            points: &[-1.0, 0.0, 0.3, 1.2],
+            f: f64::tan,
+            d1: |x| 1.0 / sq(x.cos()),
+            d2: |x| 2.0 * x.tan() / sq(x.cos()),
+        },
+        Case {
+            src: "asin(x)",
+            points: &[-0.7, 0.0, 0.2, 0.9],
+            f: f64::asin,
+            d1: |x| 1.0 / (1.0 - x * x).sqrt(),
+            d2: |x| x / (1.0 - x * x).powf(1.5),
+        },
+        Case {
+            src: "acos(x)",
+            points: &[-0.7, 0.0, 0.2, 0.9],
+            f: f64::acos,
+            d1: |x| -1.0 / (1.0 - x * x).sqrt(),
+            d2: |x| -x / (1.0 - x * x).powf(1.5),
+        },
+        Case {
+            src: "atan(x)",
+            points: &[-3.0, 0.0, 0.5, 2.0],
+            f: f64::atan,
+            d1: |x| 1.0 / (1.0 + x * x),
+            d2: |x| -2.0 * x / sq(1.0 + x * x),
+        },
+        Case {
+            // d/dy atan2(y, 2) = 2/(4 + y^2)
+            src: "atan2(x, 2)",
+            points: &[-3.0, 0.0, 0.5, 2.0],
+            f: |x| x.atan2(2.0),
+            d1: |x| 2.0 / (4.0 + x * x),
+            d2: |x| -4.0 * x / sq(4.0 + x * x),
+        },
+        Case {
+            // d/dx atan2(1, x) = -1/(1 + x^2), valid in every quadrant
+            src: "atan2(1, x)",
+            points: &[-3.0, -0.5, 0.0, 2.0],
+            f: |x| 1f64.atan2(x),
+            d1: |x| -1.0 / (1.0 + x * x),
+            d2: |x| 2.0 * x / sq(1.0 + x * x),
+        },
+        Case {
+            src: "sinh(x)",
+            points: &[-2.0, 0.0, 1.5],
+            f: f64::sinh,
+            d1: f64::cosh,
+            d2: f64::sinh,
+        },
+        Case {
+            src: "cosh(x)",
+            points: &[-2.0, 0.0, 1.5],
+            f: f64::cosh,
+            d1: f64::sinh,
+            d2: f64::cosh,
+        },
+        Case {
+            src: "tanh(x)",
+            points: &[-2.0, 0.0, 0.4, 1.5],
+            f: f64::tanh,
+            d1: |x| 1.0 / sq(x.cosh()),
+            d2: |x| -2.0 * x.tanh() / sq(x.cosh()),
+        },
+        Case {
+            src: "exp(x)",
+            points: &[-2.0, 0.0, 1.5],
+            f: f64::exp,
+            d1: f64::exp,
+            d2: f64::exp,
+        },
+        Case {
+            src: "log(x)",
+            points: &[0.3, 1.0, 1.7, 5.0],
+            f: f64::ln,
+            d1: |x| 1.0 / x,
+            d2: |x| -1.0 / (x * x),
+        },
+        Case {
+            src: "sqrt(x)",
+            points: &[0.3, 1.0, 4.0],
+            f: f64::sqrt,
+            d1: |x| 0.5 / x.sqrt(),
+            d2: |x| -0.25 / (x * x.sqrt()),
+        },
+        Case {
+            src: "abs(x)",
+            points: &[-1.3, 0.7],
+            f: f64::abs,
+            d1: f64::signum,
+            d2: |_| 0.0,
+        },
+        Case {
+            src: "sign(x)",
+            points: &[-1.3, 0.7],
+            f: f64::signum,
+            d1: |_| 0.0,
+            d2: |_| 0.0,
+        },
+        Case {
+            // selects x below 0.5, 1 - x above
+            src: "min(x, 1 - x)",
+            points: &[0.2, 0.8],
+            f: |x| x.min(1.0 - x),
+            d1: |x| if x < 0.5 { 1.0 } else { -1.0 },
+            d2: |_| 0.0,
+        },
+        Case {
+            // selects x^2 outside [0, 1], x inside
+            src: "max(x^2, x)",
+            points: &[-0.5, 0.5, 2.0],
+            f: |x| (x * x).max(x),
+            d1: |x| if x * x > x { 2.0 * x } else { 1.0 },
+            d2: |x| if x * x > x { 2.0 } else { 0.0 },
+        },
+        Case {
+            src: "x^3",
+            points: &[-1.5, 0.0, 0.5, 2.0],
+            f: |x| x * x * x,
+            d1: |x| 3.0 * x * x,
+            d2: |x| 6.0 * x,
+        },
+        Case {
+            src: "pow(x, 3)",
+            points: &[-1.5, 0.0, 2.0],
+            f: |x| x * x * x,
+            d1: |x| 3.0 * x * x,
+            d2: |x| 6.0 * x,
+        },
+        Case {
+            src: "x^-2",
+            points: &[-1.5, 0.5, 2.0],
+            f: |x| 1.0 / (x * x),
+            d1: |x| -2.0 / (x * x * x),
+            d2: |x| 6.0 / (x * x * x * x),
+        },
+        Case {
+            src: "x^2.5",
+            points: &[0.0, 0.5, 2.0],
+            f: |x| x.powf(2.5),
+            d1: |x| 2.5 * x.powf(1.5),
+            d2: |x| 3.75 * x.sqrt(),
+        },
+        Case {
+            src: "2^x",
+            points: &[-1.0, 0.0, 1.5],
+            f: |x| 2f64.powf(x),
+            d1: |x| 2f64.powf(x) * LN_2,
+            d2: |x| 2f64.powf(x) * LN_2 * LN_2,
+        },
+        Case {
+            // general power with non-constant base and exponent
+            src: "x^x",
+            points: &[0.5, 1.0, 1.5],
+            f: |x| x.powf(x),
+            d1: |x| x.powf(x) * (x.ln() + 1.0),
+            d2: |x| x.powf(x) * (sq(x.ln() + 1.0) + 1.0 / x),
+        },
+        Case {
+            src: "pow(x, 1 + x)",
+            points: &[0.5, 1.5],
+            f: |x| x.powf(1.0 + x),
+            // d/dx exp((1+x) ln x) = x^(1+x) (ln x + (1+x)/x)
+            d1: |x| x.powf(1.0 + x) * (x.ln() + (1.0 + x) / x),
+            d2: |x| {
+                let g = x.ln() + (1.0 + x) / x;
+                let dg = 1.0 / x - 1.0 / (x * x);
+                x.powf(1.0 + x) * (g * g + dg)
+            },
+        },
+        Case {
+            src: "x / (1 + x^2)",
+            points: &[-2.0, 0.0, 1.5],
+            f: |x| x / (1.0 + x * x),
+            d1: |x| (1.0 - x * x) / sq(1.0 + x * x),
+            d2: |x| 2.0 * x * (x * x - 3.0) / (1.0 + x * x).powi(3),
+        },
+        Case {
+            src: "exp(-x^2)*cos(3*x)",
+            points: &[-1.0, 0.0, 0.4],
+            f: |x| (-x * x).exp() * (3.0 * x).cos(),
+            d1: |x| {
+                let (g, c, s) = ((-x * x).exp(), (3.0 * x).cos(), (3.0 * x).sin());
+                g * (-2.0 * x * c - 3.0 * s)
+            },
+            d2: |x| {
+                let (g, c, s) = ((-x * x).exp(), (3.0 * x).cos(), (3.0 * x).sin());
+                g * ((4.0 * x * x - 11.0) * c + 12.0 * x * s)
+            },
+        },
+    ]
+}
+
+#[test]
+fn every_builtin_function_is_covered_by_the_derivative_cases() {
+    let all = cases();
+    for &(name, _, _) in parse::FUNCTIONS {
+        let call = format!("{name}(");
+        assert!(
+            all.iter().any(|c| c.src.contains(&call)),
+            "no derivative test for '{name}'"
+        );
+    }
+}
+
+#[test]
+fn derivatives_match_closed_forms() {
+    // Tolerance 1e-12 (relative, absolute near 0): AD is exact up to rounding, and
+    // the closed forms are evaluated with a differently ordered handful of operations.
+    for c in cases() {
+        let e = parse(c.src);
+        for &x in c.points {
+            let what = format!("{} at x = {x}", c.src);
+            let (f, d1, d2) = ((c.f)(x), (c.d1)(x), (c.d2)(x));
+            assert_close(&format!("{what}: f64 value"), e.eval(&[x]), f, 1e-12);
+
+            let d = e.eval(&[Dual::variable(x)]);
+            assert_close(&format!("{what}: Dual value"), d.v, f, 1e-12);
+            assert_close(&format!("{what}: Dual f'"), d.d, d1, 1e-12);
+
+            let h = e.eval(&[HyperDual::variable(x)]);
+            assert_close(&format!("{what}: HyperDual value"), h.v, f, 1e-12);
+            assert_close(&format!("{what}: HyperDual e1"), h.e1, d1, 1e-12);
+            assert_close(&format!("{what}: HyperDual e2"), h.e2, d1, 1e-12);
+            assert_close(&format!("{what}: HyperDual f''"), h.e12, d2, 1e-12);
+
+            // Different seeds a, b give a*f', b*f' and a*b*f''.
+            let h = e.eval(&[HyperDual::seed(x, 2.0, -0.5)]);
+            assert_close(&format!("{what}: seeded e1"), h.e1, 2.0 * d1, 1e-12);
+            assert_close(&format!("{what}: seeded e2"), h.e2, -0.5 * d1, 1e-12);
+            assert_close(&format!("{what}: seeded e12"), h.e12, -d2, 1e-12);
+        }
+    }
+}
+
+#[test]
+fn derivatives_match_finite_differences() {
+    // Independent check using only plain f64 evaluations.
+    //  f'  ~ (f(x+h) - f(x-h)) / 2h, h = 1e-5: truncation h^2 |f'''| / 6 ~ 2e-11 |f'''|,
+    //       rounding ~ eps |f| / h ~ 2e-11 |f|  -> tolerance 1e-7 (relative/absolute).
+    //  f'' ~ (f(x+h) - 2 f(x) + f(x-h)) / h^2, h = 1e-4: truncation h^2 |f''''| / 12
+    //       ~ 1e-9 |f''''|, rounding ~ 4 eps |f| / h^2 ~ 1e-7 |f| -> tolerance 1e-5
+    //       relative to 1 + |f''| + |f| (the rounding term scales with |f|).
+    // Points where the function has a kink (abs, sign, min, max) are kept at a
+    // distance > h from it.
+    for c in cases() {
+        let e = parse(c.src);
+        let f = |x: f64| e.eval(&[x]);
+        for &x in c.points {
+            let what = format!("{} at x = {x}", c.src);
+            let h = e.eval(&[HyperDual::variable(x)]);
+            if c.src.contains("^2.5") && x == 0.0 {
+                continue; // x^2.5 is not defined for x < 0
+            }
+            let h1 = 1e-5;
+            let fd1 = (f(x + h1) - f(x - h1)) / (2.0 * h1);
+            assert_close(&format!("{what}: f' vs FD"), h.e1, fd1, 1e-7);
+            let h2 = 1e-4;
+            let fd2 = (f(x + h2) - 2.0 * f(x) + f(x - h2)) / (h2 * h2);
+            let scale = 1.0 + h.e12.abs() + h.v.abs();
+            assert!(
+                (h.e12 - fd2).abs() <= 1e-5 * scale,
+                "{what}: f'' = {:e} vs FD {fd2:e}",
+                h.e12
+            );
+        }
+    }
+}
+
+#[test]
+fn integer_powers_exact_at_zero() {
+    for src in ["x^2", "x**2", "pow(x, 2)", "x^(1+1)", "x*x"] {
+        let h = parse(src).eval(&[HyperDual::variable(0.0)]);
+        assert_eq!((h.v, h.e1, h.e12), (0.0, 0.0, 2.0), "{src}");
+        let d = parse(src).eval(&[Dual::variable(0.0)]);
+        assert_eq!((d.v, d.d), (0.0, 0.0), "{src}");
+    }
+    let h = parse("x^3").eval(&[HyperDual::variable(0.0)]);
+    assert_eq!((h.v, h.e1, h.e12), (0.0, 0.0, 0.0));
+    let h = parse("x^1").eval(&[HyperDual::variable(0.0)]);
+    assert_eq!((h.v, h.e1, h.e12), (0.0, 1.0, 0.0));
+    let h = parse("x^0").eval(&[HyperDual::variable(0.0)]);
+    assert_eq!((h.v, h.e1, h.e12), (1.0, 0.0, 0.0));
+    // negative bases with integer exponents are fine
+    let h = parse("x^3").eval(&[HyperDual::variable(-2.0)]);
+    assert_eq!((h.v, h.e1, h.e12), (-8.0, 12.0, -12.0));
+    // exponents that are large integers still use the integer rule
+    let h = parse("x^1000").eval(&[HyperDual::variable(-1.0)]);
+    assert_eq!((h.v, h.e1, h.e12), (1.0, -1000.0, 999000.0));
+}
+
+// ---------------------------------------------------------------- TimeFunction
+
+#[test]
+fn time_function_linear() {
+    let f = TimeFunction::parse("6.1506 + 2*pi*t").unwrap();
+    assert!(!f.is_constant());
+    for t in [0.0, 0.25, 1.5, -3.0] {
+        let (v, dv, ddv) = f.eval(t);
+        // same operation order as the folded bytecode: 6.1506 + (2π)·t
+        assert_eq!(v, 6.1506 + 2.0 * PI * t);
+        assert_eq!(dv, 2.0 * PI);
+        assert_eq!(ddv, 0.0);
+        assert_eq!(f.value(t), v);
+    }
+    assert_eq!(f.source(), "6.1506 + 2*pi*t");
+    assert_eq!(f.to_string(), "6.1506 + 2*pi*t");
+}
+
+#[test]
+fn time_function_sine() {
+    let f: TimeFunction = "0.3*sin(4*t)".parse().unwrap();
+    for t in [0.0, 0.1, 0.7, 2.0] {
+        let (v, dv, ddv) = f.eval(t);
+        assert_eq!(v, 0.3 * (4.0 * t).sin());
+        assert_close("f'", dv, 1.2 * (4.0 * t).cos(), 1e-15);
+        assert_close("f''", ddv, -4.8 * (4.0 * t).sin(), 1e-15);
+    }
+    assert_eq!(f.eval(0.0).0, 0.0);
+    assert_eq!(f.eval(0.0).1, 1.2);
+}
+
+#[test]
+fn time_function_constant_and_errors() {
+    let f = TimeFunction::parse("2*pi").unwrap();
+    assert!(f.is_constant());
+    assert_eq!(f.eval(5.0), (2.0 * PI, 0.0, 0.0));
+    assert_eq!(f.expr().constant_value(), Some(2.0 * PI));
+
+    let err = TimeFunction::parse("2*crank.x").unwrap_err();
+    assert_eq!(err.offset, 2);
+    assert_eq!(
+        err.to_string(),
+        "unknown name 'crank.x' (only t (time) may appear in a driver function) at column 3"
+    );
+}
+
+// ---------------------------------------------------------------- gradient, directional2
+
+#[test]
+fn gradient_and_directional_of_circle() {
+    let e = parse("crank.x^2 + crank.y^2 - 0.5625");
+    let x = [0.6, 0.45, 9.0]; // slot 2 is unused by e
+    let mut grad = [f64::NAN; 3];
+    let mut work = [Dual::default(); 3];
+    gradient(&e, &x, &mut grad, &mut work);
+    // ∇ = (2x, 2y, 0)
+    assert_eq!(grad, [1.2, 0.9, 0.0]);
+
+    // H = diag(2, 2): dirᵀ H dir = 2 (d0² + d1²)
+    let dir = [1.0, -2.0, 5.0];
+    let mut hwork = [HyperDual::default(); 3];
+    let (v, d1, d2) = directional2(&e, &x, &dir, &mut hwork);
+    assert_close("value", v, 0.0, 1e-15);
+    assert_close("∇·dir", d1, 1.2 - 1.8, 1e-15);
+    assert_eq!(d2, 2.0 * (1.0 + 4.0));
+
+    let mut sparse = [0.0; 2];
+    let value = gradient_sparse(&e, &x, &mut sparse, &mut work);
+    assert_eq!(sparse, [1.2, 0.9]);
+    assert_eq!(value, e.eval(&x));
+}
+
+#[test]
+fn gradient_and_directional_with_cross_terms() {
+    let e = parse("a*b*sin(c)");
+    let (a, b, c) = (1.3, -0.7, 0.9);
+    let x = [a, b, c];
+    let (s, co) = (c.sin(), c.cos());
+    let mut grad = [0.0; 3];
+    let mut work = [Dual::default(); 3];
+    gradient(&e, &x, &mut grad, &mut work);
+    let expected = [b * s, a * s, a * b * co];
+    for (i, (g, x)) in grad.iter().zip(expected).enumerate() {
+        assert_close(&format!("grad[{i}]"), *g, x, 1e-15);
+    }
+
+    // Hessian by hand:
+    // [[0,        sin c,    b cos c],
+    //  [sin c,    0,        a cos c],
+    //  [b cos c,  a cos c,  -a b sin c]]
+    let hess = [
+        [0.0, s, b * co],
+        [s, 0.0, a * co],
+        [b * co, a * co, -a * b * s],
+    ];
+    let mut hwork = [HyperDual::default(); 3];
+    for dir in [
+        [1.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [1.0, 1.0, 0.0],
+        [0.3, -1.2, 2.0],
+    ] {
+        let quad: f64 = (0..3)
+            .flat_map(|i| (0..3).map(move |j| (i, j)))
+            .map(|(i, j)| dir[i] * hess[i][j] * dir[j])
+            .sum();
+        let lin: f64 = (0..3).map(|i| expected[i] * dir[i]).sum();
+        let (v, d1, d2) = directional2(&e, &x, &dir, &mut hwork);
+        assert_close("value", v, a * b * s, 1e-15);
+        assert_close(&format!("∇·{dir:?}"), d1, lin, 1e-14);
+        assert_close(&format!("{dir:?}ᵀH{dir:?}"), d2, quad, 1e-14);
+    }
+
+    let mut sparse = [0.0; 3];
+    let value = gradient_sparse(&e, &x, &mut sparse, &mut work);
+    assert_eq!(sparse, grad);
+    assert_eq!(value, a * b * s);
+}
+
+#[test]
+fn atan2_gradient_and_hessian() {
+    // θ = atan2(y, x): ∇ = (-y, x)/r² in (x, y) order; H = [[2xy, y²-x²], [y²-x², -2xy]]/r⁴
+    let e = parse("atan2(y, x)");
+    let (x0, y0) = (-0.8, 0.6);
+    let r2: f64 = x0 * x0 + y0 * y0;
+    let mut grad = [0.0; 2];
+    gradient(&e, &[x0, y0], &mut grad, &mut [Dual::default(); 2]);
+    assert_close("θ_x", grad[0], -y0 / r2, 1e-15);
+    assert_close("θ_y", grad[1], x0 / r2, 1e-15);
+    let h = [
+        [2.0 * x0 * y0, y0 * y0 - x0 * x0],
+        [y0 * y0 - x0 * x0, -2.0 * x0 * y0],
+    ];
+    let dir = [0.5, 2.0];
+    let quad =
+        (dir[0] * dir[0] * h[0][0] + 2.0 * dir[0] * dir[1] * h[0][1] + dir[1] * dir[1] * h[1][1])
+            / (r2 * r2);
+    let (_, _, d2) = directional2(&e, &[x0, y0], &dir, &mut [HyperDual::default(); 2]);
+    assert_close("dirᵀHdir", d2, quad, 1e-14);
+}
+
+#[test]
+fn constant_expression_gradient() {
+    let e = parse("3 + 4");
+    let mut grad = [1.0; 2];
+    gradient(&e, &[1.0, 2.0], &mut grad, &mut [Dual::default(); 2]);
+    assert_eq!(grad, [0.0, 0.0]);
+    assert_eq!(gradient_sparse(&e, &[], &mut [], &mut []), 7.0);
+    assert_eq!(directional2(&e, &[], &[], &mut []), (7.0, 0.0, 0.0));
+}
+
+// ---------------------------------------------------------------- errors
+
+#[track_caller]
+fn check_err(src: &str, offset: usize, message_part: &str) {
+    let e = parse_err(src);
+    assert_eq!(e.offset, offset, "{src}: {e}");
+    assert!(
+        e.message.contains(message_part),
+        "{src}: message {:?} does not contain {message_part:?}",
+        e.message
+    );
+}
+
+#[test]
+fn error_unexpected_character() {
+    check_err("2 # 3", 2, "unexpected character '#'");
+    check_err("t × 2", 2, "unexpected character '×'");
+    check_err("x; y", 1, "unexpected character ';'");
+    check_err("crank.x = 1", 8, "unexpected character '='");
+}
+
+#[test]
+fn error_unbalanced_parentheses() {
+    check_err("(1 + 2", 0, "unbalanced parentheses: '(' is never closed");
+    check_err("2 * ((x)", 4, "never closed");
+    check_err("1 + 2)", 5, "')' has no matching '('");
+    check_err("sin(x", 3, "never closed");
+    check_err("atan2(x, y", 5, "never closed");
+    check_err("(1 2)", 3, "expected ')' or an operator, found number '2'");
+    check_err(
+        "sin(x y)",
+        6,
+        "expected ',' or ')' in the arguments of 'sin'",
+    );
+}
+
+#[test]
+fn error_missing_operand() {
+    check_err("1 +", 3, "missing operand");
+    check_err("1 + * 2", 4, "found '*'");
+    check_err("2 ^", 3, "found end of input");
+    check_err("2 **", 4, "missing operand");
+    check_err("-", 1, "missing operand");
+    check_err("()", 1, "found ')'");
+    check_err("atan2(1, )", 9, "missing operand");
+    check_err("* 2", 0, "missing operand");
+}
+
+#[test]
+fn error_trailing_input() {
+    check_err(
+        "1 2",
+        2,
+        "unexpected number '2' after a complete expression",
+    );
+    check_err("2t", 1, "unexpected name 't' after a complete expression");
+    check_err("2 (y)", 2, "unexpected '('");
+    // a name directly followed by '(' is a function call
+    check_err("x (y)", 0, "unknown function 'x'");
+    check_err("1.5.3", 3, "unexpected number '.3'");
+    check_err("1, 2", 1, "unexpected ','");
+    check_err("(1, 2)", 2, "expected ')' or an operator, found ','");
+    check_err(
+        "min((1, 2), 3)",
+        6,
+        "expected ')' or an operator, found ','",
+    );
+    check_err(
+        "min(1 + 2 3)",
+        10,
+        "expected ',' or ')' in the arguments of 'min'",
+    );
+}
+
+#[test]
+fn error_unknown_function() {
+    check_err("foo(1)", 0, "unknown function 'foo'");
+    check_err("2*crank.x(1)", 2, "unknown function 'crank.x'");
+    check_err("ln(2)", 0, "unknown function 'ln'");
+    check_err("1 + pi(2)", 4, "unknown function 'pi'");
+    check_err(
+        "sin + 1",
+        0,
+        "function 'sin' needs its arguments in parentheses",
+    );
+}
+
+#[test]
+fn error_wrong_argument_count() {
+    check_err("atan2(1)", 0, "function 'atan2' takes 2 arguments, found 1");
+    check_err(
+        "x + sin(1, 2)",
+        4,
+        "function 'sin' takes 1 argument, found 2",
+    );
+    check_err("sin()", 0, "takes 1 argument, found 0");
+    check_err("pow(2)", 0, "takes 2 arguments, found 1");
+    check_err("min(1, 2, 3)", 0, "takes 2 arguments, found 3");
+}
+
+#[test]
+fn error_unknown_name() {
+    let e = parse_err("2*rokcer.x");
+    assert_eq!(e.offset, 2);
+    assert_eq!(e.column(), 3);
+    assert_eq!(
+        e.to_string(),
+        "unknown name 'rokcer.x' (expected <body>.x, <body>.y, <body>.phi or t) at column 3"
+    );
+    // without a hint
+    let e = Expr::parse("1 + q", &mut |_| Err(String::new())).unwrap_err();
+    assert_eq!(e.to_string(), "unknown name 'q' at column 5");
+    assert_eq!(e, ExprError::new("unknown name 'q'", 4));
+}
+
+#[test]
+fn error_empty_expression() {
+    check_err("", 0, "empty expression");
+    check_err("   \n", 0, "empty expression");
+}
+
+#[test]
+fn error_malformed_names_and_numbers() {
+    check_err("1e", 0, "malformed number");
+    check_err("2 + 1e+x", 4, "exponent has no digits");
+    check_err("1e999", 0, "out of range");
+    check_err("crank.", 6, "expected a letter or '_' after '.'");
+    check_err("crank.1", 6, "expected a letter or '_' after '.'");
+    check_err("a.b.c", 3, "only one '.'");
+}
+
+#[test]
+fn error_snippet() {
+    let src = "2*rokcer.x";
+    let e = parse_err(src);
+    assert_eq!(e.snippet(src), "2*rokcer.x\n  ^");
+    let src = "x +\n  × 2";
+    let e = parse_err(src);
+    assert_eq!(e.snippet(src), "  × 2\n  ^");
+    // offset at the end
+    let e = parse_err("1 +");
+    assert_eq!(e.snippet("1 +"), "1 +\n   ^");
+}
+
+#[test]
+fn nesting_limit() {
+    // exactly at the limit: deep but fine, evaluated over every scalar type
+    let n = MAX_DEPTH;
+    let src = format!("{}x{}", "(".repeat(n), ")".repeat(n));
+    let e = parse(&src);
+    assert_eq!(e.eval(&[Dual::variable(2.0)]), Dual::new(2.0, 1.0));
+    let src = format!("{}x", "-".repeat(n));
+    assert_eq!(parse(&src).eval(&[3.0]), 3.0);
+    let src = format!("{}x{}", "sin(".repeat(n), ")".repeat(n));
+    assert!(parse(&src).eval(&[HyperDual::variable(0.5)]).v > 0.0);
+    // one more level is an error, reported where the extra level opens
+    let src = format!("{}x{}", "(".repeat(n + 1), ")".repeat(n + 1));
+    check_err(&src, n, "expression nested too deeply");
+    let src = format!("{}x", "-".repeat(n + 1));
+    check_err(&src, n, "expression nested too deeply");
+    // levels of different kinds add up: 100 parentheses + 100 minus signs + 1 call
+    let src = format!(
+        "{}{}sin(x){}",
+        "(".repeat(100),
+        "-".repeat(100),
+        ")".repeat(100)
+    );
+    check_err(&src, 200, "expression nested too deeply");
+    // ... and closing a level frees it again
+    let half = "(".repeat(150) + "x" + &")".repeat(150);
+    assert_eq!(parse(&format!("{half} + {half}")).eval(&[2.0]), 4.0);
+
+    // a deep product needs a large evaluation stack: x*(x*(x*...)) = x^k
+    let k = 150;
+    let src = format!("{}x{}", "x*(".repeat(k - 1), ")".repeat(k - 1));
+    let e = parse(&src);
+    let h = e.eval(&[HyperDual::variable(1.01)]);
+    let kf = k as f64;
+    assert_close("x^k", h.v, 1.01f64.powi(k as i32), 1e-12);
+    assert_close("d x^k", h.e1, kf * 1.01f64.powi(k as i32 - 1), 1e-12);
+    assert_close(
+        "dd x^k",
+        h.e12,
+        kf * (kf - 1.0) * 1.01f64.powi(k as i32 - 2),
+        1e-12,
+    );
+
+    // far beyond the limit: an error, not a stack overflow or a hang
+    for src in [
+        format!("{}1{}", "(".repeat(100_000), ")".repeat(100_000)),
+        format!("{}1", "-".repeat(100_000)),
+        format!("2{}", "^2".repeat(100_000)),
+        format!("{}1{}", "sin(".repeat(100_000), ")".repeat(100_000)),
+        "(".repeat(100_000),
+    ] {
+        let e = parse_err(&src);
+        assert!(e.message.contains("nested too deeply"), "{e}");
+        assert!(e.offset < 1000);
+    }
+}
+
+#[test]
+fn parsing_does_not_recurse() {
+    // The parser keeps its own stack, so even the deepest accepted input parses on a
+    // thread with a tiny call stack (a recursive-descent parser would need ~1 MB in a
+    // debug build for 200 levels).
+    let handle = std::thread::Builder::new()
+        .stack_size(64 * 1024)
+        .spawn(|| {
+            let n = MAX_DEPTH;
+            let deep = format!("{}t{}", "sin(".repeat(n), ")".repeat(n));
+            let ok = TimeFunction::parse(&deep).is_ok();
+            let too_deep = format!("{}t{}", "(".repeat(100_000), ")".repeat(100_000));
+            ok && TimeFunction::parse(&too_deep).is_err()
+        })
+        .unwrap();
+    assert!(handle.join().unwrap());
+}
+
+#[test]
+fn long_flat_expressions_are_fine() {
+    // long left-associative chains are parsed iteratively, without deep recursion
+    let src = vec!["x"; 100_000].join(" + ");
+    let e = parse(&src);
+    assert_eq!(
+        e.eval(&[Dual::variable(1.0)]),
+        Dual::new(100_000.0, 100_000.0)
+    );
+    let src = vec!["1"; 100_000].join(" * ");
+    assert_eq!(parse(&src).constant_value(), Some(1.0));
+}
+
+#[test]
+fn garbage_input_never_panics() {
+    // Deterministic pseudo-random strings over the language's alphabet plus junk.
+    let alphabet: Vec<char> = "0123456789.eE+-*/^(),xyzt pisncoqrtabgmw_.×#\n"
+        .chars()
+        .collect();
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut ok = 0;
+    for _ in 0..20_000 {
+        let len = (next() % 24) as usize;
+        let s: String = (0..len)
+            .map(|_| alphabet[(next() % alphabet.len() as u64) as usize])
+            .collect();
+        match Expr::parse(&s, &mut test_resolve) {
+            Ok(e) => {
+                ok += 1;
+                let _ = e.eval(&[HyperDual::variable(0.3); 3]);
+            }
+            Err(err) => {
+                assert!(err.offset <= s.len(), "{s:?}: {err}");
+                assert!(s.is_char_boundary(err.offset), "{s:?}: {err}");
+                let _ = err.snippet(&s);
+            }
+        }
+    }
+    assert!(ok > 0);
+}

@@ -1,0 +1,154 @@
+//! Sparse LU for the square systems of kinematics: symbolic factorization once per analysis
+//! (faer's COLAMD ordering and elimination structure), numeric factorization per Jacobian, and a
+//! 1-norm condition estimate from the factors (Hager 1984, Higham 1988) to detect singular
+//! positions.
+
+use crate::system::Pattern;
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::lu::partial_pivoting::factor::PartialPivLuParams;
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, NumericLu, SymbolicLu};
+use faer::sparse::linalg::LuError;
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par, Spec};
+
+/// Why a factorization failed.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FactorError {
+    /// The pattern leaves column `column` without a possible pivot.
+    StructurallySingular {
+        /// The column (coordinate) with no pivot.
+        column: usize,
+    },
+    /// faer could not allocate.
+    OutOfMemory,
+}
+
+/// A square sparse matrix with a fixed pattern, its LU factors and every work buffer.
+pub struct SparseLu {
+    pattern: Pattern,
+    /// (nnz) current values.
+    values: Vec<f64>,
+    symbolic: SymbolicLu<usize>,
+    numeric: NumericLu<usize, f64>,
+    factored: bool,
+    stack: MemBuffer,
+    /// (n) work vectors of the condition estimate.
+    work: [Vec<f64>; 2],
+}
+
+impl std::fmt::Debug for SparseLu {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SparseLu").field("n", &self.pattern.nrows).field("nnz", &self.values.len()).finish()
+    }
+}
+
+impl SparseLu {
+    /// Symbolic analysis of a square pattern.
+    pub fn new(pattern: Pattern) -> Result<SparseLu, FactorError> {
+        let n = pattern.nrows;
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, &pattern.col_ptr, None, &pattern.row_idx);
+        let symbolic = factorize_symbolic_lu(sym, Default::default()).map_err(|_| FactorError::OutOfMemory)?;
+        let req = StackReq::any_of(&[
+            symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Spec::<PartialPivLuParams, f64>::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+        ]);
+        let nnz = pattern.row_idx.len();
+        Ok(SparseLu {
+            pattern,
+            values: vec![0.0; nnz],
+            symbolic,
+            numeric: NumericLu::new(),
+            factored: false,
+            stack: MemBuffer::new(req),
+            work: [vec![0.0; n], vec![0.0; n]],
+        })
+    }
+
+    /// The pattern and the values to fill before [`SparseLu::factor`].
+    pub fn pattern_and_values(&mut self) -> (&Pattern, &mut [f64]) {
+        (&self.pattern, &mut self.values)
+    }
+
+    /// Numeric factorization of the current `values`.
+    pub fn factor(&mut self) -> Result<(), FactorError> {
+        let n = self.pattern.nrows;
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, &self.pattern.col_ptr, None, &self.pattern.row_idx);
+        let a = SparseColMatRef::new(sym, &self.values);
+        self.factored = false;
+        let stack = MemStack::new(&mut self.stack);
+        match self.symbolic.factorize_numeric_lu(&mut self.numeric, a, Par::Seq, stack, Default::default()) {
+            Ok(_) => {
+                self.factored = true;
+                Ok(())
+            }
+            Err(LuError::SymbolicSingular { index }) => Err(FactorError::StructurallySingular { column: index }),
+            Err(LuError::Generic(_)) => Err(FactorError::OutOfMemory),
+        }
+    }
+
+    /// Solve `A x = b` in place (`rhs: (n)`), with the last successful factorization.
+    pub fn solve(&mut self, rhs: &mut [f64]) {
+        self.solve_with(rhs, false);
+    }
+
+    fn solve_with(&mut self, rhs: &mut [f64], transpose: bool) {
+        debug_assert!(self.factored, "solve before a successful factorization");
+        let n = rhs.len();
+        let lu = faer::sparse::linalg::lu::LuRef::new_unchecked(&self.symbolic, &self.numeric);
+        let rhs = MatMut::from_column_major_slice_mut(rhs, n, 1);
+        let stack = MemStack::new(&mut self.stack);
+        if transpose {
+            lu.solve_transpose_in_place_with_conj(Conj::No, rhs, Par::Seq, stack);
+        } else {
+            lu.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, stack);
+        }
+    }
+
+    /// Estimate of the 1-norm condition number `||A||_1 ||A^-1||_1` from the factors, by Hager's
+    /// method as refined by Higham (at most 5 pairs of solves; a lower bound, usually within a
+    /// factor 3 of the true value). Infinite when a solve overflows.
+    pub fn condition_estimate(&mut self) -> f64 {
+        let n = self.pattern.nrows;
+        if n == 0 {
+            return 1.0;
+        }
+        let mut norm_a = 0.0f64;
+        for c in 0..n {
+            let s: f64 = self.values[self.pattern.col_ptr[c]..self.pattern.col_ptr[c + 1]].iter().map(|v| v.abs()).sum();
+            norm_a = norm_a.max(s);
+        }
+        let [mut x, mut z] = std::mem::take(&mut self.work);
+        x.fill(1.0 / n as f64);
+        let mut est = 0.0f64;
+        let mut last = usize::MAX;
+        for _ in 0..5 {
+            self.solve_with(&mut x, false);
+            let y_norm: f64 = x.iter().map(|v| v.abs()).sum();
+            if !y_norm.is_finite() {
+                est = f64::INFINITY;
+                break;
+            }
+            if y_norm <= est {
+                break;
+            }
+            est = y_norm;
+            for (zi, yi) in z.iter_mut().zip(&x) {
+                *zi = if *yi >= 0.0 { 1.0 } else { -1.0 };
+            }
+            self.solve_with(&mut z, true);
+            let (j, zmax) = z.iter().enumerate().fold((0, 0.0f64), |(bj, bz), (j, v)| if v.abs() > bz { (j, v.abs()) } else { (bj, bz) });
+            if j == last {
+                break;
+            }
+            last = j;
+            x.fill(0.0);
+            x[j] = 1.0;
+            if !zmax.is_finite() {
+                est = f64::INFINITY;
+                break;
+            }
+        }
+        self.work = [x, z];
+        norm_a * est
+    }
+}

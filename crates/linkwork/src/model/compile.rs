@@ -1,0 +1,573 @@
+//! [`ModelSpec`] => [`Model`]: check names, numbers and expressions (every problem, with its path),
+//! resolve names to indices and build each joint's constraint.
+
+use super::spec::{AnalysisKind, DriverSpec, JointSpec, ModelSpec, PointRef};
+use super::{Analysis, Body, Element, Model};
+use crate::analysis::SolverSettings;
+use crate::constraints::{
+    Absolute, AbsoluteKind, BodyIx, Constraint, Distance, Driver, DriverKind, Frame, GearKind, GearPair,
+    GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc, Translational, Var,
+};
+use crate::error::Problem;
+use crate::expr::{Expr, TimeFunction};
+use indexmap::IndexMap;
+
+/// The most output points one analysis may ask for; more would exhaust memory rather than finish.
+const MAX_OUTPUT_POINTS: f64 = 1e7;
+
+/// Build the model, or list every problem found.
+pub fn compile(spec: &ModelSpec) -> Result<Model, Vec<Problem>> {
+    let mut cx = Cx { spec, problems: Vec::new(), q0: Vec::new() };
+    let bodies = cx.bodies();
+    cx.q0 = bodies.iter().flat_map(|b| b.q0).collect();
+    cx.unique_names();
+    let joints: Vec<Element> = spec
+        .joints
+        .iter()
+        .filter_map(|(name, j)| {
+            let path = format!("joints.{name}");
+            cx.name(&path, name);
+            let c = cx.joint(&path, j)?;
+            Some(Element { name: name.clone(), kind: joint_kind(j), constraint: c })
+        })
+        .collect();
+    let drivers: Vec<Element> = spec
+        .drivers
+        .iter()
+        .filter_map(|(name, d)| {
+            let path = format!("drivers.{name}");
+            cx.name(&path, name);
+            let c = cx.driver(&path, d)?;
+            Some(Element { name: name.clone(), kind: driver_kind(d), constraint: c })
+        })
+        .collect();
+    let analyses = cx.analyses();
+    if cx.problems.is_empty() {
+        let name = spec.name.clone().unwrap_or_else(|| "model".into());
+        Ok(Model { name, bodies, joints, drivers, analyses })
+    } else {
+        Err(cx.problems)
+    }
+}
+
+fn joint_kind(j: &JointSpec) -> &'static str {
+    match j {
+        JointSpec::Revolute { .. } => "revolute",
+        JointSpec::Translational { .. } => "translational",
+        JointSpec::PointOnLine { .. } => "point_on_line",
+        JointSpec::RevoluteTranslational { .. } => "revolute_translational",
+        JointSpec::Distance { .. } => "distance",
+        JointSpec::AbsoluteX { .. } => "absolute_x",
+        JointSpec::AbsoluteY { .. } => "absolute_y",
+        JointSpec::AbsoluteAngle { .. } => "absolute_angle",
+        JointSpec::Gear { .. } => "gear",
+        JointSpec::RackPinion { .. } => "rack_pinion",
+        JointSpec::RollingDisc { .. } => "rolling_disc",
+        JointSpec::Expression { .. } => "expression",
+    }
+}
+
+fn driver_kind(d: &DriverSpec) -> &'static str {
+    match d {
+        DriverSpec::Angle { .. } => "angle",
+        DriverSpec::RelativeAngle { .. } => "relative_angle",
+        DriverSpec::Distance { .. } => "distance",
+        DriverSpec::X { .. } => "x",
+        DriverSpec::Y { .. } => "y",
+    }
+}
+
+struct Cx<'s> {
+    spec: &'s ModelSpec,
+    problems: Vec<Problem>,
+    /// (3 * bodies) initial guess, for constants that default to their initial value.
+    q0: Vec<f64>,
+}
+
+/// Names become CSV column prefixes and expression variables (`crank.phi`): identifiers only.
+fn is_identifier(s: &str) -> bool {
+    let mut chars = s.chars();
+    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+impl Cx<'_> {
+    fn problem(&mut self, path: impl Into<String>, msg: impl Into<String>) {
+        self.problems.push(Problem::new(path, msg));
+    }
+
+    fn name(&mut self, path: &str, name: &str) {
+        if !is_identifier(name) {
+            self.problem(path, format!("'{name}' is not a valid name: use letters, digits and _, not starting with a digit"));
+        }
+    }
+
+    fn finite(&mut self, path: &str, v: f64) -> Option<f64> {
+        if v.is_finite() {
+            Some(v)
+        } else {
+            self.problem(path, format!("expected a finite number, found {v}"));
+            None
+        }
+    }
+
+    fn positive(&mut self, path: &str, v: f64) -> Option<f64> {
+        let v = self.finite(path, v)?;
+        if v > 0.0 {
+            Some(v)
+        } else {
+            self.problem(path, format!("expected a positive number, found {v}"));
+            None
+        }
+    }
+
+    fn vec2(&mut self, path: &str, v: [f64; 2]) -> Option<[f64; 2]> {
+        let a = self.finite(&format!("{path}[0]"), v[0]);
+        let b = self.finite(&format!("{path}[1]"), v[1]);
+        Some([a?, b?])
+    }
+
+    fn axis(&mut self, path: &str, v: [f64; 2]) -> Option<[f64; 2]> {
+        let v = self.vec2(path, v)?;
+        if v[0].hypot(v[1]) < 1e-12 {
+            self.problem(path, "zero-length axis: expected a non-zero direction [x, y]");
+            return None;
+        }
+        Some(v)
+    }
+
+    fn bodies(&mut self) -> Vec<Body> {
+        if self.spec.bodies.is_empty() && !self.problems.iter().any(|p| p.path == "bodies") {
+            self.problem("bodies", "at least one moving body is required");
+        }
+        let spec = self.spec;
+        if let Some(g) = &spec.ground {
+            for (p, v) in &g.points {
+                self.vec2(&format!("ground.points.{p}"), *v);
+            }
+        }
+        spec.bodies
+            .iter()
+            .enumerate()
+            .map(|(k, (name, b))| {
+                let path = format!("bodies.{name}");
+                if name == "ground" {
+                    self.problem(&path, "'ground' is the fixed body and cannot be listed among the moving bodies");
+                }
+                self.name(&path, name);
+                if let Some(m) = self.finite(&format!("{path}.mass"), b.mass) {
+                    if m < 0.0 {
+                        self.problem(format!("{path}.mass"), format!("expected a mass >= 0 kg, found {m}"));
+                    }
+                }
+                if let Some(j) = self.finite(&format!("{path}.inertia"), b.inertia) {
+                    if j < 0.0 {
+                        self.problem(format!("{path}.inertia"), format!("expected a moment of inertia >= 0 kg m^2, found {j}"));
+                    }
+                }
+                let pos = self.vec2(&format!("{path}.position"), b.position).unwrap_or([0.0; 2]);
+                let angle = self.finite(&format!("{path}.angle"), b.angle).unwrap_or(0.0);
+                let vel = self.vec2(&format!("{path}.velocity"), b.velocity).unwrap_or([0.0; 2]);
+                let omega = self.finite(&format!("{path}.omega"), b.omega).unwrap_or(0.0);
+                for (p, v) in &b.points {
+                    self.vec2(&format!("{path}.points.{p}"), *v);
+                }
+                let mut given = [false; 6];
+                for g in &b.given {
+                    given[*g as usize] = true;
+                }
+                Body {
+                    name: name.clone(),
+                    index: k,
+                    mass: b.mass,
+                    inertia: b.inertia,
+                    points: b.points.clone(),
+                    q0: [pos[0], pos[1], angle],
+                    v0: [vel[0], vel[1], omega],
+                    given,
+                }
+            })
+            .collect()
+    }
+
+    /// Names are shared by bodies, joints and drivers (they label the same output columns).
+    fn unique_names(&mut self) {
+        let spec = self.spec;
+        let mut seen: IndexMap<&str, &str> = IndexMap::new();
+        let all = spec
+            .bodies
+            .keys()
+            .map(|k| ("bodies", k))
+            .chain(spec.joints.keys().map(|k| ("joints", k)))
+            .chain(spec.drivers.keys().map(|k| ("drivers", k)));
+        for (section, name) in all {
+            if let Some(first) = seen.get(name.as_str()) {
+                self.problem(format!("{section}.{name}"), format!("duplicate name: '{name}' is already used in {first}"));
+            } else {
+                seen.insert(name, section);
+            }
+        }
+    }
+
+    fn body(&mut self, path: &str, name: &str) -> Option<BodyIx> {
+        if name == "ground" {
+            return Some(BodyIx::GROUND);
+        }
+        match self.spec.bodies.get_index_of(name) {
+            Some(k) => Some(BodyIx(Some(3 * k))),
+            None => {
+                let known: Vec<&str> = self.spec.bodies.keys().map(String::as_str).collect();
+                self.problem(path, format!("unknown body '{name}'; expected ground or one of: {}", known.join(", ")));
+                None
+            }
+        }
+    }
+
+    fn point(&mut self, path: &str, body: &str, p: &PointRef) -> Option<[f64; 2]> {
+        match p {
+            PointRef::Coords(v) => self.vec2(path, *v),
+            PointRef::Name(n) => {
+                let points = if body == "ground" {
+                    self.spec.ground.as_ref().map(|g| &g.points)
+                } else {
+                    self.spec.bodies.get(body).map(|b| &b.points)
+                };
+                match points.map(|ps| (ps.get(n), ps)) {
+                    Some((Some(v), _)) => Some(*v),
+                    Some((None, ps)) => {
+                        let known: Vec<&str> = ps.keys().map(String::as_str).collect();
+                        let list = if known.is_empty() { "it has no named points".to_string() } else { format!("it has {}", known.join(", ")) };
+                        self.problem(path, format!("unknown point '{n}' of body '{body}' ({list}); or give coordinates [x, y]"));
+                        None
+                    }
+                    // The body itself is unknown: reported where the body is named.
+                    None => None,
+                }
+            }
+        }
+    }
+
+    /// A body and one of its points, both resolved.
+    fn body_point(&mut self, path: &str, bfield: &str, body: &str, pfield: &str, p: &PointRef) -> Option<(BodyIx, [f64; 2])> {
+        let b = self.body(&format!("{path}.{bfield}"), body);
+        let s = self.point(&format!("{path}.{pfield}"), body, p);
+        Some((b?, s?))
+    }
+
+    fn distinct(&mut self, path: &str, i: &str, j: &str) -> bool {
+        if i == j {
+            self.problem(format!("{path}.body_j"), format!("a joint needs two different bodies, found '{i}' twice"));
+            false
+        } else {
+            true
+        }
+    }
+
+    fn joint(&mut self, path: &str, j: &JointSpec) -> Option<Box<dyn Constraint>> {
+        use JointSpec as J;
+        let c: Box<dyn Constraint> = match j {
+            J::Revolute { body_i, point_i, body_j, point_j } => {
+                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
+                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+                let ok = self.distinct(path, body_i, body_j);
+                let ((i, sp), (j, sq)) = (a?, b?);
+                ok.then_some(())?;
+                Box::new(Revolute::new(i, sp, j, sq))
+            }
+            J::Translational { body_i, point_i, axis_i, body_j, point_j, axis_j } => {
+                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
+                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+                let vi = self.axis(&format!("{path}.axis_i"), *axis_i);
+                let vj = self.axis(&format!("{path}.axis_j"), *axis_j);
+                let ok = self.distinct(path, body_i, body_j);
+                let ((i, sp), (j, sq), vi, vj) = (a?, b?, vi?, vj?);
+                ok.then_some(())?;
+                Box::new(Translational::new(i, sp, vi, j, sq, vj))
+            }
+            J::PointOnLine { body_i, point_i, axis_i, body_j, point_j } => {
+                let (i, sp, vi, j, sq) = self.line_and_point(path, body_i, point_i, axis_i, body_j, point_j)?;
+                Box::new(PointOnLine::new(i, sp, vi, j, sq, 0.0))
+            }
+            J::RevoluteTranslational { body_i, point_i, axis_i, body_j, point_j, offset } => {
+                let (i, sp, vi, j, sq) = self.line_and_point(path, body_i, point_i, axis_i, body_j, point_j)?;
+                let offset = match offset {
+                    Some(o) => self.finite(&format!("{path}.offset"), *o)?,
+                    None => {
+                        let (fi, fj) = (Frame::of(i, &self.q0), Frame::of(j, &self.q0));
+                        let (p, r, a) = (fi.point(sp), fj.point(sq), fi.rotate(vi));
+                        let n = [-a[1], a[0]];
+                        ((r[0] - p[0]) * n[0] + (r[1] - p[1]) * n[1]) / a[0].hypot(a[1])
+                    }
+                };
+                Box::new(PointOnLine::new(i, sp, vi, j, sq, offset))
+            }
+            J::Distance { body_i, point_i, body_j, point_j, length } => {
+                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
+                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+                let ok = self.distinct(path, body_i, body_j);
+                let ((i, sp), (j, sq)) = (a?, b?);
+                ok.then_some(())?;
+                let length = match length {
+                    Some(l) => self.positive(&format!("{path}.length"), *l)?,
+                    None => {
+                        let (p, r) = (Frame::of(i, &self.q0).point(sp), Frame::of(j, &self.q0).point(sq));
+                        let l = (r[0] - p[0]).hypot(r[1] - p[1]);
+                        if l < 1e-12 {
+                            self.problem(format!("{path}.length"), "the points coincide in the initial configuration: give a positive length");
+                            return None;
+                        }
+                        l
+                    }
+                };
+                Box::new(Distance::new(i, sp, j, sq, length))
+            }
+            J::AbsoluteX { body, point, value } | J::AbsoluteY { body, point, value } => {
+                let (b, s) = self.body_point(path, "body", body, "point", point)?;
+                if b == BodyIx::GROUND {
+                    self.problem(format!("{path}.body"), "ground cannot be constrained; name a moving body");
+                    return None;
+                }
+                let x = matches!(j, J::AbsoluteX { .. });
+                let value = match value {
+                    Some(v) => self.finite(&format!("{path}.value"), *v)?,
+                    None => Frame::of(b, &self.q0).point(s)[if x { 0 } else { 1 }],
+                };
+                let kind = if x { AbsoluteKind::X } else { AbsoluteKind::Y };
+                Box::new(Absolute::new(kind, b, s, value))
+            }
+            J::AbsoluteAngle { body, value } => {
+                let b = self.body(&format!("{path}.body"), body)?;
+                if b == BodyIx::GROUND {
+                    self.problem(format!("{path}.body"), "ground cannot be constrained; name a moving body");
+                    return None;
+                }
+                let value = match value {
+                    Some(v) => self.finite(&format!("{path}.value"), *v)?,
+                    None => b.coords(&self.q0)[2],
+                };
+                Box::new(Absolute::new(AbsoluteKind::Angle, b, [0.0, 0.0], value))
+            }
+            J::Gear { body_i, point_i, radius_i, body_j, point_j, radius_j, internal } => {
+                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
+                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+                let ri = self.positive(&format!("{path}.radius_i"), *radius_i);
+                let rj = self.positive(&format!("{path}.radius_j"), *radius_j);
+                let ok = self.distinct(path, body_i, body_j);
+                let ((i, si), (j, sj), ri, rj) = (a?, b?, ri?, rj?);
+                ok.then_some(())?;
+                let (ci, cj) = (Frame::of(i, &self.q0).point(si), Frame::of(j, &self.q0).point(sj));
+                if (cj[0] - ci[0]).hypot(cj[1] - ci[1]) < 1e-9 {
+                    self.problem(path, "the gear centres coincide in the initial configuration: the line of centres is undefined");
+                    return None;
+                }
+                let kind = if *internal { GearKind::Internal } else { GearKind::External };
+                Box::new(GearPair::new(kind, i, si, ri, j, sj, rj, &self.q0))
+            }
+            J::RackPinion { body_i, point_i, radius, body_j, point_j, axis_j }
+            | J::RollingDisc { body_i, point_i, radius, body_j, point_j, axis_j } => {
+                let rack = matches!(j, J::RackPinion { .. });
+                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
+                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+                let r = self.positive(&format!("{path}.radius"), *radius);
+                let v = self.axis(&format!("{path}.axis_j"), *axis_j);
+                let ok = self.distinct(path, body_i, body_j);
+                let ((i, sc), (j, sl), r, v) = (a?, b?, r?, v?);
+                ok.then_some(())?;
+                if rack {
+                    Box::new(RackPinion::new(i, sc, r, j, sl, v, &self.q0))
+                } else {
+                    Box::new(RollingDisc::new(i, sc, r, j, sl, v, &self.q0))
+                }
+            }
+            J::Expression { expression } => self.general(&format!("{path}.expression"), expression)?,
+        };
+        Some(c)
+    }
+
+    #[allow(clippy::type_complexity)]
+    fn line_and_point(
+        &mut self,
+        path: &str,
+        body_i: &str,
+        point_i: &PointRef,
+        axis_i: &[f64; 2],
+        body_j: &str,
+        point_j: &PointRef,
+    ) -> Option<(BodyIx, [f64; 2], [f64; 2], BodyIx, [f64; 2])> {
+        let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
+        let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+        let v = self.axis(&format!("{path}.axis_i"), *axis_i);
+        let ok = self.distinct(path, body_i, body_j);
+        let ((i, sp), (j, sq), v) = (a?, b?, v?);
+        ok.then_some((i, sp, v, j, sq))
+    }
+
+    /// A general constraint: names are `<body>.x`, `<body>.y`, `<body>.phi` and `t`.
+    fn general(&mut self, path: &str, src: &str) -> Option<Box<dyn Constraint>> {
+        let spec = self.spec;
+        let mut vars: Vec<Var> = Vec::new();
+        let mut resolve = |name: &str| -> Result<usize, String> {
+            let var = if name == "t" {
+                Var::Time
+            } else {
+                let hint = || {
+                    let bodies: Vec<&str> = spec.bodies.keys().map(String::as_str).collect();
+                    format!("expected <body>.x, <body>.y, <body>.phi or t, with a body among: {}", bodies.join(", "))
+                };
+                let (b, c) = name.split_once('.').ok_or_else(hint)?;
+                let k = spec.bodies.get_index_of(b).ok_or_else(hint)?;
+                let off = match c {
+                    "x" => 0,
+                    "y" => 1,
+                    "phi" => 2,
+                    _ => return Err(hint()),
+                };
+                Var::Coord(3 * k + off)
+            };
+            Ok(match vars.iter().position(|v| *v == var) {
+                Some(s) => s,
+                None => {
+                    vars.push(var);
+                    vars.len() - 1
+                }
+            })
+        };
+        let expr = match Expr::parse(src, &mut resolve) {
+            Ok(e) => e,
+            Err(e) => {
+                self.problem(path, format!("cannot read the expression '{src}': {e}"));
+                return None;
+            }
+        };
+        match GeneralConstraint::try_new(expr, vars) {
+            Ok(c) => Some(Box::new(c)),
+            Err(e) => {
+                self.problem(path, e);
+                None
+            }
+        }
+    }
+
+    fn function(&mut self, path: &str, src: &str) -> Option<TimeFunction> {
+        match TimeFunction::parse(src) {
+            Ok(f) => Some(f),
+            Err(e) => {
+                self.problem(path, format!("cannot read the function '{src}': {e}"));
+                None
+            }
+        }
+    }
+
+    fn driver(&mut self, path: &str, d: &DriverSpec) -> Option<Box<dyn Constraint>> {
+        use DriverSpec as D;
+        let (kind, f) = match d {
+            D::Angle { body, function } => {
+                let b = self.body(&format!("{path}.body"), body);
+                let f = self.function(&format!("{path}.function"), function);
+                let b = b?;
+                if b == BodyIx::GROUND {
+                    self.problem(format!("{path}.body"), "ground cannot be driven; name a moving body");
+                    return None;
+                }
+                (DriverKind::Angle { body: b }, f?)
+            }
+            D::RelativeAngle { body_i, body_j, function } => {
+                let i = self.body(&format!("{path}.body_i"), body_i);
+                let j = self.body(&format!("{path}.body_j"), body_j);
+                let f = self.function(&format!("{path}.function"), function);
+                let ok = self.distinct(path, body_i, body_j);
+                let (i, j) = (i?, j?);
+                ok.then_some(())?;
+                (DriverKind::RelativeAngle { i, j }, f?)
+            }
+            D::Distance { body_i, point_i, body_j, point_j, function } => {
+                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
+                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+                let f = self.function(&format!("{path}.function"), function);
+                let ok = self.distinct(path, body_i, body_j);
+                let ((i, s_p), (j, s_q)) = (a?, b?);
+                ok.then_some(())?;
+                (DriverKind::Distance { i, s_p, j, s_q }, f?)
+            }
+            D::X { body, point, function } | D::Y { body, point, function } => {
+                let bp = self.body_point(path, "body", body, "point", point);
+                let f = self.function(&format!("{path}.function"), function);
+                let (b, p) = bp?;
+                if b == BodyIx::GROUND {
+                    self.problem(format!("{path}.body"), "ground cannot be driven; name a moving body");
+                    return None;
+                }
+                let kind = if matches!(d, D::X { .. }) { DriverKind::X { body: b, point: p } } else { DriverKind::Y { body: b, point: p } };
+                (kind, f?)
+            }
+        };
+        Some(Box::new(Driver::new(kind, f)))
+    }
+
+    fn analyses(&mut self) -> IndexMap<String, Analysis> {
+        let spec = self.spec;
+        let mut out = IndexMap::new();
+        for (name, a) in &spec.analyses {
+            let path = format!("analyses.{name}");
+            let drivers: Vec<usize> = match &a.drivers {
+                None => (0..spec.drivers.len()).collect(),
+                Some(list) => list
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(k, d)| match spec.drivers.get_index_of(d.as_str()) {
+                        Some(i) => Some(i),
+                        None => {
+                            let known: Vec<&str> = spec.drivers.keys().map(String::as_str).collect();
+                            self.problem(format!("{path}.drivers[{k}]"), format!("unknown driver '{d}'; the model's drivers are: {}", known.join(", ")));
+                            None
+                        }
+                    })
+                    .collect(),
+            };
+            let t0 = self.finite(&format!("{path}.t_start"), a.t_start);
+            let t1 = self.finite(&format!("{path}.t_end"), a.t_end);
+            let h = self.positive(&format!("{path}.step"), a.step);
+            let settings = self.settings(&format!("{path}.solver"), &a.solver);
+            let (Some(t0), Some(t1), Some(h), Some(settings)) = (t0, t1, h, settings) else { continue };
+            if t1 < t0 {
+                self.problem(format!("{path}.t_end"), format!("t_end ({t1}) is before t_start ({t0})"));
+                continue;
+            }
+            if (t1 - t0) / h > MAX_OUTPUT_POINTS {
+                self.problem(format!("{path}.step"), format!("{} output points requested; at most {MAX_OUTPUT_POINTS:e} are allowed", ((t1 - t0) / h).ceil()));
+                continue;
+            }
+            let AnalysisKind::Kinematic = a.kind;
+            out.insert(name.clone(), Analysis { name: name.clone(), kind: a.kind, drivers, t_start: t0, t_end: t1, step: h, settings });
+        }
+        out
+    }
+
+    fn settings(&mut self, path: &str, s: &super::spec::SolverSpec) -> Option<SolverSettings> {
+        let d = SolverSettings::default();
+        let mut ok = true;
+        let mut pos = |cx: &mut Self, field: &str, v: Option<f64>, default: f64| -> f64 {
+            match v {
+                Some(v) => cx.positive(&format!("{path}.{field}"), v).unwrap_or_else(|| {
+                    ok = false;
+                    default
+                }),
+                None => default,
+            }
+        };
+        let tolerance = pos(self, "tolerance", s.tolerance, d.tolerance);
+        let max_rotation = pos(self, "max_rotation", s.max_rotation, d.max_rotation);
+        let min_substep = pos(self, "min_substep", s.min_substep, d.min_substep);
+        let singular_condition = pos(self, "singular_condition", s.singular_condition, d.singular_condition);
+        let max_iterations = s.max_iterations.unwrap_or(d.max_iterations);
+        if max_iterations == 0 || max_iterations > 1000 {
+            self.problem(format!("{path}.max_iterations"), format!("expected 1 to 1000 iterations, found {max_iterations}"));
+            ok = false;
+        }
+        if min_substep >= 1.0 {
+            self.problem(format!("{path}.min_substep"), "expected a fraction of the output step below 1");
+            ok = false;
+        }
+        ok.then_some(SolverSettings { tolerance, max_iterations, max_rotation, min_substep, singular_condition })
+    }
+}

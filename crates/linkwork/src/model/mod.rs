@@ -1,0 +1,128 @@
+//! Model files: schema ([`spec`]), reading with every problem located ([`parse`]), and
+//! compilation into an indexed, immutable [`Model`] ([`compile`]).
+
+mod compile;
+mod parse;
+pub mod spec;
+
+pub use compile::compile;
+pub use parse::parse_spec;
+
+use crate::analysis::SolverSettings;
+use crate::constraints::Constraint;
+use crate::error::{Error, Result};
+use indexmap::IndexMap;
+use spec::AnalysisKind;
+use std::path::Path;
+
+/// A moving body.
+#[derive(Debug, Clone)]
+pub struct Body {
+    /// Name in the model file.
+    pub name: String,
+    /// Position in the model's body list; its coordinates are `q[3 index .. 3 index + 3]`.
+    pub index: usize,
+    /// Mass, kg.
+    pub mass: f64,
+    /// Moment of inertia about the centre of mass, kg m^2.
+    pub inertia: f64,
+    /// Named points, body frame, m.
+    pub points: IndexMap<String, [f64; 2]>,
+    /// Initial guess `(x, y, phi)`.
+    pub q0: [f64; 3],
+    /// Initial guess `(vx, vy, omega)`.
+    pub v0: [f64; 3],
+    /// Which of `(x, y, phi, vx, vy, omega)` assembly holds at their initial values.
+    pub given: [bool; 6],
+}
+
+/// A named joint or driver and its constraint rows.
+#[derive(Debug)]
+pub struct Element {
+    /// Name in the model file.
+    pub name: String,
+    /// Its `type` in the model file.
+    pub kind: &'static str,
+    /// The equations.
+    pub constraint: Box<dyn Constraint>,
+}
+
+/// A named analysis, resolved.
+#[derive(Debug, Clone)]
+pub struct Analysis {
+    /// Name in the model file.
+    pub name: String,
+    /// What to compute.
+    pub kind: AnalysisKind,
+    /// Indices into [`Model::drivers`] of the active drivers.
+    pub drivers: Vec<usize>,
+    /// Start time, s.
+    pub t_start: f64,
+    /// End time, s.
+    pub t_end: f64,
+    /// Output step, s.
+    pub step: f64,
+    /// Position solver settings.
+    pub settings: SolverSettings,
+}
+
+/// A compiled mechanism: bodies with coordinate offsets, constraints built, names resolved.
+#[derive(Debug)]
+pub struct Model {
+    /// Title.
+    pub name: String,
+    /// Moving bodies; `n = 3 * bodies.len()` coordinates.
+    pub bodies: Vec<Body>,
+    /// Joints (always active).
+    pub joints: Vec<Element>,
+    /// Drivers (active per analysis).
+    pub drivers: Vec<Element>,
+    /// Analyses by name, in file order.
+    pub analyses: IndexMap<String, Analysis>,
+}
+
+impl Model {
+    /// Read and compile a model file.
+    pub fn load(path: impl AsRef<Path>) -> Result<Model> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| Error::Io { path: path.display().to_string(), message: e.to_string() })?;
+        Model::from_yaml(&text)
+    }
+
+    /// Compile a model from the text of a model file.
+    pub fn from_yaml(text: &str) -> Result<Model> {
+        let spec = parse_spec(text).map_err(Error::Model)?;
+        compile(&spec).map_err(Error::Model)
+    }
+
+    /// Number of coordinates, `3 * bodies`.
+    pub fn n(&self) -> usize {
+        3 * self.bodies.len()
+    }
+
+    /// The initial guess of positions, `(n)`.
+    pub fn q0(&self) -> Vec<f64> {
+        self.bodies.iter().flat_map(|b| b.q0).collect()
+    }
+
+    /// The initial guess of velocities, `(n)`.
+    pub fn qdot0(&self) -> Vec<f64> {
+        self.bodies.iter().flat_map(|b| b.v0).collect()
+    }
+
+    /// The analysis called `name`, or a model error listing the ones there are.
+    pub fn analysis(&self, name: &str) -> Result<&Analysis> {
+        self.analyses.get(name).ok_or_else(|| {
+            let known: Vec<&str> = self.analyses.keys().map(String::as_str).collect();
+            let list = if known.is_empty() { "the model names no analyses".to_string() } else { format!("the model has: {}", known.join(", ")) };
+            Error::Model(vec![crate::error::Problem::new(format!("analyses.{name}"), format!("no analysis named '{name}'; {list}"))])
+        })
+    }
+
+    /// The JSON Schema of model files.
+    pub fn json_schema() -> String {
+        let schema = schemars::schema_for!(spec::ModelSpec);
+        serde_json::to_string_pretty(&schema).expect("a JSON Schema always serializes")
+    }
+}

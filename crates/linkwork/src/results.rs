@@ -1,0 +1,165 @@
+//! Columnar time series of an analysis and their files: `results.csv` (a `time` column, then
+//! `<body>.x, .y, .phi, .vx, .vy, .omega, .ax, .ay, .alpha` per body, SI units, angles unwrapped)
+//! and `summary.json` (model sizes, degrees of freedom, solver statistics, status).
+
+use crate::analysis::{Assembly, KinematicStats};
+use crate::error::Error;
+use crate::model::{Analysis, Model};
+use serde_json::{json, Map, Value};
+use std::io::Write;
+use std::path::Path;
+
+/// The quantities written per body, in column order.
+pub const BODY_QUANTITIES: [&str; 9] = ["x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha"];
+
+/// Results of one analysis: one column per quantity, one row per output time.
+#[derive(Debug, Clone)]
+pub struct Results {
+    /// (rows) output times, s.
+    pub time: Vec<f64>,
+    /// Column names, without `time`.
+    pub names: Vec<String>,
+    /// (columns x rows) values, column by column.
+    pub columns: Vec<Vec<f64>>,
+    /// Everything `summary.json` says besides the status.
+    pub summary: Map<String, Value>,
+}
+
+/// A failed analysis: the error and every result computed before it.
+#[derive(Debug, Clone)]
+pub struct Failure {
+    /// What went wrong, where and when.
+    pub error: Error,
+    /// Output points up to the last good one.
+    pub results: Results,
+}
+
+impl Results {
+    /// Empty results with the columns of `model` for `analysis`.
+    pub fn new(model: &Model, analysis: &Analysis) -> Results {
+        let names: Vec<String> =
+            model.bodies.iter().flat_map(|b| BODY_QUANTITIES.iter().map(move |q| format!("{}.{q}", b.name))).collect();
+        let mut summary = Map::new();
+        summary.insert("model".into(), json!(model.name));
+        summary.insert("analysis".into(), json!(analysis.name));
+        summary.insert("type".into(), json!(analysis.kind));
+        summary.insert("bodies".into(), json!(model.bodies.len()));
+        summary.insert("coordinates".into(), json!(model.n()));
+        summary.insert("joints".into(), json!(model.joints.iter().map(|j| &j.name).collect::<Vec<_>>()));
+        summary.insert(
+            "active_drivers".into(),
+            json!(analysis.drivers.iter().map(|&d| &model.drivers[d].name).collect::<Vec<_>>()),
+        );
+        summary.insert("settings".into(), json!(analysis.settings));
+        Results { time: Vec::new(), columns: vec![Vec::new(); names.len()], names, summary }
+    }
+
+    /// Number of output points.
+    pub fn len(&self) -> usize {
+        self.time.len()
+    }
+
+    /// True when no output point was computed.
+    pub fn is_empty(&self) -> bool {
+        self.time.is_empty()
+    }
+
+    pub(crate) fn reserve(&mut self, rows: usize) {
+        self.time.reserve(rows);
+        self.columns.iter_mut().for_each(|c| c.reserve(rows));
+    }
+
+    /// Append an output point from `q`, `qdot`, `qddot` (each `(n)`).
+    pub(crate) fn push(&mut self, t: f64, q: &[f64], qdot: &[f64], qddot: &[f64]) {
+        self.time.push(t);
+        for b in 0..q.len() / 3 {
+            let vals = [q, qdot, qddot].into_iter().flat_map(|v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]]);
+            for (k, v) in vals.enumerate() {
+                self.columns[9 * b + k].push(v);
+            }
+        }
+    }
+
+    pub(crate) fn set_kinematic_stats(&mut self, stats: &KinematicStats, assembly: &Assembly) {
+        self.summary.insert("output_points".into(), json!(self.time.len()));
+        self.summary.insert("dof".into(), json!(0));
+        self.summary.insert("statistics".into(), json!(stats));
+        self.summary.insert(
+            "assembly".into(),
+            json!({"iterations": assembly.iterations, "residual": assembly.residual, "velocity_residual": assembly.velocity_residual}),
+        );
+    }
+
+    /// The column called `name` (`time` included).
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        if name == "time" {
+            return Some(&self.time);
+        }
+        self.names.iter().position(|n| n == name).map(|k| self.columns[k].as_slice())
+    }
+
+    /// Write `results.csv`: a header, then one line per output time; numbers in the shortest
+    /// form that reads back to the same double.
+    pub fn write_csv(&self, path: &Path) -> Result<(), Error> {
+        let io = |e: std::io::Error| Error::Io { path: path.display().to_string(), message: e.to_string() };
+        let file = std::fs::File::create(path).map_err(io)?;
+        let mut w = std::io::BufWriter::new(file);
+        write!(w, "time").map_err(io)?;
+        for n in &self.names {
+            write!(w, ",{n}").map_err(io)?;
+        }
+        writeln!(w).map_err(io)?;
+        for (r, t) in self.time.iter().enumerate() {
+            write!(w, "{t:?}").map_err(io)?;
+            for c in &self.columns {
+                write!(w, ",{:?}", c[r]).map_err(io)?;
+            }
+            writeln!(w).map_err(io)?;
+        }
+        w.flush().map_err(io)
+    }
+
+    /// The summary as JSON, with `status` ("ok" or "failed") and the error if there is one.
+    pub fn summary_json(&self, error: Option<&Error>) -> Value {
+        let mut s = self.summary.clone();
+        s.insert("status".into(), json!(if error.is_some() { "failed" } else { "ok" }));
+        if let Some(e) = error {
+            s.insert("error".into(), json!(e.to_string()));
+            s.insert("error_elements".into(), json!(e.elements()));
+            if let Error::Singular { time, .. } | Error::Convergence { time, .. } = e {
+                s.insert("error_time".into(), json!(time));
+            }
+        }
+        Value::Object(s)
+    }
+
+    /// Write `results.csv` and `summary.json` into `dir` (created if missing).
+    pub fn write(&self, dir: &Path, error: Option<&Error>) -> Result<(), Error> {
+        let io = |e: std::io::Error| Error::Io { path: dir.display().to_string(), message: e.to_string() };
+        std::fs::create_dir_all(dir).map_err(io)?;
+        self.write_csv(&dir.join("results.csv"))?;
+        let text = serde_json::to_string_pretty(&self.summary_json(error)).unwrap_or_default();
+        std::fs::write(dir.join("summary.json"), text + "\n").map_err(io)
+    }
+}
+
+impl Model {
+    /// Run the analysis called `name`.
+    pub fn run(&self, name: &str) -> Result<Results, Box<Failure>> {
+        let analysis = self.analysis(name).map_err(|error| {
+            let empty = Analysis {
+                name: name.into(),
+                kind: crate::model::spec::AnalysisKind::Kinematic,
+                drivers: vec![],
+                t_start: 0.0,
+                t_end: 0.0,
+                step: 1.0,
+                settings: Default::default(),
+            };
+            Box::new(Failure { error, results: Results::new(self, &empty) })
+        })?;
+        match analysis.kind {
+            crate::model::spec::AnalysisKind::Kinematic => crate::analysis::run_kinematic(self, analysis),
+        }
+    }
+}

@@ -1,0 +1,161 @@
+//! The active constraints of one analysis stacked into one system: `Phi (m)`, `Phi_q (m x n)`,
+//! `nu (m)`, `gamma (m)`. Rows are ordered joints first, then active drivers, each element's rows
+//! in its own order.
+
+use crate::constraints::Constraint;
+use crate::error::RowName;
+use crate::model::{Element, Model};
+use faer::MatMut;
+
+/// Stacked constraints of an analysis. Evaluation allocates nothing.
+#[derive(Debug)]
+pub struct System<'m> {
+    elements: Vec<&'m Element>,
+    /// (elements + 1) first row of each element; the last entry is `m`.
+    offsets: Vec<usize>,
+    /// Number of coordinates.
+    pub n: usize,
+    /// Number of equations.
+    pub m: usize,
+    /// (max rows x width) one element's Jacobian block.
+    block: Vec<f64>,
+}
+
+impl<'m> System<'m> {
+    /// The model's joints and the drivers with the given indices.
+    pub fn new(model: &'m Model, drivers: &[usize]) -> System<'m> {
+        let elements: Vec<&Element> = model.joints.iter().chain(drivers.iter().map(|&d| &model.drivers[d])).collect();
+        let mut offsets = vec![0];
+        let mut big = 0;
+        for e in &elements {
+            let c = &e.constraint;
+            offsets.push(offsets.last().copied().unwrap_or(0) + c.rows());
+            big = big.max(c.rows() * c.columns().len());
+        }
+        let m = offsets[elements.len()];
+        System { elements, offsets, n: model.n(), m, block: vec![0.0; big] }
+    }
+
+    fn constraints(&self) -> impl Iterator<Item = (&dyn Constraint, std::ops::Range<usize>)> + '_ {
+        self.elements.iter().zip(self.offsets.windows(2)).map(|(e, w)| (e.constraint.as_ref(), w[0]..w[1]))
+    }
+
+    /// `(q, t) => Phi`, `out: (m)`.
+    pub fn phi(&self, q: &[f64], t: f64, out: &mut [f64]) {
+        for (c, r) in self.constraints() {
+            c.phi(q, t, &mut out[r]);
+        }
+    }
+
+    /// `(q, t) => nu = -Phi_t`, `out: (m)`.
+    pub fn nu(&self, q: &[f64], t: f64, out: &mut [f64]) {
+        for (c, r) in self.constraints() {
+            c.nu(q, t, &mut out[r]);
+        }
+    }
+
+    /// `(q, qdot, t) => gamma`, `out: (m)`.
+    pub fn gamma(&self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) {
+        for (c, r) in self.constraints() {
+            c.gamma(q, qdot, t, &mut out[r]);
+        }
+    }
+
+    /// `(q, t) => Phi_q` as a dense `(m x n)` matrix.
+    pub fn jacobian_dense(&mut self, q: &[f64], t: f64, mut out: MatMut<'_, f64>) {
+        out.fill(0.0);
+        let Self { elements, offsets, block, .. } = self;
+        for (e, w) in elements.iter().zip(offsets.windows(2)) {
+            let c = e.constraint.as_ref();
+            let cols = c.columns();
+            let block = &mut block[..c.rows() * cols.len()];
+            c.jacobian(q, t, block);
+            for (r, row) in (w[0]..w[1]).enumerate() {
+                for (k, &col) in cols.iter().enumerate() {
+                    out[(row, col)] += block[r * cols.len() + k];
+                }
+            }
+        }
+    }
+
+    /// The joint (or driver) and equation of row `row`.
+    pub fn row_name(&self, row: usize) -> RowName {
+        let k = self.offsets.partition_point(|&o| o <= row) - 1;
+        let c = &self.elements[k].constraint;
+        RowName { element: self.elements[k].name.clone(), equation: c.row_names()[row - self.offsets[k]].to_string() }
+    }
+
+    /// The row with the largest absolute value of `v (m)`, and that value.
+    pub fn worst_row(&self, v: &[f64]) -> (RowName, f64) {
+        let (k, x) = v.iter().enumerate().fold((0, 0.0f64), |(bk, bx), (k, x)| if x.abs() > bx { (k, x.abs()) } else { (bk, bx) });
+        (self.row_name(k), x)
+    }
+}
+
+/// A compressed-column pattern of `Phi_q` restricted to chosen rows, fixed for an analysis, and
+/// the map from each element's Jacobian block entries to positions in the value array.
+#[derive(Debug, Clone)]
+pub struct Pattern {
+    /// (n + 1) column pointers.
+    pub col_ptr: Vec<usize>,
+    /// (nnz) row index of each value, in the renumbered (selected) rows.
+    pub row_idx: Vec<usize>,
+    /// (sum of block sizes) value position of each block entry, or `usize::MAX` for unselected rows.
+    map: Vec<usize>,
+    /// Number of selected rows.
+    pub nrows: usize,
+}
+
+impl Pattern {
+    /// Pattern of the rows `selected` (global row indices, ascending) of `sys`.
+    pub fn new(sys: &System<'_>, selected: &[usize]) -> Pattern {
+        let mut local = vec![usize::MAX; sys.m];
+        for (k, &r) in selected.iter().enumerate() {
+            local[r] = k;
+        }
+        // (column, local row) of every block entry, in block order.
+        let mut entries = Vec::new();
+        for (c, rows) in sys.constraints() {
+            for row in rows {
+                for &col in c.columns() {
+                    entries.push((col, local[row]));
+                }
+            }
+        }
+        let mut sorted: Vec<(usize, usize)> = entries.iter().copied().filter(|e| e.1 != usize::MAX).collect();
+        sorted.sort_unstable();
+        sorted.dedup();
+        let mut col_ptr = vec![0; sys.n + 1];
+        for &(c, _) in &sorted {
+            col_ptr[c + 1] += 1;
+        }
+        for c in 0..sys.n {
+            col_ptr[c + 1] += col_ptr[c];
+        }
+        let row_idx = sorted.iter().map(|e| e.1).collect();
+        let map = entries
+            .iter()
+            .map(|e| if e.1 == usize::MAX { usize::MAX } else { sorted.binary_search(e).unwrap_or(usize::MAX) })
+            .collect();
+        Pattern { col_ptr, row_idx, map, nrows: selected.len() }
+    }
+
+    /// `(q, t) => Phi_q` values in this pattern, `values: (nnz)`.
+    pub fn fill(&self, sys: &mut System<'_>, q: &[f64], t: f64, values: &mut [f64]) {
+        values.fill(0.0);
+        let mut k = 0;
+        let System { elements, block, .. } = sys;
+        for e in elements.iter() {
+            let c = e.constraint.as_ref();
+            let len = c.rows() * c.columns().len();
+            let block = &mut block[..len];
+            c.jacobian(q, t, block);
+            for (&pos, &v) in self.map[k..k + len].iter().zip(block.iter()) {
+                if pos != usize::MAX {
+                    values[pos] += v;
+                }
+            }
+            k += len;
+        }
+    }
+}
