@@ -23,7 +23,7 @@ mod translational;
 pub use absolute::{Absolute, AbsoluteKind};
 pub use distance::Distance;
 pub use driver::{Driver, DriverKind};
-pub use expression::GeneralConstraint;
+pub use expression::{GeneralConstraint, Var, MAX_SLOTS};
 pub use gear::{GearKind, GearPair};
 pub use point_line::PointOnLine;
 pub use revolute::Revolute;
@@ -131,11 +131,7 @@ pub(crate) struct Pair {
 
 impl Pair {
     pub fn new(i: BodyIx, j: BodyIx) -> Pair {
-        let columns = [i, j]
-            .iter()
-            .filter_map(|b| b.0)
-            .flat_map(|k| [k, k + 1, k + 2])
-            .collect();
+        let columns = [i, j].iter().filter_map(|b| b.0).flat_map(|k| [k, k + 1, k + 2]).collect();
         Pair { i, j, columns }
     }
     pub fn columns(&self) -> &[usize] {
@@ -157,6 +153,116 @@ impl Pair {
     #[inline]
     pub fn width(&self) -> usize {
         self.columns.len()
+    }
+}
+
+/// The unit vector along `v` (callers guarantee `v != 0`).
+#[inline]
+pub(crate) fn unit(v: [f64; 2]) -> [f64; 2] {
+    let n = v[0].hypot(v[1]);
+    [v[0] / n, v[1] / n]
+}
+
+/// `d = r_Q - r_P` from a point `P` of body i to a point `Q` of body j, with the rotated body vectors
+/// its derivatives need. Any scalar row `f(d)` gets its Jacobian from [`Separation::chain`] and the
+/// acceleration-free part of its second time derivative from [`Separation::rate`] and
+/// [`Separation::accel_free`]:
+///
+/// ```text
+/// d      = r_j + A_j s'_Q - r_i - A_i s'_P
+/// d_q    = [ -I   -B_i s'_P   I   B_j s'_Q ]                     (2 x 6), B s' = R90 A s'
+/// d'     = r_j' + omega_j R90 A_j s'_Q - r_i' - omega_i R90 A_i s'_P
+/// d''    = (terms in qddot) + A_i s'_P omega_i^2 - A_j s'_Q omega_j^2
+/// ```
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Separation {
+    /// `(2)` `r_Q - r_P`.
+    pub d: [f64; 2],
+    /// `(2)` `A_i s'_P`.
+    pub a_p: [f64; 2],
+    /// `(2)` `A_j s'_Q`.
+    pub a_q: [f64; 2],
+    /// `(2)` `(phi_i, phi_j)`.
+    pub phi: [f64; 2],
+}
+
+impl Separation {
+    /// `(q) => d` and the rotated body vectors.
+    #[inline]
+    pub fn of(i: BodyIx, s_p: [f64; 2], j: BodyIx, s_q: [f64; 2], q: &[f64]) -> Separation {
+        let (fi, fj) = (Frame::of(i, q), Frame::of(j, q));
+        let (a_p, a_q) = (fi.rotate(s_p), fj.rotate(s_q));
+        let d = [fj.x + a_q[0] - fi.x - a_p[0], fj.y + a_q[1] - fi.y - a_p[1]];
+        Separation { d, a_p, a_q, phi: [fi.phi, fj.phi] }
+    }
+    /// `g = df/dd => (f_{q_i}, f_{q_j})`: the `1 x 3` Jacobian blocks of a scalar `f(d)`.
+    #[inline]
+    pub fn chain(&self, g: [f64; 2]) -> ([f64; 3], [f64; 3]) {
+        ([-g[0], -g[1], -dot(g, perp(self.a_p))], [g[0], g[1], dot(g, perp(self.a_q))])
+    }
+    /// `(qdot_i, qdot_j) => d'`.
+    #[inline]
+    pub fn rate(&self, qd_i: [f64; 3], qd_j: [f64; 3]) -> [f64; 2] {
+        let (bp, bq) = (perp(self.a_p), perp(self.a_q));
+        [qd_j[0] + bq[0] * qd_j[2] - qd_i[0] - bp[0] * qd_i[2], qd_j[1] + bq[1] * qd_j[2] - qd_i[1] - bp[1] * qd_i[2]]
+    }
+    /// `(omega_i, omega_j) => d''` at zero accelerations: `A_i s'_P omega_i^2 - A_j s'_Q omega_j^2`.
+    #[inline]
+    pub fn accel_free(&self, w_i: f64, w_j: f64) -> [f64; 2] {
+        let (wi2, wj2) = (w_i * w_i, w_j * w_j);
+        [self.a_p[0] * wi2 - self.a_q[0] * wj2, self.a_p[1] * wi2 - self.a_q[1] * wj2]
+    }
+}
+
+/// `Phi = w . d`: the component along a direction `w = A_i w'` fixed in body i of the separation
+/// `d = r_Q - r_P` from `P` on body i to `Q` on body j. The line-type rows (translational,
+/// point-on-line, rolling) are this with `w'` the unit normal or direction of a line of body i.
+///
+/// ```text
+/// Phi     = w . d
+/// Phi_q_i = [ -w^T   (R90 w) . d - w . B_i s'_P ]
+/// Phi_q_j = [  w^T   w . B_j s'_Q ]
+/// gamma   = (w . d) omega_i^2 - 2 omega_i (R90 w) . d' + w . (A_j s'_Q omega_j^2 - A_i s'_P omega_i^2)
+/// ```
+/// from `w' = omega_i R90 w` and `w'' = alpha_i R90 w - omega_i^2 w` (Haug 1989, section 3.3.2).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Projection {
+    pub i: BodyIx,
+    /// `(2)` the direction in body i's frame (unit when the row must be a distance).
+    pub w: [f64; 2],
+    pub s_p: [f64; 2],
+    pub j: BodyIx,
+    pub s_q: [f64; 2],
+}
+
+impl Projection {
+    #[inline]
+    fn geometry(&self, q: &[f64]) -> ([f64; 2], Separation) {
+        let w = Frame::of(self.i, q).rotate(self.w);
+        (w, Separation::of(self.i, self.s_p, self.j, self.s_q, q))
+    }
+    /// `(q) => w . d`.
+    #[inline]
+    pub fn value(&self, q: &[f64]) -> f64 {
+        let (w, sep) = self.geometry(q);
+        dot(w, sep.d)
+    }
+    /// `(q) => (Phi_q_i, Phi_q_j)`, `1 x 3` each.
+    #[inline]
+    pub fn blocks(&self, q: &[f64]) -> ([f64; 3], [f64; 3]) {
+        let (w, sep) = self.geometry(q);
+        let (mut bi, bj) = sep.chain(w);
+        bi[2] += dot(perp(w), sep.d);
+        (bi, bj)
+    }
+    /// `(q, qdot) => gamma`.
+    #[inline]
+    pub fn gamma(&self, q: &[f64], qdot: &[f64]) -> f64 {
+        let (w, sep) = self.geometry(q);
+        let (qd_i, qd_j) = (self.i.coords(qdot), self.j.coords(qdot));
+        let wi = qd_i[2];
+        let free = sep.accel_free(wi, qd_j[2]);
+        dot(w, sep.d) * wi * wi - 2.0 * wi * dot(perp(w), sep.rate(qd_i, qd_j)) - dot(w, free)
     }
 }
 

@@ -1,0 +1,146 @@
+//! Absolute constraints: the global x or y of a body point, or the angle of a body, held at a value.
+//! One row each.
+//!
+//! ```text
+//! X:      Phi = x_i + (A_i s'_P)_x - c     Phi_q = [ 1  0  (B_i s'_P)_x ]    gamma = (A_i s'_P)_x omega_i^2
+//! Y:      Phi = y_i + (A_i s'_P)_y - c     Phi_q = [ 0  1  (B_i s'_P)_y ]    gamma = (A_i s'_P)_y omega_i^2
+//! Angle:  Phi = phi_i - c                  Phi_q = [ 0  0  1 ]               gamma = 0
+//! nu = 0
+//! ```
+//! Haug (1989) section 3.2; Nikravesh (2018) section 7.3.
+
+use super::{BodyIx, Constraint, Pair, Separation};
+
+/// Which coordinate an [`Absolute`] constraint holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AbsoluteKind {
+    /// The global x of a body point.
+    X,
+    /// The global y of a body point.
+    Y,
+    /// The angle of the body frame.
+    Angle,
+}
+
+/// A body point's global x or y, or a body's angle, equal to a constant.
+#[derive(Debug, Clone)]
+pub struct Absolute {
+    kind: AbsoluteKind,
+    pair: Pair,
+    point: [f64; 2],
+    value: f64,
+}
+
+impl Absolute {
+    /// `point`: the point in the body frame (ignored for [`AbsoluteKind::Angle`]); `value`: the
+    /// coordinate it is held at (m or rad).
+    pub fn new(kind: AbsoluteKind, body: BodyIx, point: [f64; 2], value: f64) -> Absolute {
+        Absolute { kind, pair: Pair::new(body, BodyIx::GROUND), point, value }
+    }
+
+    /// `(q) => r_P` measured from the global origin.
+    #[inline]
+    fn position(&self, q: &[f64]) -> Separation {
+        Separation::of(BodyIx::GROUND, [0.0; 2], self.pair.i, self.point, q)
+    }
+
+    /// The component of `r_P` this row holds (0 or 1), `None` for the angle.
+    #[inline]
+    fn axis(&self) -> Option<usize> {
+        match self.kind {
+            AbsoluteKind::X => Some(0),
+            AbsoluteKind::Y => Some(1),
+            AbsoluteKind::Angle => None,
+        }
+    }
+}
+
+impl Constraint for Absolute {
+    fn rows(&self) -> usize {
+        1
+    }
+    fn row_names(&self) -> &[&'static str] {
+        match self.kind {
+            AbsoluteKind::X => &["x"],
+            AbsoluteKind::Y => &["y"],
+            AbsoluteKind::Angle => &["angle"],
+        }
+    }
+    fn columns(&self) -> &[usize] {
+        self.pair.columns()
+    }
+    fn phi(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+        out[0] = match self.axis() {
+            Some(k) => self.position(q).d[k],
+            None => self.pair.i.coords(q)[2],
+        } - self.value;
+    }
+    fn jacobian(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+        let row = match self.axis() {
+            Some(k) => {
+                let mut g = [0.0; 2];
+                g[k] = 1.0;
+                self.position(q).chain(g).1
+            }
+            None => [0.0, 0.0, 1.0],
+        };
+        self.pair.scatter(row, [0.0; 3], out);
+    }
+    fn nu(&self, _q: &[f64], _t: f64, out: &mut [f64]) {
+        out[0] = 0.0;
+    }
+    fn gamma(&self, q: &[f64], qdot: &[f64], _t: f64, out: &mut [f64]) {
+        out[0] = match self.axis() {
+            Some(k) => -self.position(q).accel_free(0.0, self.pair.i.coords(qdot)[2])[k],
+            None => 0.0,
+        };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::constraints::testing::check_fd_random;
+
+    #[test]
+    fn derivatives_match_finite_differences() {
+        for (seed, kind) in [AbsoluteKind::X, AbsoluteKind::Y, AbsoluteKind::Angle].into_iter().enumerate() {
+            let c = Absolute::new(kind, BodyIx(Some(3)), [0.4, -0.7], 0.25);
+            check_fd_random(&c, 2, seed as u64);
+        }
+    }
+
+    /// Hand-derived: a bar at angle pi/2 with centre (1, 2); its end s' = (0.5, 0) is at
+    /// (1, 2.5). x row: Phi = 1 - 0.2 = 0.8, d x_P / d phi = -0.5 sin(pi/2) = -0.5, gamma =
+    /// (A s')_x omega^2 = 0 for x, and (A s')_y omega^2 = 0.5 * 9 = 4.5 for y (omega = 3).
+    #[test]
+    fn hand_derived_bar_end() {
+        let q = [1.0, 2.0, std::f64::consts::FRAC_PI_2];
+        let qdot = [0.1, -0.2, 3.0];
+        let (mut phi, mut jac, mut g) = ([0.0], [0.0; 3], [0.0]);
+
+        let x = Absolute::new(AbsoluteKind::X, BodyIx(Some(0)), [0.5, 0.0], 0.2);
+        x.phi(&q, 0.0, &mut phi);
+        x.jacobian(&q, 0.0, &mut jac);
+        x.gamma(&q, &qdot, 0.0, &mut g);
+        assert!((phi[0] - 0.8).abs() < 1e-14, "{phi:?}");
+        assert!((jac[0] - 1.0).abs() < 1e-14 && jac[1] == 0.0 && (jac[2] + 0.5).abs() < 1e-14, "{jac:?}");
+        assert!(g[0].abs() < 1e-14, "{g:?}");
+
+        let y = Absolute::new(AbsoluteKind::Y, BodyIx(Some(0)), [0.5, 0.0], 2.5);
+        y.phi(&q, 0.0, &mut phi);
+        y.jacobian(&q, 0.0, &mut jac);
+        y.gamma(&q, &qdot, 0.0, &mut g);
+        assert!(phi[0].abs() < 1e-14, "{phi:?}");
+        assert!(jac[0] == 0.0 && jac[1] == 1.0 && jac[2].abs() < 1e-14, "{jac:?}");
+        assert!((g[0] - 4.5).abs() < 1e-14, "{g:?}");
+
+        let a = Absolute::new(AbsoluteKind::Angle, BodyIx(Some(0)), [9.0, 9.0], 1.0);
+        a.phi(&q, 0.0, &mut phi);
+        a.jacobian(&q, 0.0, &mut jac);
+        a.gamma(&q, &qdot, 0.0, &mut g);
+        assert!((phi[0] - (std::f64::consts::FRAC_PI_2 - 1.0)).abs() < 1e-15);
+        assert_eq!(jac, [0.0, 0.0, 1.0]);
+        assert_eq!(g, [0.0]);
+    }
+}

@@ -1,0 +1,107 @@
+//! Translational (prismatic) joint: point `Q` of body j slides on the line of body i through `P`
+//! along `v'_i`, and the bodies keep their relative angle so that the axes `v'_i` and `v'_j` stay
+//! parallel. Two rows.
+//!
+//! ```text
+//! n_i   = A_i R90 v'_i / |v'_i|,    d = r_j + A_j s'_Q - r_i - A_i s'_P
+//! Phi   = [ n_i . d                 ]                                      (2)
+//!         [ phi_i - phi_j - c       ],   c = atan2(v'_j) - atan2(v'_i)
+//! Phi_q = [ -n_i^T   (R90 n_i) . d - n_i . B_i s'_P    n_i^T   n_i . B_j s'_Q ]
+//!         [  0  0    1                                  0  0   -1             ]   (2 x 6)
+//! nu    = 0
+//! gamma = [ (n_i . d) omega_i^2 - 2 omega_i (R90 n_i) . d'
+//!             + n_i . (A_j s'_Q omega_j^2 - A_i s'_P omega_i^2) ]
+//!         [ 0 ]
+//! ```
+//! `c` comes from the axes, not from an initial configuration: the joint forces `A_i v'_i` and
+//! `A_j v'_j` to point the same way. Haug (1989) section 3.3.2; Nikravesh (2018) section 7.1.
+
+use super::{perp, unit, BodyIx, Constraint, Pair, Projection};
+
+/// A translational joint between body i (line through `P` along `v_i`) and body j (point `Q`, axis
+/// `v_j`).
+#[derive(Debug, Clone)]
+pub struct Translational {
+    pair: Pair,
+    line: Projection,
+    c: f64,
+}
+
+impl Translational {
+    /// `s_p`, `v_i`: a point of the sliding axis and its direction in body i's frame; `s_q`, `v_j`:
+    /// a point of body j on the axis and the axis direction in body j's frame. The directions need
+    /// not be unit, but must be non-zero.
+    pub fn new(i: BodyIx, s_p: [f64; 2], v_i: [f64; 2], j: BodyIx, s_q: [f64; 2], v_j: [f64; 2]) -> Translational {
+        let c = v_j[1].atan2(v_j[0]) - v_i[1].atan2(v_i[0]);
+        let line = Projection { i, w: perp(unit(v_i)), s_p, j, s_q };
+        Translational { pair: Pair::new(i, j), line, c }
+    }
+}
+
+impl Constraint for Translational {
+    fn rows(&self) -> usize {
+        2
+    }
+    fn row_names(&self) -> &[&'static str] {
+        &["line", "angle"]
+    }
+    fn columns(&self) -> &[usize] {
+        self.pair.columns()
+    }
+    fn phi(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+        out[0] = self.line.value(q);
+        out[1] = self.pair.i.coords(q)[2] - self.pair.j.coords(q)[2] - self.c;
+    }
+    fn jacobian(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+        let w = self.pair.width();
+        let (bi, bj) = self.line.blocks(q);
+        self.pair.scatter(bi, bj, &mut out[..w]);
+        self.pair.scatter([0.0, 0.0, 1.0], [0.0, 0.0, -1.0], &mut out[w..2 * w]);
+    }
+    fn nu(&self, _q: &[f64], _t: f64, out: &mut [f64]) {
+        out[..2].fill(0.0);
+    }
+    fn gamma(&self, q: &[f64], qdot: &[f64], _t: f64, out: &mut [f64]) {
+        out[0] = self.line.gamma(q, qdot);
+        out[1] = 0.0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::constraints::testing::check_fd_random;
+
+    #[test]
+    fn derivatives_match_finite_differences() {
+        let c = Translational::new(BodyIx(Some(0)), [0.3, -0.2], [1.0, 2.0], BodyIx(Some(3)), [-1.1, 0.4], [0.0, -3.0]);
+        check_fd_random(&c, 2, 1);
+        let g = Translational::new(BodyIx::GROUND, [0.5, -2.0], [2.0, 0.0], BodyIx(Some(3)), [0.7, 0.1], [1.0, 1.0]);
+        check_fd_random(&g, 2, 2);
+        let h = Translational::new(BodyIx(Some(0)), [0.5, -2.0], [0.3, -0.4], BodyIx::GROUND, [0.7, 0.1], [1.0, 0.0]);
+        check_fd_random(&h, 2, 3);
+    }
+
+    /// Hand-derived: a guide (body i) with centre at the origin, angle 0, axis (2, 0) through its
+    /// centre; a slider (body j, axis (0, 1) in its own frame) with centre (1.5, 0.25) and s'_Q = 0, at
+    /// angle -pi/2 so that its axis points along +x. n_i = (0, 1); d = (1.5, 0.25): line row = 0.25; c = pi/2 - 0 so the angle row is
+    /// 0 - (-pi/2) - pi/2 = 0. Line row Phi_phi_i = (R90 n) . d = (-1, 0) . (1.5, 0.25) = -1.5.
+    /// With the guide spinning at omega_i = 2 (slider at rest): d' = 0 (P is the guide's centre),
+    /// so gamma = (n . d) omega_i^2 = 0.25 * 4 = 1.
+    #[test]
+    fn hand_derived_slider_on_spinning_guide() {
+        let c = Translational::new(BodyIx(Some(0)), [0.0, 0.0], [2.0, 0.0], BodyIx(Some(3)), [0.0, 0.0], [0.0, 1.0]);
+        let q = [0.0, 0.0, 0.0, 1.5, 0.25, -std::f64::consts::FRAC_PI_2];
+        let qdot = [0.0, 0.0, 2.0, 0.0, 0.0, 0.0];
+        let (mut phi, mut jac, mut g) = ([1.0; 2], [0.0; 12], [0.0; 2]);
+        c.phi(&q, 0.0, &mut phi);
+        c.jacobian(&q, 0.0, &mut jac);
+        c.gamma(&q, &qdot, 0.0, &mut g);
+        assert!((phi[0] - 0.25).abs() < 1e-14 && phi[1].abs() < 1e-15, "{phi:?}");
+        let expect = [0.0, -1.0, -1.5, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0];
+        for (a, b) in jac.iter().zip(expect) {
+            assert!((a - b).abs() < 1e-14, "{jac:?}");
+        }
+        assert!((g[0] - 1.0).abs() < 1e-14 && g[1] == 0.0, "{g:?}");
+    }
+}
