@@ -36,7 +36,14 @@ pub struct Assembly {
 
 /// Assemble `sys` at time `t` from `q0`, `qdot0`. `given: (2n)` marks the positions (first `n`)
 /// and velocities (last `n`) to hold. `tolerance` is the max-norm of `Phi` to reach.
-pub fn assemble(sys: &mut System<'_>, q0: &[f64], qdot0: &[f64], given: &[bool], t: f64, tolerance: f64) -> Result<Assembly> {
+pub fn assemble(
+    sys: &mut System<'_>,
+    q0: &[f64],
+    qdot0: &[f64],
+    given: &[bool],
+    t: f64,
+    tolerance: f64,
+) -> Result<Assembly> {
     let (n, m) = (sys.n, sys.m);
     let free: Vec<usize> = (0..n).filter(|&k| !given[k]).collect();
     let mut q = q0.to_vec();
@@ -89,7 +96,8 @@ pub fn assemble(sys: &mut System<'_>, q0: &[f64], qdot0: &[f64], given: &[bool],
     let free_v: Vec<usize> = (0..n).filter(|&k| !given[n + k]).collect();
     let r: Vec<f64> = (0..m).map(|i| nu[i] - (0..n).map(|j| jac[(i, j)] * qdot[j]).sum::<f64>()).collect();
     let jf = select_columns(jac.as_ref(), &free_v);
-    let dv = min_norm_solve(jf.as_ref(), &r).ok_or_else(|| fail(sys, &phi, iterations, "the Jacobian is not finite"))?;
+    let dv =
+        min_norm_solve(jf.as_ref(), &r).ok_or_else(|| fail(sys, &phi, iterations, "the Jacobian is not finite"))?;
     for (k, &c) in free_v.iter().enumerate() {
         qdot[c] += dv[k];
     }

@@ -84,7 +84,8 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
     } else {
         vec![false; 2 * n]
     };
-    let assembly = assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t, super::SolverSettings::default().tolerance)?;
+    let assembly =
+        assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t, super::SolverSettings::default().tolerance)?;
     let mut jac = Mat::<f64>::zeros(sys.m, n);
     sys.jacobian_dense(&assembly.q, t, jac.as_mut());
     let (keep, drop) = independent_rows(jac.as_ref());

@@ -80,9 +80,13 @@ impl Solver<'_> {
             FactorError::StructurallySingular { column } => Error::Singular {
                 time: self.t,
                 rows: vec![],
-                detail: format!("no equation determines coordinate {column} (the driven Jacobian is structurally singular)"),
+                detail: format!(
+                    "no equation determines coordinate {column} (the driven Jacobian is structurally singular)"
+                ),
             },
-            FactorError::OutOfMemory => Error::Io { path: String::new(), message: "out of memory while factorizing".into() },
+            FactorError::OutOfMemory => {
+                Error::Io { path: String::new(), message: "out of memory while factorizing".into() }
+            }
         }
     }
 
@@ -151,7 +155,10 @@ impl Solver<'_> {
         let ratio = if s[0] > 0.0 { s[k] / s[0] } else { 0.0 };
         let u = svd.U();
         let umax = (0..u.nrows()).map(|i| u[(i, k)].abs()).fold(0.0f64, f64::max);
-        let rows = (0..u.nrows()).filter(|&i| u[(i, k)].abs() >= 0.2 * umax).map(|i| self.sys.row_name(self.rows[i])).collect();
+        let rows = (0..u.nrows())
+            .filter(|&i| u[(i, k)].abs() >= 0.2 * umax)
+            .map(|i| self.sys.row_name(self.rows[i]))
+            .collect();
         (ratio, rows)
     }
 }
@@ -165,7 +172,9 @@ fn gather(full: &[f64], rows: &[usize], out: &mut [f64]) {
 
 /// Index and absolute value of the largest entry.
 fn worst(v: &[f64]) -> (usize, f64) {
-    v.iter().enumerate().fold((0, 0.0f64), |(bk, bx), (k, x)| if x.abs() > bx || x.is_nan() { (k, x.abs()) } else { (bk, bx) })
+    v.iter()
+        .enumerate()
+        .fold((0, 0.0f64), |(bk, bx), (k, x)| if x.abs() > bx || x.is_nan() { (k, x.abs()) } else { (bk, bx) })
 }
 
 fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
@@ -203,7 +212,12 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
     let pattern = Pattern::new(&sys, &rows);
     let lu = match SparseLu::new(pattern) {
         Ok(lu) => lu,
-        Err(_) => return Err(fail(results, Error::Io { path: String::new(), message: "out of memory in the symbolic factorization".into() })),
+        Err(_) => {
+            return Err(fail(
+                results,
+                Error::Io { path: String::new(), message: "out of memory in the symbolic factorization".into() },
+            ))
+        }
     };
     let m = sys.m;
     let mut s = Solver {
@@ -330,7 +344,13 @@ fn give_up(s: &mut Solver<'_>, t_new: f64, step: f64, newton: Option<NewtonFailu
         };
     }
     match newton {
-        Some(f) => Error::Convergence { time: t_new, residual: f.residual, row: s.sys.row_name(f.row), iterations: f.iterations, substep: step },
+        Some(f) => Error::Convergence {
+            time: t_new,
+            residual: f.residual,
+            row: s.sys.row_name(f.row),
+            iterations: f.iterations,
+            substep: step,
+        },
         None => Error::Convergence {
             time: t_new,
             residual: 0.0,

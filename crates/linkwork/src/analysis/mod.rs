@@ -39,7 +39,13 @@ pub struct SolverSettings {
 
 impl Default for SolverSettings {
     fn default() -> Self {
-        SolverSettings { tolerance: 1e-12, max_iterations: 12, max_rotation: 0.35, min_substep: 1e-8, singular_condition: 1e10 }
+        SolverSettings {
+            tolerance: 1e-12,
+            max_iterations: 12,
+            max_rotation: 0.35,
+            min_substep: 1e-8,
+            singular_condition: 1e10,
+        }
     }
 }
 

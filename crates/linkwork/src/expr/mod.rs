@@ -77,10 +77,7 @@ pub struct ExprError {
 impl ExprError {
     /// An error with the given message at byte `offset`.
     pub fn new(message: impl Into<String>, offset: usize) -> Self {
-        ExprError {
-            message: message.into(),
-            offset,
-        }
+        ExprError { message: message.into(), offset }
     }
 
     /// 1-based column of the error (`offset + 1`).
@@ -141,17 +138,9 @@ impl Expr {
     /// operand, trailing input, an unknown function, a wrong number of function
     /// arguments, an unknown name, an empty expression, or nesting deeper than
     /// [`MAX_DEPTH`].
-    pub fn parse(
-        src: &str,
-        resolve: &mut dyn FnMut(&str) -> Result<usize, String>,
-    ) -> Result<Expr, ExprError> {
+    pub fn parse(src: &str, resolve: &mut dyn FnMut(&str) -> Result<usize, String>) -> Result<Expr, ExprError> {
         let c = parse::compile(src, resolve)?;
-        Ok(Expr {
-            source: src.to_string(),
-            code: c.code,
-            slots: c.slots,
-            max_stack: c.max_stack,
-        })
+        Ok(Expr { source: src.to_string(), code: c.code, slots: c.slots, max_stack: c.max_stack })
     }
 
     /// The source text the expression was parsed from.

@@ -152,10 +152,7 @@ pub(crate) const FUNCTIONS: &[(&str, usize, Op)] = &[
 const CONSTANTS: &[(&str, f64)] = &[("pi", std::f64::consts::PI), ("e", std::f64::consts::E)];
 
 fn function(name: &str) -> Option<(usize, Op)> {
-    FUNCTIONS
-        .iter()
-        .find(|(n, _, _)| *n == name)
-        .map(|&(_, arity, op)| (arity, op))
+    FUNCTIONS.iter().find(|(n, _, _)| *n == name).map(|&(_, arity, op)| (arity, op))
 }
 
 /// The result of compiling a source string.
@@ -171,14 +168,8 @@ pub(crate) fn compile(
     src: &str,
     resolve: &mut dyn FnMut(&str) -> Result<usize, String>,
 ) -> Result<Compiled, ExprError> {
-    let mut p = Parser {
-        lex: Lexer { src, pos: 0 },
-        peeked: None,
-        stack: Vec::new(),
-        depth: 0,
-        code: Vec::new(),
-        resolve,
-    };
+    let mut p =
+        Parser { lex: Lexer { src, pos: 0 }, peeked: None, stack: Vec::new(), depth: 0, code: Vec::new(), resolve };
     p.parse()?;
 
     let code = p.code;
@@ -203,11 +194,7 @@ pub(crate) fn compile(
     }
     slots.sort_unstable();
     slots.dedup();
-    Ok(Compiled {
-        code,
-        slots,
-        max_stack,
-    })
+    Ok(Compiled { code, slots, max_stack })
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -265,17 +252,9 @@ impl<'a> Lexer<'a> {
 
         let start = self.pos;
         let Some(c) = self.byte(start) else {
-            return Ok(Token {
-                tok: Tok::End,
-                start,
-                end: start,
-            });
+            return Ok(Token { tok: Tok::End, start, end: start });
         };
-        let single = |tok| Token {
-            tok,
-            start,
-            end: start + 1,
-        };
+        let single = |tok| Token { tok, start, end: start + 1 };
         let token = match c {
             b'+' => single(Tok::Plus),
             b'-' => single(Tok::Minus),
@@ -284,23 +263,14 @@ impl<'a> Lexer<'a> {
             b'(' => single(Tok::LParen),
             b')' => single(Tok::RParen),
             b',' => single(Tok::Comma),
-            b'*' if self.byte(start + 1) == Some(b'*') => Token {
-                tok: Tok::Caret,
-                start,
-                end: start + 2,
-            },
+            b'*' if self.byte(start + 1) == Some(b'*') => Token { tok: Tok::Caret, start, end: start + 2 },
             b'*' => single(Tok::Star),
             b'0'..=b'9' => return self.number(),
-            b'.' if self.byte(start + 1).is_some_and(|b| b.is_ascii_digit()) => {
-                return self.number()
-            }
+            b'.' if self.byte(start + 1).is_some_and(|b| b.is_ascii_digit()) => return self.number(),
             c if is_name_start(c) => return self.name(),
             _ => {
                 let ch = self.src[start..].chars().next().unwrap_or('?');
-                return Err(ExprError::new(
-                    format!("unexpected character '{}'", ch.escape_debug()),
-                    start,
-                ));
+                return Err(ExprError::new(format!("unexpected character '{}'", ch.escape_debug()), start));
             }
         };
         self.pos = token.end;
@@ -320,29 +290,17 @@ impl<'a> Lexer<'a> {
                 i += 1;
             }
             if !self.byte(i).is_some_and(|b| b.is_ascii_digit()) {
-                return Err(ExprError::new(
-                    "malformed number: exponent has no digits",
-                    start,
-                ));
+                return Err(ExprError::new("malformed number: exponent has no digits", start));
             }
             self.pos = i;
             self.skip_while(|b| b.is_ascii_digit());
         }
         let text = &self.src[start..self.pos];
-        let v: f64 = text
-            .parse()
-            .map_err(|_| ExprError::new(format!("malformed number '{text}'"), start))?;
+        let v: f64 = text.parse().map_err(|_| ExprError::new(format!("malformed number '{text}'"), start))?;
         if !v.is_finite() {
-            return Err(ExprError::new(
-                format!("number '{text}' is out of range"),
-                start,
-            ));
+            return Err(ExprError::new(format!("number '{text}' is out of range"), start));
         }
-        Ok(Token {
-            tok: Tok::Num(v),
-            start,
-            end: self.pos,
-        })
+        Ok(Token { tok: Tok::Num(v), start, end: self.pos })
     }
 
     fn name(&mut self) -> Result<Token<'a>, ExprError> {
@@ -352,10 +310,7 @@ impl<'a> Lexer<'a> {
             self.pos += 1;
             if !self.byte(self.pos).is_some_and(is_name_start) {
                 return Err(ExprError::new(
-                    format!(
-                        "expected a letter or '_' after '.' in name '{}'",
-                        &self.src[start..self.pos]
-                    ),
+                    format!("expected a letter or '_' after '.' in name '{}'", &self.src[start..self.pos]),
                     self.pos,
                 ));
             }
@@ -364,11 +319,7 @@ impl<'a> Lexer<'a> {
                 return Err(ExprError::new("a name may contain only one '.'", self.pos));
             }
         }
-        Ok(Token {
-            tok: Tok::Name(&self.src[start..self.pos]),
-            start,
-            end: self.pos,
-        })
+        Ok(Token { tok: Tok::Name(&self.src[start..self.pos]), start, end: self.pos })
     }
 }
 
@@ -523,19 +474,10 @@ impl<'a> Parser<'a, '_> {
                             *args += 1;
                             self.close_call()?;
                         }
-                        _ => {
-                            return Err(ExprError::new(
-                                "unbalanced parentheses: ')' has no matching '('",
-                                t.start,
-                            ))
-                        }
+                        _ => return Err(ExprError::new("unbalanced parentheses: ')' has no matching '('", t.start)),
                     }
                 }
-                Tok::Comma
-                    if self
-                        .innermost_group()
-                        .is_some_and(|f| matches!(f, Frame::Call { .. })) =>
-                {
+                Tok::Comma if self.innermost_group().is_some_and(|f| matches!(f, Frame::Call { .. })) => {
                     self.reduce(0);
                     if let Some(Frame::Call { args, .. }) = self.stack.last_mut() {
                         *args += 1;
@@ -546,10 +488,9 @@ impl<'a> Parser<'a, '_> {
                     self.reduce(0);
                     return match self.stack.last() {
                         None => Ok(()),
-                        Some(Frame::Paren(open) | Frame::Call { open, .. }) => Err(ExprError::new(
-                            "unbalanced parentheses: '(' is never closed",
-                            *open,
-                        )),
+                        Some(Frame::Paren(open) | Frame::Call { open, .. }) => {
+                            Err(ExprError::new("unbalanced parentheses: '(' is never closed", *open))
+                        }
                         Some(_) => unreachable!("reduce(0) leaves no operator on top"),
                     };
                 }
@@ -571,19 +512,9 @@ impl<'a> Parser<'a, '_> {
                 if self.peek()?.tok == Tok::LParen {
                     let open = self.next()?;
                     let Some((arity, op)) = function(name) else {
-                        return Err(ExprError::new(
-                            format!("unknown function '{name}'"),
-                            t.start,
-                        ));
+                        return Err(ExprError::new(format!("unknown function '{name}'"), t.start));
                     };
-                    let call = Frame::Call {
-                        name,
-                        start: t.start,
-                        open: open.start,
-                        arity,
-                        op,
-                        args: 0,
-                    };
+                    let call = Frame::Call { name, start: t.start, open: open.start, arity, op, args: 0 };
                     self.push(call, t.start)?;
                     if self.peek()?.tok == Tok::RParen {
                         self.next()?;
@@ -605,10 +536,7 @@ impl<'a> Parser<'a, '_> {
             }
             Tok::Plus => Ok(false),
             _ => Err(ExprError::new(
-                format!(
-                    "missing operand: expected a number, name or '(', found {}",
-                    self.describe(t)
-                ),
+                format!("missing operand: expected a number, name or '(', found {}", self.describe(t)),
                 t.start,
             )),
         }
@@ -621,10 +549,7 @@ impl<'a> Parser<'a, '_> {
             return Ok(());
         }
         if function(name).is_some() {
-            return Err(ExprError::new(
-                format!("function '{name}' needs its arguments in parentheses"),
-                start,
-            ));
+            return Err(ExprError::new(format!("function '{name}' needs its arguments in parentheses"), start));
         }
         match (self.resolve)(name) {
             Ok(slot) => {
@@ -664,10 +589,7 @@ impl<'a> Parser<'a, '_> {
     fn push(&mut self, frame: Frame<'a>, at: usize) -> Result<(), ExprError> {
         if frame.nests() {
             if self.depth >= MAX_DEPTH {
-                return Err(ExprError::new(
-                    format!("expression nested too deeply (more than {MAX_DEPTH} levels)"),
-                    at,
-                ));
+                return Err(ExprError::new(format!("expression nested too deeply (more than {MAX_DEPTH} levels)"), at));
             }
             self.depth += 1;
         }
@@ -705,15 +627,7 @@ impl<'a> Parser<'a, '_> {
     /// Pops the call frame on top of the stack, checks its argument count and emits
     /// the function.
     fn close_call(&mut self) -> Result<(), ExprError> {
-        let Some(Frame::Call {
-            name,
-            start,
-            arity,
-            op,
-            args,
-            ..
-        }) = self.stack.last().copied()
-        else {
+        let Some(Frame::Call { name, start, arity, op, args, .. }) = self.stack.last().copied() else {
             unreachable!("close_call without a call frame");
         };
         self.pop();

@@ -57,13 +57,7 @@ fn sign_of(v: f64) -> f64 {
 /// [`lift`](Scalar::lift) / [`lift2`](Scalar::lift2); every elementary function has a
 /// default implementation in terms of those.
 pub trait Scalar:
-    Copy
-    + Debug
-    + Add<Output = Self>
-    + Sub<Output = Self>
-    + Mul<Output = Self>
-    + Div<Output = Self>
-    + Neg<Output = Self>
+    Copy + Debug + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
 {
     /// Highest derivative order carried by the type (0 for `f64`, 1 for [`Dual`],
     /// 2 for [`HyperDual`]). The default methods skip computing derivative factors
@@ -240,16 +234,8 @@ pub trait Scalar:
         let nf = f64::from(n);
         // The factors n and n(n-1) vanish for n = 0 and n = 1; skip the power then so
         // that 0 * inf cannot produce NaN at v = 0.
-        let f1 = if n == 0 {
-            0.0
-        } else {
-            nf * v.powi(n.saturating_sub(1))
-        };
-        let f2 = if n == 0 || n == 1 {
-            0.0
-        } else {
-            nf * (nf - 1.0) * v.powi(n.saturating_sub(2))
-        };
+        let f1 = if n == 0 { 0.0 } else { nf * v.powi(n.saturating_sub(1)) };
+        let f2 = if n == 0 || n == 1 { 0.0 } else { nf * (nf - 1.0) * v.powi(n.saturating_sub(2)) };
         self.lift(f0, f1, f2)
     }
 
@@ -262,11 +248,7 @@ pub trait Scalar:
             return Self::constant(f0);
         }
         let f1 = if c == 0.0 { 0.0 } else { c * v.powf(c - 1.0) };
-        let f2 = if c == 0.0 || c == 1.0 {
-            0.0
-        } else {
-            c * (c - 1.0) * v.powf(c - 2.0)
-        };
+        let f2 = if c == 0.0 || c == 1.0 { 0.0 } else { c * (c - 1.0) * v.powf(c - 2.0) };
         self.lift(f0, f1, f2)
     }
 
@@ -469,12 +451,7 @@ impl Add for HyperDual {
     type Output = HyperDual;
     #[inline]
     fn add(self, o: HyperDual) -> HyperDual {
-        HyperDual::new(
-            self.v + o.v,
-            self.e1 + o.e1,
-            self.e2 + o.e2,
-            self.e12 + o.e12,
-        )
+        HyperDual::new(self.v + o.v, self.e1 + o.e1, self.e2 + o.e2, self.e12 + o.e12)
     }
 }
 
@@ -482,12 +459,7 @@ impl Sub for HyperDual {
     type Output = HyperDual;
     #[inline]
     fn sub(self, o: HyperDual) -> HyperDual {
-        HyperDual::new(
-            self.v - o.v,
-            self.e1 - o.e1,
-            self.e2 - o.e2,
-            self.e12 - o.e12,
-        )
+        HyperDual::new(self.v - o.v, self.e1 - o.e1, self.e2 - o.e2, self.e12 - o.e12)
     }
 }
 
@@ -540,12 +512,7 @@ impl Scalar for HyperDual {
 
     #[inline]
     fn lift(self, f0: f64, f1: f64, f2: f64) -> Self {
-        HyperDual::new(
-            f0,
-            scale(f1, self.e1),
-            scale(f1, self.e2),
-            scale(f1, self.e12) + scale(f2, self.e1 * self.e2),
-        )
+        HyperDual::new(f0, scale(f1, self.e1), scale(f1, self.e2), scale(f1, self.e12) + scale(f2, self.e1 * self.e2))
     }
 
     #[inline]

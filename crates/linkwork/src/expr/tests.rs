@@ -36,10 +36,7 @@ fn close(a: f64, b: f64, tol: f64) -> bool {
 
 #[track_caller]
 fn assert_close(what: &str, a: f64, b: f64, tol: f64) {
-    assert!(
-        close(a, b, tol),
-        "{what}: got {a:e}, expected {b:e} (tol {tol:e})"
-    );
+    assert!(close(a, b, tol), "{what}: got {a:e}, expected {b:e} (tol {tol:e})");
 }
 
 // ---------------------------------------------------------------- values
@@ -231,13 +228,7 @@ fn cases() -> Vec<Case> {
         x * x
     }
     vec![
-        Case {
-            src: "sin(x)",
-            points: &[-2.0, 0.0, 0.7, 3.0],
-            f: f64::sin,
-            d1: f64::cos,
-            d2: |x| -x.sin(),
-        },
+        Case { src: "sin(x)", points: &[-2.0, 0.0, 0.7, 3.0], f: f64::sin, d1: f64::cos, d2: |x| -x.sin() },
         Case {
             src: "sin(4*x)",
             points: &[-0.3, 0.0, 0.9],
@@ -245,13 +236,7 @@ fn cases() -> Vec<Case> {
             d1: |x| 4.0 * (4.0 * x).cos(),
             d2: |x| -16.0 * (4.0 * x).sin(),
         },
-        Case {
-            src: "cos(x)",
-            points: &[-2.0, 0.0, 0.7, 3.0],
-            f: f64::cos,
-            d1: |x| -x.sin(),
-            d2: |x| -x.cos(),
-        },
+        Case { src: "cos(x)", points: &[-2.0, 0.0, 0.7, 3.0], f: f64::cos, d1: |x| -x.sin(), d2: |x| -x.cos() },
         Case {
             src: "tan(x)",
             points: &[-1.0, 0.0, 0.3, 1.2],
@@ -296,20 +281,8 @@ fn cases() -> Vec<Case> {
             d1: |x| -1.0 / (1.0 + x * x),
             d2: |x| 2.0 * x / sq(1.0 + x * x),
         },
-        Case {
-            src: "sinh(x)",
-            points: &[-2.0, 0.0, 1.5],
-            f: f64::sinh,
-            d1: f64::cosh,
-            d2: f64::sinh,
-        },
-        Case {
-            src: "cosh(x)",
-            points: &[-2.0, 0.0, 1.5],
-            f: f64::cosh,
-            d1: f64::sinh,
-            d2: f64::cosh,
-        },
+        Case { src: "sinh(x)", points: &[-2.0, 0.0, 1.5], f: f64::sinh, d1: f64::cosh, d2: f64::sinh },
+        Case { src: "cosh(x)", points: &[-2.0, 0.0, 1.5], f: f64::cosh, d1: f64::sinh, d2: f64::cosh },
         Case {
             src: "tanh(x)",
             points: &[-2.0, 0.0, 0.4, 1.5],
@@ -317,20 +290,8 @@ fn cases() -> Vec<Case> {
             d1: |x| 1.0 / sq(x.cosh()),
             d2: |x| -2.0 * x.tanh() / sq(x.cosh()),
         },
-        Case {
-            src: "exp(x)",
-            points: &[-2.0, 0.0, 1.5],
-            f: f64::exp,
-            d1: f64::exp,
-            d2: f64::exp,
-        },
-        Case {
-            src: "log(x)",
-            points: &[0.3, 1.0, 1.7, 5.0],
-            f: f64::ln,
-            d1: |x| 1.0 / x,
-            d2: |x| -1.0 / (x * x),
-        },
+        Case { src: "exp(x)", points: &[-2.0, 0.0, 1.5], f: f64::exp, d1: f64::exp, d2: f64::exp },
+        Case { src: "log(x)", points: &[0.3, 1.0, 1.7, 5.0], f: f64::ln, d1: |x| 1.0 / x, d2: |x| -1.0 / (x * x) },
         Case {
             src: "sqrt(x)",
             points: &[0.3, 1.0, 4.0],
@@ -338,20 +299,8 @@ fn cases() -> Vec<Case> {
             d1: |x| 0.5 / x.sqrt(),
             d2: |x| -0.25 / (x * x.sqrt()),
         },
-        Case {
-            src: "abs(x)",
-            points: &[-1.3, 0.7],
-            f: f64::abs,
-            d1: f64::signum,
-            d2: |_| 0.0,
-        },
-        Case {
-            src: "sign(x)",
-            points: &[-1.3, 0.7],
-            f: f64::signum,
-            d1: |_| 0.0,
-            d2: |_| 0.0,
-        },
+        Case { src: "abs(x)", points: &[-1.3, 0.7], f: f64::abs, d1: f64::signum, d2: |_| 0.0 },
+        Case { src: "sign(x)", points: &[-1.3, 0.7], f: f64::signum, d1: |_| 0.0, d2: |_| 0.0 },
         Case {
             // selects x below 0.5, 1 - x above
             src: "min(x, 1 - x)",
@@ -368,20 +317,8 @@ fn cases() -> Vec<Case> {
             d1: |x| if x * x > x { 2.0 * x } else { 1.0 },
             d2: |x| if x * x > x { 2.0 } else { 0.0 },
         },
-        Case {
-            src: "x^3",
-            points: &[-1.5, 0.0, 0.5, 2.0],
-            f: |x| x * x * x,
-            d1: |x| 3.0 * x * x,
-            d2: |x| 6.0 * x,
-        },
-        Case {
-            src: "pow(x, 3)",
-            points: &[-1.5, 0.0, 2.0],
-            f: |x| x * x * x,
-            d1: |x| 3.0 * x * x,
-            d2: |x| 6.0 * x,
-        },
+        Case { src: "x^3", points: &[-1.5, 0.0, 0.5, 2.0], f: |x| x * x * x, d1: |x| 3.0 * x * x, d2: |x| 6.0 * x },
+        Case { src: "pow(x, 3)", points: &[-1.5, 0.0, 2.0], f: |x| x * x * x, d1: |x| 3.0 * x * x, d2: |x| 6.0 * x },
         Case {
             src: "x^-2",
             points: &[-1.5, 0.5, 2.0],
@@ -451,10 +388,7 @@ fn every_builtin_function_is_covered_by_the_derivative_cases() {
     let all = cases();
     for &(name, _, _) in parse::FUNCTIONS {
         let call = format!("{name}(");
-        assert!(
-            all.iter().any(|c| c.src.contains(&call)),
-            "no derivative test for '{name}'"
-        );
+        assert!(all.iter().any(|c| c.src.contains(&call)), "no derivative test for '{name}'");
     }
 }
 
@@ -513,11 +447,7 @@ fn derivatives_match_finite_differences() {
             let h2 = 1e-4;
             let fd2 = (f(x + h2) - 2.0 * f(x) + f(x - h2)) / (h2 * h2);
             let scale = 1.0 + h.e12.abs() + h.v.abs();
-            assert!(
-                (h.e12 - fd2).abs() <= 1e-5 * scale,
-                "{what}: f'' = {:e} vs FD {fd2:e}",
-                h.e12
-            );
+            assert!((h.e12 - fd2).abs() <= 1e-5 * scale, "{what}: f'' = {:e} vs FD {fd2:e}", h.e12);
         }
     }
 }
@@ -584,10 +514,7 @@ fn time_function_constant_and_errors() {
 
     let err = TimeFunction::parse("2*crank.x").unwrap_err();
     assert_eq!(err.offset, 2);
-    assert_eq!(
-        err.to_string(),
-        "unknown name 'crank.x' (only t (time) may appear in a driver function) at column 3"
-    );
+    assert_eq!(err.to_string(), "unknown name 'crank.x' (only t (time) may appear in a driver function) at column 3");
 }
 
 // ---------------------------------------------------------------- gradient, directional2
@@ -634,22 +561,11 @@ fn gradient_and_directional_with_cross_terms() {
     // [[0,        sin c,    b cos c],
     //  [sin c,    0,        a cos c],
     //  [b cos c,  a cos c,  -a b sin c]]
-    let hess = [
-        [0.0, s, b * co],
-        [s, 0.0, a * co],
-        [b * co, a * co, -a * b * s],
-    ];
+    let hess = [[0.0, s, b * co], [s, 0.0, a * co], [b * co, a * co, -a * b * s]];
     let mut hwork = [HyperDual::default(); 3];
-    for dir in [
-        [1.0, 0.0, 0.0],
-        [0.0, 0.0, 1.0],
-        [1.0, 1.0, 0.0],
-        [0.3, -1.2, 2.0],
-    ] {
-        let quad: f64 = (0..3)
-            .flat_map(|i| (0..3).map(move |j| (i, j)))
-            .map(|(i, j)| dir[i] * hess[i][j] * dir[j])
-            .sum();
+    for dir in [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 0.0], [0.3, -1.2, 2.0]] {
+        let quad: f64 =
+            (0..3).flat_map(|i| (0..3).map(move |j| (i, j))).map(|(i, j)| dir[i] * hess[i][j] * dir[j]).sum();
         let lin: f64 = (0..3).map(|i| expected[i] * dir[i]).sum();
         let (v, d1, d2) = directional2(&e, &x, &dir, &mut hwork);
         assert_close("value", v, a * b * s, 1e-15);
@@ -673,14 +589,9 @@ fn atan2_gradient_and_hessian() {
     gradient(&e, &[x0, y0], &mut grad, &mut [Dual::default(); 2]);
     assert_close("θ_x", grad[0], -y0 / r2, 1e-15);
     assert_close("θ_y", grad[1], x0 / r2, 1e-15);
-    let h = [
-        [2.0 * x0 * y0, y0 * y0 - x0 * x0],
-        [y0 * y0 - x0 * x0, -2.0 * x0 * y0],
-    ];
+    let h = [[2.0 * x0 * y0, y0 * y0 - x0 * x0], [y0 * y0 - x0 * x0, -2.0 * x0 * y0]];
     let dir = [0.5, 2.0];
-    let quad =
-        (dir[0] * dir[0] * h[0][0] + 2.0 * dir[0] * dir[1] * h[0][1] + dir[1] * dir[1] * h[1][1])
-            / (r2 * r2);
+    let quad = (dir[0] * dir[0] * h[0][0] + 2.0 * dir[0] * dir[1] * h[0][1] + dir[1] * dir[1] * h[1][1]) / (r2 * r2);
     let (_, _, d2) = directional2(&e, &[x0, y0], &dir, &mut [HyperDual::default(); 2]);
     assert_close("dirᵀHdir", d2, quad, 1e-14);
 }
@@ -701,11 +612,7 @@ fn constant_expression_gradient() {
 fn check_err(src: &str, offset: usize, message_part: &str) {
     let e = parse_err(src);
     assert_eq!(e.offset, offset, "{src}: {e}");
-    assert!(
-        e.message.contains(message_part),
-        "{src}: message {:?} does not contain {message_part:?}",
-        e.message
-    );
+    assert!(e.message.contains(message_part), "{src}: message {:?} does not contain {message_part:?}", e.message);
 }
 
 #[test]
@@ -724,11 +631,7 @@ fn error_unbalanced_parentheses() {
     check_err("sin(x", 3, "never closed");
     check_err("atan2(x, y", 5, "never closed");
     check_err("(1 2)", 3, "expected ')' or an operator, found number '2'");
-    check_err(
-        "sin(x y)",
-        6,
-        "expected ',' or ')' in the arguments of 'sin'",
-    );
+    check_err("sin(x y)", 6, "expected ',' or ')' in the arguments of 'sin'");
 }
 
 #[test]
@@ -745,11 +648,7 @@ fn error_missing_operand() {
 
 #[test]
 fn error_trailing_input() {
-    check_err(
-        "1 2",
-        2,
-        "unexpected number '2' after a complete expression",
-    );
+    check_err("1 2", 2, "unexpected number '2' after a complete expression");
     check_err("2t", 1, "unexpected name 't' after a complete expression");
     check_err("2 (y)", 2, "unexpected '('");
     // a name directly followed by '(' is a function call
@@ -757,16 +656,8 @@ fn error_trailing_input() {
     check_err("1.5.3", 3, "unexpected number '.3'");
     check_err("1, 2", 1, "unexpected ','");
     check_err("(1, 2)", 2, "expected ')' or an operator, found ','");
-    check_err(
-        "min((1, 2), 3)",
-        6,
-        "expected ')' or an operator, found ','",
-    );
-    check_err(
-        "min(1 + 2 3)",
-        10,
-        "expected ',' or ')' in the arguments of 'min'",
-    );
+    check_err("min((1, 2), 3)", 6, "expected ')' or an operator, found ','");
+    check_err("min(1 + 2 3)", 10, "expected ',' or ')' in the arguments of 'min'");
 }
 
 #[test]
@@ -775,21 +666,13 @@ fn error_unknown_function() {
     check_err("2*crank.x(1)", 2, "unknown function 'crank.x'");
     check_err("ln(2)", 0, "unknown function 'ln'");
     check_err("1 + pi(2)", 4, "unknown function 'pi'");
-    check_err(
-        "sin + 1",
-        0,
-        "function 'sin' needs its arguments in parentheses",
-    );
+    check_err("sin + 1", 0, "function 'sin' needs its arguments in parentheses");
 }
 
 #[test]
 fn error_wrong_argument_count() {
     check_err("atan2(1)", 0, "function 'atan2' takes 2 arguments, found 1");
-    check_err(
-        "x + sin(1, 2)",
-        4,
-        "function 'sin' takes 1 argument, found 2",
-    );
+    check_err("x + sin(1, 2)", 4, "function 'sin' takes 1 argument, found 2");
     check_err("sin()", 0, "takes 1 argument, found 0");
     check_err("pow(2)", 0, "takes 2 arguments, found 1");
     check_err("min(1, 2, 3)", 0, "takes 2 arguments, found 3");
@@ -800,10 +683,7 @@ fn error_unknown_name() {
     let e = parse_err("2*rokcer.x");
     assert_eq!(e.offset, 2);
     assert_eq!(e.column(), 3);
-    assert_eq!(
-        e.to_string(),
-        "unknown name 'rokcer.x' (expected <body>.x, <body>.y, <body>.phi or t) at column 3"
-    );
+    assert_eq!(e.to_string(), "unknown name 'rokcer.x' (expected <body>.x, <body>.y, <body>.phi or t) at column 3");
     // without a hint
     let e = Expr::parse("1 + q", &mut |_| Err(String::new())).unwrap_err();
     assert_eq!(e.to_string(), "unknown name 'q' at column 5");
@@ -856,12 +736,7 @@ fn nesting_limit() {
     let src = format!("{}x", "-".repeat(n + 1));
     check_err(&src, n, "expression nested too deeply");
     // levels of different kinds add up: 100 parentheses + 100 minus signs + 1 call
-    let src = format!(
-        "{}{}sin(x){}",
-        "(".repeat(100),
-        "-".repeat(100),
-        ")".repeat(100)
-    );
+    let src = format!("{}{}sin(x){}", "(".repeat(100), "-".repeat(100), ")".repeat(100));
     check_err(&src, 200, "expression nested too deeply");
     // ... and closing a level frees it again
     let half = "(".repeat(150) + "x" + &")".repeat(150);
@@ -875,12 +750,7 @@ fn nesting_limit() {
     let kf = k as f64;
     assert_close("x^k", h.v, 1.01f64.powi(k as i32), 1e-12);
     assert_close("d x^k", h.e1, kf * 1.01f64.powi(k as i32 - 1), 1e-12);
-    assert_close(
-        "dd x^k",
-        h.e12,
-        kf * (kf - 1.0) * 1.01f64.powi(k as i32 - 2),
-        1e-12,
-    );
+    assert_close("dd x^k", h.e12, kf * (kf - 1.0) * 1.01f64.powi(k as i32 - 2), 1e-12);
 
     // far beyond the limit: an error, not a stack overflow or a hang
     for src in [
@@ -919,10 +789,7 @@ fn long_flat_expressions_are_fine() {
     // long left-associative chains are parsed iteratively, without deep recursion
     let src = vec!["x"; 100_000].join(" + ");
     let e = parse(&src);
-    assert_eq!(
-        e.eval(&[Dual::variable(1.0)]),
-        Dual::new(100_000.0, 100_000.0)
-    );
+    assert_eq!(e.eval(&[Dual::variable(1.0)]), Dual::new(100_000.0, 100_000.0));
     let src = vec!["1"; 100_000].join(" * ");
     assert_eq!(parse(&src).constant_value(), Some(1.0));
 }
@@ -930,9 +797,7 @@ fn long_flat_expressions_are_fine() {
 #[test]
 fn garbage_input_never_panics() {
     // Deterministic pseudo-random strings over the language's alphabet plus junk.
-    let alphabet: Vec<char> = "0123456789.eE+-*/^(),xyzt pisncoqrtabgmw_.×#\n"
-        .chars()
-        .collect();
+    let alphabet: Vec<char> = "0123456789.eE+-*/^(),xyzt pisncoqrtabgmw_.×#\n".chars().collect();
     let mut state = 0x2545_f491_4f6c_dd1d_u64;
     let mut next = || {
         state ^= state << 13;
@@ -943,9 +808,7 @@ fn garbage_input_never_panics() {
     let mut ok = 0;
     for _ in 0..20_000 {
         let len = (next() % 24) as usize;
-        let s: String = (0..len)
-            .map(|_| alphabet[(next() % alphabet.len() as u64) as usize])
-            .collect();
+        let s: String = (0..len).map(|_| alphabet[(next() % alphabet.len() as u64) as usize]).collect();
         match Expr::parse(&s, &mut test_resolve) {
             Ok(e) => {
                 ok += 1;

@@ -114,7 +114,8 @@ impl SparseLu {
         }
         let mut norm_a = 0.0f64;
         for c in 0..n {
-            let s: f64 = self.values[self.pattern.col_ptr[c]..self.pattern.col_ptr[c + 1]].iter().map(|v| v.abs()).sum();
+            let s: f64 =
+                self.values[self.pattern.col_ptr[c]..self.pattern.col_ptr[c + 1]].iter().map(|v| v.abs()).sum();
             norm_a = norm_a.max(s);
         }
         let [mut x, mut z] = std::mem::take(&mut self.work);
@@ -136,7 +137,10 @@ impl SparseLu {
                 *zi = if *yi >= 0.0 { 1.0 } else { -1.0 };
             }
             self.solve_with(&mut z, true);
-            let (j, zmax) = z.iter().enumerate().fold((0, 0.0f64), |(bj, bz), (j, v)| if v.abs() > bz { (j, v.abs()) } else { (bj, bz) });
+            let (j, zmax) = z
+                .iter()
+                .enumerate()
+                .fold((0, 0.0f64), |(bj, bz), (j, v)| if v.abs() > bz { (j, v.abs()) } else { (bj, bz) });
             if j == last {
                 break;
             }

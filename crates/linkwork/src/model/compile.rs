@@ -98,7 +98,10 @@ impl Cx<'_> {
 
     fn name(&mut self, path: &str, name: &str) {
         if !is_identifier(name) {
-            self.problem(path, format!("'{name}' is not a valid name: use letters, digits and _, not starting with a digit"));
+            self.problem(
+                path,
+                format!("'{name}' is not a valid name: use letters, digits and _, not starting with a digit"),
+            );
         }
     }
 
@@ -162,7 +165,10 @@ impl Cx<'_> {
                 }
                 if let Some(j) = self.finite(&format!("{path}.inertia"), b.inertia) {
                     if j < 0.0 {
-                        self.problem(format!("{path}.inertia"), format!("expected a moment of inertia >= 0 kg m^2, found {j}"));
+                        self.problem(
+                            format!("{path}.inertia"),
+                            format!("expected a moment of inertia >= 0 kg m^2, found {j}"),
+                        );
                     }
                 }
                 let pos = self.vec2(&format!("{path}.position"), b.position).unwrap_or([0.0; 2]);
@@ -202,7 +208,10 @@ impl Cx<'_> {
             .chain(spec.drivers.keys().map(|k| ("drivers", k)));
         for (section, name) in all {
             if let Some(first) = seen.get(name.as_str()) {
-                self.problem(format!("{section}.{name}"), format!("duplicate name: '{name}' is already used in {first}"));
+                self.problem(
+                    format!("{section}.{name}"),
+                    format!("duplicate name: '{name}' is already used in {first}"),
+                );
             } else {
                 seen.insert(name, section);
             }
@@ -236,8 +245,15 @@ impl Cx<'_> {
                     Some((Some(v), _)) => Some(*v),
                     Some((None, ps)) => {
                         let known: Vec<&str> = ps.keys().map(String::as_str).collect();
-                        let list = if known.is_empty() { "it has no named points".to_string() } else { format!("it has {}", known.join(", ")) };
-                        self.problem(path, format!("unknown point '{n}' of body '{body}' ({list}); or give coordinates [x, y]"));
+                        let list = if known.is_empty() {
+                            "it has no named points".to_string()
+                        } else {
+                            format!("it has {}", known.join(", "))
+                        };
+                        self.problem(
+                            path,
+                            format!("unknown point '{n}' of body '{body}' ({list}); or give coordinates [x, y]"),
+                        );
                         None
                     }
                     // The body itself is unknown: reported where the body is named.
@@ -248,7 +264,14 @@ impl Cx<'_> {
     }
 
     /// A body and one of its points, both resolved.
-    fn body_point(&mut self, path: &str, bfield: &str, body: &str, pfield: &str, p: &PointRef) -> Option<(BodyIx, [f64; 2])> {
+    fn body_point(
+        &mut self,
+        path: &str,
+        bfield: &str,
+        body: &str,
+        pfield: &str,
+        p: &PointRef,
+    ) -> Option<(BodyIx, [f64; 2])> {
         let b = self.body(&format!("{path}.{bfield}"), body);
         let s = self.point(&format!("{path}.{pfield}"), body, p);
         Some((b?, s?))
@@ -313,7 +336,10 @@ impl Cx<'_> {
                         let (p, r) = (Frame::of(i, &self.q0).point(sp), Frame::of(j, &self.q0).point(sq));
                         let l = (r[0] - p[0]).hypot(r[1] - p[1]);
                         if l < 1e-12 {
-                            self.problem(format!("{path}.length"), "the points coincide in the initial configuration: give a positive length");
+                            self.problem(
+                                format!("{path}.length"),
+                                "the points coincide in the initial configuration: give a positive length",
+                            );
                             return None;
                         }
                         l
@@ -357,7 +383,10 @@ impl Cx<'_> {
                 ok.then_some(())?;
                 let (ci, cj) = (Frame::of(i, &self.q0).point(si), Frame::of(j, &self.q0).point(sj));
                 if (cj[0] - ci[0]).hypot(cj[1] - ci[1]) < 1e-9 {
-                    self.problem(path, "the gear centres coincide in the initial configuration: the line of centres is undefined");
+                    self.problem(
+                        path,
+                        "the gear centres coincide in the initial configuration: the line of centres is undefined",
+                    );
                     return None;
                 }
                 let kind = if *internal { GearKind::Internal } else { GearKind::External };
@@ -497,7 +526,11 @@ impl Cx<'_> {
                     self.problem(format!("{path}.body"), "ground cannot be driven; name a moving body");
                     return None;
                 }
-                let kind = if matches!(d, D::X { .. }) { DriverKind::X { body: b, point: p } } else { DriverKind::Y { body: b, point: p } };
+                let kind = if matches!(d, D::X { .. }) {
+                    DriverKind::X { body: b, point: p }
+                } else {
+                    DriverKind::Y { body: b, point: p }
+                };
                 (kind, f?)
             }
         };
@@ -518,7 +551,10 @@ impl Cx<'_> {
                         Some(i) => Some(i),
                         None => {
                             let known: Vec<&str> = spec.drivers.keys().map(String::as_str).collect();
-                            self.problem(format!("{path}.drivers[{k}]"), format!("unknown driver '{d}'; the model's drivers are: {}", known.join(", ")));
+                            self.problem(
+                                format!("{path}.drivers[{k}]"),
+                                format!("unknown driver '{d}'; the model's drivers are: {}", known.join(", ")),
+                            );
                             None
                         }
                     })
@@ -534,11 +570,20 @@ impl Cx<'_> {
                 continue;
             }
             if (t1 - t0) / h > MAX_OUTPUT_POINTS {
-                self.problem(format!("{path}.step"), format!("{} output points requested; at most {MAX_OUTPUT_POINTS:e} are allowed", ((t1 - t0) / h).ceil()));
+                self.problem(
+                    format!("{path}.step"),
+                    format!(
+                        "{} output points requested; at most {MAX_OUTPUT_POINTS:e} are allowed",
+                        ((t1 - t0) / h).ceil()
+                    ),
+                );
                 continue;
             }
             let AnalysisKind::Kinematic = a.kind;
-            out.insert(name.clone(), Analysis { name: name.clone(), kind: a.kind, drivers, t_start: t0, t_end: t1, step: h, settings });
+            out.insert(
+                name.clone(),
+                Analysis { name: name.clone(), kind: a.kind, drivers, t_start: t0, t_end: t1, step: h, settings },
+            );
         }
         out
     }
@@ -561,7 +606,10 @@ impl Cx<'_> {
         let singular_condition = pos(self, "singular_condition", s.singular_condition, d.singular_condition);
         let max_iterations = s.max_iterations.unwrap_or(d.max_iterations);
         if max_iterations == 0 || max_iterations > 1000 {
-            self.problem(format!("{path}.max_iterations"), format!("expected 1 to 1000 iterations, found {max_iterations}"));
+            self.problem(
+                format!("{path}.max_iterations"),
+                format!("expected 1 to 1000 iterations, found {max_iterations}"),
+            );
             ok = false;
         }
         if min_substep >= 1.0 {

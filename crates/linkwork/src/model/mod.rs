@@ -115,8 +115,15 @@ impl Model {
     pub fn analysis(&self, name: &str) -> Result<&Analysis> {
         self.analyses.get(name).ok_or_else(|| {
             let known: Vec<&str> = self.analyses.keys().map(String::as_str).collect();
-            let list = if known.is_empty() { "the model names no analyses".to_string() } else { format!("the model has: {}", known.join(", ")) };
-            Error::Model(vec![crate::error::Problem::new(format!("analyses.{name}"), format!("no analysis named '{name}'; {list}"))])
+            let list = if known.is_empty() {
+                "the model names no analyses".to_string()
+            } else {
+                format!("the model has: {}", known.join(", "))
+            };
+            Error::Model(vec![crate::error::Problem::new(
+                format!("analyses.{name}"),
+                format!("no analysis named '{name}'; {list}"),
+            )])
         })
     }
 

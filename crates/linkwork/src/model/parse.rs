@@ -28,7 +28,9 @@ pub fn parse_spec(text: &str) -> Result<ModelSpec, Vec<Problem>> {
     for key in map.keys() {
         match key.as_str() {
             Some(k) if SECTIONS.contains(&k) => {}
-            Some(k) => problems.push(Problem::new(k, format!("unknown section; expected one of {}", SECTIONS.join(", ")))),
+            Some(k) => {
+                problems.push(Problem::new(k, format!("unknown section; expected one of {}", SECTIONS.join(", "))))
+            }
             None => problems.push(Problem::new("", format!("section names must be strings, found {}", describe(key)))),
         }
     }

@@ -87,7 +87,10 @@ impl<'m> System<'m> {
 
     /// The row with the largest absolute value of `v (m)`, and that value.
     pub fn worst_row(&self, v: &[f64]) -> (RowName, f64) {
-        let (k, x) = v.iter().enumerate().fold((0, 0.0f64), |(bk, bx), (k, x)| if x.abs() > bx { (k, x.abs()) } else { (bk, bx) });
+        let (k, x) = v
+            .iter()
+            .enumerate()
+            .fold((0, 0.0f64), |(bk, bx), (k, x)| if x.abs() > bx { (k, x.abs()) } else { (bk, bx) });
         (self.row_name(k), x)
     }
 }
