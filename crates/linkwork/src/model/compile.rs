@@ -17,7 +17,13 @@ const MAX_OUTPUT_POINTS: f64 = 1e7;
 
 /// Build the model, or list every problem found.
 pub fn compile(spec: &ModelSpec) -> Result<Model, Vec<Problem>> {
-    let mut cx = Cx { spec, problems: Vec::new(), q0: Vec::new() };
+    compile_partial(spec, &[])
+}
+
+/// Build the model from the entries that were read; `broken` names (`section.name`) the entries
+/// that were not: they are taken as existing, so that only their own problems are reported.
+pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec<Problem>> {
+    let mut cx = Cx { spec, problems: Vec::new(), q0: Vec::new(), broken };
     let bodies = cx.bodies();
     cx.q0 = bodies.iter().flat_map(|b| b.q0).collect();
     cx.unique_names();
@@ -82,6 +88,8 @@ struct Cx<'s> {
     problems: Vec<Problem>,
     /// (3 * bodies) initial guess, for constants that default to their initial value.
     q0: Vec<f64>,
+    /// `section.name` of entries that exist but could not be read.
+    broken: &'s [String],
 }
 
 /// Names become CSV column prefixes and expression variables (`crank.phi`): identifiers only.
@@ -92,6 +100,16 @@ fn is_identifier(s: &str) -> bool {
 }
 
 impl Cx<'_> {
+    /// Every body named in the file, read or not.
+    fn body_names(&self) -> Vec<&str> {
+        let broken = self.broken.iter().filter_map(|b| b.strip_prefix("bodies."));
+        self.spec.bodies.keys().map(String::as_str).chain(broken).collect()
+    }
+
+    fn is_broken_body(&self, name: &str) -> bool {
+        self.broken.iter().any(|b| b.strip_prefix("bodies.") == Some(name))
+    }
+
     fn problem(&mut self, path: impl Into<String>, msg: impl Into<String>) {
         self.problems.push(Problem::new(path, msg));
     }
@@ -140,7 +158,7 @@ impl Cx<'_> {
     }
 
     fn bodies(&mut self) -> Vec<Body> {
-        if self.spec.bodies.is_empty() && !self.problems.iter().any(|p| p.path == "bodies") {
+        if self.body_names().is_empty() {
             self.problem("bodies", "at least one moving body is required");
         }
         let spec = self.spec;
@@ -200,14 +218,16 @@ impl Cx<'_> {
     fn unique_names(&mut self) {
         let spec = self.spec;
         let mut seen: IndexMap<&str, &str> = IndexMap::new();
+        let broken = self.broken.iter().filter_map(|b| b.split_once('.'));
         let all = spec
             .bodies
             .keys()
-            .map(|k| ("bodies", k))
-            .chain(spec.joints.keys().map(|k| ("joints", k)))
-            .chain(spec.drivers.keys().map(|k| ("drivers", k)));
+            .map(|k| ("bodies", k.as_str()))
+            .chain(spec.joints.keys().map(|k| ("joints", k.as_str())))
+            .chain(spec.drivers.keys().map(|k| ("drivers", k.as_str())))
+            .chain(broken.filter(|(s, _)| ["bodies", "joints", "drivers"].contains(s)));
         for (section, name) in all {
-            if let Some(first) = seen.get(name.as_str()) {
+            if let Some(first) = seen.get(name) {
                 self.problem(
                     format!("{section}.{name}"),
                     format!("duplicate name: '{name}' is already used in {first}"),
@@ -224,9 +244,10 @@ impl Cx<'_> {
         }
         match self.spec.bodies.get_index_of(name) {
             Some(k) => Some(BodyIx(Some(3 * k))),
+            None if self.is_broken_body(name) => None,
             None => {
-                let known: Vec<&str> = self.spec.bodies.keys().map(String::as_str).collect();
-                self.problem(path, format!("unknown body '{name}'; expected ground or one of: {}", known.join(", ")));
+                let known = self.body_names().join(", ");
+                self.problem(path, format!("unknown body '{name}'; expected ground or one of: {known}"));
                 None
             }
         }
@@ -434,17 +455,25 @@ impl Cx<'_> {
     /// A general constraint: names are `<body>.x`, `<body>.y`, `<body>.phi` and `t`.
     fn general(&mut self, path: &str, src: &str) -> Option<Box<dyn Constraint>> {
         let spec = self.spec;
+        let known = self.body_names().join(", ");
+        let broken: Vec<&str> = self.broken.iter().filter_map(|b| b.strip_prefix("bodies.")).collect();
+        let mut uses_broken = false;
         let mut vars: Vec<Var> = Vec::new();
         let mut resolve = |name: &str| -> Result<usize, String> {
             let var = if name == "t" {
                 Var::Time
             } else {
-                let hint = || {
-                    let bodies: Vec<&str> = spec.bodies.keys().map(String::as_str).collect();
-                    format!("expected <body>.x, <body>.y, <body>.phi or t, with a body among: {}", bodies.join(", "))
-                };
+                let hint = || format!("expected <body>.x, <body>.y, <body>.phi or t, with a body among: {known}");
                 let (b, c) = name.split_once('.').ok_or_else(hint)?;
-                let k = spec.bodies.get_index_of(b).ok_or_else(hint)?;
+                // A body that exists but could not be read: its own problem is reported.
+                let k = match spec.bodies.get_index_of(b) {
+                    Some(k) => k,
+                    None if broken.contains(&b) && ["x", "y", "phi"].contains(&c) => {
+                        uses_broken = true;
+                        0
+                    }
+                    None => return Err(hint()),
+                };
                 let off = match c {
                     "x" => 0,
                     "y" => 1,
@@ -468,6 +497,9 @@ impl Cx<'_> {
                 return None;
             }
         };
+        if uses_broken {
+            return None;
+        }
         match GeneralConstraint::try_new(expr, vars) {
             Ok(c) => Some(Box::new(c)),
             Err(e) => {
@@ -549,6 +581,7 @@ impl Cx<'_> {
                     .enumerate()
                     .filter_map(|(k, d)| match spec.drivers.get_index_of(d.as_str()) {
                         Some(i) => Some(i),
+                        None if self.broken.contains(&format!("drivers.{d}")) => None,
                         None => {
                             let known: Vec<&str> = spec.drivers.keys().map(String::as_str).collect();
                             self.problem(

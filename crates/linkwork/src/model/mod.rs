@@ -5,8 +5,8 @@ mod compile;
 mod parse;
 pub mod spec;
 
-pub use compile::compile;
-pub use parse::parse_spec;
+pub use compile::{compile, compile_partial};
+pub use parse::{parse_partial, parse_spec, Parsed};
 
 use crate::analysis::SolverSettings;
 use crate::constraints::Constraint;
@@ -92,8 +92,12 @@ impl Model {
 
     /// Compile a model from the text of a model file.
     pub fn from_yaml(text: &str) -> Result<Model> {
-        let spec = parse_spec(text).map_err(Error::Model)?;
-        compile(&spec).map_err(Error::Model)
+        let parsed = parse_partial(text).map_err(Error::Model)?;
+        match compile_partial(&parsed.spec, &parsed.broken) {
+            Ok(model) if parsed.problems.is_empty() => Ok(model),
+            Ok(_) => Err(Error::Model(parsed.problems)),
+            Err(more) => Err(Error::Model(parsed.problems.into_iter().chain(more).collect())),
+        }
     }
 
     /// Number of coordinates, `3 * bodies`.

@@ -12,8 +12,30 @@ use serde_yaml_ng::Value;
 
 const SECTIONS: [&str; 7] = ["name", "description", "ground", "bodies", "joints", "drivers", "analyses"];
 
+/// A model file read as far as it could be: the entries that deserialized, the problems of the
+/// others, and the names of those others (so that later checks do not call them unknown).
+#[derive(Debug)]
+pub struct Parsed {
+    /// Every entry that deserialized.
+    pub spec: ModelSpec,
+    /// Structural problems (types, missing and unknown fields), with paths.
+    pub problems: Vec<Problem>,
+    /// `section.name` of each entry that did not deserialize.
+    pub broken: Vec<String>,
+}
+
 /// Parse a model file's text. `Err` lists every problem found.
 pub fn parse_spec(text: &str) -> Result<ModelSpec, Vec<Problem>> {
+    let parsed = parse_partial(text)?;
+    if parsed.problems.is_empty() {
+        Ok(parsed.spec)
+    } else {
+        Err(parsed.problems)
+    }
+}
+
+/// Parse as much of a model file as can be read; `Err` only when the text is not a YAML mapping.
+pub fn parse_partial(text: &str) -> Result<Parsed, Vec<Problem>> {
     let root: Value = serde_yaml_ng::from_str(text).map_err(|e| {
         let msg = match e.location() {
             Some(l) => format!("YAML syntax error at line {}, column {}: {e}", l.line(), l.column()),
@@ -41,15 +63,12 @@ pub fn parse_spec(text: &str) -> Result<ModelSpec, Vec<Problem>> {
     if get("bodies").is_none() {
         problems.push(Problem::new("bodies", "missing section: at least one moving body is required"));
     }
-    let bodies = section::<BodySpec>("bodies", get("bodies"), &mut problems);
-    let joints = section::<JointSpec>("joints", get("joints"), &mut problems);
-    let drivers = section::<DriverSpec>("drivers", get("drivers"), &mut problems);
-    let analyses = section::<AnalysisSpec>("analyses", get("analyses"), &mut problems);
-    if problems.is_empty() {
-        Ok(ModelSpec { name, description, ground, bodies, joints, drivers, analyses })
-    } else {
-        Err(problems)
-    }
+    let mut broken = Vec::new();
+    let bodies = section::<BodySpec>("bodies", get("bodies"), &mut problems, &mut broken);
+    let joints = section::<JointSpec>("joints", get("joints"), &mut problems, &mut broken);
+    let drivers = section::<DriverSpec>("drivers", get("drivers"), &mut problems, &mut broken);
+    let analyses = section::<AnalysisSpec>("analyses", get("analyses"), &mut problems, &mut broken);
+    Ok(Parsed { spec: ModelSpec { name, description, ground, bodies, joints, drivers, analyses }, problems, broken })
 }
 
 /// Deserialize one value, recording a problem (with the path inside the value) on failure.
@@ -66,7 +85,12 @@ fn entry<T: DeserializeOwned>(path: &str, v: &Value, problems: &mut Vec<Problem>
 }
 
 /// A section that maps names to entries; each entry is read on its own.
-fn section<T: DeserializeOwned>(name: &str, v: Option<&Value>, problems: &mut Vec<Problem>) -> IndexMap<String, T> {
+fn section<T: DeserializeOwned>(
+    name: &str,
+    v: Option<&Value>,
+    problems: &mut Vec<Problem>,
+    broken: &mut Vec<String>,
+) -> IndexMap<String, T> {
     let mut out = IndexMap::new();
     let Some(v) = v else { return out };
     let Value::Mapping(map) = v else {
@@ -78,8 +102,11 @@ fn section<T: DeserializeOwned>(name: &str, v: Option<&Value>, problems: &mut Ve
             problems.push(Problem::new(name, format!("names must be strings, found {}", describe(k))));
             continue;
         };
-        if let Some(t) = entry::<T>(&format!("{name}.{key}"), v, problems) {
-            out.insert(key.to_string(), t);
+        match entry::<T>(&format!("{name}.{key}"), v, problems) {
+            Some(t) => {
+                out.insert(key.to_string(), t);
+            }
+            None => broken.push(format!("{name}.{key}")),
         }
     }
     out

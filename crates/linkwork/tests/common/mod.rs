@@ -1,0 +1,68 @@
+//! Shared harness of the reference tests: load an example, run it, and compare columns with a
+//! reference given as closed-form functions of time. Closed forms are written once, generically,
+//! and evaluated with hyper-dual numbers, so that the reference velocity and acceleration are the
+//! exact first and second time derivatives of the reference position (no finite differences).
+
+#![allow(dead_code)]
+
+use linkwork::expr::{HyperDual, Scalar};
+use linkwork::{Model, Results};
+
+/// Path of a file in the repository's `examples/` folder.
+pub fn example(name: &str) -> String {
+    format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Load and run an example's analysis; panics with the engine's message on failure.
+pub fn run(name: &str, analysis: &str) -> (Model, Results) {
+    let model = Model::load(example(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let results = model.run(analysis).unwrap_or_else(|f| panic!("{name}: {}", f.error));
+    (model, results)
+}
+
+/// `(f(t), f'(t), f''(t))` of a closed form `f`, exactly.
+pub fn derivatives(f: impl Fn(HyperDual) -> HyperDual, t: f64) -> [f64; 3] {
+    let y = f(HyperDual::variable(t));
+    [y.v, y.e1, y.e12]
+}
+
+/// Tolerance of a quantity: `tol` absolute below magnitude 1, relative above (accelerations of a
+/// fast mechanism reach hundreds of m/s^2, where 1e-10 absolute would ask for 1e-13 relative).
+pub fn close(got: f64, want: f64, tol: f64) -> bool {
+    (got - want).abs() <= tol * want.abs().max(1.0)
+}
+
+/// Compare body `body`'s column `<body>.<q>` (q = x, y or phi) and its two derivative columns
+/// with the closed form `f` at every output time.
+pub fn check_coordinate(r: &Results, body: &str, q: &str, f: impl Fn(HyperDual) -> HyperDual, tol: f64) {
+    let names = match q {
+        "x" => ["x", "vx", "ax"],
+        "y" => ["y", "vy", "ay"],
+        "phi" => ["phi", "omega", "alpha"],
+        _ => panic!("coordinate {q}"),
+    };
+    let cols: Vec<&[f64]> = names.iter().map(|n| r.column(&format!("{body}.{n}")).expect("column")).collect();
+    let mut worst = [0.0f64; 3];
+    for (k, &t) in r.time.iter().enumerate() {
+        let want = derivatives(&f, t);
+        for d in 0..3 {
+            let got = cols[d][k];
+            assert!(close(got, want[d], tol), "{body}.{} at t = {t}: engine {got}, closed form {}", names[d], want[d]);
+            worst[d] = worst[d].max((got - want[d]).abs());
+        }
+    }
+    eprintln!(
+        "{body}.{q}: largest differences (position, velocity, acceleration) {:.2e} {:.2e} {:.2e}",
+        worst[0], worst[1], worst[2]
+    );
+}
+
+/// `x^2` for any scalar.
+pub fn sq<S: Scalar>(x: S) -> S {
+    x * x
+}
+
+/// A constant as a scalar.
+pub fn c<S: Scalar>(v: f64) -> S {
+    S::constant(v)
+}

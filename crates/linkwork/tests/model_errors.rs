@@ -1,0 +1,120 @@
+//! Bad input: every problem of a file is reported, each with its path in the file, and no input
+//! panics or hangs.
+
+mod common;
+
+use common::example;
+use linkwork::{Error, Model};
+
+fn problems(text: &str) -> Vec<String> {
+    match Model::from_yaml(text) {
+        Err(Error::Model(p)) => p.iter().map(|p| p.to_string()).collect(),
+        Err(e) => panic!("expected a model error, got {e}"),
+        Ok(_) => panic!("expected a model error, the model compiled"),
+    }
+}
+
+fn has(list: &[String], path: &str, words: &str) {
+    let prefix = if path.is_empty() { String::new() } else { format!("{path}: ") };
+    assert!(
+        list.iter().any(|p| p.starts_with(&prefix) && p.contains(words)),
+        "no '{prefix}...{words}...' in {list:#?}"
+    );
+}
+
+const BAD: &str = r#"
+bodies:
+  crank: {mass: 1, inertia: .nan, position: [0, 0], angle: 0}
+  rocker: {mass: 1, inertia: 1, position: [0, 0], angle: 0, colour: red}
+  link: {mass: 1, position: [0, 0], angle: 0}
+  slider: {mass: -2, inertia: 1, position: [0, "abc"], angle: 0}
+joints:
+  B: {type: revolute, body_i: crank, point_i: [0, 0], body_j: rokcer, point_j: [0, 0]}
+  S: {type: point_on_line, body_i: crank, point_i: [0, 0], axis_i: [0, 0], body_j: rocker, point_j: [1, 0]}
+  crank: {type: revolute, body_i: crank, point_i: [0, 0], body_j: ground, point_j: [0, 0]}
+  E: {type: expression, expression: "crank.x^2 + rocker.z"}
+  F: {type: expression, expression: "crank.x * (1 +"}
+  P: {type: revolute, body_i: crank, point_i: tip, body_j: ground, point_j: [0, 0]}
+  Q: {type: revolut, body_i: crank}
+drivers:
+  d: {type: angle, body: crank, function: "2*pi*q"}
+analyses:
+  kin: {type: kinematic, drivers: [d, e], t_end: 1, step: 0}
+"#;
+
+#[test]
+fn every_problem_is_listed_with_its_path() {
+    let p = problems(BAD);
+    has(&p, "bodies.crank.inertia", "finite");
+    has(&p, "bodies.rocker.colour", "unknown field");
+    has(&p, "bodies.link", "missing field `inertia`");
+    has(&p, "bodies.slider.position[1]", "invalid type: string");
+    has(&p, "joints.B.body_j", "unknown body 'rokcer'");
+    has(&p, "joints.S.axis_i", "zero-length axis");
+    has(&p, "joints.crank", "duplicate name");
+    has(&p, "joints.E.expression", "unknown name 'rocker.z'");
+    has(&p, "joints.F.expression", "cannot read the expression");
+    has(&p, "joints.P.point_i", "unknown point 'tip'");
+    has(&p, "joints.Q.type", "unknown variant `revolut`");
+    has(&p, "drivers.d.function", "unknown name 'q'");
+    has(&p, "analyses.kin.drivers[1]", "unknown driver 'e'");
+    has(&p, "analyses.kin.step", "positive");
+    assert_eq!(p.len(), 14, "{p:#?}");
+}
+
+#[test]
+fn negative_mass_is_refused_once_the_body_reads() {
+    let text = "bodies:\n  a: {mass: -2, inertia: -1, position: [0, 0], angle: 0}\n";
+    let p = problems(text);
+    has(&p, "bodies.a.mass", "mass >= 0");
+    has(&p, "bodies.a.inertia", ">= 0");
+}
+
+#[test]
+fn syntax_errors_and_wrong_shapes() {
+    has(&problems("bodies: [1, 2"), "", "YAML syntax error");
+    has(&problems("- 1\n- 2\n"), "", "expected a mapping");
+    has(&problems("bodies: {}\nbogus: 1\n"), "bogus", "unknown section");
+    has(&problems("joints: {}\n"), "bodies", "missing section");
+    has(&problems("bodies: 3\n"), "bodies", "expected a mapping");
+    has(&problems("bodies:\n  a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n  a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n"), "", "duplicate");
+    has(
+        &problems("bodies:\n  ground: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n"),
+        "bodies.ground",
+        "fixed body",
+    );
+    has(
+        &problems("bodies:\n  2a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n"),
+        "bodies.2a",
+        "not a valid name",
+    );
+}
+
+/// Every prefix of every example, and every example with one character replaced, must give a
+/// model or a model error: never a panic (a hang would time the test out).
+#[test]
+fn no_input_panics() {
+    let files = ["quick_return_a.yaml", "quick_return_b.yaml", "fourbar.yaml", "parallelogram.yaml"];
+    let mut tried = 0;
+    for f in files {
+        let text = std::fs::read_to_string(example(f)).unwrap();
+        for cut in (0..text.len()).step_by(11) {
+            if text.is_char_boundary(cut) {
+                let _ = Model::from_yaml(&text[..cut]);
+                tried += 1;
+            }
+        }
+        for (k, _) in text.char_indices().step_by(7) {
+            for replacement in ["0", "-", ":", "[", "x", "9e999", " "] {
+                let mut mutated = text.clone();
+                mutated.replace_range(k..k + 1, replacement);
+                if let Ok(model) = Model::from_yaml(&mutated) {
+                    // A model that compiles must also run to an answer or a typed error.
+                    let _ = model.run("kinematics");
+                }
+                tried += 1;
+            }
+        }
+    }
+    assert!(tried > 3000);
+}
