@@ -272,3 +272,10 @@ def test_exceptions_pickle():
     again = pickle.loads(pickle.dumps(caught.value))
     assert type(again) is linkwork.ModelError
     assert again.problems == caught.value.problems
+
+
+def test_a_panic_becomes_internal_error():
+    """A panic in the engine is a bug, but it must reach Python as an ordinary exception, never as
+    pyo3's PanicException (a BaseException) or a crash."""
+    with pytest.raises(linkwork.InternalError, match="internal error in the Linkwork engine .*deliberate panic"):
+        linkwork._linkwork._panic_for_tests()

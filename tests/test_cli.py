@@ -193,3 +193,16 @@ def test_readme_python_snippet(tmp_path, monkeypatch, capsys):
     exec(compile(snippet, "README.md", "exec"), {})
     assert capsys.readouterr().out.splitlines()[0] == "1"
     assert (tmp_path / "out" / "quick_return_a" / "results.csv").is_file()
+
+
+def test_internal_error_exits_1(monkeypatch, tmp_path, capsys):
+    from linkwork import _linkwork, cli
+
+    def explode(path):
+        _linkwork._panic_for_tests()
+
+    monkeypatch.setattr(cli.Model, "load", staticmethod(explode))
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["run", str(EXAMPLES / "fourbar.yaml")]) == 1
+    err = capsys.readouterr().err
+    assert "internal error" in err and "please report it" in err

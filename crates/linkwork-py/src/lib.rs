@@ -145,11 +145,19 @@ fn schema() -> PyResult<String> {
     guard(linkwork::Model::json_schema)
 }
 
+/// Panic inside the guard that wraps every engine call, so that tests can see the panic arrive as
+/// `InternalError` rather than crash the interpreter.
+#[pyfunction]
+fn _panic_for_tests() -> PyResult<()> {
+    guard(|| panic!("deliberate panic (linkwork._linkwork._panic_for_tests)"))
+}
+
 #[pymodule]
 fn _linkwork(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<PyModel>()?;
     m.add_class::<PyResults>()?;
     m.add_function(wrap_pyfunction!(schema, m)?)?;
+    m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     errors::register(m)
 }
