@@ -1,1 +1,26 @@
-fn main() {}
+//! Kinematic analysis of the quick-return mechanism (model A), timed per output point.
+//!
+//! `cargo bench -p linkwork --bench kinematics`. Two runs: the analysis as the model file gives it
+//! (0 to 2 s every 0.05 s: 41 points, so assembly and the symbolic factorization weigh in), and
+//! the same mechanism over 100 s (2001 points), where the time loop dominates. Criterion reports
+//! time per element = per output point. Figures are recorded in `docs/performance.md`.
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use linkwork::Model;
+use std::hint::black_box;
+
+fn quick_return(c: &mut Criterion) {
+    let path = format!("{}/../../examples/quick_return_a.yaml", env!("CARGO_MANIFEST_DIR"));
+    let mut model = Model::load(&path).expect("the example loads");
+    let mut group = c.benchmark_group("quick_return_a");
+    for (label, t_end) in [("kinematics_2s", 2.0), ("kinematics_100s", 100.0)] {
+        model.analyses[0].t_end = t_end;
+        let points = model.run("kinematics").expect("the example runs").len();
+        group.throughput(Throughput::Elements(points as u64));
+        group.bench_function(label, |b| b.iter(|| black_box(&model).run("kinematics").map(|r| r.len()).ok()));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, quick_return);
+criterion_main!(benches);

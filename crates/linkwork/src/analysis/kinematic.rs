@@ -269,8 +269,8 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
                     step = settings.max_rotation / wmax;
                 }
                 let t_new = if step == target - s.t { target } else { s.t + step };
-                for k in 0..n {
-                    q_pred[k] = s.q[k] + step * s.qdot[k] + 0.5 * step * step * s.qddot[k];
+                for (k, p) in q_pred.iter_mut().enumerate() {
+                    *p = s.q[k] + step * s.qdot[k] + 0.5 * step * step * s.qddot[k];
                 }
                 s.trial.copy_from_slice(&q_pred);
                 let motion = max_abs_diff(&q_pred, &s.q);

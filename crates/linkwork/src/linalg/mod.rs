@@ -156,3 +156,40 @@ impl SparseLu {
         norm_a * est
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lu(col_ptr: Vec<usize>, row_idx: Vec<usize>, values: &[f64]) -> SparseLu {
+        let n = col_ptr.len() - 1;
+        let mut lu = SparseLu::new(Pattern { col_ptr, row_idx, map: vec![], nrows: n }).unwrap();
+        lu.pattern_and_values().1.copy_from_slice(values);
+        lu
+    }
+
+    /// `A = [[4, 1, 0], [1, 3, 0], [0, 0, 2]]`: `A [1, 1, 1] = [5, 4, 2]`, `||A||_1 = 5` and
+    /// `A^-1 = [[3, -1, 0], [-1, 4, 0], [0, 0, 5.5]] / 11`, so `||A^-1||_1 = 0.5` and the
+    /// 1-norm condition number is exactly 2.5 (Hager's estimate is exact on this matrix).
+    #[test]
+    fn solves_and_estimates_the_condition() {
+        let mut a = lu(vec![0, 2, 4, 5], vec![0, 1, 0, 1, 2], &[4.0, 1.0, 1.0, 3.0, 2.0]);
+        a.factor().unwrap();
+        let mut b = [5.0, 4.0, 2.0];
+        a.solve(&mut b);
+        assert!(b.iter().all(|x| (x - 1.0).abs() < 1e-15), "{b:?}");
+        let k = a.condition_estimate();
+        assert!((k - 2.5).abs() < 1e-12, "condition {k}");
+    }
+
+    /// A numerically singular matrix is flagged, whether faer refuses it or factors it.
+    #[test]
+    fn singular_matrix_is_flagged() {
+        let mut a = lu(vec![0, 2, 4], vec![0, 1, 0, 1], &[1.0, 2.0, 2.0, 4.0]);
+        if a.factor().is_ok() {
+            assert!(a.condition_estimate() > 1e15);
+        }
+        let mut b = lu(vec![0, 1, 1], vec![0], &[1.0]);
+        assert_eq!(b.factor(), Err(FactorError::StructurallySingular { column: 1 }));
+    }
+}

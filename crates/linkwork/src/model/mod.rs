@@ -1,5 +1,5 @@
-//! Model files: schema ([`spec`]), reading with every problem located ([`parse`]), and
-//! compilation into an indexed, immutable [`Model`] ([`compile`]).
+//! Model files: schema ([`spec`]), reading with every problem located ([`parse_partial`]), and
+//! compilation into an indexed, immutable [`Model`] ([`compile_partial`]).
 
 mod compile;
 mod parse;

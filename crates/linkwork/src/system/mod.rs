@@ -104,7 +104,7 @@ pub struct Pattern {
     /// (nnz) row index of each value, in the renumbered (selected) rows.
     pub row_idx: Vec<usize>,
     /// (sum of block sizes) value position of each block entry, or `usize::MAX` for unselected rows.
-    map: Vec<usize>,
+    pub(crate) map: Vec<usize>,
     /// Number of selected rows.
     pub nrows: usize,
 }
