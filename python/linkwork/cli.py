@@ -18,7 +18,7 @@ import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any
 
 from . import _linkwork
 from .errors import AssemblyError, FileError, InternalError, LinkworkError, ModelError, SolverError
@@ -246,8 +246,8 @@ def _num(value: object) -> str:
     return f"{value:.3g}" if isinstance(value, float) else str(value)
 
 
-def _err(text: str, stream: TextIO | None = None) -> None:
-    print(text, file=stream if stream is not None else sys.stderr)
+def _err(text: str) -> None:
+    print(text, file=sys.stderr)
 
 
 if __name__ == "__main__":
