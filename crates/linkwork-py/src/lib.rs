@@ -1,1 +1,163 @@
+//! Python bindings of the Linkwork engine: thin wrappers, numpy out, every engine error mapped to
+//! its own Python exception in one exhaustive `match` ([`errors::to_pyerr`]).
+//!
+//! The Python package `linkwork` (in `python/linkwork/`) is the public interface; this module,
+//! `linkwork._linkwork`, is its native half and holds no logic of its own.
 
+mod errors;
+mod json;
+
+use errors::{guard, to_pyerr};
+use linkwork::analysis::check;
+use linkwork::{Error, Results};
+use numpy::ndarray::{Array2, ShapeBuilder};
+use numpy::{PyArray1, PyArray2};
+use pyo3::prelude::*;
+use std::path::PathBuf;
+
+/// A compiled mechanism (immutable).
+#[pyclass(name = "PyModel", module = "linkwork._linkwork", frozen)]
+struct PyModel {
+    model: linkwork::Model,
+}
+
+#[pymethods]
+impl PyModel {
+    /// Read and compile a model file. Raises `ModelError` listing every problem, or `FileError`.
+    #[staticmethod]
+    fn load(py: Python<'_>, path: PathBuf) -> PyResult<PyModel> {
+        let model = py.detach(|| guard(|| linkwork::Model::load(&path)))?;
+        model.map(|model| PyModel { model }).map_err(|e| to_pyerr(py, e, None))
+    }
+
+    /// Compile a model from the text of a model file.
+    #[staticmethod]
+    fn from_yaml(py: Python<'_>, text: &str) -> PyResult<PyModel> {
+        let model = py.detach(|| guard(|| linkwork::Model::from_yaml(text)))?;
+        model.map(|model| PyModel { model }).map_err(|e| to_pyerr(py, e, None))
+    }
+
+    /// Title of the model.
+    #[getter]
+    fn name(&self) -> &str {
+        &self.model.name
+    }
+
+    /// Names of the moving bodies, in file order.
+    #[getter]
+    fn bodies(&self) -> Vec<String> {
+        self.model.bodies.iter().map(|b| b.name.clone()).collect()
+    }
+
+    /// Names of the joints, in file order.
+    #[getter]
+    fn joints(&self) -> Vec<String> {
+        self.model.joints.iter().map(|j| j.name.clone()).collect()
+    }
+
+    /// Names of the drivers, in file order.
+    #[getter]
+    fn drivers(&self) -> Vec<String> {
+        self.model.drivers.iter().map(|d| d.name.clone()).collect()
+    }
+
+    /// Names of the analyses, in file order.
+    #[getter]
+    fn analyses(&self) -> Vec<String> {
+        self.model.analyses.keys().cloned().collect()
+    }
+
+    /// Degrees of freedom, redundant rows and assembly, for the mechanism alone and for each
+    /// analysis with its drivers, as the engine's `CheckReport` in plain Python objects.
+    fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let report = py.detach(|| guard(|| check(&self.model)))?.map_err(|e| to_pyerr(py, e, None))?;
+        let value = serde_json::to_value(&report).map_err(|e| errors::internal(&e.to_string()))?;
+        json::to_py(py, &value)
+    }
+
+    /// Run the analysis called `analysis`. A failure raises the matching exception, whose
+    /// `results` attribute holds the output computed before it.
+    fn run(&self, py: Python<'_>, analysis: &str) -> PyResult<PyResults> {
+        match py.detach(|| guard(|| self.model.run(analysis)))? {
+            Ok(results) => Ok(PyResults { results, error: None }),
+            Err(failure) => {
+                let linkwork::Failure { error, results } = *failure;
+                let partial = PyResults { results, error: Some(error.clone()) };
+                Err(to_pyerr(py, error, Some(partial)))
+            }
+        }
+    }
+}
+
+/// Output of one analysis (complete, or up to a failure).
+#[pyclass(name = "PyResults", module = "linkwork._linkwork", frozen)]
+struct PyResults {
+    results: Results,
+    /// Why the analysis stopped early, if it did.
+    error: Option<Error>,
+}
+
+#[pymethods]
+impl PyResults {
+    /// Column names after `time`: `<body>.x, .y, .phi, .vx, .vy, .omega, .ax, .ay, .alpha` per body.
+    #[getter]
+    fn names(&self) -> Vec<String> {
+        self.results.names.clone()
+    }
+
+    /// (rows) output times, s.
+    #[getter]
+    fn time<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.results.time)
+    }
+
+    /// (rows x columns) values in Fortran order, so that each column is contiguous.
+    #[getter]
+    fn values<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let (rows, cols) = (self.results.time.len(), self.results.columns.len());
+        let flat: Vec<f64> = self.results.columns.iter().flatten().copied().collect();
+        let array = Array2::from_shape_vec((rows, cols).f(), flat)
+            .map_err(|e| errors::internal(&format!("results columns of unequal length: {e}")))?;
+        Ok(PyArray2::from_owned_array(py, array))
+    }
+
+    /// `summary.json` as a dict: sizes, solver statistics, `status` and the error if any.
+    #[getter]
+    fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json::to_py(py, &self.results.summary_json(self.error.as_ref()))
+    }
+
+    /// True when the analysis ran to its end time.
+    #[getter]
+    fn ok(&self) -> bool {
+        self.error.is_none()
+    }
+
+    /// Write `results.csv` and `summary.json` into `directory` (created if missing).
+    fn write(&self, py: Python<'_>, directory: PathBuf) -> PyResult<()> {
+        py.detach(|| guard(|| self.results.write(&directory, self.error.as_ref())))?.map_err(|e| to_pyerr(py, e, None))
+    }
+}
+
+/// The JSON Schema of model files, as JSON text.
+#[pyfunction]
+fn schema() -> PyResult<String> {
+    guard(linkwork::Model::json_schema)
+}
+
+/// Panic inside the guard that wraps every engine call, so that tests can see the panic arrive as
+/// `InternalError` rather than crash the interpreter.
+#[pyfunction]
+fn _panic_for_tests() -> PyResult<()> {
+    guard(|| panic!("deliberate panic (linkwork._linkwork._panic_for_tests)"))
+}
+
+#[pymodule]
+fn _linkwork(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_class::<PyModel>()?;
+    m.add_class::<PyResults>()?;
+    m.add_function(wrap_pyfunction!(schema, m)?)?;
+    m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
+    errors::register(m)
+}

@@ -1,0 +1,174 @@
+//! The Python exception tree and the one place that maps engine errors onto it.
+//!
+//! ```text
+//! LinkworkError
+//! ├── ModelError          problems: list[(path, message)]
+//! ├── AssemblyError       joints, row, residual, iterations, hint, results
+//! ├── SolverError         time, joints, rows, results
+//! │   ├── SingularError       detail
+//! │   └── ConvergenceError    row, residual, iterations, substep
+//! ├── FileError           path (also an OSError)
+//! └── InternalError       a panic inside the engine: a bug, reported instead of crashing
+//! ```
+//!
+//! Every exception's message is the engine's own (`Display`), so Python and the engine say the
+//! same thing. `results` is the output computed before the failure (`None` outside `run`).
+
+use crate::PyResults;
+use linkwork::Error;
+use pyo3::exceptions::{PyException, PyOSError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple, PyType};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+pyo3::create_exception!(linkwork, LinkworkError, PyException, "Base class of every Linkwork error.");
+pyo3::create_exception!(
+    linkwork,
+    ModelError,
+    LinkworkError,
+    "The model is invalid. `problems` lists every problem as `(path, message)`, the path being a dotted path into the model file such as `joints.B.body_j`."
+);
+pyo3::create_exception!(
+    linkwork,
+    AssemblyError,
+    LinkworkError,
+    "The initial guess could not be moved onto the constraints. `row` is the joint equation with the largest residual, `joints` its joint, `hint` what to try."
+);
+pyo3::create_exception!(
+    linkwork,
+    SolverError,
+    LinkworkError,
+    "An analysis failed at time `time` (s) in the joints `joints` (rows `rows`). `results` holds the output computed before the failure."
+);
+pyo3::create_exception!(
+    linkwork,
+    SingularError,
+    SolverError,
+    "The constraint Jacobian became singular: a dead centre, lock-up or lost degree of freedom. `detail` gives the numbers behind the verdict."
+);
+pyo3::create_exception!(
+    linkwork,
+    ConvergenceError,
+    SolverError,
+    "Newton's method on the positions did not converge, even with the smallest sub-step."
+);
+pyo3::create_exception!(
+    linkwork,
+    InternalError,
+    LinkworkError,
+    "The engine panicked: a bug in Linkwork. Please report it with the model that caused it."
+);
+
+/// Name of the exception that is both a `LinkworkError` and an `OSError`.
+const FILE_ERROR: &str = "FileError";
+
+/// Add the exception classes to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("LinkworkError", py.get_type::<LinkworkError>())?;
+    m.add("ModelError", py.get_type::<ModelError>())?;
+    m.add("AssemblyError", py.get_type::<AssemblyError>())?;
+    m.add("SolverError", py.get_type::<SolverError>())?;
+    m.add("SingularError", py.get_type::<SingularError>())?;
+    m.add("ConvergenceError", py.get_type::<ConvergenceError>())?;
+    m.add("InternalError", py.get_type::<InternalError>())?;
+    // Two bases, so that `except OSError` catches a missing model file as well: built with
+    // `type(name, bases, namespace)`, as a `class` statement would.
+    let namespace = PyDict::new(py);
+    namespace.set_item("__module__", "linkwork")?;
+    namespace.set_item("__doc__", "A file could not be read or written. `path` names it.")?;
+    let bases = PyTuple::new(py, [py.get_type::<LinkworkError>(), py.get_type::<PyOSError>()])?;
+    let file_error = py.get_type::<PyType>().call1((FILE_ERROR, bases, namespace))?;
+    m.add(FILE_ERROR, file_error)
+}
+
+/// Run `f`, turning a panic into `InternalError` so that it never reaches Python as a
+/// `PanicException` (which `except Exception` does not catch). Needs no GIL.
+pub fn guard<T>(f: impl FnOnce() -> T) -> PyResult<T> {
+    catch_unwind(AssertUnwindSafe(f)).map_err(|payload| {
+        let what = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown panic".into());
+        internal(&what)
+    })
+}
+
+/// An `InternalError` saying what went wrong.
+pub fn internal(what: &str) -> PyErr {
+    InternalError::new_err(format!(
+        "internal error in the Linkwork engine (a bug; please report it with the model that caused it): {what}"
+    ))
+}
+
+/// The Python exception for an engine error, with its context as attributes. `partial` (the
+/// results before a failed analysis) becomes the `results` attribute where the error has one.
+pub fn to_pyerr(py: Python<'_>, error: Error, partial: Option<PyResults>) -> PyErr {
+    match build(py, &error, partial) {
+        Ok(err) => err,
+        // Setting an attribute failed (out of memory): the message alone still says what happened.
+        Err(_) => LinkworkError::new_err(error.to_string()),
+    }
+}
+
+fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<PyErr> {
+    let message = error.to_string();
+    let joints = error.elements();
+    let results = || -> PyResult<Py<PyAny>> {
+        Ok(match partial {
+            Some(r) => Py::new(py, r)?.into_any(),
+            None => py.None(),
+        })
+    };
+    let (err, attributes): (PyErr, Vec<(&str, Bound<'_, PyAny>)>) = match error {
+        Error::Model(problems) => {
+            let list: Vec<(String, String)> = problems.iter().map(|p| (p.path.clone(), p.message.clone())).collect();
+            (ModelError::new_err(message), vec![("problems", list.into_pyobject(py)?.into_any())])
+        }
+        Error::Assembly { iterations, residual, row, hint } => (
+            AssemblyError::new_err(message),
+            vec![
+                ("joints", joints.into_pyobject(py)?.into_any()),
+                ("row", row.to_string().into_pyobject(py)?.into_any()),
+                ("residual", residual.into_pyobject(py)?.into_any()),
+                ("iterations", iterations.into_pyobject(py)?.into_any()),
+                ("hint", hint.into_pyobject(py)?.into_any()),
+                ("results", results()?.into_bound(py)),
+            ],
+        ),
+        Error::Singular { time, rows, detail } => (
+            SingularError::new_err(message),
+            vec![
+                ("time", time.into_pyobject(py)?.into_any()),
+                ("joints", joints.into_pyobject(py)?.into_any()),
+                ("rows", rows.iter().map(|r| r.to_string()).collect::<Vec<_>>().into_pyobject(py)?.into_any()),
+                ("detail", detail.into_pyobject(py)?.into_any()),
+                ("results", results()?.into_bound(py)),
+            ],
+        ),
+        Error::Convergence { time, residual, row, iterations, substep } => (
+            ConvergenceError::new_err(message),
+            vec![
+                ("time", time.into_pyobject(py)?.into_any()),
+                ("joints", joints.into_pyobject(py)?.into_any()),
+                ("rows", vec![row.to_string()].into_pyobject(py)?.into_any()),
+                ("row", row.to_string().into_pyobject(py)?.into_any()),
+                ("residual", residual.into_pyobject(py)?.into_any()),
+                ("iterations", iterations.into_pyobject(py)?.into_any()),
+                ("substep", substep.into_pyobject(py)?.into_any()),
+                ("results", results()?.into_bound(py)),
+            ],
+        ),
+        Error::Io { path, .. } => {
+            let class = py.import("linkwork._linkwork")?.getattr(FILE_ERROR)?;
+            let err = PyErr::from_value(class.call1((message,))?);
+            (err, vec![("path", path.into_pyobject(py)?.into_any())])
+        }
+    };
+    let value = err.value(py);
+    for (name, v) in attributes {
+        value.setattr(name, v)?;
+    }
+    Ok(err)
+}

@@ -1,0 +1,74 @@
+"""Linkwork: planar multibody kinematics.
+
+A Rust engine with a thin Python layer on top::
+
+    import linkwork
+
+    model = linkwork.load("examples/quick_return_a.yaml")
+    print(model.check()["mechanism"]["dof"])   # 1: the crank
+    results = model.run()                      # the first analysis in the file
+    results["rocker.phi"]                      # numpy array, one value per output time
+    results.to_pandas()                        # DataFrame indexed by time (needs pandas)
+    results.write("out/quick_return_a")        # results.csv and summary.json
+
+Errors are exceptions under :class:`LinkworkError`; see :mod:`linkwork.errors`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any
+
+from . import _linkwork
+from .errors import (
+    AssemblyError,
+    ConvergenceError,
+    FileError,
+    InternalError,
+    LinkworkError,
+    ModelError,
+    SingularError,
+    SolverError,
+)
+from .model import Model
+from .results import Results
+
+__version__: str = _linkwork.__version__
+
+__all__ = [
+    "AssemblyError",
+    "ConvergenceError",
+    "FileError",
+    "InternalError",
+    "LinkworkError",
+    "Model",
+    "ModelError",
+    "Results",
+    "SingularError",
+    "SolverError",
+    "__version__",
+    "from_yaml",
+    "load",
+    "schema",
+]
+
+
+def load(path: str | os.PathLike[str]) -> Model:
+    """Read and compile the model file at ``path``.
+
+    Raises :class:`ModelError` (with every problem in ``problems``) if the file is invalid, and
+    :class:`FileError` (also an :class:`OSError`) if it cannot be read.
+    """
+    return Model._wrap(_linkwork.PyModel.load(os.fspath(path)), path=os.fspath(path))
+
+
+def from_yaml(text: str) -> Model:
+    """Compile a model from the text of a model file (YAML)."""
+    return Model._wrap(_linkwork.PyModel.from_yaml(text))
+
+
+def schema() -> dict[str, Any]:
+    """The JSON Schema of model files, as a dict (``linkwork schema`` prints it as JSON)."""
+    result: dict[str, Any] = json.loads(_linkwork.schema())
+    return result

@@ -1,0 +1,254 @@
+"""The ``linkwork`` command line.
+
+::
+
+    linkwork run MODEL [--analysis NAME] [--out DIR]   run an analysis, write results.csv and summary.json
+    linkwork check MODEL [--json]                      degrees of freedom, redundant rows, assembly
+    linkwork schema                                    the JSON Schema of model files
+
+Exit status: 0 success; 2 an invalid model, a file that cannot be read or written, or a bad command
+line (every problem is printed as ``path: message``); 3 a solver failure (what failed, when, in
+which joints; the results computed until then are still written); 1 an internal error (a bug).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from . import _linkwork
+from .errors import AssemblyError, FileError, InternalError, LinkworkError, ModelError, SolverError
+from .model import Model
+from .results import Results
+
+EXIT_OK = 0
+EXIT_INTERNAL = 1
+EXIT_MODEL = 2
+EXIT_SOLVER = 3
+
+# The coordinates of one body, in the engine's order.
+COORDINATES = ("x", "y", "phi")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line with ``argv`` (default: ``sys.argv[1:]``); return the exit status."""
+    parser = _parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exit_:  # --help, --version, or a usage error (status 2)
+        return exit_.code if isinstance(exit_.code, int) else EXIT_MODEL
+    try:
+        status: int = args.command(args)
+        return status
+    except ModelError as error:
+        _print_problems(error, getattr(args, "model", None))
+        return EXIT_MODEL
+    except FileError as error:
+        _err(f"error: {error}")
+        return EXIT_MODEL
+    except InternalError as error:
+        _err(f"error: {error}")
+        return EXIT_INTERNAL
+    except (SolverError, AssemblyError) as error:  # from `check`: `run` handles its own
+        _print_failure(error)
+        return EXIT_SOLVER
+    except LinkworkError as error:  # a kind this command line does not know yet
+        _err(f"error: {error}")
+        return EXIT_INTERNAL
+    except KeyboardInterrupt:
+        _err("interrupted")
+        return 130
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="linkwork",
+        description="Planar multibody kinematics: check and run mechanism models.",
+        epilog="Exit status: 0 success, 2 invalid model or file, 3 solver failure, 1 internal error.",
+    )
+    parser.add_argument("--version", action="version", version=f"linkwork {_linkwork.__version__}")
+    commands = parser.add_subparsers(title="commands", required=True, metavar="COMMAND")
+
+    run = commands.add_parser(
+        "run",
+        help="run an analysis and write results.csv and summary.json",
+        description="Run an analysis of MODEL and write results.csv and summary.json into the output folder.",
+    )
+    run.add_argument("model", metavar="MODEL", help="model file (YAML)")
+    run.add_argument("--analysis", "-a", metavar="NAME", help="analysis to run (default: the first in the file)")
+    run.add_argument("--out", "-o", metavar="DIR", type=Path, help="output folder (default: out/<model file stem>/)")
+    run.set_defaults(command=_run)
+
+    check = commands.add_parser(
+        "check",
+        help="degrees of freedom, redundant constraints and assembly",
+        description="Check MODEL: degrees of freedom (Gruebler and from the rank of the Jacobian), "
+        "redundant rows by joint and equation, and assembly of the initial guess, for the mechanism "
+        "alone and for each analysis with its drivers.",
+    )
+    check.add_argument("model", metavar="MODEL", help="model file (YAML)")
+    check.add_argument("--json", action="store_true", help="print the report as JSON")
+    check.set_defaults(command=_check)
+
+    schema = commands.add_parser("schema", help="print the JSON Schema of model files")
+    schema.set_defaults(command=_schema)
+    return parser
+
+
+# --- run -----------------------------------------------------------------------------------------
+
+
+def _run(args: argparse.Namespace) -> int:
+    model = Model.load(args.model)
+    out: Path = args.out if args.out is not None else Path("out") / Path(args.model).stem
+    try:
+        results = model.run(args.analysis)
+    except (SolverError, AssemblyError) as error:
+        _print_failure(error)
+        partial = error.results
+        if isinstance(partial, Results):
+            try:
+                partial.write(out)
+            except FileError as write_error:
+                _err(f"error: the partial results could not be written: {write_error}")
+                return EXIT_SOLVER
+            _err(f"partial results ({_span(partial)}) written to {_folder(out)} (status: failed)")
+        return EXIT_SOLVER
+    results.write(out)
+    _print_summary(results)
+    print(f"wrote {_folder(out)}results.csv and summary.json")
+    return EXIT_OK
+
+
+def _print_summary(results: Results) -> None:
+    s = results.summary
+    stats: dict[str, Any] = s.get("statistics") or {}
+    print(f"{s.get('model', '')}: analysis '{s.get('analysis', '')}' ({s.get('type', '')})")
+    drivers = ", ".join(s.get("active_drivers", [])) or "none"
+    print(f"  {s.get('bodies', '?')} bodies, {s.get('coordinates', '?')} coordinates; drivers: {drivers}")
+    print(f"  {_span(results)}")
+    if stats:
+        print(
+            f"  {stats.get('substeps', '?')} sub-steps ({stats.get('rejected_substeps', '?')} rejected), "
+            f"{stats.get('newton_iterations', '?')} Newton iterations, "
+            f"{stats.get('factorizations', '?')} factorizations"
+        )
+        print(
+            f"  largest residual {_num(stats.get('max_residual'))}, "
+            f"largest condition estimate {_num(stats.get('max_condition'))}"
+        )
+        redundant = [f"{r['element']}.{r['equation']}" for r in stats.get("redundant_rows", [])]
+        if redundant:
+            print(f"  redundant rows (hold implicitly): {', '.join(redundant)}")
+
+
+def _print_failure(error: SolverError | AssemblyError) -> None:
+    _err(f"error: {error}")
+    where = []
+    time = getattr(error, "time", None)
+    if time is not None:
+        where.append(f"at t = {time:.6g} s")
+    joints = getattr(error, "joints", None) or []
+    if joints:
+        where.append(f"in joint(s) {', '.join(joints)}")
+    if where:
+        what = "assembly failed" if isinstance(error, AssemblyError) else "the analysis failed"
+        _err(f"  {what} {' '.join(where)}")
+
+
+def _span(results: Results) -> str:
+    if len(results) == 0:
+        return "no output points"
+    return f"{len(results)} output points, t = {results.time[0]:g} .. {results.time[-1]:g} s"
+
+
+def _folder(path: Path) -> str:
+    text = str(path)
+    return text if text.endswith(("/", "\\")) else text + "/"
+
+
+# --- check ---------------------------------------------------------------------------------------
+
+
+def _check(args: argparse.Namespace) -> int:
+    model = Model.load(args.model)
+    report = model.check()
+    if args.json:
+        json.dump(report, sys.stdout, indent=2)
+        print()
+        return EXIT_OK
+    bodies: list[str] = report["bodies"]
+    print(report["model"] or Path(args.model).name)
+    print(f"bodies: {', '.join(bodies)} ({len(bodies)} bodies, {report['coordinates']} coordinates)")
+    print()
+    _print_system("mechanism (joints only; coordinates marked given held)", report["mechanism"], bodies)
+    for name, system in report["analyses"].items():
+        drivers = ", ".join(system["drivers"]) or "no drivers"
+        print()
+        _print_system(f"analysis '{name}' (joints and {drivers})", system, bodies)
+    return EXIT_OK
+
+
+def _print_system(title: str, system: dict[str, Any], bodies: list[str]) -> None:
+    n = 3 * len(bodies)
+    print(f"{title}:")
+    print(f"  equations            {system['equations']}")
+    print(f"  degrees of freedom   {system['dof']} (coordinates - rank of Phi_q = {n} - {system['rank']})")
+    print(f"  Gruebler count       {system['gruebler_dof']} (coordinates - equations = {n} - {system['equations']})")
+    redundant = system["redundant"]
+    if redundant:
+        print(f"  redundant rows       {len(redundant)}:")
+        for row in redundant:
+            print(f"    joint {row['element']}, equation {row['equation']}")
+    else:
+        print("  redundant rows       none")
+    assembly = system["assembly"]
+    print(
+        f"  assembly             residual {_num(assembly['residual'])} after {assembly['iterations']} "
+        f"iteration(s); velocity residual {_num(assembly['velocity_residual'])}"
+    )
+    change: list[float] = assembly["change"]
+    names = [f"{b}.{c}" for b in bodies for c in COORDINATES]
+    if change:
+        k = max(range(len(change)), key=lambda i: abs(change[i]))
+        print(f"  change from guess    largest {names[k]} {change[k]:+.6g}")
+        width = max(len(b) for b in bodies)
+        print(f"    {'':{width}}  {'x (m)':>11} {'y (m)':>11} {'phi (rad)':>11}")
+        for i, body in enumerate(bodies):
+            cells = " ".join(f"{v:+11.3e}" for v in change[3 * i : 3 * i + 3])
+            print(f"    {body:{width}}  {cells}")
+
+
+# --- schema --------------------------------------------------------------------------------------
+
+
+def _schema(_args: argparse.Namespace) -> int:
+    print(_linkwork.schema())
+    return EXIT_OK
+
+
+# --- output --------------------------------------------------------------------------------------
+
+
+def _print_problems(error: ModelError, model: str | None) -> None:
+    problems: list[tuple[str, str]] = getattr(error, "problems", [])
+    where = f" {model}" if model else ""
+    _err(f"error: invalid model{where} ({len(problems)} problem{'s' if len(problems) != 1 else ''}):")
+    for path, message in problems:
+        _err(f"{path}: {message}" if path else message)
+
+
+def _num(value: object) -> str:
+    return f"{value:.3g}" if isinstance(value, float) else str(value)
+
+
+def _err(text: str) -> None:
+    print(text, file=sys.stderr)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

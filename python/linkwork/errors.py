@@ -1,0 +1,48 @@
+"""The exceptions Linkwork raises.
+
+::
+
+    LinkworkError
+    ├── ModelError          problems: list of (path, message), e.g. ("joints.B.body_j", "unknown body 'rokcer' ...")
+    ├── AssemblyError       joints, row, residual, iterations, hint, results
+    ├── SolverError         time (s), joints, rows, results (the output computed before the failure)
+    │   ├── SingularError       detail: a dead centre, lock-up or lost degree of freedom
+    │   └── ConvergenceError    row, residual, iterations, substep
+    ├── FileError           path; also an OSError
+    └── InternalError       the engine panicked: a bug, reported instead of crashing
+
+The classes are defined by the native module, which maps each engine error to one of them; the
+message of each is the engine's own.
+"""
+
+from __future__ import annotations
+
+from ._linkwork import (
+    AssemblyError,
+    ConvergenceError,
+    FileError,
+    InternalError,
+    LinkworkError,
+    ModelError,
+    SingularError,
+    SolverError,
+)
+
+__all__ = [
+    "AssemblyError",
+    "ConvergenceError",
+    "FileError",
+    "InternalError",
+    "LinkworkError",
+    "ModelError",
+    "SingularError",
+    "SolverError",
+    "model_error",
+]
+
+
+def model_error(path: str, message: str) -> ModelError:
+    """A :class:`ModelError` with one problem, worded as the engine words its own."""
+    error = ModelError(f"the model has 1 problem(s):\n  {path}: {message}")
+    error.problems = [(path, message)]
+    return error

@@ -1,0 +1,113 @@
+"""A compiled mechanism: its names, its checks, and its analyses."""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+from . import _linkwork
+from .errors import AssemblyError, SolverError, model_error
+from .results import Results
+
+
+class Model:
+    """A mechanism read from a model file, compiled and immutable.
+
+    Make one with :func:`linkwork.load` (a file) or :func:`linkwork.from_yaml` (its text).
+    """
+
+    __slots__ = ("_native", "path")
+
+    _native: _linkwork.PyModel
+    path: str | None
+    """The file the model was read from, if any."""
+
+    def __init__(self, *_args: object, **_kwargs: object) -> None:
+        raise TypeError("use linkwork.load(path) or linkwork.from_yaml(text) to make a Model")
+
+    @classmethod
+    def _wrap(cls, native: _linkwork.PyModel, path: str | None = None) -> Model:
+        self = object.__new__(cls)
+        self._native = native
+        self.path = path
+        return self
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> Model:
+        """Read and compile the model file at ``path`` (same as :func:`linkwork.load`)."""
+        return cls._wrap(_linkwork.PyModel.load(os.fspath(path)), path=os.fspath(path))
+
+    @classmethod
+    def from_yaml(cls, text: str) -> Model:
+        """Compile a model from the text of a model file (same as :func:`linkwork.from_yaml`)."""
+        return cls._wrap(_linkwork.PyModel.from_yaml(text))
+
+    @property
+    def name(self) -> str:
+        """The model's title (``name:`` in the file)."""
+        return self._native.name
+
+    @property
+    def bodies(self) -> list[str]:
+        """Names of the moving bodies, in file order (ground is not one of them)."""
+        return self._native.bodies
+
+    @property
+    def joints(self) -> list[str]:
+        """Names of the joints, in file order."""
+        return self._native.joints
+
+    @property
+    def drivers(self) -> list[str]:
+        """Names of the drivers, in file order."""
+        return self._native.drivers
+
+    @property
+    def analyses(self) -> list[str]:
+        """Names of the analyses, in file order; :meth:`run` runs the first by default."""
+        return self._native.analyses
+
+    def check(self) -> dict[str, Any]:
+        """Degrees of freedom, redundant constraints and assembly of the mechanism.
+
+        Returns a dict with ``model``, ``bodies``, ``coordinates``, ``mechanism`` (the joints
+        alone, with the coordinates the file marks as given held) and ``analyses`` (a dict by
+        analysis name, each with its drivers active). Each system has ``drivers``,
+        ``equations``, ``gruebler_dof``, ``rank``, ``dof``, ``redundant`` (a list of
+        ``{"element", "equation"}``) and ``assembly`` (``q``, ``qdot``, ``iterations``,
+        ``residual``, ``velocity_residual`` and ``change``, the assembled position minus the
+        guess, per coordinate in the order ``<body>.x, <body>.y, <body>.phi``).
+
+        Raises :class:`AssemblyError` if a configuration cannot be assembled.
+        """
+        report: dict[str, Any] = self._native.check()
+        report["analyses"] = {name: system for name, system in report["analyses"]}
+        return report
+
+    def run(self, analysis: str | None = None) -> Results:
+        """Run the analysis called ``analysis`` (default: the first one in the file).
+
+        On a solver failure the exception (:class:`SolverError`, :class:`AssemblyError`) has
+        ``results``: the :class:`Results` computed before the failure.
+        """
+        if analysis is None:
+            if not self.analyses:
+                raise model_error(
+                    "analyses",
+                    "the model names no analyses; add one, e.g. "
+                    "`kinematics: {type: kinematic, drivers: [motor], t_end: 1, step: 0.01}`",
+                )
+            analysis = self.analyses[0]
+        try:
+            return Results(self._native.run(analysis))
+        except (SolverError, AssemblyError) as error:
+            if isinstance(error.results, _linkwork.PyResults):
+                error.results = Results(error.results)
+            raise
+
+    def __repr__(self) -> str:
+        source = f" from {self.path!r}" if self.path else ""
+        return (
+            f"<linkwork.Model {self.name!r}{source}: {len(self.bodies)} bodies, "
+            f"{len(self.joints)} joints, {len(self.drivers)} drivers, analyses {self.analyses}>"
+        )

@@ -1,0 +1,100 @@
+"""Results of one analysis: time series as numpy arrays, a data frame, and the files."""
+
+from __future__ import annotations
+
+import os
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from . import _linkwork
+
+if TYPE_CHECKING:
+    import pandas
+
+
+class Results:
+    """Output of one analysis, complete or up to a failure.
+
+    ``results["rocker.phi"]`` is one column (a read-only numpy array, one value per output time);
+    the columns are named ``<body>.x, .y, .phi, .vx, .vy, .omega, .ax, .ay, .alpha`` per body,
+    in SI units, angles unwrapped. ``results["time"]`` is the output times.
+    """
+
+    __slots__ = ("_columns", "_index", "_native", "_time", "_values")
+
+    def __init__(self, native: _linkwork.PyResults) -> None:
+        self._native = native
+        self._columns: list[str] = native.names
+        self._index = {name: k for k, name in enumerate(self._columns)}
+        # Copied out of the engine once; read-only so that every view stays true to the run.
+        self._time: np.ndarray = native.time
+        self._values: np.ndarray = native.values
+        self._time.flags.writeable = False
+        self._values.flags.writeable = False
+
+    @property
+    def time(self) -> np.ndarray:
+        """(rows) output times, s."""
+        return self._time
+
+    @property
+    def columns(self) -> list[str]:
+        """Names of the columns after ``time``, in the order of ``results.csv``."""
+        return list(self._columns)
+
+    @property
+    def values(self) -> np.ndarray:
+        """(rows x columns) every column but ``time``, in the order of :attr:`columns`."""
+        return self._values
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        """What ``summary.json`` says: sizes, solver statistics, ``status`` and any error."""
+        summary: dict[str, Any] = self._native.summary
+        return summary
+
+    @property
+    def ok(self) -> bool:
+        """True when the analysis reached its end time."""
+        return self._native.ok
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        """The column called ``name`` (``"time"`` included), as a read-only numpy array."""
+        if name == "time":
+            return self._time
+        try:
+            return self._values[:, self._index[name]]
+        except KeyError:
+            raise KeyError(f"no column {name!r}; the columns are time, {', '.join(self._columns)}") from None
+
+    def __contains__(self, name: object) -> bool:
+        return name == "time" or name in self._index
+
+    def __len__(self) -> int:
+        """Number of output points."""
+        return len(self._time)
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """A DataFrame indexed by ``time``, one column per quantity (needs pandas:
+        ``pip install linkwork[pandas]``). ``.reset_index()`` gives the layout of ``results.csv``."""
+        try:
+            import pandas as pd
+        except ImportError as error:
+            raise ImportError("to_pandas() needs pandas: pip install 'linkwork[pandas]'") from error
+        index = pd.Index(self._time.copy(), name="time")
+        return pd.DataFrame(self._values.copy(), index=index, columns=list(self._columns))
+
+    def write(self, out_dir: str | os.PathLike[str]) -> None:
+        """Write ``results.csv`` and ``summary.json`` into ``out_dir`` (created if missing), in the
+        engine's format: the same files as ``linkwork run``."""
+        self._native.write(os.fspath(out_dir))
+
+    def __repr__(self) -> str:
+        summary = self.summary
+        status = summary.get("status", "?")
+        span = f"t = {self._time[0]:g} .. {self._time[-1]:g} s" if len(self) else "no output"
+        return (
+            f"<linkwork.Results {summary.get('analysis', '')!r} ({status}): {len(self)} points, {span}, "
+            f"{len(self._columns)} columns>"
+        )

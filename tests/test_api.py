@@ -1,0 +1,281 @@
+"""The Python API: models, results as numpy arrays and data frames, files, exceptions."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import pickle
+
+import numpy as np
+import pytest
+
+import linkwork
+from conftest import EXAMPLES
+
+QUANTITIES = ["x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha"]
+
+
+@pytest.fixture(scope="module")
+def model_a() -> linkwork.Model:
+    return linkwork.load(EXAMPLES / "quick_return_a.yaml")
+
+
+@pytest.fixture(scope="module")
+def results_a(model_a: linkwork.Model) -> linkwork.Results:
+    return model_a.run()
+
+
+def test_model_names(model_a):
+    assert model_a.name == "quick-return mechanism (model A, two sliders)"
+    assert model_a.bodies == ["crank", "rocker", "slider_b", "link", "slider_d"]
+    assert model_a.joints == ["O", "A", "B", "B_slot", "C", "D", "D_guide"]
+    assert model_a.drivers == ["crank_drive"]
+    assert model_a.analyses == ["kinematics"]
+    assert "quick_return_a.yaml" in repr(model_a)
+
+
+def test_model_is_made_by_load_or_from_yaml():
+    with pytest.raises(TypeError, match="linkwork.load"):
+        linkwork.Model()
+    text = (EXAMPLES / "fourbar.yaml").read_text()
+    assert linkwork.from_yaml(text).bodies == linkwork.Model.from_yaml(text).bodies == ["crank", "coupler", "rocker"]
+
+
+def test_results_columns_follow_the_contract(model_a, results_a):
+    expected = [f"{b}.{q}" for b in model_a.bodies for q in QUANTITIES]
+    assert results_a.columns == expected
+    assert results_a.values.shape == (41, len(expected))
+    assert len(results_a) == 41
+    np.testing.assert_allclose(results_a.time, np.arange(41) * 0.05, rtol=0, atol=1e-12)
+    assert results_a["time"] is results_a.time
+    for name in expected:
+        column = results_a[name]
+        assert column.shape == (41,) and column.dtype == np.float64
+        assert name in results_a
+    assert "time" in results_a and "crank.theta" not in results_a
+
+
+def test_results_values_are_the_engines(results_a):
+    # The crank angle is the driver's function exactly: 6.1506 + 2 pi t.
+    np.testing.assert_allclose(results_a["crank.phi"], 6.1506 + 2 * math.pi * results_a.time, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(results_a["crank.omega"], 2 * math.pi, rtol=0, atol=1e-12)
+    # Angles are unwrapped: the crank's goes past 2 pi without folding back.
+    assert np.all(np.diff(results_a["crank.phi"]) > 0)
+    # slider_d stays on its guide y = 2.
+    np.testing.assert_allclose(results_a["slider_d.y"], 2.0, rtol=0, atol=1e-11)
+
+
+def test_results_are_read_only(results_a):
+    with pytest.raises(ValueError, match="read-only"):
+        results_a["rocker.phi"][0] = 0.0
+    with pytest.raises(ValueError, match="read-only"):
+        results_a.time[0] = 1.0
+
+
+def test_unknown_column(results_a):
+    with pytest.raises(KeyError, match="no column 'rocker.theta'; the columns are time, crank.x"):
+        results_a["rocker.theta"]
+
+
+def test_summary(results_a):
+    summary = results_a.summary
+    assert summary["status"] == "ok"
+    assert summary["analysis"] == "kinematics"
+    assert summary["output_points"] == 41
+    assert summary["coordinates"] == 15
+    assert results_a.ok
+    assert "41 points" in repr(results_a)
+
+
+def test_to_pandas(results_a):
+    pd = pytest.importorskip("pandas")
+    frame = results_a.to_pandas()
+    assert isinstance(frame, pd.DataFrame)
+    assert frame.index.name == "time"
+    assert list(frame.columns) == results_a.columns
+    np.testing.assert_array_equal(frame.index.to_numpy(), results_a.time)
+    np.testing.assert_array_equal(frame["link.vx"].to_numpy(), results_a["link.vx"])
+    # The frame is the user's own: changing it leaves the results alone.
+    frame.iloc[0, 0] = 123.0
+    assert results_a.values[0, 0] != 123.0
+    # reset_index() gives the layout of results.csv.
+    assert list(frame.reset_index().columns) == ["time", *results_a.columns]
+
+
+def test_write_matches_the_arrays(results_a, tmp_path):
+    results_a.write(tmp_path / "a")
+    with (tmp_path / "a" / "results.csv").open(newline="") as f:
+        rows = list(csv.reader(f))
+    assert rows[0] == ["time", *results_a.columns]
+    table = np.array([[float(v) for v in row] for row in rows[1:]])
+    # The CSV holds every double exactly (shortest round-trip form).
+    np.testing.assert_array_equal(table[:, 0], results_a.time)
+    np.testing.assert_array_equal(table[:, 1:], results_a.values)
+    summary = json.loads((tmp_path / "a" / "summary.json").read_text())
+    assert summary == results_a.summary
+
+
+def test_models_a_and_b_agree():
+    """Model A (5 bodies, two sliders) and model B (3 bodies, pin-in-slot joints) describe the
+    same crank, rocker and link motion with different equations. Tolerance 1e-10 (relative above
+    magnitude 1): each is solved to |Phi| <= 1e-12 and the Jacobian amplifies that by at most ~300
+    (the largest condition estimate the runs report)."""
+    a = linkwork.load(EXAMPLES / "quick_return_a.yaml").run("kinematics")
+    b = linkwork.load(EXAMPLES / "quick_return_b.yaml").run("kinematics")
+    np.testing.assert_array_equal(a.time, b.time)
+    compared = 0
+    for body in ["crank", "rocker", "link"]:
+        for q in QUANTITIES:
+            name = f"{body}.{q}"
+            np.testing.assert_allclose(a[name], b[name], rtol=1e-10, atol=1e-10, err_msg=name)
+            compared += 1
+    assert compared == 27
+    assert a.summary["statistics"]["max_condition"] < 1e3
+    # The mechanism really moves: the rocker swings by more than half a radian.
+    assert np.ptp(a["rocker.phi"]) > 0.5
+
+
+def test_check(model_a):
+    report = model_a.check()
+    assert report["bodies"] == model_a.bodies
+    assert report["coordinates"] == 15
+    mechanism = report["mechanism"]
+    assert (mechanism["equations"], mechanism["rank"], mechanism["dof"], mechanism["gruebler_dof"]) == (14, 14, 1, 1)
+    assert mechanism["redundant"] == []
+    assert mechanism["drivers"] == []
+    assembly = mechanism["assembly"]
+    assert assembly["residual"] <= 1e-12
+    assert len(assembly["q"]) == len(assembly["change"]) == 15
+    assert assembly["change"][2] == 0.0  # the crank angle is given: held
+    driven = report["analyses"]["kinematics"]
+    assert driven["drivers"] == ["crank_drive"]
+    assert (driven["equations"], driven["dof"]) == (15, 0)
+
+
+def test_schema():
+    schema = linkwork.schema()
+    assert schema["type"] == "object"
+    assert {"bodies", "joints", "drivers", "analyses"} <= set(schema["properties"])
+
+
+def test_version():
+    assert isinstance(linkwork.__version__, str) and linkwork.__version__.count(".") == 2
+
+
+# --- exceptions ----------------------------------------------------------------------------------
+
+
+def test_exception_tree():
+    assert issubclass(linkwork.ModelError, linkwork.LinkworkError)
+    assert issubclass(linkwork.AssemblyError, linkwork.LinkworkError)
+    assert issubclass(linkwork.SolverError, linkwork.LinkworkError)
+    assert issubclass(linkwork.SingularError, linkwork.SolverError)
+    assert issubclass(linkwork.ConvergenceError, linkwork.SolverError)
+    assert issubclass(linkwork.InternalError, linkwork.LinkworkError)
+    assert issubclass(linkwork.FileError, linkwork.LinkworkError)
+    assert issubclass(linkwork.FileError, OSError)
+    assert issubclass(linkwork.LinkworkError, Exception)
+    assert linkwork.ModelError.__module__ == "linkwork"
+    assert linkwork.errors.SingularError is linkwork.SingularError
+
+
+def test_model_error_lists_problems():
+    text = """
+bodies:
+  crank: {mass: 1, inertia: 1, position: [0, 0], angle: 0}
+joints:
+  B: {type: revolute, body_i: crank, point_i: [0, 0], body_j: rokcer, point_j: [0, 0]}
+  C: {type: revolute, body_i: crank, point_i: tip, body_j: ground, point_j: [0, 0]}
+"""
+    with pytest.raises(linkwork.ModelError) as caught:
+        linkwork.from_yaml(text)
+    paths = [path for path, _ in caught.value.problems]
+    assert "joints.B.body_j" in paths
+    assert "joints.C.point_i" in paths
+    assert len(caught.value.problems) == 2
+    assert "joints.B.body_j: unknown body 'rokcer'" in str(caught.value)
+
+
+def test_missing_file_is_a_file_error(tmp_path):
+    missing = tmp_path / "missing.yaml"
+    with pytest.raises(linkwork.FileError) as caught:
+        linkwork.load(missing)
+    assert caught.value.path == str(missing)
+    with pytest.raises(OSError):
+        linkwork.load(missing)
+
+
+def test_run_unknown_analysis(model_a):
+    with pytest.raises(linkwork.ModelError, match="no analysis named 'nope'") as caught:
+        model_a.run("nope")
+    assert caught.value.problems[0][0] == "analyses.nope"
+
+
+def test_run_without_analyses():
+    text = (EXAMPLES / "fourbar.yaml").read_text().split("analyses:")[0]
+    model = linkwork.from_yaml(text)
+    assert model.analyses == []
+    with pytest.raises(linkwork.ModelError, match="names no analyses") as caught:
+        model.run()
+    assert caught.value.problems[0][0] == "analyses"
+
+
+def test_singular_error_carries_partial_results():
+    model = linkwork.load(EXAMPLES / "slider_crank_lockup.yaml")
+    with pytest.raises(linkwork.SingularError) as caught:
+        model.run()
+    error = caught.value
+    assert isinstance(error, linkwork.SolverError)
+    assert error.time == pytest.approx(math.asin(0.6), abs=1e-3)
+    assert {"A", "B", "guide"} <= set(error.joints)
+    assert all("." in row for row in error.rows)
+    assert error.detail
+    partial = error.results
+    assert isinstance(partial, linkwork.Results)
+    assert not partial.ok
+    assert 0 < len(partial) <= 13 and partial.time[-1] < error.time
+    assert partial.summary["status"] == "failed"
+    assert partial.summary["error_time"] == error.time
+    # Until the lock-up the crank follows its driver, theta = t.
+    np.testing.assert_allclose(partial["crank.phi"], partial.time, rtol=0, atol=1e-12)
+
+
+def test_assembly_error():
+    """A link too short to close the loop: the guess cannot be assembled."""
+    text = """
+bodies:
+  crank: {mass: 1, inertia: 1, position: [0.5, 0], angle: 0, points: {O: [-0.5, 0], A: [0.5, 0]}}
+joints:
+  O: {type: revolute, body_i: crank, point_i: O, body_j: ground, point_j: [0, 0]}
+  reach: {type: distance, body_i: crank, point_i: A, body_j: ground, point_j: [5, 0], length: 1}
+drivers:
+  motor: {type: angle, body: crank, function: "t"}
+analyses:
+  kinematics: {type: kinematic, drivers: [motor], t_end: 1, step: 0.1}
+"""
+    model = linkwork.from_yaml(text)
+    with pytest.raises(linkwork.AssemblyError) as caught:
+        model.run()
+    error = caught.value
+    assert error.joints and error.row.split(".")[0] in error.joints
+    assert error.residual > 1e-3
+    assert error.hint
+    assert isinstance(error.results, linkwork.Results) and len(error.results) == 0
+    with pytest.raises(linkwork.AssemblyError):
+        model.check()
+
+
+def test_exceptions_pickle():
+    with pytest.raises(linkwork.ModelError) as caught:
+        linkwork.from_yaml("bodies: {}\n")
+    again = pickle.loads(pickle.dumps(caught.value))
+    assert type(again) is linkwork.ModelError
+    assert again.problems == caught.value.problems
+
+
+def test_a_panic_becomes_internal_error():
+    """A panic in the engine is a bug, but it must reach Python as an ordinary exception, never as
+    pyo3's PanicException (a BaseException) or a crash."""
+    with pytest.raises(linkwork.InternalError, match="internal error in the Linkwork engine .*deliberate panic"):
+        linkwork._linkwork._panic_for_tests()

@@ -1,0 +1,208 @@
+"""The command line's contract: files written, exit codes 0 / 2 / 3, and what it prints."""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from conftest import EXAMPLES, ROOT, run_process
+
+QUANTITIES = ["x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha"]
+
+
+def read_csv(path: Path) -> tuple[list[str], list[list[float]]]:
+    with path.open(newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], [[float(v) for v in row] for row in rows[1:]]
+
+
+def test_run_writes_results_and_summary(linkwork, tmp_path):
+    done = linkwork("run", EXAMPLES / "quick_return_a.yaml")
+    assert done.code == 0, done.output
+    out = tmp_path / "out" / "quick_return_a"
+    header, rows = read_csv(out / "results.csv")
+    bodies = ["crank", "rocker", "slider_b", "link", "slider_d"]
+    assert header == ["time"] + [f"{b}.{q}" for b in bodies for q in QUANTITIES]
+    assert len(rows) == 41  # 0 to 2 s every 0.05 s
+    assert rows[0][0] == 0.0 and rows[-1][0] == 2.0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "ok"
+    assert summary["analysis"] == "kinematics"
+    assert summary["output_points"] == 41
+    # The short summary names the analysis, the size of the run and where the files went.
+    assert "kinematics" in done.stdout
+    assert "41 output points" in done.stdout
+    assert "out/quick_return_a/results.csv" in done.stdout
+    assert done.stderr == ""
+
+
+def test_run_with_analysis_and_out(linkwork, tmp_path):
+    done = linkwork("run", EXAMPLES / "fourbar.yaml", "--analysis", "kinematics", "--out", tmp_path / "here")
+    assert done.code == 0, done.output
+    assert (tmp_path / "here" / "results.csv").is_file()
+    assert json.loads((tmp_path / "here" / "summary.json").read_text())["status"] == "ok"
+
+
+def test_unknown_analysis_is_a_model_error(linkwork):
+    done = linkwork("run", EXAMPLES / "fourbar.yaml", "--analysis", "dynamics")
+    assert done.code == 2
+    assert "analyses.dynamics: no analysis named 'dynamics'" in done.stderr
+    assert "kinematics" in done.stderr  # the ones there are
+
+
+def test_missing_model_file_exits_2_without_traceback(linkwork, tmp_path):
+    for command in ["run", "check"]:
+        done = linkwork(command, tmp_path / "nowhere.yaml")
+        assert done.code == 2, done.output
+        assert "nowhere.yaml" in done.stderr
+        assert "No such file" in done.stderr
+        assert "Traceback" not in done.output
+
+
+def test_folder_instead_of_model_file_exits_2(linkwork, tmp_path):
+    done = linkwork("run", tmp_path)
+    assert done.code == 2
+    assert "Traceback" not in done.output
+
+
+def test_unwritable_output_folder_exits_2(linkwork, tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    done = linkwork("run", EXAMPLES / "fourbar.yaml", "--out", blocker / "out")
+    assert done.code == 2, done.output
+    assert "Traceback" not in done.output
+
+
+def test_usage_errors_exit_2(linkwork):
+    assert linkwork().code == 2
+    assert linkwork("fly", "model.yaml").code == 2
+    assert linkwork("run").code == 2
+
+
+def test_version(linkwork):
+    import linkwork as package
+
+    done = linkwork("--version")
+    assert done.code == 0
+    assert package.__version__ in done.output
+
+
+def test_schema(linkwork):
+    done = linkwork("schema")
+    assert done.code == 0
+    schema = json.loads(done.stdout)
+    assert {"bodies", "joints", "drivers", "analyses"} <= set(schema["properties"])
+
+
+def test_lock_up_exits_3_and_keeps_partial_results(linkwork, tmp_path):
+    """The slider-crank whose rod is shorter than its crank locks up at theta = asin(0.6) =
+    0.6435 rad = t (see the example's comment)."""
+    done = linkwork("run", EXAMPLES / "slider_crank_lockup.yaml")
+    assert done.code == 3, done.output
+    assert "Traceback" not in done.output
+    # When: the time, as printed by the engine and by the command line.
+    assert re.search(r"t = 0\.6435\d* s", done.stderr), done.stderr
+    # Where: the joints involved.
+    joints = re.search(r"in joint\(s\) ([\w, ]+)", done.stderr)
+    assert joints, done.stderr
+    assert {"A", "B", "guide"} <= set(joints.group(1).split(", "))
+    # The results until then are kept, and the summary says the run failed.
+    out = tmp_path / "out" / "slider_crank_lockup"
+    header, rows = read_csv(out / "results.csv")
+    assert header[:4] == ["time", "crank.x", "crank.y", "crank.phi"]
+    assert 10 <= len(rows) <= 13  # 0 to 0.6 s every 0.05 s
+    assert rows[-1][0] < 0.6436
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed"
+    assert summary["error_time"] == pytest.approx(0.6435, abs=1e-3)
+    assert {"A", "B", "guide"} <= set(summary["error_elements"])
+    assert "singular" in summary["error"]
+    assert str(len(rows)) in done.stderr and "partial results" in done.stderr
+
+
+def test_check_text(linkwork):
+    done = linkwork("check", EXAMPLES / "quick_return_a.yaml")
+    assert done.code == 0, done.output
+    text = done.stdout
+    assert "crank, rocker, slider_b, link, slider_d" in text
+    assert "15 coordinates" in text
+    mechanism, analysis = text.split("analysis 'kinematics'")
+    assert re.search(r"equations\s+14\b", mechanism)
+    assert re.search(r"degrees of freedom\s+1\b", mechanism)
+    assert re.search(r"Gruebler count\s+1\b", mechanism)
+    assert re.search(r"redundant rows\s+none", mechanism)
+    assert re.search(r"assembly\s+residual", mechanism)
+    # The crank angle is given (held), so the largest change from the guess is elsewhere.
+    largest = re.search(r"change from guess\s+largest (\w+\.\w+) ([-+][\d.e+-]+)", mechanism)
+    assert largest and largest.group(1) != "crank.phi", mechanism
+    assert re.search(r"crank\s+[-+][\d.e+-]+\s+[-+][\d.e+-]+\s+\+0\.000e\+00", mechanism), mechanism
+    assert "crank_drive" in analysis
+    assert re.search(r"degrees of freedom\s+0\b", analysis)
+    assert re.search(r"equations\s+15\b", analysis)
+
+
+def test_check_names_redundant_rows_by_joint_and_equation(linkwork):
+    done = linkwork("check", EXAMPLES / "parallelogram.yaml")
+    assert done.code == 0, done.output
+    assert re.search(r"redundant rows\s+1", done.stdout)
+    assert "joint coupler_3, equation y" in done.stdout
+    assert re.search(r"Gruebler count\s+0\b", done.stdout)
+    assert re.search(r"degrees of freedom\s+1\b", done.stdout)
+
+
+def test_check_json(linkwork):
+    done = linkwork("check", EXAMPLES / "parallelogram.yaml", "--json")
+    assert done.code == 0, done.output
+    report = json.loads(done.stdout)
+    mechanism = report["mechanism"]
+    assert (mechanism["gruebler_dof"], mechanism["dof"]) == (0, 1)
+    assert mechanism["redundant"] == [{"element": "coupler_3", "equation": "y"}]
+    assert len(mechanism["assembly"]["change"]) == report["coordinates"] == 12
+    assert report["analyses"]["kinematics"]["dof"] == 0
+
+
+def test_readme_quick_start(tmp_path):
+    """The README's quick-start commands (all but the install) run as written, from a folder
+    holding the examples."""
+    readme = (ROOT / "README.md").read_text()
+    quick_start = readme.split("## Quick start", 1)[1].split("\n## ", 1)[0]
+    commands = [
+        line.split()
+        for block in re.findall(r"```sh\n(.*?)```", quick_start, flags=re.S)
+        for line in block.splitlines()
+        if line.startswith("linkwork ")
+    ]
+    assert [c[:2] for c in commands] == [["linkwork", "check"], ["linkwork", "run"]]
+    (tmp_path / "examples").symlink_to(EXAMPLES)
+    for command in commands:
+        done = run_process(command[1:], tmp_path)
+        assert done.code == 0, (command, done.output)
+    assert (tmp_path / "out" / "quick_return_a" / "results.csv").is_file()
+    assert (tmp_path / "out" / "quick_return_a" / "summary.json").is_file()
+
+
+def test_readme_python_snippet(tmp_path, monkeypatch, capsys):
+    readme = (ROOT / "README.md").read_text()
+    (snippet,) = re.findall(r"```python\n(.*?)```", readme, flags=re.S)
+    (tmp_path / "examples").symlink_to(EXAMPLES)
+    monkeypatch.chdir(tmp_path)
+    exec(compile(snippet, "README.md", "exec"), {})
+    assert capsys.readouterr().out.splitlines()[0] == "1"
+    assert (tmp_path / "out" / "quick_return_a" / "results.csv").is_file()
+
+
+def test_internal_error_exits_1(monkeypatch, tmp_path, capsys):
+    from linkwork import _linkwork, cli
+
+    def explode(path):
+        _linkwork._panic_for_tests()
+
+    monkeypatch.setattr(cli.Model, "load", staticmethod(explode))
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["run", str(EXAMPLES / "fourbar.yaml")]) == 1
+    err = capsys.readouterr().err
+    assert "internal error" in err and "please report it" in err
