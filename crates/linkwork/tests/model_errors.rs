@@ -55,7 +55,7 @@ fn every_problem_is_listed_with_its_path() {
     has(&p, "joints.E.expression", "unknown name 'rocker.z'");
     has(&p, "joints.F.expression", "cannot read the expression");
     has(&p, "joints.P.point_i", "unknown point 'tip'");
-    has(&p, "joints.Q.type", "unknown variant `revolut`");
+    has(&p, "joints.Q.type", "unknown type `revolut`");
     has(&p, "drivers.d.function", "unknown name 'q'");
     has(&p, "analyses.kin.drivers[1]", "unknown driver 'e'");
     has(&p, "analyses.kin.step", "positive");
@@ -117,4 +117,45 @@ fn no_input_panics() {
         }
     }
     assert!(tried > 3000);
+}
+
+/// A point with the wrong shape names its field and says what a point is.
+#[test]
+fn bad_points_name_their_field() {
+    let base = "bodies:\n  a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\njoints:\n  C: {type: revolute, body_i: a, point_i: [0, 0], body_j: ground, point_j: POINT}\n";
+    let cases = [
+        ("[0, 0, 0]", "joints.C.point_j", "invalid length 3"),
+        ("[1]", "joints.C.point_j", "invalid length 1"),
+        ("[x, 1]", "joints.C.point_j[0]", "expected f64"),
+        ("{x: 1}", "joints.C.point_j", "a point: [x, y]"),
+    ];
+    for (point, path, words) in cases {
+        has(&problems(&base.replace("POINT", point)), path, words);
+    }
+}
+
+/// A bad field inside a joint or driver keeps its full path, and a missing or unknown `type`
+/// says which types exist.
+#[test]
+fn fields_of_joints_and_drivers_keep_their_paths() {
+    let base = "bodies:\n  a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n  b: {mass: 1, inertia: 1, position: [1, 0], angle: 0}\n";
+    let gear = "joints:\n  G: {type: gear, body_i: a, point_i: [0, 0], radius_i: big, body_j: b, point_j: [0, 0], radius_j: 1}\n";
+    has(&problems(&(base.to_string() + gear)), "joints.G.radius_i", "expected f64");
+    let extra =
+        "joints:\n  R: {type: revolute, body_i: a, point_i: [0, 0], body_j: b, point_j: [0, 0], stiffness: 3}\n";
+    has(&problems(&(base.to_string() + extra)), "joints.R.stiffness", "unknown field");
+    let untyped = "joints:\n  R: {body_i: a}\n";
+    has(
+        &problems(&(base.to_string() + untyped)),
+        "joints.R",
+        "missing field `type`, expected one of: revolute, translational",
+    );
+    let driver = "drivers:\n  d: {type: angel, body: a, function: t}\n";
+    has(
+        &problems(&(base.to_string() + driver)),
+        "drivers.d.type",
+        "unknown type `angel`, expected one of: angle, relative_angle",
+    );
+    let fun = "drivers:\n  d: {type: x, body: a, point: [0, 0], function: 3}\n";
+    has(&problems(&(base.to_string() + fun)), "drivers.d.function", "expected a string");
 }

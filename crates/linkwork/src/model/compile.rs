@@ -1,7 +1,7 @@
 //! [`ModelSpec`] => [`Model`]: check names, numbers and expressions (every problem, with its path),
 //! resolve names to indices and build each joint's constraint.
 
-use super::spec::{AnalysisKind, DriverSpec, JointSpec, ModelSpec, PointRef};
+use super::spec::*;
 use super::{Analysis, Body, Element, Model};
 use crate::analysis::SolverSettings;
 use crate::constraints::{
@@ -58,28 +58,28 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec
 
 fn joint_kind(j: &JointSpec) -> &'static str {
     match j {
-        JointSpec::Revolute { .. } => "revolute",
-        JointSpec::Translational { .. } => "translational",
-        JointSpec::PointOnLine { .. } => "point_on_line",
-        JointSpec::RevoluteTranslational { .. } => "revolute_translational",
-        JointSpec::Distance { .. } => "distance",
-        JointSpec::AbsoluteX { .. } => "absolute_x",
-        JointSpec::AbsoluteY { .. } => "absolute_y",
-        JointSpec::AbsoluteAngle { .. } => "absolute_angle",
-        JointSpec::Gear { .. } => "gear",
-        JointSpec::RackPinion { .. } => "rack_pinion",
-        JointSpec::RollingDisc { .. } => "rolling_disc",
-        JointSpec::Expression { .. } => "expression",
+        JointSpec::Revolute(..) => "revolute",
+        JointSpec::Translational(..) => "translational",
+        JointSpec::PointOnLine(..) => "point_on_line",
+        JointSpec::RevoluteTranslational(..) => "revolute_translational",
+        JointSpec::Distance(..) => "distance",
+        JointSpec::AbsoluteX(..) => "absolute_x",
+        JointSpec::AbsoluteY(..) => "absolute_y",
+        JointSpec::AbsoluteAngle(..) => "absolute_angle",
+        JointSpec::Gear(..) => "gear",
+        JointSpec::RackPinion(..) => "rack_pinion",
+        JointSpec::RollingDisc(..) => "rolling_disc",
+        JointSpec::Expression(..) => "expression",
     }
 }
 
 fn driver_kind(d: &DriverSpec) -> &'static str {
     match d {
-        DriverSpec::Angle { .. } => "angle",
-        DriverSpec::RelativeAngle { .. } => "relative_angle",
-        DriverSpec::Distance { .. } => "distance",
-        DriverSpec::X { .. } => "x",
-        DriverSpec::Y { .. } => "y",
+        DriverSpec::Angle(..) => "angle",
+        DriverSpec::RelativeAngle(..) => "relative_angle",
+        DriverSpec::Distance(..) => "distance",
+        DriverSpec::X(..) => "x",
+        DriverSpec::Y(..) => "y",
     }
 }
 
@@ -310,7 +310,7 @@ impl Cx<'_> {
     fn joint(&mut self, path: &str, j: &JointSpec) -> Option<Box<dyn Constraint>> {
         use JointSpec as J;
         let c: Box<dyn Constraint> = match j {
-            J::Revolute { body_i, point_i, body_j, point_j } => {
+            J::Revolute(RevoluteJoint { body_i, point_i, body_j, point_j }) => {
                 let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
                 let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
                 let ok = self.distinct(path, body_i, body_j);
@@ -318,7 +318,7 @@ impl Cx<'_> {
                 ok.then_some(())?;
                 Box::new(Revolute::new(i, sp, j, sq))
             }
-            J::Translational { body_i, point_i, axis_i, body_j, point_j, axis_j } => {
+            J::Translational(TranslationalJoint { body_i, point_i, axis_i, body_j, point_j, axis_j }) => {
                 let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
                 let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
                 let vi = self.axis(&format!("{path}.axis_i"), *axis_i);
@@ -328,11 +328,18 @@ impl Cx<'_> {
                 ok.then_some(())?;
                 Box::new(Translational::new(i, sp, vi, j, sq, vj))
             }
-            J::PointOnLine { body_i, point_i, axis_i, body_j, point_j } => {
+            J::PointOnLine(PointOnLineJoint { body_i, point_i, axis_i, body_j, point_j }) => {
                 let (i, sp, vi, j, sq) = self.line_and_point(path, body_i, point_i, axis_i, body_j, point_j)?;
                 Box::new(PointOnLine::new(i, sp, vi, j, sq, 0.0))
             }
-            J::RevoluteTranslational { body_i, point_i, axis_i, body_j, point_j, offset } => {
+            J::RevoluteTranslational(RevoluteTranslationalJoint {
+                body_i,
+                point_i,
+                axis_i,
+                body_j,
+                point_j,
+                offset,
+            }) => {
                 let (i, sp, vi, j, sq) = self.line_and_point(path, body_i, point_i, axis_i, body_j, point_j)?;
                 let offset = match offset {
                     Some(o) => self.finite(&format!("{path}.offset"), *o)?,
@@ -345,7 +352,7 @@ impl Cx<'_> {
                 };
                 Box::new(PointOnLine::new(i, sp, vi, j, sq, offset))
             }
-            J::Distance { body_i, point_i, body_j, point_j, length } => {
+            J::Distance(DistanceJoint { body_i, point_i, body_j, point_j, length }) => {
                 let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
                 let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
                 let ok = self.distinct(path, body_i, body_j);
@@ -368,13 +375,13 @@ impl Cx<'_> {
                 };
                 Box::new(Distance::new(i, sp, j, sq, length))
             }
-            J::AbsoluteX { body, point, value } | J::AbsoluteY { body, point, value } => {
+            J::AbsoluteX(AbsolutePoint { body, point, value }) | J::AbsoluteY(AbsolutePoint { body, point, value }) => {
                 let (b, s) = self.body_point(path, "body", body, "point", point)?;
                 if b == BodyIx::GROUND {
                     self.problem(format!("{path}.body"), "ground cannot be constrained; name a moving body");
                     return None;
                 }
-                let x = matches!(j, J::AbsoluteX { .. });
+                let x = matches!(j, J::AbsoluteX(..));
                 let value = match value {
                     Some(v) => self.finite(&format!("{path}.value"), *v)?,
                     None => Frame::of(b, &self.q0).point(s)[if x { 0 } else { 1 }],
@@ -382,7 +389,7 @@ impl Cx<'_> {
                 let kind = if x { AbsoluteKind::X } else { AbsoluteKind::Y };
                 Box::new(Absolute::new(kind, b, s, value))
             }
-            J::AbsoluteAngle { body, value } => {
+            J::AbsoluteAngle(AbsoluteAngleJoint { body, value }) => {
                 let b = self.body(&format!("{path}.body"), body)?;
                 if b == BodyIx::GROUND {
                     self.problem(format!("{path}.body"), "ground cannot be constrained; name a moving body");
@@ -394,7 +401,7 @@ impl Cx<'_> {
                 };
                 Box::new(Absolute::new(AbsoluteKind::Angle, b, [0.0, 0.0], value))
             }
-            J::Gear { body_i, point_i, radius_i, body_j, point_j, radius_j, internal } => {
+            J::Gear(GearJoint { body_i, point_i, radius_i, body_j, point_j, radius_j, internal }) => {
                 let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
                 let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
                 let ri = self.positive(&format!("{path}.radius_i"), *radius_i);
@@ -413,9 +420,9 @@ impl Cx<'_> {
                 let kind = if *internal { GearKind::Internal } else { GearKind::External };
                 Box::new(GearPair::new(kind, i, si, ri, j, sj, rj, &self.q0))
             }
-            J::RackPinion { body_i, point_i, radius, body_j, point_j, axis_j }
-            | J::RollingDisc { body_i, point_i, radius, body_j, point_j, axis_j } => {
-                let rack = matches!(j, J::RackPinion { .. });
+            J::RackPinion(RollingJoint { body_i, point_i, radius, body_j, point_j, axis_j })
+            | J::RollingDisc(RollingJoint { body_i, point_i, radius, body_j, point_j, axis_j }) => {
+                let rack = matches!(j, J::RackPinion(..));
                 let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
                 let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
                 let r = self.positive(&format!("{path}.radius"), *radius);
@@ -429,7 +436,7 @@ impl Cx<'_> {
                     Box::new(RollingDisc::new(i, sc, r, j, sl, v, &self.q0))
                 }
             }
-            J::Expression { expression } => self.general(&format!("{path}.expression"), expression)?,
+            J::Expression(ExpressionJoint { expression }) => self.general(&format!("{path}.expression"), expression)?,
         };
         Some(c)
     }
@@ -522,7 +529,7 @@ impl Cx<'_> {
     fn driver(&mut self, path: &str, d: &DriverSpec) -> Option<Box<dyn Constraint>> {
         use DriverSpec as D;
         let (kind, f) = match d {
-            D::Angle { body, function } => {
+            D::Angle(AngleDriver { body, function }) => {
                 let b = self.body(&format!("{path}.body"), body);
                 let f = self.function(&format!("{path}.function"), function);
                 let b = b?;
@@ -532,7 +539,7 @@ impl Cx<'_> {
                 }
                 (DriverKind::Angle { body: b }, f?)
             }
-            D::RelativeAngle { body_i, body_j, function } => {
+            D::RelativeAngle(RelativeAngleDriver { body_i, body_j, function }) => {
                 let i = self.body(&format!("{path}.body_i"), body_i);
                 let j = self.body(&format!("{path}.body_j"), body_j);
                 let f = self.function(&format!("{path}.function"), function);
@@ -541,7 +548,7 @@ impl Cx<'_> {
                 ok.then_some(())?;
                 (DriverKind::RelativeAngle { i, j }, f?)
             }
-            D::Distance { body_i, point_i, body_j, point_j, function } => {
+            D::Distance(DistanceDriver { body_i, point_i, body_j, point_j, function }) => {
                 let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
                 let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
                 let f = self.function(&format!("{path}.function"), function);
@@ -550,7 +557,7 @@ impl Cx<'_> {
                 ok.then_some(())?;
                 (DriverKind::Distance { i, s_p, j, s_q }, f?)
             }
-            D::X { body, point, function } | D::Y { body, point, function } => {
+            D::X(PointDriver { body, point, function }) | D::Y(PointDriver { body, point, function }) => {
                 let bp = self.body_point(path, "body", body, "point", point);
                 let f = self.function(&format!("{path}.function"), function);
                 let (b, p) = bp?;
@@ -558,7 +565,7 @@ impl Cx<'_> {
                     self.problem(format!("{path}.body"), "ground cannot be driven; name a moving body");
                     return None;
                 }
-                let kind = if matches!(d, D::X { .. }) {
+                let kind = if matches!(d, D::X(..)) {
                     DriverKind::X { body: b, point: p }
                 } else {
                     DriverKind::Y { body: b, point: p }

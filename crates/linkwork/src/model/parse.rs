@@ -64,10 +64,10 @@ pub fn parse_partial(text: &str) -> Result<Parsed, Vec<Problem>> {
         problems.push(Problem::new("bodies", "missing section: at least one moving body is required"));
     }
     let mut broken = Vec::new();
-    let bodies = section::<BodySpec>("bodies", get("bodies"), &mut problems, &mut broken);
-    let joints = section::<JointSpec>("joints", get("joints"), &mut problems, &mut broken);
-    let drivers = section::<DriverSpec>("drivers", get("drivers"), &mut problems, &mut broken);
-    let analyses = section::<AnalysisSpec>("analyses", get("analyses"), &mut problems, &mut broken);
+    let bodies = section("bodies", get("bodies"), &mut problems, &mut broken, entry::<BodySpec>);
+    let joints = section("joints", get("joints"), &mut problems, &mut broken, tagged(&JointSpec::TYPES, joint));
+    let drivers = section("drivers", get("drivers"), &mut problems, &mut broken, tagged(&DriverSpec::TYPES, driver));
+    let analyses = section("analyses", get("analyses"), &mut problems, &mut broken, entry::<AnalysisSpec>);
     Ok(Parsed { spec: ModelSpec { name, description, ground, bodies, joints, drivers, analyses }, problems, broken })
 }
 
@@ -76,20 +76,112 @@ fn entry<T: DeserializeOwned>(path: &str, v: &Value, problems: &mut Vec<Problem>
     match serde_path_to_error::deserialize::<_, T>(v.clone()) {
         Ok(t) => Some(t),
         Err(e) => {
-            let inner = e.path().to_string();
-            let full = if inner == "." || inner.is_empty() { path.to_string() } else { format!("{path}.{inner}") };
-            problems.push(Problem::new(full, e.into_inner().to_string()));
+            problems.push(located(path, e));
             None
         }
     }
 }
 
-/// A section that maps names to entries; each entry is read on its own.
-fn section<T: DeserializeOwned>(
+/// A deserialization result that remembers the path inside the value.
+type Tracked<T> = Result<T, serde_path_to_error::Error<serde_yaml_ng::Error>>;
+
+/// A variant of a tagged section (`type: revolute`, ...) read from the entry without its `type`.
+fn variant<T: DeserializeOwned, U>(v: Value, wrap: fn(T) -> U) -> Tracked<U> {
+    serde_path_to_error::deserialize(v).map(wrap)
+}
+
+fn joint(kind: &str, v: Value) -> Option<Tracked<JointSpec>> {
+    use JointSpec as J;
+    Some(match kind {
+        "revolute" => variant(v, J::Revolute),
+        "translational" => variant(v, J::Translational),
+        "point_on_line" => variant(v, J::PointOnLine),
+        "revolute_translational" => variant(v, J::RevoluteTranslational),
+        "distance" => variant(v, J::Distance),
+        "absolute_x" => variant(v, J::AbsoluteX),
+        "absolute_y" => variant(v, J::AbsoluteY),
+        "absolute_angle" => variant(v, J::AbsoluteAngle),
+        "gear" => variant(v, J::Gear),
+        "rack_pinion" => variant(v, J::RackPinion),
+        "rolling_disc" => variant(v, J::RollingDisc),
+        "expression" => variant(v, J::Expression),
+        _ => return None,
+    })
+}
+
+fn driver(kind: &str, v: Value) -> Option<Tracked<DriverSpec>> {
+    use DriverSpec as D;
+    Some(match kind {
+        "angle" => variant(v, D::Angle),
+        "relative_angle" => variant(v, D::RelativeAngle),
+        "distance" => variant(v, D::Distance),
+        "x" => variant(v, D::X),
+        "y" => variant(v, D::Y),
+        _ => return None,
+    })
+}
+
+/// An entry of a section whose entries name their kind in `type`. Serde's internally tagged
+/// enums buffer the entry before dispatching, which loses the path of a bad field; reading `type`
+/// here and deserializing the rest straight into the variant's struct keeps it
+/// (`joints.G.radius_i`, not `joints.G`).
+fn tagged<T>(
+    types: &'static [&'static str],
+    read: fn(&str, Value) -> Option<Tracked<T>>,
+) -> impl Fn(&str, &Value, &mut Vec<Problem>) -> Option<T> {
+    move |path, v, problems| {
+        let expected = || format!("expected one of: {}", types.join(", "));
+        let Value::Mapping(map) = v else {
+            problems.push(Problem::new(
+                path,
+                format!("expected a mapping with a `type` ({}), found {}", expected(), describe(v)),
+            ));
+            return None;
+        };
+        let kind = match map.get("type") {
+            Some(Value::String(k)) => k.clone(),
+            Some(other) => {
+                problems.push(Problem::new(
+                    format!("{path}.type"),
+                    format!("expected a type name ({}), found {}", expected(), describe(other)),
+                ));
+                return None;
+            }
+            None => {
+                problems.push(Problem::new(path, format!("missing field `type`, {}", expected())));
+                return None;
+            }
+        };
+        let mut rest = map.clone();
+        rest.remove("type");
+        match read(&kind, Value::Mapping(rest)) {
+            None => {
+                problems.push(Problem::new(format!("{path}.type"), format!("unknown type `{kind}`, {}", expected())));
+                None
+            }
+            Some(Ok(t)) => Some(t),
+            Some(Err(e)) => {
+                problems.push(located(path, e));
+                None
+            }
+        }
+    }
+}
+
+/// A problem at `path` plus the path serde tracked inside the value.
+fn located(path: &str, e: serde_path_to_error::Error<serde_yaml_ng::Error>) -> Problem {
+    let inner = e.path().to_string();
+    let full = if inner == "." || inner.is_empty() { path.to_string() } else { format!("{path}.{inner}") };
+    Problem::new(full, e.into_inner().to_string())
+}
+
+/// A section that maps names to entries; each entry is read on its own by `read`.
+fn section<T>(
     name: &str,
     v: Option<&Value>,
     problems: &mut Vec<Problem>,
     broken: &mut Vec<String>,
+    read: impl Fn(&str, &Value, &mut Vec<Problem>) -> Option<T>,
 ) -> IndexMap<String, T> {
     let mut out = IndexMap::new();
     let Some(v) = v else { return out };
@@ -102,7 +194,7 @@ fn section<T: DeserializeOwned>(
             problems.push(Problem::new(name, format!("names must be strings, found {}", describe(k))));
             continue;
         };
-        match entry::<T>(&format!("{name}.{key}"), v, problems) {
+        match read(&format!("{name}.{key}"), v, problems) {
             Some(t) => {
                 out.insert(key.to_string(), t);
             }

@@ -88,13 +88,40 @@ pub enum Given {
 
 /// A point of a body: its coordinates `[x, y]` in the body frame, m, or the name of one of the
 /// body's `points`.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 #[serde(untagged)]
 pub enum PointRef {
     /// Coordinates in the body frame.
     Coords([f64; 2]),
     /// A named point of the body.
     Name(String),
+}
+
+/// Read by hand rather than derived: an untagged enum's error ("data did not match any variant")
+/// would lose the field's path and say nothing useful.
+impl<'de> Deserialize<'de> for PointRef {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = PointRef;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a point: [x, y] in the body frame, or the name of one of the body's points")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<PointRef, E> {
+                Ok(PointRef::Name(v.to_string()))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<PointRef, A::Error> {
+                use serde::de::Error;
+                let x: f64 = seq.next_element()?.ok_or_else(|| A::Error::invalid_length(0, &self))?;
+                let y: f64 = seq.next_element()?.ok_or_else(|| A::Error::invalid_length(1, &self))?;
+                if seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    return Err(A::Error::invalid_length(3, &self));
+                }
+                Ok(PointRef::Coords([x, y]))
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
 }
 
 impl Default for PointRef {
@@ -106,227 +133,297 @@ impl Default for PointRef {
 /// A joint between two bodies (or a body and `ground`), or a general constraint. The first body
 /// (`body_i`) is the one whose reaction is reported.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(tag = "type", rename_all = "snake_case")]
 pub enum JointSpec {
     /// Pin: `point_i` of `body_i` coincides with `point_j` of `body_j`. 2 equations.
-    Revolute {
-        /// First body.
-        body_i: String,
-        /// Pin location on the first body.
-        point_i: PointRef,
-        /// Second body.
-        body_j: String,
-        /// Pin location on the second body.
-        point_j: PointRef,
-    },
+    Revolute(RevoluteJoint),
     /// Prismatic: `point_j` of `body_j` slides on the line of `body_i` through `point_i` along
     /// `axis_i`, and the bodies keep the relative angle that makes `axis_i` and `axis_j` parallel.
     /// 2 equations.
-    Translational {
-        /// Body carrying the line.
-        body_i: String,
-        /// A point of the line, body i frame.
-        point_i: PointRef,
-        /// Direction of the line, body i frame (any non-zero length).
-        axis_i: [f64; 2],
-        /// The sliding body.
-        body_j: String,
-        /// The point of body j that stays on the line.
-        point_j: PointRef,
-        /// Direction in body j that stays parallel to `axis_i`.
-        axis_j: [f64; 2],
-    },
+    Translational(TranslationalJoint),
     /// Pin in slot: `point_j` of `body_j` stays on the line of `body_i` through `point_i` along
     /// `axis_i`; rotation stays free. 1 equation.
-    PointOnLine {
-        /// Body carrying the slot (line).
-        body_i: String,
-        /// A point of the line, body i frame.
-        point_i: PointRef,
-        /// Direction of the line, body i frame.
-        axis_i: [f64; 2],
-        /// Body carrying the pin.
-        body_j: String,
-        /// The pin, body j frame.
-        point_j: PointRef,
-    },
+    PointOnLine(PointOnLineJoint),
     /// Revolute-translational composite: `point_j` of `body_j` keeps a constant signed distance
     /// `offset` from the line of `body_i` (a link pinned at `point_j` and sliding, at right angles,
     /// on the line). 1 equation.
-    RevoluteTranslational {
-        /// Body carrying the line.
-        body_i: String,
-        /// A point of the line, body i frame.
-        point_i: PointRef,
-        /// Direction of the line, body i frame.
-        axis_i: [f64; 2],
-        /// Body carrying the pin.
-        body_j: String,
-        /// The pin, body j frame.
-        point_j: PointRef,
-        /// Signed distance from the line to the pin (positive to the left of `axis_i`), m.
-        /// Default: its value in the initial configuration.
-        #[serde(default)]
-        offset: Option<f64>,
-    },
+    RevoluteTranslational(RevoluteTranslationalJoint),
     /// Distance (revolute-revolute link): the two points stay `length` apart. 1 equation.
-    Distance {
-        /// First body.
-        body_i: String,
-        /// Point on the first body.
-        point_i: PointRef,
-        /// Second body.
-        body_j: String,
-        /// Point on the second body.
-        point_j: PointRef,
-        /// Distance, m. Default: its value in the initial configuration.
-        #[serde(default)]
-        length: Option<f64>,
-    },
+    Distance(DistanceJoint),
     /// Absolute x of a body point is constant. 1 equation.
-    AbsoluteX {
-        /// The body.
-        body: String,
-        /// The point (default: the centre of mass).
-        #[serde(default)]
-        point: PointRef,
-        /// The x value, m. Default: its value in the initial configuration.
-        #[serde(default)]
-        value: Option<f64>,
-    },
+    AbsoluteX(AbsolutePoint),
     /// Absolute y of a body point is constant. 1 equation.
-    AbsoluteY {
-        /// The body.
-        body: String,
-        /// The point (default: the centre of mass).
-        #[serde(default)]
-        point: PointRef,
-        /// The y value, m. Default: its value in the initial configuration.
-        #[serde(default)]
-        value: Option<f64>,
-    },
+    AbsoluteY(AbsolutePoint),
     /// Absolute angle of a body is constant. 1 equation.
-    AbsoluteAngle {
-        /// The body.
-        body: String,
-        /// The angle, rad. Default: its value in the initial configuration.
-        #[serde(default)]
-        value: Option<f64>,
-    },
+    AbsoluteAngle(AbsoluteAngleJoint),
     /// Gear pair: pitch circles of radius `radius_i` and `radius_j` about `point_i` and `point_j`
     /// roll without slip. The centre distance must be kept by other joints. 1 equation.
-    Gear {
-        /// First gear.
-        body_i: String,
-        /// Centre of the first gear, body i frame.
-        point_i: PointRef,
-        /// Pitch radius of the first gear, m.
-        radius_i: f64,
-        /// Second gear (the ring when `internal`).
-        body_j: String,
-        /// Centre of the second gear, body j frame.
-        point_j: PointRef,
-        /// Pitch radius of the second gear, m.
-        radius_j: f64,
-        /// True when gear j is an internal (ring) gear with gear i inside it. Default: false.
-        #[serde(default)]
-        internal: bool,
-    },
+    Gear(GearJoint),
     /// Rack and pinion: the pinion's pitch circle (centre `point_i`, `radius`) rolls without slip
     /// on the rack's pitch line through `point_j` along `axis_j`. The centre-to-line distance must
     /// be kept by other joints. 1 equation.
-    RackPinion {
-        /// The pinion.
-        body_i: String,
-        /// Centre of the pinion, body i frame.
-        point_i: PointRef,
-        /// Pitch radius, m.
-        radius: f64,
-        /// The rack.
-        body_j: String,
-        /// A point of the pitch line, body j frame.
-        point_j: PointRef,
-        /// Direction of the pitch line, body j frame.
-        axis_j: [f64; 2],
-    },
+    RackPinion(RollingJoint),
     /// A disc (centre `point_i`, `radius`) rolling without slip on the line of `body_j` through
     /// `point_j` along `axis_j`: contact and no slip. 2 equations.
-    RollingDisc {
-        /// The disc.
-        body_i: String,
-        /// Centre of the disc, body i frame.
-        point_i: PointRef,
-        /// Radius, m.
-        radius: f64,
-        /// The body carrying the line.
-        body_j: String,
-        /// A point of the line, body j frame.
-        point_j: PointRef,
-        /// Direction of the line, body j frame.
-        axis_j: [f64; 2],
-    },
+    RollingDisc(RollingJoint),
     /// A general constraint `expression = 0` in body coordinates (`crank.x`, `crank.y`,
     /// `crank.phi`) and time `t`, differentiated exactly. 1 equation.
-    Expression {
-        /// The left-hand side, e.g. `"crank.x^2 + crank.y^2 - 0.5625"`.
-        expression: String,
-    },
+    Expression(ExpressionJoint),
+}
+
+/// Pin: `point_i` of `body_i` coincides with `point_j` of `body_j`. 2 equations.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RevoluteJoint {
+    /// First body.
+    pub body_i: String,
+    /// Pin location on the first body.
+    pub point_i: PointRef,
+    /// Second body.
+    pub body_j: String,
+    /// Pin location on the second body.
+    pub point_j: PointRef,
+}
+
+/// Prismatic: `point_j` of `body_j` slides on the line of `body_i` through `point_i` along
+/// `axis_i`, and the bodies keep the relative angle that makes `axis_i` and `axis_j` parallel.
+/// 2 equations.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TranslationalJoint {
+    /// Body carrying the line.
+    pub body_i: String,
+    /// A point of the line, body i frame.
+    pub point_i: PointRef,
+    /// Direction of the line, body i frame (any non-zero length).
+    pub axis_i: [f64; 2],
+    /// The sliding body.
+    pub body_j: String,
+    /// The point of body j that stays on the line.
+    pub point_j: PointRef,
+    /// Direction in body j that stays parallel to `axis_i`.
+    pub axis_j: [f64; 2],
+}
+
+/// Pin in slot: `point_j` of `body_j` stays on the line of `body_i` through `point_i` along
+/// `axis_i`; rotation stays free. 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PointOnLineJoint {
+    /// Body carrying the slot (line).
+    pub body_i: String,
+    /// A point of the line, body i frame.
+    pub point_i: PointRef,
+    /// Direction of the line, body i frame.
+    pub axis_i: [f64; 2],
+    /// Body carrying the pin.
+    pub body_j: String,
+    /// The pin, body j frame.
+    pub point_j: PointRef,
+}
+
+/// Revolute-translational composite: `point_j` of `body_j` keeps a constant signed distance
+/// `offset` from the line of `body_i` (a link pinned at `point_j` and sliding, at right angles,
+/// on the line). 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RevoluteTranslationalJoint {
+    /// Body carrying the line.
+    pub body_i: String,
+    /// A point of the line, body i frame.
+    pub point_i: PointRef,
+    /// Direction of the line, body i frame.
+    pub axis_i: [f64; 2],
+    /// Body carrying the pin.
+    pub body_j: String,
+    /// The pin, body j frame.
+    pub point_j: PointRef,
+    /// Signed distance from the line to the pin (positive to the left of `axis_i`), m.
+    /// Default: its value in the initial configuration.
+    #[serde(default)]
+    pub offset: Option<f64>,
+}
+
+/// Distance (revolute-revolute link): the two points stay `length` apart. 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DistanceJoint {
+    /// First body.
+    pub body_i: String,
+    /// Point on the first body.
+    pub point_i: PointRef,
+    /// Second body.
+    pub body_j: String,
+    /// Point on the second body.
+    pub point_j: PointRef,
+    /// Distance, m. Default: its value in the initial configuration.
+    #[serde(default)]
+    pub length: Option<f64>,
+}
+
+/// `absolute_x` / `absolute_y`: a global coordinate of a body point is constant.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AbsolutePoint {
+    /// The body.
+    pub body: String,
+    /// The point (default: the centre of mass).
+    #[serde(default)]
+    pub point: PointRef,
+    /// The x value, m. Default: its value in the initial configuration.
+    #[serde(default)]
+    pub value: Option<f64>,
+}
+
+/// Absolute angle of a body is constant. 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AbsoluteAngleJoint {
+    /// The body.
+    pub body: String,
+    /// The angle, rad. Default: its value in the initial configuration.
+    #[serde(default)]
+    pub value: Option<f64>,
+}
+
+/// Gear pair: pitch circles of radius `radius_i` and `radius_j` about `point_i` and `point_j`
+/// roll without slip. The centre distance must be kept by other joints. 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GearJoint {
+    /// First gear.
+    pub body_i: String,
+    /// Centre of the first gear, body i frame.
+    pub point_i: PointRef,
+    /// Pitch radius of the first gear, m.
+    pub radius_i: f64,
+    /// Second gear (the ring when `internal`).
+    pub body_j: String,
+    /// Centre of the second gear, body j frame.
+    pub point_j: PointRef,
+    /// Pitch radius of the second gear, m.
+    pub radius_j: f64,
+    /// True when gear j is an internal (ring) gear with gear i inside it. Default: false.
+    #[serde(default)]
+    pub internal: bool,
+}
+
+/// `rack_pinion` / `rolling_disc`: a pitch circle rolling on a pitch line.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RollingJoint {
+    /// The pinion.
+    pub body_i: String,
+    /// Centre of the pinion, body i frame.
+    pub point_i: PointRef,
+    /// Pitch radius, m.
+    pub radius: f64,
+    /// The rack.
+    pub body_j: String,
+    /// A point of the pitch line, body j frame.
+    pub point_j: PointRef,
+    /// Direction of the pitch line, body j frame.
+    pub axis_j: [f64; 2],
+}
+
+/// A general constraint `expression = 0` in body coordinates (`crank.x`, `crank.y`,
+/// `crank.phi`) and time `t`, differentiated exactly. 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ExpressionJoint {
+    /// The left-hand side, e.g. `"crank.x^2 + crank.y^2 - 0.5625"`.
+    pub expression: String,
+}
+
+impl JointSpec {
+    /// Every joint `type`, as written in model files.
+    pub const TYPES: [&'static str; 12] = [
+        "revolute",
+        "translational",
+        "point_on_line",
+        "revolute_translational",
+        "distance",
+        "absolute_x",
+        "absolute_y",
+        "absolute_angle",
+        "gear",
+        "rack_pinion",
+        "rolling_disc",
+        "expression",
+    ];
+}
+
+impl DriverSpec {
+    /// Every driver `type`, as written in model files.
+    pub const TYPES: [&'static str; 5] = ["angle", "relative_angle", "distance", "x", "y"];
 }
 
 /// A prescribed motion: a coordinate of the mechanism equals `function` of time `t` (an
 /// expression such as `"6.1506 + 2*pi*t"`; its derivatives are exact).
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(tag = "type", rename_all = "snake_case")]
 pub enum DriverSpec {
     /// Angle of `body`, rad.
-    Angle {
-        /// The driven body.
-        body: String,
-        /// Angle as a function of `t`, rad.
-        function: String,
-    },
+    Angle(AngleDriver),
     /// Angle of `body_i` minus angle of `body_j`, rad.
-    RelativeAngle {
-        /// First body.
-        body_i: String,
-        /// Second body.
-        body_j: String,
-        /// Relative angle as a function of `t`, rad.
-        function: String,
-    },
+    RelativeAngle(RelativeAngleDriver),
     /// Distance between two points, m.
-    Distance {
-        /// First body.
-        body_i: String,
-        /// Point on the first body.
-        point_i: PointRef,
-        /// Second body.
-        body_j: String,
-        /// Point on the second body.
-        point_j: PointRef,
-        /// Distance as a function of `t`, m (must stay positive).
-        function: String,
-    },
+    Distance(DistanceDriver),
     /// Global x of a body point, m.
-    X {
-        /// The body.
-        body: String,
-        /// The point (default: the centre of mass).
-        #[serde(default)]
-        point: PointRef,
-        /// x as a function of `t`, m.
-        function: String,
-    },
+    X(PointDriver),
     /// Global y of a body point, m.
-    Y {
-        /// The body.
-        body: String,
-        /// The point (default: the centre of mass).
-        #[serde(default)]
-        point: PointRef,
-        /// y as a function of `t`, m.
-        function: String,
-    },
+    Y(PointDriver),
+}
+
+/// Angle of `body`, rad.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AngleDriver {
+    /// The driven body.
+    pub body: String,
+    /// Angle as a function of `t`, rad.
+    pub function: String,
+}
+
+/// Angle of `body_i` minus angle of `body_j`, rad.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RelativeAngleDriver {
+    /// First body.
+    pub body_i: String,
+    /// Second body.
+    pub body_j: String,
+    /// Relative angle as a function of `t`, rad.
+    pub function: String,
+}
+
+/// Distance between two points, m.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DistanceDriver {
+    /// First body.
+    pub body_i: String,
+    /// Point on the first body.
+    pub point_i: PointRef,
+    /// Second body.
+    pub body_j: String,
+    /// Point on the second body.
+    pub point_j: PointRef,
+    /// Distance as a function of `t`, m (must stay positive).
+    pub function: String,
+}
+
+/// `x` / `y` drivers: a global coordinate of a body point.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PointDriver {
+    /// The body.
+    pub body: String,
+    /// The point (default: the centre of mass).
+    #[serde(default)]
+    pub point: PointRef,
+    /// x as a function of `t`, m.
+    pub function: String,
 }
 
 /// An analysis of the model.
