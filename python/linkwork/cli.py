@@ -187,9 +187,14 @@ def _check(args: argparse.Namespace) -> int:
     print()
     _print_system("mechanism (joints only; coordinates marked given held)", report["mechanism"], bodies)
     for name, system in report["analyses"].items():
-        drivers = ", ".join(system["drivers"]) or "no drivers"
         print()
-        _print_system(f"analysis '{name}' (joints and {drivers})", system, bodies)
+        if system["error"] is not None:
+            print(f"analysis '{name}' ({system['kind']}): cannot be assembled: {system['error']}")
+            continue
+        drivers = ", ".join(system["drivers"]) or "no drivers"
+        _print_system(f"analysis '{name}' ({system['kind']}; joints and {drivers})", system, bodies)
+        if system["warning"] is not None:
+            print(f"  warning              {system['warning']}")
     return EXIT_OK
 
 
@@ -212,7 +217,7 @@ def _print_system(title: str, system: dict[str, Any], bodies: list[str]) -> None
         f"iteration(s); velocity residual {_num(assembly['velocity_residual'])}"
     )
     change: list[float] = assembly["change"]
-    names = [f"{b}.{c}" for b in bodies for c in COORDINATES]
+    names = [f"{b}.{c}" for b in bodies for c in COORDINATES]  # = report["coordinate_names"]
     if change:
         k = max(range(len(change)), key=lambda i: abs(change[i]))
         print(f"  change from guess    largest {names[k]} {change[k]:+.6g}")

@@ -71,17 +71,18 @@ class Model:
         """Degrees of freedom, redundant constraints and assembly of the mechanism.
 
         Returns a dict with ``model``, ``bodies``, ``coordinates``, ``mechanism`` (the joints
-        alone, with the coordinates the file marks as given held) and ``analyses`` (a dict by
-        analysis name, each with its drivers active). Each system has ``drivers``,
+        alone, with the coordinates the file marks as given held), ``coordinate_names`` and
+        ``analyses`` (a dict by analysis name, each with its drivers active, its ``kind``, a
+        ``warning`` when it cannot run as set up, and an ``error`` instead of the system fields
+        when it cannot be assembled). Each system has ``drivers``,
         ``equations``, ``gruebler_dof``, ``rank``, ``dof``, ``redundant`` (a list of
         ``{"element", "equation"}``) and ``assembly`` (``q``, ``qdot``, ``iterations``,
         ``residual``, ``velocity_residual`` and ``change``, the assembled position minus the
         guess, per coordinate in the order ``<body>.x, <body>.y, <body>.phi``).
 
-        Raises :class:`AssemblyError` if a configuration cannot be assembled.
+        Raises :class:`AssemblyError` if the mechanism alone cannot be assembled.
         """
         report: dict[str, Any] = self._native.check()
-        report["analyses"] = {name: system for name, system in report["analyses"]}
         return report
 
     def run(self, analysis: str | None = None) -> Results:

@@ -126,9 +126,10 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
             let list: Vec<(String, String)> = problems.iter().map(|p| (p.path.clone(), p.message.clone())).collect();
             (ModelError::new_err(message), vec![("problems", list.into_pyobject(py)?.into_any())])
         }
-        Error::Assembly { iterations, residual, row, hint } => (
+        Error::Assembly { time, iterations, residual, row, hint } => (
             AssemblyError::new_err(message),
             vec![
+                ("time", time.into_pyobject(py)?.into_any()),
                 ("joints", joints.into_pyobject(py)?.into_any()),
                 ("row", row.to_string().into_pyobject(py)?.into_any()),
                 ("residual", residual.into_pyobject(py)?.into_any()),

@@ -53,8 +53,10 @@ pub enum Error {
     #[error("{}", format_problems(.0))]
     Model(Vec<Problem>),
     /// The initial guess could not be moved onto `Phi = 0`.
-    #[error("assembly failed after {iterations} iterations: residual {residual:.3e} (largest in {row}); {hint}")]
+    #[error("assembly at t = {time} s failed after {iterations} iterations: residual {residual:.3e} (largest in {row}); {hint}")]
     Assembly {
+        /// Time at which the system was assembled (drivers are evaluated there).
+        time: f64,
         /// Newton iterations taken.
         iterations: usize,
         /// Max-norm of `Phi` at the best point found.

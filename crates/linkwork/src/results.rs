@@ -126,7 +126,7 @@ impl Results {
         if let Some(e) = error {
             s.insert("error".into(), json!(e.to_string()));
             s.insert("error_elements".into(), json!(e.elements()));
-            if let Error::Singular { time, .. } | Error::Convergence { time, .. } = e {
+            if let Error::Singular { time, .. } | Error::Convergence { time, .. } | Error::Assembly { time, .. } = e {
                 s.insert("error_time".into(), json!(time));
             }
         }

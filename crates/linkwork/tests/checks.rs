@@ -19,7 +19,7 @@ fn redundant_parallelogram() {
     assert_eq!(mech.dof, 1);
     assert_eq!(mech.redundant.len(), 1, "{:?}", mech.redundant);
     assert!(["ground_3", "coupler_3"].contains(&mech.redundant[0].element.as_str()), "{:?}", mech.redundant);
-    let (_, driven) = &report.analyses[0];
+    let driven = report.analyses["kinematics"].system.as_ref().expect("assembles with its driver");
     assert_eq!((driven.dof, driven.redundant.len()), (0, 1));
 
     let (_, r) = run("parallelogram.yaml", "kinematics");
@@ -75,4 +75,22 @@ fn kinematic_analysis_needs_a_fully_driven_model() {
         }
         other => panic!("expected a model error, got {other}"),
     }
+}
+
+/// An analysis whose drivers cannot be met does not sink the report: the mechanism alone and the
+/// other analyses are still checked.
+#[test]
+fn an_analysis_that_cannot_assemble_is_reported_in_its_entry() {
+    let text = std::fs::read_to_string(example("quick_return_b.yaml")).unwrap().replace(
+        "analyses:\n",
+        "  too_far: {type: angle, body: rocker, function: \"9\"}\nanalyses:\n  clash: {type: kinematic, drivers: [crank_drive, too_far], t_end: 1, step: 0.1}\n",
+    );
+    let model = Model::from_yaml(&text).unwrap();
+    let report = check(&model).unwrap();
+    assert_eq!(report.mechanism.dof, 1);
+    let clash = &report.analyses["clash"];
+    assert!(clash.system.is_none());
+    assert!(clash.error.as_deref().unwrap_or_default().contains("assembly at t = 0 s failed"), "{:?}", clash.error);
+    assert_eq!(report.analyses["kinematics"].system.as_ref().map(|s| s.dof), Some(0));
+    assert_eq!(report.coordinate_names[..3], ["crank.x", "crank.y", "crank.phi"]);
 }

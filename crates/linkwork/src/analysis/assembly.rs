@@ -55,7 +55,7 @@ pub fn assemble(
     let maxabs = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
     let fail = |sys: &System<'_>, phi: &[f64], iterations: usize, hint: &str| {
         let (row, residual) = sys.worst_row(phi);
-        Error::Assembly { iterations, residual, row, hint: hint.to_string() }
+        Error::Assembly { time: t, iterations, residual, row, hint: hint.to_string() }
     };
     while maxabs(&phi) > tolerance {
         if iterations == MAX_ITERATIONS || !phi.iter().all(|x| x.is_finite()) {
@@ -107,6 +107,7 @@ pub fn assemble(
     if velocity_residual > 1e-8 * scale {
         let (row, res) = sys.worst_row(&vres);
         return Err(Error::Assembly {
+            time: t,
             iterations,
             residual: res,
             row,

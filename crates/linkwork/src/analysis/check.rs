@@ -6,10 +6,12 @@
 //! the redundant one, as a designer reading the file would.
 
 use super::{assemble, Assembly, RANK_TOLERANCE};
-use crate::error::{Error, Result, RowName};
+use crate::error::{Result, RowName};
+use crate::model::spec::AnalysisKind;
 use crate::model::Model;
 use crate::system::System;
 use faer::{Mat, MatRef};
+use indexmap::IndexMap;
 
 /// Degrees of freedom and redundancy of one set of active constraints.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -30,6 +32,21 @@ pub struct SystemCheck {
     pub assembly: Assembly,
 }
 
+/// The check of one analysis: its system with the analysis's drivers, or why it could not be
+/// assembled, and a warning when the analysis cannot run as set up.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct AnalysisCheck {
+    /// What the analysis computes.
+    pub kind: AnalysisKind,
+    /// The system with the analysis's drivers (absent when it could not be assembled).
+    #[serde(flatten)]
+    pub system: Option<SystemCheck>,
+    /// Why the system could not be assembled.
+    pub error: Option<String>,
+    /// What stops the analysis from running, found without running it.
+    pub warning: Option<String>,
+}
+
 /// Everything `linkwork check` reports.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct CheckReport {
@@ -39,10 +56,12 @@ pub struct CheckReport {
     pub bodies: Vec<String>,
     /// Number of coordinates `n = 3 bodies`.
     pub coordinates: usize,
+    /// Name of each coordinate, `<body>.x`, `<body>.y`, `<body>.phi`, in the order of `q`.
+    pub coordinate_names: Vec<String>,
     /// The mechanism alone (joints, no drivers).
     pub mechanism: SystemCheck,
-    /// Each analysis, with its drivers.
-    pub analyses: Vec<(String, SystemCheck)>,
+    /// Each analysis by name, with its drivers.
+    pub analyses: IndexMap<String, AnalysisCheck>,
 }
 
 /// Greedy independent rows of `jac (m x n)` in order: modified Gram-Schmidt, twice for accuracy.
@@ -100,18 +119,40 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
     })
 }
 
-/// Check the mechanism alone (given coordinates held) and with each analysis's drivers.
+/// Check the mechanism alone (given coordinates held) and with each analysis's drivers. Fails
+/// only when the mechanism alone cannot be assembled; an analysis that cannot is reported in its
+/// entry.
 pub fn check(model: &Model) -> Result<CheckReport> {
     let mechanism = check_system(model, &[], true, 0.0)?;
     let analyses = model
         .analyses
         .values()
-        .map(|a| Ok((a.name.clone(), check_system(model, &a.drivers, false, a.t_start)?)))
-        .collect::<Result<Vec<_>, Error>>()?;
+        .map(|a| {
+            let entry = match check_system(model, &a.drivers, false, a.t_start) {
+                Ok(system) => {
+                    let warning = match a.kind {
+                        AnalysisKind::Kinematic if system.dof > 0 => Some(format!(
+                            "a kinematic analysis needs a fully driven model: {} degree(s) of freedom remain, add {} driver(s)",
+                            system.dof, system.dof
+                        )),
+                        AnalysisKind::Kinematic => None,
+                    };
+                    AnalysisCheck { kind: a.kind, system: Some(system), error: None, warning }
+                }
+                Err(e) => AnalysisCheck { kind: a.kind, system: None, error: Some(e.to_string()), warning: None },
+            };
+            (a.name.clone(), entry)
+        })
+        .collect();
     Ok(CheckReport {
         model: model.name.clone(),
         bodies: model.bodies.iter().map(|b| b.name.clone()).collect(),
         coordinates: model.n(),
+        coordinate_names: model
+            .bodies
+            .iter()
+            .flat_map(|b| ["x", "y", "phi"].map(|c| format!("{}.{c}", b.name)))
+            .collect(),
         mechanism,
         analyses,
     })

@@ -7,7 +7,7 @@ mod check;
 mod kinematic;
 
 pub use assembly::{assemble, Assembly};
-pub use check::{check, independent_rows, CheckReport, SystemCheck};
+pub use check::{check, independent_rows, AnalysisCheck, CheckReport, SystemCheck};
 pub use kinematic::{run_kinematic, KinematicStats};
 
 use faer::{Mat, MatRef};

@@ -270,7 +270,7 @@ pub struct AbsolutePoint {
     /// The point (default: the centre of mass).
     #[serde(default)]
     pub point: PointRef,
-    /// The x value, m. Default: its value in the initial configuration.
+    /// The value of the x (or y) coordinate, m. Default: its value in the initial configuration.
     #[serde(default)]
     pub value: Option<f64>,
 }
@@ -422,7 +422,7 @@ pub struct PointDriver {
     /// The point (default: the centre of mass).
     #[serde(default)]
     pub point: PointRef,
-    /// x as a function of `t`, m.
+    /// The x (or y) coordinate as a function of `t`, m.
     pub function: String,
 }
 
