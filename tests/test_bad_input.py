@@ -96,7 +96,7 @@ CASES = [
         "unknown joint type",
         broken("type: translational", "type: prismatic"),
         "joints.guide.type",
-        "unknown variant `prismatic`",
+        "unknown type `prismatic`",
     ),
     (
         "not fully driven",
