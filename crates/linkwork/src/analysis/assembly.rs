@@ -8,6 +8,7 @@
 //! search on `|Phi|_2` keeps a rough guess from diverging.
 
 use super::{min_norm_solve, select_columns};
+use crate::constraints::ConfigBuf;
 use crate::error::{Error, Result};
 use crate::system::System;
 use faer::Mat;
@@ -49,7 +50,7 @@ pub fn assemble(
     let mut q = q0.to_vec();
     let mut phi = vec![0.0; m];
     let mut jac = Mat::<f64>::zeros(m, n);
-    sys.phi(&q, t, &mut phi);
+    sys.phi(&ConfigBuf::new(&q).view(), t, &mut phi);
     let mut iterations = 0;
     let norm2 = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
     let maxabs = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
@@ -62,7 +63,7 @@ pub fn assemble(
             return Err(fail(sys, &phi, iterations, "the initial guess may be too far from an assembled configuration, or the joints, drivers and given coordinates cannot all hold at once (check lengths, points and given values)"));
         }
         iterations += 1;
-        sys.jacobian_dense(&q, t, jac.as_mut());
+        sys.jacobian_dense(&ConfigBuf::new(&q).view(), t, jac.as_mut());
         let jf = select_columns(jac.as_ref(), &free);
         let rhs: Vec<f64> = phi.iter().map(|x| -x).collect();
         let Some(dq) = min_norm_solve(jf.as_ref(), &rhs) else {
@@ -76,7 +77,7 @@ pub fn assemble(
             for (k, &c) in free.iter().enumerate() {
                 trial[c] += alpha * dq[k];
             }
-            sys.phi(&trial, t, &mut phi);
+            sys.phi(&ConfigBuf::new(&trial).view(), t, &mut phi);
             if norm2(&phi) < before {
                 break;
             }
@@ -89,9 +90,10 @@ pub fn assemble(
     }
     let residual = maxabs(&phi);
     // Velocities: least change from the guess, given ones held.
-    sys.jacobian_dense(&q, t, jac.as_mut());
+    let config = ConfigBuf::new(&q);
+    sys.jacobian_dense(&config.view(), t, jac.as_mut());
     let mut nu = vec![0.0; m];
-    sys.nu(&q, t, &mut nu);
+    sys.nu(&config.view(), t, &mut nu);
     let mut qdot = qdot0.to_vec();
     let free_v: Vec<usize> = (0..n).filter(|&k| !given[n + k]).collect();
     let r: Vec<f64> = (0..m).map(|i| nu[i] - (0..n).map(|j| jac[(i, j)] * qdot[j]).sum::<f64>()).collect();

@@ -6,6 +6,7 @@
 //! the redundant one, as a designer reading the file would.
 
 use super::{assemble, Assembly, RANK_TOLERANCE};
+use crate::constraints::ConfigBuf;
 use crate::error::{Result, RowName};
 use crate::model::spec::AnalysisKind;
 use crate::model::Model;
@@ -106,7 +107,7 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
     let assembly =
         assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t, super::SolverSettings::default().tolerance)?;
     let mut jac = Mat::<f64>::zeros(sys.m, n);
-    sys.jacobian_dense(&assembly.q, t, jac.as_mut());
+    sys.jacobian_dense(&ConfigBuf::new(&assembly.q).view(), t, jac.as_mut());
     let (keep, drop) = independent_rows(jac.as_ref());
     Ok(SystemCheck {
         drivers: drivers.iter().map(|&d| model.drivers[d].name.clone()).collect(),

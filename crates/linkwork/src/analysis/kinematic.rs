@@ -13,6 +13,7 @@
 //! loop except the growth of the output columns, reserved up front.
 
 use super::{assemble, independent_rows, Assembly};
+use crate::constraints::{Config, ConfigBuf};
 use crate::error::{Error, Problem, RowName};
 use crate::linalg::{FactorError, SparseLu};
 use crate::model::{Analysis, Model};
@@ -68,6 +69,9 @@ struct Solver<'m> {
     qddot: Vec<f64>,
     /// (n) Newton iterate of the sub-step being tried.
     trial: Vec<f64>,
+    /// (bodies) `(cos phi, sin phi)` of `q` and of `trial`, computed once per position.
+    rot_q: Vec<[f64; 2]>,
+    rot_trial: Vec<[f64; 2]>,
     t: f64,
     tolerance: f64,
     max_iterations: usize,
@@ -92,20 +96,22 @@ impl Solver<'_> {
 
     /// Factorize `Phi_q` at `q`.
     fn factor_at(&mut self, q_is_trial: bool, t: f64) -> Result<(), Error> {
-        let q = if q_is_trial { &self.trial } else { &self.q };
+        // `rot_trial` always matches `trial` here: Newton evaluates the residual first.
+        let q = if q_is_trial { Config::new(&self.trial, &self.rot_trial) } else { Config::new(&self.q, &self.rot_q) };
         let (pattern, values) = self.lu.pattern_and_values();
-        pattern.fill(&mut self.sys, q, t, values);
+        pattern.fill(&mut self.sys, &q, t, values);
         self.stats.factorizations += 1;
         self.lu.factor().map_err(|e| self.factor_error(e))
     }
 
     /// With `Phi_q` factorized at `(q, t)`: `qdot` from `nu` and `qddot` from `gamma`.
     fn velocities(&mut self) {
-        self.sys.nu(&self.q, self.t, &mut self.full);
+        let q = Config::new(&self.q, &self.rot_q);
+        self.sys.nu(&q, self.t, &mut self.full);
         gather(&self.full, &self.rows, &mut self.rhs);
         self.lu.solve(&mut self.rhs);
         self.qdot.copy_from_slice(&self.rhs);
-        self.sys.gamma(&self.q, &self.qdot, self.t, &mut self.full);
+        self.sys.gamma(&q, &self.qdot, self.t, &mut self.full);
         gather(&self.full, &self.rows, &mut self.rhs);
         self.lu.solve(&mut self.rhs);
         self.qddot.copy_from_slice(&self.rhs);
@@ -118,7 +124,8 @@ impl Solver<'_> {
     fn newton(&mut self, t: f64) -> Result<Result<(), NewtonFailure>, Error> {
         let mut previous = f64::INFINITY;
         for it in 0..=self.max_iterations {
-            self.sys.phi(&self.trial, t, &mut self.full);
+            Config::rotations(&self.trial, &mut self.rot_trial);
+            self.sys.phi(&Config::new(&self.trial, &self.rot_trial), t, &mut self.full);
             gather(&self.full, &self.rows, &mut self.rhs);
             let (row, r) = worst(&self.rhs);
             if r <= self.tolerance {
@@ -147,7 +154,7 @@ impl Solver<'_> {
     fn diagnose(&mut self) -> (f64, Vec<RowName>) {
         let n = self.sys.n;
         let mut jac = Mat::<f64>::zeros(self.sys.m, n);
-        self.sys.jacobian_dense(&self.q, self.t, jac.as_mut());
+        self.sys.jacobian_dense(&Config::new(&self.q, &self.rot_q), self.t, jac.as_mut());
         let sq = Mat::from_fn(self.rows.len(), n, |i, j| jac[(self.rows[i], j)]);
         let Ok(svd) = sq.svd() else { return (0.0, vec![]) };
         let s = svd.S().column_vector();
@@ -196,7 +203,7 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
         Err(e) => return Err(fail(results, e)),
     };
     let mut jac = Mat::<f64>::zeros(sys.m, n);
-    sys.jacobian_dense(&assembly.q, t0, jac.as_mut());
+    sys.jacobian_dense(&ConfigBuf::new(&assembly.q).view(), t0, jac.as_mut());
     let (rows, redundant) = independent_rows(jac.as_ref());
     if rows.len() < n {
         let dof = n - rows.len();
@@ -230,6 +237,12 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
         qdot: vec![0.0; n],
         qddot: vec![0.0; n],
         trial: vec![0.0; n],
+        rot_q: {
+            let mut rot = vec![[1.0, 0.0]; n / 3];
+            Config::rotations(&assembly.q, &mut rot);
+            rot
+        },
+        rot_trial: vec![[1.0, 0.0]; n / 3],
         t: t0,
         tolerance: settings.tolerance,
         max_iterations: settings.max_iterations,
@@ -282,6 +295,7 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
                 match failure {
                     None => {
                         std::mem::swap(&mut s.q, &mut s.trial);
+                        std::mem::swap(&mut s.rot_q, &mut s.rot_trial);
                         s.t = t_new;
                         s.factor_at(false, t_new)?;
                         s.velocities();

@@ -9,7 +9,7 @@
 //! ```
 //! Haug (1989) section 3.2; Nikravesh (2018) section 7.3.
 
-use super::{BodyIx, Constraint, Pair, Separation};
+use super::{BodyIx, Config, Constraint, Pair, Separation};
 
 /// Which coordinate an [`Absolute`] constraint holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -40,7 +40,7 @@ impl Absolute {
 
     /// `(q) => r_P` measured from the global origin.
     #[inline]
-    fn position(&self, q: &[f64]) -> Separation {
+    fn position(&self, q: &Config<'_>) -> Separation {
         Separation::of(BodyIx::GROUND, [0.0; 2], self.pair.i, self.point, q)
     }
 
@@ -69,13 +69,13 @@ impl Constraint for Absolute {
     fn columns(&self) -> &[usize] {
         self.pair.columns()
     }
-    fn phi(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = match self.axis() {
             Some(k) => self.position(q).d[k],
             None => self.pair.i.coords(q)[2],
         } - self.value;
     }
-    fn jacobian(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let row = match self.axis() {
             Some(k) => {
                 let mut g = [0.0; 2];
@@ -86,10 +86,10 @@ impl Constraint for Absolute {
         };
         self.pair.scatter(row, [0.0; 3], out);
     }
-    fn nu(&self, _q: &[f64], _t: f64, out: &mut [f64]) {
+    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = 0.0;
     }
-    fn gamma(&self, q: &[f64], qdot: &[f64], _t: f64, out: &mut [f64]) {
+    fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = match self.axis() {
             Some(k) => -self.position(q).accel_free(0.0, self.pair.i.coords(qdot)[2])[k],
             None => 0.0,
@@ -101,6 +101,7 @@ impl Constraint for Absolute {
 mod tests {
     use super::*;
     use crate::constraints::testing::check_fd_random;
+    use crate::constraints::testing::OnSlice;
 
     #[test]
     fn derivatives_match_finite_differences() {
@@ -120,25 +121,25 @@ mod tests {
         let (mut phi, mut jac, mut g) = ([0.0], [0.0; 3], [0.0]);
 
         let x = Absolute::new(AbsoluteKind::X, BodyIx(Some(0)), [0.5, 0.0], 0.2);
-        x.phi(&q, 0.0, &mut phi);
-        x.jacobian(&q, 0.0, &mut jac);
-        x.gamma(&q, &qdot, 0.0, &mut g);
+        x.phi_at(&q, 0.0, &mut phi);
+        x.jacobian_at(&q, 0.0, &mut jac);
+        x.gamma_at(&q, &qdot, 0.0, &mut g);
         assert!((phi[0] - 0.8).abs() < 1e-14, "{phi:?}");
         assert!((jac[0] - 1.0).abs() < 1e-14 && jac[1] == 0.0 && (jac[2] + 0.5).abs() < 1e-14, "{jac:?}");
         assert!(g[0].abs() < 1e-14, "{g:?}");
 
         let y = Absolute::new(AbsoluteKind::Y, BodyIx(Some(0)), [0.5, 0.0], 2.5);
-        y.phi(&q, 0.0, &mut phi);
-        y.jacobian(&q, 0.0, &mut jac);
-        y.gamma(&q, &qdot, 0.0, &mut g);
+        y.phi_at(&q, 0.0, &mut phi);
+        y.jacobian_at(&q, 0.0, &mut jac);
+        y.gamma_at(&q, &qdot, 0.0, &mut g);
         assert!(phi[0].abs() < 1e-14, "{phi:?}");
         assert!(jac[0] == 0.0 && jac[1] == 1.0 && jac[2].abs() < 1e-14, "{jac:?}");
         assert!((g[0] - 4.5).abs() < 1e-14, "{g:?}");
 
         let a = Absolute::new(AbsoluteKind::Angle, BodyIx(Some(0)), [9.0, 9.0], 1.0);
-        a.phi(&q, 0.0, &mut phi);
-        a.jacobian(&q, 0.0, &mut jac);
-        a.gamma(&q, &qdot, 0.0, &mut g);
+        a.phi_at(&q, 0.0, &mut phi);
+        a.jacobian_at(&q, 0.0, &mut jac);
+        a.gamma_at(&q, &qdot, 0.0, &mut g);
         assert!((phi[0] - (std::f64::consts::FRAC_PI_2 - 1.0)).abs() < 1e-15);
         assert_eq!(jac, [0.0, 0.0, 1.0]);
         assert_eq!(g, [0.0]);

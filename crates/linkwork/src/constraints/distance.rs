@@ -12,7 +12,7 @@
 //! price of a multiplier that is a force divided by `2 L`. Haug (1989) section 3.4.1; Nikravesh
 //! (2018) section 7.2.
 
-use super::{dot, BodyIx, Constraint, Pair, Separation};
+use super::{dot, BodyIx, Config, Constraint, Pair, Separation};
 
 /// Two body points at a fixed distance.
 #[derive(Debug, Clone)]
@@ -30,7 +30,7 @@ impl Distance {
     }
 
     #[inline]
-    fn separation(&self, q: &[f64]) -> Separation {
+    fn separation(&self, q: &Config<'_>) -> Separation {
         Separation::of(self.pair.i, self.s_p, self.pair.j, self.s_q, q)
     }
 }
@@ -45,19 +45,19 @@ impl Constraint for Distance {
     fn columns(&self) -> &[usize] {
         self.pair.columns()
     }
-    fn phi(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let d = self.separation(q).d;
         out[0] = dot(d, d) - self.length * self.length;
     }
-    fn jacobian(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let d = self.separation(q);
         let (bi, bj) = d.chain([2.0 * d.d[0], 2.0 * d.d[1]]);
         self.pair.scatter(bi, bj, out);
     }
-    fn nu(&self, _q: &[f64], _t: f64, out: &mut [f64]) {
+    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = 0.0;
     }
-    fn gamma(&self, q: &[f64], qdot: &[f64], _t: f64, out: &mut [f64]) {
+    fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         let sep = self.separation(q);
         let (qd_i, qd_j) = (self.pair.i.coords(qdot), self.pair.j.coords(qdot));
         let rate = sep.rate(qd_i, qd_j);
@@ -70,6 +70,7 @@ impl Constraint for Distance {
 mod tests {
     use super::*;
     use crate::constraints::testing::check_fd_random;
+    use crate::constraints::testing::OnSlice;
 
     #[test]
     fn derivatives_match_finite_differences() {
@@ -91,9 +92,9 @@ mod tests {
         let c = Distance::new(BodyIx::GROUND, [1.0, 2.0], BodyIx(Some(0)), [0.5, 0.0], 2.0);
         let q = [0.5, 0.0, 0.0];
         let (mut phi, mut jac, mut g) = ([1.0], [0.0; 3], [0.0]);
-        c.phi(&q, 0.0, &mut phi);
-        c.jacobian(&q, 0.0, &mut jac);
-        c.gamma(&q, &[0.0, 0.0, 3.0], 0.0, &mut g);
+        c.phi_at(&q, 0.0, &mut phi);
+        c.jacobian_at(&q, 0.0, &mut jac);
+        c.gamma_at(&q, &[0.0, 0.0, 3.0], 0.0, &mut g);
         assert!(phi[0].abs() < 1e-14, "{phi:?}");
         // d = r_Q - r_P = (1, 0) - (1, 2) = (0, -2); Phi_q_j = 2 d^T [I  B s'] = (0, -4, -2).
         let expect = [0.0, -4.0, -2.0];

@@ -18,7 +18,7 @@
 //! `P Q` (its effort); it is singular when `P` and `Q` coincide (`|d| = 0`, division by zero), which
 //! the prescribed `f(t)` must keep away from. Haug (1989) section 3.5; Nikravesh (2018) section 7.5.
 
-use super::{dot, Absolute, AbsoluteKind, BodyIx, Constraint, Pair, Separation};
+use super::{dot, Absolute, AbsoluteKind, BodyIx, Config, Constraint, Pair, Separation};
 use crate::expr::TimeFunction;
 
 /// What a [`Driver`] prescribes.
@@ -79,17 +79,17 @@ impl Constraint for Driver {
     fn columns(&self) -> &[usize] {
         self.g.columns()
     }
-    fn phi(&self, q: &[f64], t: f64, out: &mut [f64]) {
+    fn phi(&self, q: &Config<'_>, t: f64, out: &mut [f64]) {
         self.g.phi(q, t, out);
         out[0] -= self.f.eval(t).0;
     }
-    fn jacobian(&self, q: &[f64], t: f64, out: &mut [f64]) {
+    fn jacobian(&self, q: &Config<'_>, t: f64, out: &mut [f64]) {
         self.g.jacobian(q, t, out);
     }
-    fn nu(&self, _q: &[f64], t: f64, out: &mut [f64]) {
+    fn nu(&self, _q: &Config<'_>, t: f64, out: &mut [f64]) {
         out[0] = self.f.eval(t).1;
     }
-    fn gamma(&self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) {
+    fn gamma(&self, q: &Config<'_>, qdot: &[f64], t: f64, out: &mut [f64]) {
         self.g.gamma(q, qdot, t, out);
         out[0] += self.f.eval(t).2;
     }
@@ -111,16 +111,16 @@ impl Constraint for RelativeAngle {
     fn columns(&self) -> &[usize] {
         self.pair.columns()
     }
-    fn phi(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = self.pair.i.coords(q)[2] - self.pair.j.coords(q)[2];
     }
-    fn jacobian(&self, _q: &[f64], _t: f64, out: &mut [f64]) {
+    fn jacobian(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         self.pair.scatter([0.0, 0.0, 1.0], [0.0, 0.0, -1.0], out);
     }
-    fn nu(&self, _q: &[f64], _t: f64, out: &mut [f64]) {
+    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = 0.0;
     }
-    fn gamma(&self, _q: &[f64], _qdot: &[f64], _t: f64, out: &mut [f64]) {
+    fn gamma(&self, _q: &Config<'_>, _qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = 0.0;
     }
 }
@@ -135,7 +135,7 @@ struct Length {
 
 impl Length {
     #[inline]
-    fn separation(&self, q: &[f64]) -> Separation {
+    fn separation(&self, q: &Config<'_>) -> Separation {
         Separation::of(self.pair.i, self.s_p, self.pair.j, self.s_q, q)
     }
 }
@@ -150,20 +150,20 @@ impl Constraint for Length {
     fn columns(&self) -> &[usize] {
         self.pair.columns()
     }
-    fn phi(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let d = self.separation(q).d;
         out[0] = dot(d, d).sqrt();
     }
-    fn jacobian(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let sep = self.separation(q);
         let len = dot(sep.d, sep.d).sqrt();
         let (bi, bj) = sep.chain([sep.d[0] / len, sep.d[1] / len]);
         self.pair.scatter(bi, bj, out);
     }
-    fn nu(&self, _q: &[f64], _t: f64, out: &mut [f64]) {
+    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = 0.0;
     }
-    fn gamma(&self, q: &[f64], qdot: &[f64], _t: f64, out: &mut [f64]) {
+    fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         let sep = self.separation(q);
         let (qd_i, qd_j) = (self.pair.i.coords(qdot), self.pair.j.coords(qdot));
         let rate = sep.rate(qd_i, qd_j);
@@ -178,6 +178,8 @@ impl Constraint for Length {
 mod tests {
     use super::*;
     use crate::constraints::testing::check_fd_random_where;
+    use crate::constraints::testing::OnSlice;
+    use crate::constraints::ConfigBuf;
 
     fn f() -> TimeFunction {
         TimeFunction::parse("0.3 + 2*t + 0.5*sin(3*t)").unwrap()
@@ -204,7 +206,7 @@ mod tests {
                 // near it: check where the points are at least 1 apart.
                 let apart = |q: &[f64]| match kind {
                     DriverKind::Distance { i, s_p, j, s_q } => {
-                        let d = Separation::of(i, s_p, j, s_q, q).d;
+                        let d = Separation::of(i, s_p, j, s_q, &ConfigBuf::new(q).view()).d;
                         dot(d, d) > 1.0
                     }
                     _ => true,
@@ -226,19 +228,19 @@ mod tests {
         let qdot = [0.0, 1.0, 0.5];
         let t = std::f64::consts::FRAC_PI_6;
         let (mut phi, mut jac, mut nu, mut g) = ([0.0], [0.0; 3], [0.0], [0.0]);
-        d.phi(&q, t, &mut phi);
-        d.jacobian(&q, t, &mut jac);
-        d.nu(&q, t, &mut nu);
-        d.gamma(&q, &qdot, t, &mut g);
+        d.phi_at(&q, t, &mut phi);
+        d.jacobian_at(&q, t, &mut jac);
+        d.nu_at(&q, t, &mut nu);
+        d.gamma_at(&q, &qdot, t, &mut g);
         assert!((phi[0] - (5.0 - 0.8 - std::f64::consts::FRAC_PI_3)).abs() < 1e-14, "{phi:?}");
         assert!((jac[0] - 0.6).abs() < 1e-15 && (jac[1] - 0.8).abs() < 1e-15 && jac[2] == 0.0, "{jac:?}");
         assert!((nu[0] - 2.0).abs() < 1e-14, "{nu:?}");
         assert!((g[0] - (-0.072 - 4.5)).abs() < 1e-14, "{g:?}");
 
         let a = Driver::new(DriverKind::Angle { body: BodyIx(Some(0)) }, f());
-        a.phi(&q, 0.0, &mut phi);
-        a.nu(&q, 0.0, &mut nu);
-        a.gamma(&q, &qdot, 0.0, &mut g);
+        a.phi_at(&q, 0.0, &mut phi);
+        a.nu_at(&q, 0.0, &mut nu);
+        a.gamma_at(&q, &qdot, 0.0, &mut g);
         assert!((phi[0] - 0.7).abs() < 1e-15 && (nu[0] - 3.5).abs() < 1e-15 && g[0].abs() < 1e-15);
         assert_eq!(a.row_names(), ["angle"]);
     }

@@ -17,7 +17,7 @@
 //! [`MAX_SLOTS`] slots, so that the derivative passes run on stack arrays. Haug (1989) section
 //! 3.5 (general constraints and drivers); derivatives by hyper-dual numbers (Fike and Alonso, 2011).
 
-use super::Constraint;
+use super::{Config, Constraint};
 use crate::expr::{Dual, Expr, HyperDual, Scalar};
 
 /// The most slots (distinct names) a general constraint may use.
@@ -117,11 +117,11 @@ impl Constraint for GeneralConstraint {
     fn columns(&self) -> &[usize] {
         &self.columns
     }
-    fn phi(&self, q: &[f64], t: f64, out: &mut [f64]) {
+    fn phi(&self, q: &Config<'_>, t: f64, out: &mut [f64]) {
         let z = self.slots::<f64>(q, t);
         out[0] = self.expr.eval(&z[..self.vars.len()]);
     }
-    fn jacobian(&self, q: &[f64], t: f64, out: &mut [f64]) {
+    fn jacobian(&self, q: &Config<'_>, t: f64, out: &mut [f64]) {
         let n = self.vars.len();
         let mut z = self.slots::<Dual>(q, t);
         out[..self.columns.len()].fill(0.0);
@@ -133,7 +133,7 @@ impl Constraint for GeneralConstraint {
             }
         }
     }
-    fn nu(&self, q: &[f64], t: f64, out: &mut [f64]) {
+    fn nu(&self, q: &Config<'_>, t: f64, out: &mut [f64]) {
         let n = self.vars.len();
         let mut z = self.slots::<Dual>(q, t);
         let mut timed = false;
@@ -145,7 +145,7 @@ impl Constraint for GeneralConstraint {
         }
         out[0] = if timed { -self.expr.eval(&z[..n]).d } else { 0.0 };
     }
-    fn gamma(&self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) {
+    fn gamma(&self, q: &Config<'_>, qdot: &[f64], t: f64, out: &mut [f64]) {
         let n = self.vars.len();
         let mut z = self.slots::<HyperDual>(q, t);
         for (zk, v) in z.iter_mut().zip(&self.vars) {
@@ -163,6 +163,7 @@ impl Constraint for GeneralConstraint {
 mod tests {
     use super::*;
     use crate::constraints::testing::check_fd_random;
+    use crate::constraints::testing::OnSlice;
 
     /// Parse `src` over names `<x|y|phi><body>` (body 0 or 1) and `t`, slots in order of first use.
     fn general(src: &str) -> GeneralConstraint {
@@ -202,7 +203,7 @@ mod tests {
         let c = GeneralConstraint::new(expr, vec![Var::Coord(2), Var::Coord(2)]);
         assert_eq!(c.columns(), [2]);
         let mut jac = [0.0];
-        c.jacobian(&[0.0, 0.0, 1.5], 0.0, &mut jac);
+        c.jacobian_at(&[0.0, 0.0, 1.5], 0.0, &mut jac);
         assert_eq!(jac, [3.0]);
         check_fd_random(&c, 1, 4);
     }
@@ -215,10 +216,10 @@ mod tests {
         let c = general("x0^2 + y0^2 - 0.5625 + x0*t");
         let q = [0.6, 0.45, 0.0];
         let (mut phi, mut jac, mut nu, mut g) = ([1.0], [0.0; 2], [0.0], [0.0]);
-        c.phi(&q, 0.0, &mut phi);
-        c.jacobian(&q, 0.0, &mut jac);
-        c.nu(&q, 0.0, &mut nu);
-        c.gamma(&q, &[2.0, -1.0, 0.0], 0.0, &mut g);
+        c.phi_at(&q, 0.0, &mut phi);
+        c.jacobian_at(&q, 0.0, &mut jac);
+        c.nu_at(&q, 0.0, &mut nu);
+        c.gamma_at(&q, &[2.0, -1.0, 0.0], 0.0, &mut g);
         assert!(phi[0].abs() < 1e-15, "{phi:?}");
         assert!((jac[0] - 1.2).abs() < 1e-15 && (jac[1] - 0.9).abs() < 1e-15, "{jac:?}");
         assert!((nu[0] + 0.6).abs() < 1e-15, "{nu:?}");

@@ -31,7 +31,7 @@
 
 use std::f64::consts::TAU;
 
-use super::{dot, perp, BodyIx, Constraint, Pair, Separation};
+use super::{dot, perp, BodyIx, Config, ConfigBuf, Constraint, Pair, Separation};
 
 /// External or internal meshing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -78,7 +78,7 @@ impl GearPair {
             GearKind::Internal => -r_j,
         };
         let mut g = GearPair { kind, pair: Pair::new(i, j), s_i, s_j, r_i, r_j, k: r_i + r_j, c: 0.0 };
-        g.c = g.unwrapped(q0);
+        g.c = g.unwrapped(&ConfigBuf::new(q0).view());
         g
     }
 
@@ -88,13 +88,13 @@ impl GearPair {
     }
 
     #[inline]
-    fn separation(&self, q: &[f64]) -> Separation {
+    fn separation(&self, q: &Config<'_>) -> Separation {
         Separation::of(self.pair.i, self.s_i, self.pair.j, self.s_j, q)
     }
 
     /// `(q) => r_i phi_i + sigma r_j phi_j - k theta - c` with `theta` in `(-pi, pi]`.
     #[inline]
-    fn unwrapped(&self, q: &[f64]) -> f64 {
+    fn unwrapped(&self, q: &Config<'_>) -> f64 {
         let sep = self.separation(q);
         let theta = sep.d[1].atan2(sep.d[0]);
         self.r_i * sep.phi[0] + self.r_j * sep.phi[1] - self.k * theta - self.c
@@ -111,12 +111,12 @@ impl Constraint for GearPair {
     fn columns(&self) -> &[usize] {
         self.pair.columns()
     }
-    fn phi(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let raw = self.unwrapped(q);
         let period = TAU * self.k.abs();
         out[0] = if period > 0.0 { raw - period * (raw / period).round() } else { raw };
     }
-    fn jacobian(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let sep = self.separation(q);
         let rho = dot(sep.d, sep.d);
         let n = perp(sep.d);
@@ -126,10 +126,10 @@ impl Constraint for GearPair {
         let bj = [-k * tj[0], -k * tj[1], self.r_j - k * tj[2]];
         self.pair.scatter(bi, bj, out);
     }
-    fn nu(&self, _q: &[f64], _t: f64, out: &mut [f64]) {
+    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = 0.0;
     }
-    fn gamma(&self, q: &[f64], qdot: &[f64], _t: f64, out: &mut [f64]) {
+    fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         let sep = self.separation(q);
         let (qd_i, qd_j) = (self.pair.i.coords(qdot), self.pair.j.coords(qdot));
         let rate = sep.rate(qd_i, qd_j);
@@ -144,13 +144,18 @@ impl Constraint for GearPair {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::constraints::testing::OnSlice;
     use crate::constraints::testing::{check_fd_random_where, Lcg};
+    use crate::constraints::ConfigBuf;
 
     /// Finite differences lose their accuracy as the centres approach each other (`1 / rho`
     /// terms, with fourth derivatives growing like |d|^-4): check at states where they are at least 1
     /// apart.
     fn check(g: &GearPair, seed: u64) {
-        let apart = |q: &[f64]| dot(g.separation(q).d, g.separation(q).d) > 1.0;
+        let apart = |q: &[f64]| {
+            let d = g.separation(&ConfigBuf::new(q).view()).d;
+            dot(d, d) > 1.0
+        };
         check_fd_random_where(g, 2, seed, &apart);
     }
 
@@ -171,9 +176,9 @@ mod tests {
     /// `(gear, q, qdot) => (Phi, Phi_q, gamma)` for a two-body pair.
     fn eval(g: &GearPair, q: &[f64], qdot: &[f64]) -> (f64, [f64; 6], f64) {
         let (mut phi, mut jac, mut gamma) = ([0.0], [0.0; 6], [0.0]);
-        g.phi(q, 0.0, &mut phi);
-        g.jacobian(q, 0.0, &mut jac);
-        g.gamma(q, qdot, 0.0, &mut gamma);
+        g.phi_at(q, 0.0, &mut phi);
+        g.jacobian_at(q, 0.0, &mut jac);
+        g.gamma_at(q, qdot, 0.0, &mut gamma);
         (phi[0], jac, gamma[0])
     }
 
@@ -218,7 +223,7 @@ mod tests {
         let q = [1.5, 0.0, 0.0];
         let g = GearPair::new(GearKind::External, BodyIx::GROUND, [0.0; 2], 1.0, BodyIx(Some(0)), [0.0; 2], 0.5, &q);
         let mut gamma = [0.0];
-        g.gamma(&q, &[0.3, 0.6, 0.7], 0.0, &mut gamma);
+        g.gamma_at(&q, &[0.3, 0.6, 0.7], 0.0, &mut gamma);
         assert!((gamma[0] + 0.24).abs() < 1e-14, "{gamma:?}");
     }
 
@@ -232,7 +237,7 @@ mod tests {
         // Rolling on the fixed sun: r_j (phi_j - theta) = r_i theta + const, phi_j = 3 theta + const.
         for a in [3.0, 3.1, 3.2, 3.5, 6.0, 9.0, -4.0] {
             let mut phi = [1.0];
-            g.phi(&planet(a, 3.0 * (a - 3.0)), 0.0, &mut phi);
+            g.phi_at(&planet(a, 3.0 * (a - 3.0)), 0.0, &mut phi);
             assert!(phi[0].abs() < 1e-13, "carrier at {a}: {phi:?}");
         }
     }

@@ -13,7 +13,7 @@
 //! `e > 0` puts `Q` on the left of the line (the side `R90 v'_i` points to). Haug (1989) sections
 //! 3.3.2 and 3.4.2; Nikravesh (2018) section 7.1.
 
-use super::{perp, unit, BodyIx, Constraint, Pair, Projection};
+use super::{perp, unit, BodyIx, Config, Constraint, Pair, Projection};
 
 /// A point of body j on (or at a fixed offset from) a line of body i.
 #[derive(Debug, Clone)]
@@ -43,17 +43,17 @@ impl Constraint for PointOnLine {
     fn columns(&self) -> &[usize] {
         self.pair.columns()
     }
-    fn phi(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = self.line.value(q) - self.offset;
     }
-    fn jacobian(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let (bi, bj) = self.line.blocks(q);
         self.pair.scatter(bi, bj, out);
     }
-    fn nu(&self, _q: &[f64], _t: f64, out: &mut [f64]) {
+    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = 0.0;
     }
-    fn gamma(&self, q: &[f64], qdot: &[f64], _t: f64, out: &mut [f64]) {
+    fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = self.line.gamma(q, qdot);
     }
 }
@@ -62,6 +62,7 @@ impl Constraint for PointOnLine {
 mod tests {
     use super::*;
     use crate::constraints::testing::check_fd_random;
+    use crate::constraints::testing::OnSlice;
 
     #[test]
     fn derivatives_match_finite_differences() {
@@ -83,9 +84,9 @@ mod tests {
         let c = PointOnLine::new(BodyIx(Some(0)), [0.0, 0.0], [3.0, 0.0], BodyIx::GROUND, [1.0, 0.5], 0.5);
         let q = [0.0, 0.0, 0.0];
         let (mut phi, mut jac, mut g) = ([1.0], [0.0; 3], [0.0]);
-        c.phi(&q, 0.0, &mut phi);
-        c.jacobian(&q, 0.0, &mut jac);
-        c.gamma(&q, &[0.0, 0.0, 2.0], 0.0, &mut g);
+        c.phi_at(&q, 0.0, &mut phi);
+        c.jacobian_at(&q, 0.0, &mut jac);
+        c.gamma_at(&q, &[0.0, 0.0, 2.0], 0.0, &mut g);
         assert!(phi[0].abs() < 1e-15, "{phi:?}");
         let expect = [0.0, -1.0, -1.0];
         for (a, b) in jac.iter().zip(expect) {

@@ -8,7 +8,7 @@
 //! ```
 //! with `B = dA/dphi`. Haug (1989) section 3.3.1; Nikravesh (2018) section 7.1.
 
-use super::{BodyIx, Constraint, Frame, Pair};
+use super::{BodyIx, Config, Constraint, Frame, Pair};
 
 /// A revolute joint between body i (point `P`) and body j (point `Q`).
 #[derive(Debug, Clone)]
@@ -35,23 +35,23 @@ impl Constraint for Revolute {
     fn columns(&self) -> &[usize] {
         self.pair.columns()
     }
-    fn phi(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let p = Frame::of(self.pair.i, q).point(self.s_p);
         let r = Frame::of(self.pair.j, q).point(self.s_q);
         out[0] = p[0] - r[0];
         out[1] = p[1] - r[1];
     }
-    fn jacobian(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let bi = Frame::of(self.pair.i, q).rotate_d(self.s_p);
         let bj = Frame::of(self.pair.j, q).rotate_d(self.s_q);
         let w = self.pair.width();
         self.pair.scatter([1.0, 0.0, bi[0]], [-1.0, 0.0, -bj[0]], &mut out[..w]);
         self.pair.scatter([0.0, 1.0, bi[1]], [0.0, -1.0, -bj[1]], &mut out[w..2 * w]);
     }
-    fn nu(&self, _q: &[f64], _t: f64, out: &mut [f64]) {
+    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[..2].fill(0.0);
     }
-    fn gamma(&self, q: &[f64], qdot: &[f64], _t: f64, out: &mut [f64]) {
+    fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         let wi = self.pair.i.coords(qdot)[2];
         let wj = self.pair.j.coords(qdot)[2];
         let ai = Frame::of(self.pair.i, q).rotate(self.s_p);
@@ -65,6 +65,7 @@ impl Constraint for Revolute {
 mod tests {
     use super::*;
     use crate::constraints::testing::check_fd_random;
+    use crate::constraints::testing::OnSlice;
 
     #[test]
     fn derivatives_match_finite_differences() {
@@ -81,18 +82,18 @@ mod tests {
         let j = Revolute::new(BodyIx(Some(0)), [0.75, 0.0], BodyIx::GROUND, [0.0, 0.0]);
         let q = [0.0, -0.75, std::f64::consts::FRAC_PI_2];
         let mut phi = [1.0; 2];
-        j.phi(&q, 0.0, &mut phi);
+        j.phi_at(&q, 0.0, &mut phi);
         assert!(phi[0].abs() < 1e-15 && phi[1].abs() < 1e-15, "{phi:?}");
         // B s' = (-sin*0.75, cos*0.75) = (-0.75, 0) at phi = pi/2.
         let mut jac = [0.0; 6];
-        j.jacobian(&q, 0.0, &mut jac);
+        j.jacobian_at(&q, 0.0, &mut jac);
         let expect = [1.0, 0.0, -0.75, 0.0, 1.0, 0.0];
         for (a, b) in jac.iter().zip(expect) {
             assert!((a - b).abs() < 1e-15, "{jac:?}");
         }
         // Centripetal: gamma = A s' omega^2 = (0, 0.75) * 4 for omega = 2.
         let mut g = [0.0; 2];
-        j.gamma(&q, &[0.0, 0.0, 2.0], 0.0, &mut g);
+        j.gamma_at(&q, &[0.0, 0.0, 2.0], 0.0, &mut g);
         assert!(g[0].abs() < 1e-14 && (g[1] - 3.0).abs() < 1e-14, "{g:?}");
     }
 }

@@ -32,7 +32,7 @@
 //! frame and the rack on a translational joint), so it has only the rolling row; a rolling disc
 //! adds the contact row. Haug (1989) section 3.4.5; Nikravesh (2018) section 7.4.
 
-use super::{perp, unit, BodyIx, Constraint, Pair, Projection};
+use super::{perp, unit, BodyIx, Config, ConfigBuf, Constraint, Pair, Projection};
 
 /// The no-slip row shared by [`RackPinion`] and [`RollingDisc`].
 #[derive(Debug, Clone)]
@@ -47,13 +47,13 @@ struct RollingRow {
 impl RollingRow {
     /// `(q) => u . d + side rho (phi_disc - phi_line) - c`.
     #[inline]
-    fn value(&self, q: &[f64]) -> f64 {
+    fn value(&self, q: &Config<'_>) -> f64 {
         let turn = self.along.j.coords(q)[2] - self.along.i.coords(q)[2];
         self.along.value(q) + self.lever * turn - self.c
     }
     /// `(q) => (Phi_q_disc, Phi_q_line)`.
     #[inline]
-    fn blocks(&self, q: &[f64]) -> ([f64; 3], [f64; 3]) {
+    fn blocks(&self, q: &Config<'_>) -> ([f64; 3], [f64; 3]) {
         let (mut line, mut disc) = self.along.blocks(q);
         line[2] -= self.lever;
         disc[2] += self.lever;
@@ -71,6 +71,8 @@ fn rows(
     v_l: [f64; 2],
     q0: &[f64],
 ) -> (Projection, f64, RollingRow) {
+    let q0 = ConfigBuf::new(q0);
+    let q0 = &q0.view();
     let u = unit(v_l);
     let normal = Projection { i: line_body, w: perp(u), s_p: s_l, j: disc, s_q: s_c };
     let side = if normal.value(q0) < 0.0 { -1.0 } else { 1.0 };
@@ -118,17 +120,17 @@ impl Constraint for RackPinion {
     fn columns(&self) -> &[usize] {
         self.pair.columns()
     }
-    fn phi(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = self.rolling.value(q);
     }
-    fn jacobian(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let (disc, line) = self.rolling.blocks(q);
         self.pair.scatter(disc, line, out);
     }
-    fn nu(&self, _q: &[f64], _t: f64, out: &mut [f64]) {
+    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = 0.0;
     }
-    fn gamma(&self, q: &[f64], qdot: &[f64], _t: f64, out: &mut [f64]) {
+    fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = self.rolling.along.gamma(q, qdot);
     }
 }
@@ -171,21 +173,21 @@ impl Constraint for RollingDisc {
     fn columns(&self) -> &[usize] {
         self.pair.columns()
     }
-    fn phi(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = self.normal.value(q) - self.lever;
         out[1] = self.rolling.value(q);
     }
-    fn jacobian(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let w = self.pair.width();
         let (line, disc) = self.normal.blocks(q);
         self.pair.scatter(disc, line, &mut out[..w]);
         let (disc, line) = self.rolling.blocks(q);
         self.pair.scatter(disc, line, &mut out[w..2 * w]);
     }
-    fn nu(&self, _q: &[f64], _t: f64, out: &mut [f64]) {
+    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[..2].fill(0.0);
     }
-    fn gamma(&self, q: &[f64], qdot: &[f64], _t: f64, out: &mut [f64]) {
+    fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = self.normal.gamma(q, qdot);
         out[1] = self.rolling.along.gamma(q, qdot);
     }
@@ -194,6 +196,7 @@ impl Constraint for RollingDisc {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::constraints::testing::OnSlice;
     use crate::constraints::testing::{check_fd_random, Lcg};
 
     #[test]
@@ -213,9 +216,9 @@ mod tests {
     fn eval(c: &dyn Constraint, q: &[f64], qdot: &[f64]) -> ([f64; 2], [f64; 6], [f64; 2]) {
         let (mut phi, mut jac, mut gamma) = ([0.0; 2], [0.0; 6], [0.0; 2]);
         let m = c.rows();
-        c.phi(q, 0.0, &mut phi[..m]);
-        c.jacobian(q, 0.0, &mut jac[..3 * m]);
-        c.gamma(q, qdot, 0.0, &mut gamma[..m]);
+        c.phi_at(q, 0.0, &mut phi[..m]);
+        c.jacobian_at(q, 0.0, &mut jac[..3 * m]);
+        c.gamma_at(q, qdot, 0.0, &mut gamma[..m]);
         (phi, jac, gamma)
     }
 
@@ -258,9 +261,9 @@ mod tests {
         let (disc, line) = (BodyIx(Some(0)), BodyIx(Some(3)));
         let d = RollingDisc::new(disc, [0.0; 2], 0.5, line, [0.0; 2], [1.0, 0.0], &q);
         let (mut phi, mut jac, mut gamma) = ([1.0; 2], [1.0; 12], [0.0; 2]);
-        d.phi(&q, 0.0, &mut phi);
-        d.jacobian(&q, 0.0, &mut jac);
-        d.gamma(&q, &[0.0, 0.0, 0.0, 0.0, 0.0, 1.0], 0.0, &mut gamma);
+        d.phi_at(&q, 0.0, &mut phi);
+        d.jacobian_at(&q, 0.0, &mut jac);
+        d.gamma_at(&q, &[0.0, 0.0, 0.0, 0.0, 0.0, 1.0], 0.0, &mut gamma);
         assert!(phi[0].abs() < 1e-15 && phi[1].abs() < 1e-15, "{phi:?}");
         assert!(jac[11].abs() < 1e-15 && (jac[8] - 0.5).abs() < 1e-15, "{jac:?}");
         assert!((gamma[0] - 0.5).abs() < 1e-14 && (gamma[1] - 2.0).abs() < 1e-14, "{gamma:?}");
@@ -276,8 +279,8 @@ mod tests {
         let rp = RackPinion::new(BodyIx(Some(0)), [0.0; 2], 1.0, BodyIx(Some(3)), [0.0; 2], [1.0, 0.0], &q0);
         let q = [0.0, 1.0, 0.3, 3.3, 0.0, 0.0];
         let (mut phi, mut jac) = ([1.0], [0.0; 6]);
-        rp.phi(&q, 0.0, &mut phi);
-        rp.jacobian(&q, 0.0, &mut jac);
+        rp.phi_at(&q, 0.0, &mut phi);
+        rp.jacobian_at(&q, 0.0, &mut jac);
         assert!(phi[0].abs() < 1e-15, "{phi:?}");
         assert_eq!(jac, [1.0, 0.0, 1.0, -1.0, 0.0, 0.0]);
         // Phi_q qdot = 0 with pinion omega = 1, rack vx free (vy, omega_rack = 0): vx = 1.

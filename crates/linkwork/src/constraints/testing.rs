@@ -1,7 +1,7 @@
 //! Test harness shared by every joint: analytic Jacobian, `nu` and `gamma` against central finite
 //! differences of `Phi` (an independent computation from the residual alone).
 
-use super::Constraint;
+use super::{ConfigBuf, Constraint};
 
 /// A small deterministic generator, so that failures reproduce.
 pub struct Lcg(u64);
@@ -33,15 +33,15 @@ pub fn check_fd(c: &dyn Constraint, q: &[f64], qdot: &[f64], t: f64) {
     let w = cols.len();
     assert_eq!(c.row_names().len(), m, "one name per row");
     let mut jac = vec![0.0; m * w];
-    c.jacobian(q, t, &mut jac);
+    c.jacobian_at(q, t, &mut jac);
     let (mut fp, mut fm) = (vec![0.0; m], vec![0.0; m]);
     let h = 1e-5;
     for (k, &col) in cols.iter().enumerate() {
         let (mut qp, mut qm) = (q.to_vec(), q.to_vec());
         qp[col] += h;
         qm[col] -= h;
-        c.phi(&qp, t, &mut fp);
-        c.phi(&qm, t, &mut fm);
+        c.phi_at(&qp, t, &mut fp);
+        c.phi_at(&qm, t, &mut fm);
         for r in 0..m {
             let fd = (fp[r] - fm[r]) / (2.0 * h);
             let an = jac[r * w + k];
@@ -55,30 +55,30 @@ pub fn check_fd(c: &dyn Constraint, q: &[f64], qdot: &[f64], t: f64) {
         }
         let (mut qp, mut q0) = (q.to_vec(), vec![0.0; m]);
         qp[col] += 0.1;
-        c.phi(&qp, t, &mut fp);
-        c.phi(q, t, &mut q0);
+        c.phi_at(&qp, t, &mut fp);
+        c.phi_at(q, t, &mut q0);
         for r in 0..m {
             assert_eq!(fp[r], q0[r], "{c:?}: row {r} depends on unlisted column {col}");
         }
     }
     let mut nu = vec![0.0; m];
-    c.nu(q, t, &mut nu);
-    c.phi(q, t + h, &mut fp);
-    c.phi(q, t - h, &mut fm);
+    c.nu_at(q, t, &mut nu);
+    c.phi_at(q, t + h, &mut fp);
+    c.phi_at(q, t - h, &mut fm);
     for r in 0..m {
         let fd = -(fp[r] - fm[r]) / (2.0 * h);
         assert!((fd - nu[r]).abs() < 1e-7, "{c:?}: nu[{r}] analytic {} vs fd {fd}", nu[r]);
     }
     // Along q(s) = q + s qdot, t(s) = t + s: d2 Phi / ds2 = -gamma.
     let mut gamma = vec![0.0; m];
-    c.gamma(q, qdot, t, &mut gamma);
+    c.gamma_at(q, qdot, t, &mut gamma);
     let h2 = 1e-4;
     let qp: Vec<f64> = q.iter().zip(qdot).map(|(a, b)| a + h2 * b).collect();
     let qm: Vec<f64> = q.iter().zip(qdot).map(|(a, b)| a - h2 * b).collect();
     let mut f0 = vec![0.0; m];
-    c.phi(&qp, t + h2, &mut fp);
-    c.phi(&qm, t - h2, &mut fm);
-    c.phi(q, t, &mut f0);
+    c.phi_at(&qp, t + h2, &mut fp);
+    c.phi_at(&qm, t - h2, &mut fm);
+    c.phi_at(q, t, &mut f0);
     for r in 0..m {
         let fd = -(fp[r] - 2.0 * f0[r] + fm[r]) / (h2 * h2);
         assert!((fd - gamma[r]).abs() < 1e-5, "{c:?}: gamma[{r}] analytic {} vs fd {fd}", gamma[r]);
@@ -104,5 +104,28 @@ pub fn check_fd_random_where(c: &dyn Constraint, bodies: usize, seed: u64, accep
             check_fd(c, &q, &qdot, t);
             checked += 1;
         }
+    }
+}
+
+/// Calls on a bare coordinate vector, for tests: computes the rotations and forwards.
+pub trait OnSlice {
+    fn phi_at(&self, q: &[f64], t: f64, out: &mut [f64]);
+    fn jacobian_at(&self, q: &[f64], t: f64, out: &mut [f64]);
+    fn nu_at(&self, q: &[f64], t: f64, out: &mut [f64]);
+    fn gamma_at(&self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]);
+}
+
+impl<C: Constraint + ?Sized> OnSlice for C {
+    fn phi_at(&self, q: &[f64], t: f64, out: &mut [f64]) {
+        self.phi(&ConfigBuf::new(q).view(), t, out)
+    }
+    fn jacobian_at(&self, q: &[f64], t: f64, out: &mut [f64]) {
+        self.jacobian(&ConfigBuf::new(q).view(), t, out)
+    }
+    fn nu_at(&self, q: &[f64], t: f64, out: &mut [f64]) {
+        self.nu(&ConfigBuf::new(q).view(), t, out)
+    }
+    fn gamma_at(&self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) {
+        self.gamma(&ConfigBuf::new(q).view(), qdot, t, out)
     }
 }

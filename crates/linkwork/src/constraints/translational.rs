@@ -16,7 +16,7 @@
 //! `c` comes from the axes, not from an initial configuration: the joint forces `A_i v'_i` and
 //! `A_j v'_j` to point the same way. Haug (1989) section 3.3.2; Nikravesh (2018) section 7.1.
 
-use super::{perp, unit, BodyIx, Constraint, Pair, Projection};
+use super::{perp, unit, BodyIx, Config, Constraint, Pair, Projection};
 
 /// A translational joint between body i (line through `P` along `v_i`) and body j (point `Q`, axis
 /// `v_j`).
@@ -48,20 +48,20 @@ impl Constraint for Translational {
     fn columns(&self) -> &[usize] {
         self.pair.columns()
     }
-    fn phi(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = self.line.value(q);
         out[1] = self.pair.i.coords(q)[2] - self.pair.j.coords(q)[2] - self.c;
     }
-    fn jacobian(&self, q: &[f64], _t: f64, out: &mut [f64]) {
+    fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let w = self.pair.width();
         let (bi, bj) = self.line.blocks(q);
         self.pair.scatter(bi, bj, &mut out[..w]);
         self.pair.scatter([0.0, 0.0, 1.0], [0.0, 0.0, -1.0], &mut out[w..2 * w]);
     }
-    fn nu(&self, _q: &[f64], _t: f64, out: &mut [f64]) {
+    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[..2].fill(0.0);
     }
-    fn gamma(&self, q: &[f64], qdot: &[f64], _t: f64, out: &mut [f64]) {
+    fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = self.line.gamma(q, qdot);
         out[1] = 0.0;
     }
@@ -71,6 +71,7 @@ impl Constraint for Translational {
 mod tests {
     use super::*;
     use crate::constraints::testing::check_fd_random;
+    use crate::constraints::testing::OnSlice;
 
     #[test]
     fn derivatives_match_finite_differences() {
@@ -94,9 +95,9 @@ mod tests {
         let q = [0.0, 0.0, 0.0, 1.5, 0.25, -std::f64::consts::FRAC_PI_2];
         let qdot = [0.0, 0.0, 2.0, 0.0, 0.0, 0.0];
         let (mut phi, mut jac, mut g) = ([1.0; 2], [0.0; 12], [0.0; 2]);
-        c.phi(&q, 0.0, &mut phi);
-        c.jacobian(&q, 0.0, &mut jac);
-        c.gamma(&q, &qdot, 0.0, &mut g);
+        c.phi_at(&q, 0.0, &mut phi);
+        c.jacobian_at(&q, 0.0, &mut jac);
+        c.gamma_at(&q, &qdot, 0.0, &mut g);
         assert!((phi[0] - 0.25).abs() < 1e-14 && phi[1].abs() < 1e-15, "{phi:?}");
         let expect = [0.0, -1.0, -1.5, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0];
         for (a, b) in jac.iter().zip(expect) {

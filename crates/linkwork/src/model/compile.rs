@@ -344,7 +344,7 @@ impl Cx<'_> {
                 let offset = match offset {
                     Some(o) => self.finite(&format!("{path}.offset"), *o)?,
                     None => {
-                        let (fi, fj) = (Frame::of(i, &self.q0), Frame::of(j, &self.q0));
+                        let (fi, fj) = (Frame::of_slice(i, &self.q0), Frame::of_slice(j, &self.q0));
                         let (p, r, a) = (fi.point(sp), fj.point(sq), fi.rotate(vi));
                         let n = [-a[1], a[0]];
                         ((r[0] - p[0]) * n[0] + (r[1] - p[1]) * n[1]) / a[0].hypot(a[1])
@@ -361,7 +361,7 @@ impl Cx<'_> {
                 let length = match length {
                     Some(l) => self.positive(&format!("{path}.length"), *l)?,
                     None => {
-                        let (p, r) = (Frame::of(i, &self.q0).point(sp), Frame::of(j, &self.q0).point(sq));
+                        let (p, r) = (Frame::of_slice(i, &self.q0).point(sp), Frame::of_slice(j, &self.q0).point(sq));
                         let l = (r[0] - p[0]).hypot(r[1] - p[1]);
                         if l < 1e-12 {
                             self.problem(
@@ -384,7 +384,7 @@ impl Cx<'_> {
                 let x = matches!(j, J::AbsoluteX(..));
                 let value = match value {
                     Some(v) => self.finite(&format!("{path}.value"), *v)?,
-                    None => Frame::of(b, &self.q0).point(s)[if x { 0 } else { 1 }],
+                    None => Frame::of_slice(b, &self.q0).point(s)[if x { 0 } else { 1 }],
                 };
                 let kind = if x { AbsoluteKind::X } else { AbsoluteKind::Y };
                 Box::new(Absolute::new(kind, b, s, value))
@@ -409,7 +409,7 @@ impl Cx<'_> {
                 let ok = self.distinct(path, body_i, body_j);
                 let ((i, si), (j, sj), ri, rj) = (a?, b?, ri?, rj?);
                 ok.then_some(())?;
-                let (ci, cj) = (Frame::of(i, &self.q0).point(si), Frame::of(j, &self.q0).point(sj));
+                let (ci, cj) = (Frame::of_slice(i, &self.q0).point(si), Frame::of_slice(j, &self.q0).point(sj));
                 if (cj[0] - ci[0]).hypot(cj[1] - ci[1]) < 1e-9 {
                     self.problem(
                         path,

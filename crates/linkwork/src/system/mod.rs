@@ -2,7 +2,7 @@
 //! `nu (m)`, `gamma (m)`. Rows are ordered joints first, then active drivers, each element's rows
 //! in its own order.
 
-use crate::constraints::Constraint;
+use crate::constraints::{Config, Constraint};
 use crate::error::RowName;
 use crate::model::{Element, Model};
 use faer::MatMut;
@@ -41,28 +41,28 @@ impl<'m> System<'m> {
     }
 
     /// `(q, t) => Phi`, `out: (m)`.
-    pub fn phi(&self, q: &[f64], t: f64, out: &mut [f64]) {
+    pub fn phi(&self, q: &Config<'_>, t: f64, out: &mut [f64]) {
         for (c, r) in self.constraints() {
             c.phi(q, t, &mut out[r]);
         }
     }
 
     /// `(q, t) => nu = -Phi_t`, `out: (m)`.
-    pub fn nu(&self, q: &[f64], t: f64, out: &mut [f64]) {
+    pub fn nu(&self, q: &Config<'_>, t: f64, out: &mut [f64]) {
         for (c, r) in self.constraints() {
             c.nu(q, t, &mut out[r]);
         }
     }
 
     /// `(q, qdot, t) => gamma`, `out: (m)`.
-    pub fn gamma(&self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) {
+    pub fn gamma(&self, q: &Config<'_>, qdot: &[f64], t: f64, out: &mut [f64]) {
         for (c, r) in self.constraints() {
             c.gamma(q, qdot, t, &mut out[r]);
         }
     }
 
     /// `(q, t) => Phi_q` as a dense `(m x n)` matrix.
-    pub fn jacobian_dense(&mut self, q: &[f64], t: f64, mut out: MatMut<'_, f64>) {
+    pub fn jacobian_dense(&mut self, q: &Config<'_>, t: f64, mut out: MatMut<'_, f64>) {
         out.fill(0.0);
         let Self { elements, offsets, block, .. } = self;
         for (e, w) in elements.iter().zip(offsets.windows(2)) {
@@ -144,7 +144,7 @@ impl Pattern {
     }
 
     /// `(q, t) => Phi_q` values in this pattern, `values: (nnz)`.
-    pub fn fill(&self, sys: &mut System<'_>, q: &[f64], t: f64, values: &mut [f64]) {
+    pub fn fill(&self, sys: &mut System<'_>, q: &Config<'_>, t: f64, values: &mut [f64]) {
         values.fill(0.0);
         let mut k = 0;
         let System { elements, block, .. } = sys;
