@@ -216,6 +216,7 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
         );
         return Err(fail(results, Error::Model(vec![problem])));
     }
+    let redundant_rows: Vec<RowName> = redundant.iter().map(|&r| sys.row_name(r)).collect();
     let pattern = Pattern::new(&sys, &rows);
     let lu = match SparseLu::new(pattern) {
         Ok(lu) => lu,
@@ -247,7 +248,7 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
         tolerance: settings.tolerance,
         max_iterations: settings.max_iterations,
         stats: KinematicStats {
-            redundant_rows: redundant.iter().map(|&r| jac_row_name(model, analysis, r)).collect(),
+            redundant_rows,
             assembly_iterations: assembly.iterations,
             assembly_max_change: assembly.change.iter().fold(0.0f64, |a, x| a.max(x.abs())),
             max_residual: assembly.residual,
@@ -323,11 +324,6 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
         Ok(()) => Ok(results),
         Err(e) => Err(fail(results, e)),
     }
-}
-
-/// A row name in the analysis's system (used before the solver exists).
-fn jac_row_name(model: &Model, analysis: &Analysis, row: usize) -> RowName {
-    System::new(model, &analysis.drivers).row_name(row)
 }
 
 fn check_condition(s: &mut Solver<'_>, limit: f64) -> Result<(), Error> {

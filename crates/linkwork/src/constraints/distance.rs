@@ -12,26 +12,19 @@
 //! price of a multiplier that is a force divided by `2 L`. Haug (1989) section 3.4.1; Nikravesh
 //! (2018) section 7.2.
 
-use super::{dot, BodyIx, Config, Constraint, Pair, Separation};
+use super::{dot, BodyIx, Config, Constraint, PointPair};
 
 /// Two body points at a fixed distance.
 #[derive(Debug, Clone)]
 pub struct Distance {
-    pair: Pair,
-    s_p: [f64; 2],
-    s_q: [f64; 2],
+    points: PointPair,
     length: f64,
 }
 
 impl Distance {
     /// `s_p`, `s_q`: the points in the frames of body i and body j; `length`: their distance (m).
     pub fn new(i: BodyIx, s_p: [f64; 2], j: BodyIx, s_q: [f64; 2], length: f64) -> Distance {
-        Distance { pair: Pair::new(i, j), s_p, s_q, length }
-    }
-
-    #[inline]
-    fn separation(&self, q: &Config<'_>) -> Separation {
-        Separation::of(self.pair.i, self.s_p, self.pair.j, self.s_q, q)
+        Distance { points: PointPair::new(i, s_p, j, s_q), length }
     }
 }
 
@@ -43,23 +36,23 @@ impl Constraint for Distance {
         &["distance"]
     }
     fn columns(&self) -> &[usize] {
-        self.pair.columns()
+        self.points.pair.columns()
     }
     fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        let d = self.separation(q).d;
+        let d = self.points.separation(q).d;
         out[0] = dot(d, d) - self.length * self.length;
     }
     fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        let d = self.separation(q);
+        let d = self.points.separation(q);
         let (bi, bj) = d.chain([2.0 * d.d[0], 2.0 * d.d[1]]);
-        self.pair.scatter(bi, bj, out);
+        self.points.pair.scatter(bi, bj, out);
     }
     fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = 0.0;
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
-        let sep = self.separation(q);
-        let (qd_i, qd_j) = (self.pair.i.coords(qdot), self.pair.j.coords(qdot));
+        let sep = self.points.separation(q);
+        let (qd_i, qd_j) = (self.points.pair.i.coords(qdot), self.points.pair.j.coords(qdot));
         let rate = sep.rate(qd_i, qd_j);
         let free = sep.accel_free(qd_i[2], qd_j[2]);
         out[0] = -2.0 * (dot(rate, rate) + dot(sep.d, free));

@@ -18,7 +18,7 @@
 //! `P Q` (its effort); it is singular when `P` and `Q` coincide (`|d| = 0`, division by zero), which
 //! the prescribed `f(t)` must keep away from. Haug (1989) section 3.5; Nikravesh (2018) section 7.5.
 
-use super::{dot, Absolute, AbsoluteKind, BodyIx, Config, Constraint, Pair, Separation};
+use super::{dot, Absolute, AbsoluteKind, BodyIx, Config, Constraint, Pair, PointPair};
 use crate::expr::TimeFunction;
 
 /// What a [`Driver`] prescribes.
@@ -53,7 +53,7 @@ impl Driver {
             DriverKind::X { body, point } => Box::new(Absolute::new(AbsoluteKind::X, body, point, 0.0)),
             DriverKind::Y { body, point } => Box::new(Absolute::new(AbsoluteKind::Y, body, point, 0.0)),
             DriverKind::RelativeAngle { i, j } => Box::new(RelativeAngle { pair: Pair::new(i, j) }),
-            DriverKind::Distance { i, s_p, j, s_q } => Box::new(Length { pair: Pair::new(i, j), s_p, s_q }),
+            DriverKind::Distance { i, s_p, j, s_q } => Box::new(Length(PointPair::new(i, s_p, j, s_q))),
         };
         Driver { kind, f, g }
     }
@@ -127,18 +127,7 @@ impl Constraint for RelativeAngle {
 
 /// `|d|`, `d = r_Q - r_P`.
 #[derive(Debug)]
-struct Length {
-    pair: Pair,
-    s_p: [f64; 2],
-    s_q: [f64; 2],
-}
-
-impl Length {
-    #[inline]
-    fn separation(&self, q: &Config<'_>) -> Separation {
-        Separation::of(self.pair.i, self.s_p, self.pair.j, self.s_q, q)
-    }
-}
+struct Length(PointPair);
 
 impl Constraint for Length {
     fn rows(&self) -> usize {
@@ -148,24 +137,24 @@ impl Constraint for Length {
         &["distance"]
     }
     fn columns(&self) -> &[usize] {
-        self.pair.columns()
+        self.0.pair.columns()
     }
     fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        let d = self.separation(q).d;
+        let d = self.0.separation(q).d;
         out[0] = dot(d, d).sqrt();
     }
     fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        let sep = self.separation(q);
+        let sep = self.0.separation(q);
         let len = dot(sep.d, sep.d).sqrt();
         let (bi, bj) = sep.chain([sep.d[0] / len, sep.d[1] / len]);
-        self.pair.scatter(bi, bj, out);
+        self.0.pair.scatter(bi, bj, out);
     }
     fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         out[0] = 0.0;
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
-        let sep = self.separation(q);
-        let (qd_i, qd_j) = (self.pair.i.coords(qdot), self.pair.j.coords(qdot));
+        let sep = self.0.separation(q);
+        let (qd_i, qd_j) = (self.0.pair.i.coords(qdot), self.0.pair.j.coords(qdot));
         let rate = sep.rate(qd_i, qd_j);
         let free = sep.accel_free(qd_i[2], qd_j[2]);
         let len = dot(sep.d, sep.d).sqrt();
@@ -179,7 +168,7 @@ mod tests {
     use super::*;
     use crate::constraints::testing::check_fd_random_where;
     use crate::constraints::testing::OnSlice;
-    use crate::constraints::ConfigBuf;
+    use crate::constraints::{ConfigBuf, Separation};
 
     fn f() -> TimeFunction {
         TimeFunction::parse("0.3 + 2*t + 0.5*sin(3*t)").unwrap()

@@ -253,6 +253,26 @@ pub(crate) struct Separation {
     pub phi: [f64; 2],
 }
 
+/// Two body points, `P` on body i and `Q` on body j: what the distance joint and the distance
+/// driver share.
+#[derive(Debug, Clone)]
+pub(crate) struct PointPair {
+    pub pair: Pair,
+    pub s_p: [f64; 2],
+    pub s_q: [f64; 2],
+}
+
+impl PointPair {
+    pub fn new(i: BodyIx, s_p: [f64; 2], j: BodyIx, s_q: [f64; 2]) -> PointPair {
+        PointPair { pair: Pair::new(i, j), s_p, s_q }
+    }
+    /// `d = r_Q - r_P` and its derivatives.
+    #[inline]
+    pub fn separation(&self, q: &Config<'_>) -> Separation {
+        Separation::of(self.pair.i, self.s_p, self.pair.j, self.s_q, q)
+    }
+}
+
 impl Separation {
     /// `(q) => d` and the rotated body vectors.
     #[inline]
