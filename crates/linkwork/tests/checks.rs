@@ -72,6 +72,7 @@ fn kinematic_analysis_needs_a_fully_driven_model() {
             assert_eq!(problems.len(), 1);
             assert_eq!(problems[0].path, "analyses.kinematics.drivers");
             assert!(problems[0].message.contains("add 1 driver"), "{}", problems[0].message);
+            assert!(!problems[0].message.contains("singular"), "fewer equations than coordinates: drivers are missing");
         }
         other => panic!("expected a model error, got {other}"),
     }
@@ -93,4 +94,75 @@ fn an_analysis_that_cannot_assemble_is_reported_in_its_entry() {
     assert!(clash.error.as_deref().unwrap_or_default().contains("assembly at t = 0 s failed"), "{:?}", clash.error);
     assert_eq!(report.analyses["kinematics"].system.as_ref().map(|s| s.dof), Some(0));
     assert_eq!(report.coordinate_names[..3], ["crank.x", "crank.y", "crank.phi"]);
+}
+
+/// Assembly is the least change: a body held on the unit circle by a general constraint, guessed
+/// at (1.5, 1.5), lands on the nearest point (1/sqrt 2, 1/sqrt 2) with its angle untouched; its
+/// guessed velocity (2, 0) loses exactly its radial component, giving (1, -1); with `x` given
+/// (0.6), `y` becomes 0.8 and the velocity's `vx` is held.
+#[test]
+fn assembly_is_the_least_change() {
+    let text = |given: &str, x: f64| {
+        format!(
+            "bodies:\n  b: {{mass: 1, inertia: 1, position: [{x}, 1.5], angle: 0.3, velocity: [2, 0], omega: 5, given: {given}}}\n\
+             joints:\n  circle: {{type: expression, expression: \"b.x^2 + b.y^2 - 1\"}}\n"
+        )
+    };
+    let model = Model::from_yaml(&text("[]", 1.5)).unwrap();
+    let a = check(&model).unwrap().mechanism.assembly;
+    let r = std::f64::consts::FRAC_1_SQRT_2;
+    let expected = [r, r, 0.3, 1.0, -1.0, 5.0];
+    let got = [a.q[0], a.q[1], a.q[2], a.qdot[0], a.qdot[1], a.qdot[2]];
+    // Gauss-Newton's minimum-norm steps from a point move along the circle's normal, which keeps
+    // them on the line to the nearest point: the answer is exact to rounding (1e-12).
+    assert!(got.iter().zip(expected).all(|(g, e)| (g - e).abs() < 1e-12), "{got:?}");
+
+    let model = Model::from_yaml(&text("[x, vx]", 0.6)).unwrap();
+    let a = check(&model).unwrap().mechanism.assembly;
+    assert_eq!(a.q[0], 0.6, "x is given");
+    assert!((a.q[1] - 0.8).abs() < 1e-12, "y = {}", a.q[1]);
+    assert_eq!(a.qdot[0], 2.0, "vx is given");
+    // x vx + y vy = 0: vy = -0.6 * 2 / 0.8.
+    assert!((a.qdot[1] + 1.5).abs() < 1e-12, "vy = {}", a.qdot[1]);
+}
+
+/// The singular-position test at output times bites: the quick-return run's largest condition
+/// estimate is ~287 (reported in its summary), so a limit of 1e3 lets it run and a limit of 100
+/// stops it with a singular-position error naming rows, keeping the points before.
+#[test]
+fn condition_limit_stops_the_analysis() {
+    let mut model = Model::load(example("quick_return_a.yaml")).unwrap();
+    let full = model.run("kinematics").unwrap();
+    let max = full.summary["statistics"]["max_condition"].as_f64().unwrap();
+    assert!(max > 100.0 && max < 1e3, "max condition {max}");
+    model.analyses[0].settings.singular_condition = 1e3;
+    assert_eq!(model.run("kinematics").unwrap().len(), 41);
+    model.analyses[0].settings.singular_condition = 100.0;
+    let failure = model.run("kinematics").expect_err("stops above the limit");
+    match &failure.error {
+        Error::Singular { rows, detail, .. } => {
+            assert!(!rows.is_empty());
+            assert!(detail.contains("condition estimate"), "{detail}");
+        }
+        other => panic!("expected a singular position, got {other}"),
+    }
+    assert!(failure.results.len() < 41);
+}
+
+/// A slider-crank driven by its slider's x from the dead centre (crank and rod in line): as many
+/// equations as coordinates, but the rank drops at the start. The refusal says both possible
+/// causes; a model short of equations is told only to add drivers.
+#[test]
+fn a_start_at_a_dead_centre_is_named_as_a_possible_cause() {
+    let text = std::fs::read_to_string(example("slider_crank.yaml"))
+        .unwrap()
+        .replace(
+            "motor: {type: angle, body: crank, function: \"2*pi*t\"}",
+            "push: {type: x, body: slider, function: \"0.4 - 0.1*t\"}",
+        )
+        .replace("drivers: [motor]", "drivers: [push]");
+    let model = Model::from_yaml(&text).unwrap();
+    let failure = model.run("kinematics").expect_err("singular start");
+    let message = failure.error.to_string();
+    assert!(message.contains("add 1 driver(s), unless the start position is a singular one"), "{message}");
 }

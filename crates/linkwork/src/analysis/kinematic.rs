@@ -207,10 +207,17 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
     let (rows, redundant) = independent_rows(jac.as_ref());
     if rows.len() < n {
         let dof = n - rows.len();
+        // With at least as many equations as coordinates, a rank drop at the start may also be a
+        // start at a dead centre: the rank alone cannot tell the two apart, so say both.
+        let or_singular = if sys.m >= n {
+            ", unless the start position is a singular one (a dead centre or lock-up, where the Jacobian loses rank)"
+        } else {
+            ""
+        };
         let problem = Problem::new(
             format!("analyses.{}.drivers", analysis.name),
             format!(
-                "a kinematic analysis needs a fully driven model, but {dof} degree(s) of freedom remain with these drivers ({n} coordinates, {} independent equations): add {dof} driver(s)",
+                "a kinematic analysis needs a fully driven model, but {dof} degree(s) of freedom remain with these drivers ({n} coordinates, {} independent equations): add {dof} driver(s){or_singular}",
                 rows.len()
             ),
         );
