@@ -7,7 +7,8 @@
     ├── AssemblyError       joints, row, residual, iterations, hint, results
     ├── SolverError         time (s), joints, rows, results (the output computed before the failure)
     │   ├── SingularError       detail: a dead centre, lock-up or lost degree of freedom
-    │   └── ConvergenceError    row, residual, iterations, substep
+    │   ├── ConvergenceError    row, residual, iterations, substep
+    │   └── IntegrationError    step, cause: a dynamic integrator could not continue
     ├── FileError           path; also an OSError
     └── InternalError       the engine panicked: a bug, reported instead of crashing
 
@@ -21,6 +22,7 @@ from ._linkwork import (
     AssemblyError,
     ConvergenceError,
     FileError,
+    IntegrationError,
     InternalError,
     LinkworkError,
     ModelError,
@@ -32,6 +34,7 @@ __all__ = [
     "AssemblyError",
     "ConvergenceError",
     "FileError",
+    "IntegrationError",
     "InternalError",
     "LinkworkError",
     "ModelError",

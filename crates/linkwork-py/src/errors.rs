@@ -6,7 +6,8 @@
 //! ├── AssemblyError       joints, row, residual, iterations, hint, results
 //! ├── SolverError         time, joints, rows, results
 //! │   ├── SingularError       detail
-//! │   └── ConvergenceError    row, residual, iterations, substep
+//! │   ├── ConvergenceError    row, residual, iterations, substep
+//! │   └── IntegrationError    step, cause
 //! ├── FileError           path (also an OSError)
 //! └── InternalError       a panic inside the engine: a bug, reported instead of crashing
 //! ```
@@ -54,6 +55,12 @@ pyo3::create_exception!(
 );
 pyo3::create_exception!(
     linkwork,
+    IntegrationError,
+    SolverError,
+    "A dynamic integrator could not continue (repeated Newton or error-test failures down to the smallest step). `step` is the step that last failed, `cause` what failed."
+);
+pyo3::create_exception!(
+    linkwork,
     InternalError,
     LinkworkError,
     "The engine panicked: a bug in Linkwork. Please report it with the model that caused it."
@@ -71,6 +78,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SolverError", py.get_type::<SolverError>())?;
     m.add("SingularError", py.get_type::<SingularError>())?;
     m.add("ConvergenceError", py.get_type::<ConvergenceError>())?;
+    m.add("IntegrationError", py.get_type::<IntegrationError>())?;
     m.add("InternalError", py.get_type::<InternalError>())?;
     // Two bases, so that `except OSError` catches a missing model file as well: built with
     // `type(name, bases, namespace)`, as a `class` statement would.
@@ -158,6 +166,17 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
                 ("residual", residual.into_pyobject(py)?.into_any()),
                 ("iterations", iterations.into_pyobject(py)?.into_any()),
                 ("substep", substep.into_pyobject(py)?.into_any()),
+                ("results", results()?.into_bound(py)),
+            ],
+        ),
+        Error::Integration { time, step, cause, rows } => (
+            IntegrationError::new_err(message),
+            vec![
+                ("time", time.into_pyobject(py)?.into_any()),
+                ("joints", joints.into_pyobject(py)?.into_any()),
+                ("rows", rows.iter().map(|r| r.to_string()).collect::<Vec<_>>().into_pyobject(py)?.into_any()),
+                ("step", step.into_pyobject(py)?.into_any()),
+                ("cause", cause.into_pyobject(py)?.into_any()),
                 ("results", results()?.into_bound(py)),
             ],
         ),

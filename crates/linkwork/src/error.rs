@@ -91,6 +91,19 @@ pub enum Error {
         /// The sub-step that last failed.
         substep: f64,
     },
+    /// A dynamic integrator could not continue: the step size fell below its minimum after
+    /// repeated Newton or error-test failures.
+    #[error("integration failed at t = {time:.6} s with a step of {step:.3e} s: {cause}{}", rows_suffix(.rows))]
+    Integration {
+        /// Time reached (the last accepted step).
+        time: f64,
+        /// The step that last failed, s.
+        step: f64,
+        /// What failed (Newton's method, the error test) and the numbers behind it.
+        cause: String,
+        /// The rows with the largest residual or involved in a singularity, if known.
+        rows: Vec<RowName>,
+    },
     /// Reading or writing a file failed.
     #[error("{path}: {message}")]
     Io {
@@ -105,7 +118,7 @@ impl Error {
     /// The joints (and drivers) named by a solver error, in order and without repeats.
     pub fn elements(&self) -> Vec<String> {
         let rows: Vec<&RowName> = match self {
-            Error::Singular { rows, .. } => rows.iter().collect(),
+            Error::Singular { rows, .. } | Error::Integration { rows, .. } => rows.iter().collect(),
             Error::Convergence { row, .. } | Error::Assembly { row, .. } => vec![row],
             _ => vec![],
         };
@@ -116,6 +129,14 @@ impl Error {
             }
         }
         out
+    }
+}
+
+fn rows_suffix(rows: &[RowName]) -> String {
+    if rows.is_empty() {
+        String::new()
+    } else {
+        format!("; rows involved: {}", join(rows))
     }
 }
 

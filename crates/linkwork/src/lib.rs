@@ -16,6 +16,7 @@ pub mod analysis;
 pub mod constraints;
 pub mod error;
 pub mod expr;
+pub mod forces;
 pub mod linalg;
 pub mod model;
 pub mod results;

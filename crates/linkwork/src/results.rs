@@ -1,6 +1,8 @@
 //! Columnar time series of an analysis and their files: `results.csv` (a `time` column, then
-//! `<body>.x, .y, .phi, .vx, .vy, .omega, .ax, .ay, .alpha` per body, SI units, angles unwrapped)
-//! and `summary.json` (model sizes, degrees of freedom, solver statistics, status).
+//! `<body>.x, .y, .phi, .vx, .vy, .omega, .ax, .ay, .alpha` per body, SI units, angles unwrapped;
+//! for dynamics every joint's `<joint>.fx, .fy, .torque`, every active driver's
+//! `<driver>.effort`, the energies and constraint residuals; then one column per measure) and
+//! `summary.json` (model sizes, degrees of freedom, solver statistics, status).
 
 use crate::analysis::{Assembly, KinematicStats};
 use crate::error::Error;
@@ -64,19 +66,34 @@ impl Results {
         self.time.is_empty()
     }
 
+    /// Append columns after the body quantities (filled by the `extra` values of
+    /// [`Results::push`], in order).
+    pub(crate) fn add_columns(&mut self, names: impl IntoIterator<Item = String>) {
+        for n in names {
+            self.names.push(n);
+            self.columns.push(Vec::new());
+        }
+    }
+
     pub(crate) fn reserve(&mut self, rows: usize) {
         self.time.reserve(rows);
         self.columns.iter_mut().for_each(|c| c.reserve(rows));
     }
 
-    /// Append an output point from `q`, `qdot`, `qddot` (each `(n)`).
-    pub(crate) fn push(&mut self, t: f64, q: &[f64], qdot: &[f64], qddot: &[f64]) {
+    /// Append an output point from `q`, `qdot`, `qddot` (each `(n)`) and the values of the
+    /// columns after the body quantities, `extra`.
+    pub(crate) fn push(&mut self, t: f64, q: &[f64], qdot: &[f64], qddot: &[f64], extra: &[f64]) {
         self.time.push(t);
-        for b in 0..q.len() / 3 {
+        let bodies = q.len() / 3;
+        for b in 0..bodies {
             let vals = [q, qdot, qddot].into_iter().flat_map(|v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]]);
             for (k, v) in vals.enumerate() {
                 self.columns[9 * b + k].push(v);
             }
+        }
+        debug_assert_eq!(self.columns.len(), 9 * bodies + extra.len(), "one extra value per extra column");
+        for (c, &v) in self.columns[9 * bodies..].iter_mut().zip(extra) {
+            c.push(v);
         }
     }
 
@@ -126,7 +143,11 @@ impl Results {
         if let Some(e) = error {
             s.insert("error".into(), json!(e.to_string()));
             s.insert("error_elements".into(), json!(e.elements()));
-            if let Error::Singular { time, .. } | Error::Convergence { time, .. } | Error::Assembly { time, .. } = e {
+            if let Error::Singular { time, .. }
+            | Error::Convergence { time, .. }
+            | Error::Assembly { time, .. }
+            | Error::Integration { time, .. } = e
+            {
                 s.insert("error_time".into(), json!(time));
             }
         }
@@ -155,11 +176,13 @@ impl Model {
                 t_end: 0.0,
                 step: 1.0,
                 settings: Default::default(),
+                integrator: Default::default(),
             };
             Box::new(Failure { error, results: Results::new(self, &empty) })
         })?;
         match analysis.kind {
             crate::model::spec::AnalysisKind::Kinematic => crate::analysis::run_kinematic(self, analysis),
+            crate::model::spec::AnalysisKind::Dynamic => crate::analysis::dynamic::run_dynamic(self, analysis),
         }
     }
 }

@@ -129,14 +129,16 @@ pub fn check(model: &Model) -> Result<CheckReport> {
         .analyses
         .values()
         .map(|a| {
-            let entry = match check_system(model, &a.drivers, false, a.t_start) {
+            // Dynamics assembles holding the given coordinates, as the mechanism alone does.
+            let hold = a.kind == AnalysisKind::Dynamic;
+            let entry = match check_system(model, &a.drivers, hold, a.t_start) {
                 Ok(system) => {
                     let warning = match a.kind {
                         AnalysisKind::Kinematic if system.dof > 0 => Some(format!(
                             "a kinematic analysis needs a fully driven model: {} degree(s) of freedom remain, add {} driver(s)",
                             system.dof, system.dof
                         )),
-                        AnalysisKind::Kinematic => None,
+                        AnalysisKind::Kinematic | AnalysisKind::Dynamic => None,
                     };
                     AnalysisCheck { kind: a.kind, system: Some(system), error: None, warning }
                 }

@@ -191,6 +191,8 @@ fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
 /// Run a kinematic analysis. On failure the results up to the last good output time are kept.
 pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
     let mut results = Results::new(model, analysis);
+    results.add_columns(model.measures.iter().map(|m| m.name.clone()));
+    let mut extra = vec![0.0; model.measures.len()];
     let fail = |results: Results, error: Error| Box::new(Failure { error, results });
     let settings = analysis.settings;
     let n = model.n();
@@ -274,7 +276,8 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
         s.factor_at(false, t0)?;
         s.velocities();
         check_condition(&mut s, settings.singular_condition)?;
-        results.push(t0, &s.q, &s.qdot, &s.qddot);
+        measures(model, &s, &mut extra);
+        results.push(t0, &s.q, &s.qdot, &s.qddot, &extra);
         let mut dt = h;
         let mut q_pred = vec![0.0; n];
         for &target in &times[1..] {
@@ -321,7 +324,8 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
                 }
             }
             check_condition(&mut s, settings.singular_condition)?;
-            results.push(target, &s.q, &s.qdot, &s.qddot);
+            measures(model, &s, &mut extra);
+            results.push(target, &s.q, &s.qdot, &s.qddot, &extra);
         }
         Ok(())
     })();
@@ -330,6 +334,13 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
     match outcome {
         Ok(()) => Ok(results),
         Err(e) => Err(fail(results, e)),
+    }
+}
+
+/// The model's measures at the solver's current state, `out: (measures)`.
+fn measures(model: &Model, s: &Solver<'_>, out: &mut [f64]) {
+    for (o, m) in out.iter_mut().zip(&model.measures) {
+        *o = m.value(&s.q, &s.qdot, &s.qddot, s.t);
     }
 }
 

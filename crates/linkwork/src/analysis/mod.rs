@@ -4,10 +4,12 @@
 
 mod assembly;
 mod check;
+pub mod dynamic;
 mod kinematic;
 
 pub use assembly::{assemble, Assembly};
 pub use check::{check, independent_rows, AnalysisCheck, CheckReport, SystemCheck};
+pub use dynamic::IntegratorSettings;
 pub use kinematic::{run_kinematic, KinematicStats};
 
 use faer::{Mat, MatRef};

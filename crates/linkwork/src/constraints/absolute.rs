@@ -9,7 +9,7 @@
 //! ```
 //! Haug (1989) section 3.2; Nikravesh (2018) section 7.3.
 
-use super::{BodyIx, Config, Constraint, Pair, Separation};
+use super::{Anchor, BodyIx, Config, Constraint, Pair, Separation};
 
 /// Which coordinate an [`Absolute`] constraint holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -58,6 +58,9 @@ impl Absolute {
 impl Constraint for Absolute {
     fn rows(&self) -> usize {
         1
+    }
+    fn anchor(&self) -> Anchor {
+        Anchor { i: self.pair.i, j: BodyIx::GROUND, point: self.point }
     }
     fn row_names(&self) -> &[&'static str] {
         match self.kind {

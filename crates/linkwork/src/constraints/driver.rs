@@ -18,7 +18,7 @@
 //! `P Q` (its effort); it is singular when `P` and `Q` coincide (`|d| = 0`, division by zero), which
 //! the prescribed `f(t)` must keep away from. Haug (1989) section 3.5; Nikravesh (2018) section 7.5.
 
-use super::{dot, Absolute, AbsoluteKind, BodyIx, Config, Constraint, Pair, PointPair};
+use super::{dot, Absolute, AbsoluteKind, Anchor, BodyIx, Config, Constraint, Pair, PointPair};
 use crate::expr::TimeFunction;
 
 /// What a [`Driver`] prescribes.
@@ -73,6 +73,9 @@ impl Constraint for Driver {
     fn rows(&self) -> usize {
         1
     }
+    fn anchor(&self) -> Anchor {
+        self.g.anchor()
+    }
     fn row_names(&self) -> &[&'static str] {
         self.g.row_names()
     }
@@ -105,6 +108,9 @@ impl Constraint for RelativeAngle {
     fn rows(&self) -> usize {
         1
     }
+    fn anchor(&self) -> Anchor {
+        Anchor { i: self.pair.i, j: self.pair.j, point: [0.0, 0.0] }
+    }
     fn row_names(&self) -> &[&'static str] {
         &["relative_angle"]
     }
@@ -132,6 +138,9 @@ struct Length(PointPair);
 impl Constraint for Length {
     fn rows(&self) -> usize {
         1
+    }
+    fn anchor(&self) -> Anchor {
+        self.0.anchor()
     }
     fn row_names(&self) -> &[&'static str] {
         &["distance"]

@@ -17,7 +17,7 @@
 //! [`MAX_SLOTS`] slots, so that the derivative passes run on stack arrays. Haug (1989) section
 //! 3.5 (general constraints and drivers); derivatives by hyper-dual numbers (Fike and Alonso, 2011).
 
-use super::{Config, Constraint};
+use super::{Anchor, BodyIx, Config, Constraint};
 use crate::expr::{Dual, Expr, HyperDual, Scalar};
 
 /// The most slots (distinct names) a general constraint may use.
@@ -110,6 +110,13 @@ impl GeneralConstraint {
 impl Constraint for GeneralConstraint {
     fn rows(&self) -> usize {
         1
+    }
+    fn anchor(&self) -> Anchor {
+        Anchor {
+            i: self.columns.first().map_or(BodyIx::GROUND, |&c| BodyIx(Some(c - c % 3))),
+            j: BodyIx::GROUND,
+            point: [0.0, 0.0],
+        }
     }
     fn row_names(&self) -> &[&'static str] {
         &["expression"]

@@ -31,7 +31,7 @@
 
 use std::f64::consts::TAU;
 
-use super::{dot, perp, BodyIx, Config, ConfigBuf, Constraint, Pair, Separation};
+use super::{dot, perp, Anchor, BodyIx, Config, ConfigBuf, Constraint, Pair, Separation};
 
 /// External or internal meshing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -104,6 +104,9 @@ impl GearPair {
 impl Constraint for GearPair {
     fn rows(&self) -> usize {
         1
+    }
+    fn anchor(&self) -> Anchor {
+        Anchor { i: self.pair.i, j: self.pair.j, point: self.s_i }
     }
     fn row_names(&self) -> &[&'static str] {
         &["rolling"]

@@ -96,6 +96,9 @@ impl ConfigBuf {
 pub trait Constraint: Debug + Send + Sync {
     /// Number of equations this constraint adds.
     fn rows(&self) -> usize;
+    /// The first body (whose reaction is reported), the second, and the point of the first body
+    /// (its frame; the global frame when it is ground) about which the reaction moment is taken.
+    fn anchor(&self) -> Anchor;
     /// A short name for each row, used when a row is reported as redundant or singular.
     fn row_names(&self) -> &[&'static str];
     /// Global indices into `q` of the coordinates the rows depend on (its Jacobian columns).
@@ -108,6 +111,18 @@ pub trait Constraint: Debug + Send + Sync {
     fn nu(&self, q: &Config<'_>, t: f64, out: &mut [f64]);
     /// `(q, qdot, t) => gamma`, `out: (rows)`.
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], t: f64, out: &mut [f64]);
+}
+
+/// Where a joint's reaction is reported: on body `i`, about `point` (body i frame), with `j` the
+/// body the joint connects it to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Anchor {
+    /// The first body.
+    pub i: BodyIx,
+    /// The second body (ground when there is none).
+    pub j: BodyIx,
+    /// The reaction point, body i frame.
+    pub point: [f64; 2],
 }
 
 /// Where a body's coordinates sit in `q`: the index of its `x` (`y` and `phi` follow), or `None`
@@ -263,6 +278,9 @@ pub(crate) struct PointPair {
 }
 
 impl PointPair {
+    pub fn anchor(&self) -> Anchor {
+        Anchor { i: self.pair.i, j: self.pair.j, point: self.s_p }
+    }
     pub fn new(i: BodyIx, s_p: [f64; 2], j: BodyIx, s_q: [f64; 2]) -> PointPair {
         PointPair { pair: Pair::new(i, j), s_p, s_q }
     }

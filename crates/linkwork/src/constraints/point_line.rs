@@ -13,7 +13,7 @@
 //! `e > 0` puts `Q` on the left of the line (the side `R90 v'_i` points to). Haug (1989) sections
 //! 3.3.2 and 3.4.2; Nikravesh (2018) section 7.1.
 
-use super::{perp, unit, BodyIx, Config, Constraint, Pair, Projection};
+use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Pair, Projection};
 
 /// A point of body j on (or at a fixed offset from) a line of body i.
 #[derive(Debug, Clone)]
@@ -36,6 +36,9 @@ impl PointOnLine {
 impl Constraint for PointOnLine {
     fn rows(&self) -> usize {
         1
+    }
+    fn anchor(&self) -> Anchor {
+        Anchor { i: self.pair.i, j: self.pair.j, point: self.line.s_p }
     }
     fn row_names(&self) -> &[&'static str] {
         &["line"]

@@ -8,7 +8,7 @@
 //! ```
 //! with `B = dA/dphi`. Haug (1989) section 3.3.1; Nikravesh (2018) section 7.1.
 
-use super::{BodyIx, Config, Constraint, Frame, Pair};
+use super::{Anchor, BodyIx, Config, Constraint, Frame, Pair};
 
 /// A revolute joint between body i (point `P`) and body j (point `Q`).
 #[derive(Debug, Clone)]
@@ -28,6 +28,9 @@ impl Revolute {
 impl Constraint for Revolute {
     fn rows(&self) -> usize {
         2
+    }
+    fn anchor(&self) -> Anchor {
+        Anchor { i: self.pair.i, j: self.pair.j, point: self.s_p }
     }
     fn row_names(&self) -> &[&'static str] {
         &["x", "y"]

@@ -32,7 +32,7 @@
 //! frame and the rack on a translational joint), so it has only the rolling row; a rolling disc
 //! adds the contact row. Haug (1989) section 3.4.5; Nikravesh (2018) section 7.4.
 
-use super::{perp, unit, BodyIx, Config, ConfigBuf, Constraint, Pair, Projection};
+use super::{perp, unit, Anchor, BodyIx, Config, ConfigBuf, Constraint, Pair, Projection};
 
 /// The no-slip row shared by [`RackPinion`] and [`RollingDisc`].
 #[derive(Debug, Clone)]
@@ -89,6 +89,8 @@ fn rows(
 #[derive(Debug, Clone)]
 pub struct RackPinion {
     pair: Pair,
+    /// The pinion's centre, its frame.
+    s_c: [f64; 2],
     rolling: RollingRow,
 }
 
@@ -106,13 +108,16 @@ impl RackPinion {
         q0: &[f64],
     ) -> RackPinion {
         let (_, _, rolling) = rows(pinion, s_c, radius, rack, s_l, v_l, q0);
-        RackPinion { pair: Pair::new(pinion, rack), rolling }
+        RackPinion { pair: Pair::new(pinion, rack), s_c, rolling }
     }
 }
 
 impl Constraint for RackPinion {
     fn rows(&self) -> usize {
         1
+    }
+    fn anchor(&self) -> Anchor {
+        Anchor { i: self.pair.i, j: self.pair.j, point: self.s_c }
     }
     fn row_names(&self) -> &[&'static str] {
         &["rolling"]
@@ -139,6 +144,8 @@ impl Constraint for RackPinion {
 #[derive(Debug, Clone)]
 pub struct RollingDisc {
     pair: Pair,
+    /// The disc's centre, its frame.
+    s_c: [f64; 2],
     normal: Projection,
     /// `side * rho`.
     lever: f64,
@@ -159,13 +166,16 @@ impl RollingDisc {
         q0: &[f64],
     ) -> RollingDisc {
         let (normal, lever, rolling) = rows(disc, s_c, radius, line_body, s_l, v_l, q0);
-        RollingDisc { pair: Pair::new(disc, line_body), normal, lever, rolling }
+        RollingDisc { pair: Pair::new(disc, line_body), s_c, normal, lever, rolling }
     }
 }
 
 impl Constraint for RollingDisc {
     fn rows(&self) -> usize {
         2
+    }
+    fn anchor(&self) -> Anchor {
+        Anchor { i: self.pair.i, j: self.pair.j, point: self.s_c }
     }
     fn row_names(&self) -> &[&'static str] {
         &["contact", "rolling"]

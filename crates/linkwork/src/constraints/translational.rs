@@ -16,7 +16,7 @@
 //! `c` comes from the axes, not from an initial configuration: the joint forces `A_i v'_i` and
 //! `A_j v'_j` to point the same way. Haug (1989) section 3.3.2; Nikravesh (2018) section 7.1.
 
-use super::{perp, unit, BodyIx, Config, Constraint, Pair, Projection};
+use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Pair, Projection};
 
 /// A translational joint between body i (line through `P` along `v_i`) and body j (point `Q`, axis
 /// `v_j`).
@@ -41,6 +41,9 @@ impl Translational {
 impl Constraint for Translational {
     fn rows(&self) -> usize {
         2
+    }
+    fn anchor(&self) -> Anchor {
+        Anchor { i: self.pair.i, j: self.pair.j, point: self.line.s_p }
     }
     fn row_names(&self) -> &[&'static str] {
         &["line", "angle"]

@@ -2,14 +2,15 @@
 //! resolve names to indices and build each joint's constraint.
 
 use super::spec::*;
-use super::{Analysis, Body, Element, Model};
-use crate::analysis::SolverSettings;
+use super::{Analysis, Body, Element, ForceElement, Measure, MeasureKind, Model};
+use crate::analysis::{IntegratorSettings, SolverSettings};
 use crate::constraints::{
     Absolute, AbsoluteKind, BodyIx, Constraint, Distance, Driver, DriverKind, Frame, GearKind, GearPair,
     GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc, Translational, Var,
 };
 use crate::error::Problem;
 use crate::expr::{Expr, TimeFunction};
+use crate::forces::{Force, Load, PointLoad, RotationalSpringDamper, SpringDamper, StateExpr, StateVar, Torque};
 use indexmap::IndexMap;
 
 /// The most output points one analysis may ask for; more would exhaust memory rather than finish.
@@ -47,10 +48,30 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec
             Some(Element { name: name.clone(), kind: driver_kind(d), constraint: c })
         })
         .collect();
+    let forces: Vec<ForceElement> = spec
+        .forces
+        .iter()
+        .filter_map(|(name, f)| {
+            let path = format!("forces.{name}");
+            cx.name(&path, name);
+            let force = cx.force(&path, f)?;
+            Some(ForceElement { name: name.clone(), kind: force_kind(f), force })
+        })
+        .collect();
+    let measures: Vec<Measure> = spec
+        .measures
+        .iter()
+        .filter_map(|(name, m)| {
+            let path = format!("measures.{name}");
+            cx.name(&path, name);
+            Some(Measure { name: name.clone(), kind: cx.measure(&path, m)? })
+        })
+        .collect();
+    let gravity = spec.gravity.and_then(|g| cx.vec2("gravity", g)).unwrap_or([0.0, 0.0]);
     let analyses = cx.analyses();
     if cx.problems.is_empty() {
         let name = spec.name.clone().unwrap_or_else(|| "model".into());
-        Ok(Model { name, bodies, joints, drivers, analyses })
+        Ok(Model { name, bodies, joints, drivers, gravity, forces, measures, analyses })
     } else {
         Err(cx.problems)
     }
@@ -70,6 +91,15 @@ fn joint_kind(j: &JointSpec) -> &'static str {
         JointSpec::RackPinion(..) => "rack_pinion",
         JointSpec::RollingDisc(..) => "rolling_disc",
         JointSpec::Expression(..) => "expression",
+    }
+}
+
+fn force_kind(f: &ForceSpec) -> &'static str {
+    match f {
+        ForceSpec::Force(..) => "force",
+        ForceSpec::Torque(..) => "torque",
+        ForceSpec::SpringDamper(..) => "spring_damper",
+        ForceSpec::RotationalSpringDamper(..) => "rotational_spring_damper",
     }
 }
 
@@ -214,7 +244,8 @@ impl Cx<'_> {
             .collect()
     }
 
-    /// Names are shared by bodies, joints and drivers (they label the same output columns).
+    /// Names are shared by bodies, joints, drivers, forces and measures (they label output
+    /// columns).
     fn unique_names(&mut self) {
         let spec = self.spec;
         let mut seen: IndexMap<&str, &str> = IndexMap::new();
@@ -225,7 +256,9 @@ impl Cx<'_> {
             .map(|k| ("bodies", k.as_str()))
             .chain(spec.joints.keys().map(|k| ("joints", k.as_str())))
             .chain(spec.drivers.keys().map(|k| ("drivers", k.as_str())))
-            .chain(broken.filter(|(s, _)| ["bodies", "joints", "drivers"].contains(s)));
+            .chain(spec.forces.keys().map(|k| ("forces", k.as_str())))
+            .chain(spec.measures.keys().map(|k| ("measures", k.as_str())))
+            .chain(broken.filter(|(s, _)| ["bodies", "joints", "drivers", "forces", "measures"].contains(s)));
         for (section, name) in all {
             if let Some(first) = seen.get(name) {
                 self.problem(
@@ -516,6 +549,174 @@ impl Cx<'_> {
         }
     }
 
+    /// An expression of time and state: `<body>.x, .y, .phi, .vx, .vy, .omega`, with
+    /// `accelerations` also `.ax, .ay, .alpha`, and `t`. `None` (with the problem recorded, unless
+    /// it names a body that could not be read) when it cannot be compiled.
+    fn state_expr(&mut self, path: &str, src: &str, accelerations: bool) -> Option<StateExpr> {
+        let spec = self.spec;
+        let known = self.body_names().join(", ");
+        let broken: Vec<&str> = self.broken.iter().filter_map(|b| b.strip_prefix("bodies.")).collect();
+        let quantities: &[&str] = if accelerations {
+            &["x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha"]
+        } else {
+            &["x", "y", "phi", "vx", "vy", "omega"]
+        };
+        let mut uses_broken = false;
+        let mut vars: Vec<StateVar> = Vec::new();
+        let mut resolve = |name: &str| -> Result<usize, String> {
+            let var = if name == "t" {
+                StateVar::Time
+            } else {
+                let hint = || {
+                    let q: Vec<String> = quantities.iter().map(|q| format!("<body>.{q}")).collect();
+                    format!("expected {} or t, with a body among: {known}", q.join(", "))
+                };
+                let (b, c) = name.split_once('.').ok_or_else(hint)?;
+                let at = quantities.iter().position(|q| *q == c).ok_or_else(hint)?;
+                let k = match spec.bodies.get_index_of(b) {
+                    Some(k) => k,
+                    None if broken.contains(&b) => {
+                        uses_broken = true;
+                        0
+                    }
+                    None => return Err(hint()),
+                };
+                let col = 3 * k + at % 3;
+                match at / 3 {
+                    0 => StateVar::Position(col),
+                    1 => StateVar::Velocity(col),
+                    _ => StateVar::Acceleration(col),
+                }
+            };
+            Ok(match vars.iter().position(|v| *v == var) {
+                Some(s) => s,
+                None => {
+                    vars.push(var);
+                    vars.len() - 1
+                }
+            })
+        };
+        let expr = match Expr::parse(src, &mut resolve) {
+            Ok(e) => e,
+            Err(e) => {
+                self.problem(path, format!("cannot read the expression '{src}': {e}"));
+                return None;
+            }
+        };
+        if uses_broken {
+            return None;
+        }
+        match StateExpr::try_new(expr, vars) {
+            Ok(e) => Some(e),
+            Err(e) => {
+                self.problem(path, e);
+                None
+            }
+        }
+    }
+
+    fn load(&mut self, path: &str, q: &Quantity) -> Option<Load> {
+        match q {
+            Quantity::Number(v) => self.finite(path, *v).map(Load::Constant),
+            Quantity::Expression(src) => self.state_expr(path, src, false).map(Load::Expression),
+        }
+    }
+
+    fn non_negative(&mut self, path: &str, v: f64) -> Option<f64> {
+        let v = self.finite(path, v)?;
+        if v < 0.0 {
+            self.problem(path, format!("expected a number >= 0, found {v}"));
+            return None;
+        }
+        Some(v)
+    }
+
+    fn moving(&mut self, path: &str, name: &str) -> Option<usize> {
+        let b = self.body(path, name)?;
+        if b == BodyIx::GROUND {
+            self.problem(path, "ground does not move: name a moving body");
+            return None;
+        }
+        b.0
+    }
+
+    fn force(&mut self, path: &str, f: &ForceSpec) -> Option<Box<dyn Force>> {
+        Some(match f {
+            ForceSpec::Force(PointForce { body, point, frame, fx, fy }) => {
+                let b = self.moving(&format!("{path}.body"), body);
+                let s = self.point(&format!("{path}.point"), body, point);
+                let fx = self.load(&format!("{path}.fx"), fx);
+                let fy = self.load(&format!("{path}.fy"), fy);
+                Box::new(PointLoad::new(b?, s?, *frame == ForceFrame::Body, fx?, fy?))
+            }
+            ForceSpec::Torque(TorqueSpec { body, torque }) => {
+                let b = self.moving(&format!("{path}.body"), body);
+                let t = self.load(&format!("{path}.torque"), torque);
+                Box::new(Torque::new(b?, t?))
+            }
+            ForceSpec::SpringDamper(SpringDamperSpec {
+                body_i,
+                point_i,
+                body_j,
+                point_j,
+                stiffness,
+                damping,
+                free_length,
+                actuator,
+            }) => {
+                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
+                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+                let k = self.non_negative(&format!("{path}.stiffness"), *stiffness);
+                let c = self.non_negative(&format!("{path}.damping"), *damping);
+                let act = self.load(&format!("{path}.actuator"), actuator);
+                let ok = self.distinct(path, body_i, body_j);
+                let ((i, sp), (j, sq), k, c, act) = (a?, b?, k?, c?, act?);
+                ok.then_some(())?;
+                let l0 = match free_length {
+                    Some(l) => self.non_negative(&format!("{path}.free_length"), *l)?,
+                    None => {
+                        let (p, r) = (Frame::of_slice(i, &self.q0).point(sp), Frame::of_slice(j, &self.q0).point(sq));
+                        (r[0] - p[0]).hypot(r[1] - p[1])
+                    }
+                };
+                Box::new(SpringDamper::new(i.0, sp, j.0, sq, k, c, l0, act))
+            }
+            ForceSpec::RotationalSpringDamper(RotationalSpringDamperSpec {
+                body_i,
+                body_j,
+                stiffness,
+                damping,
+                free_angle,
+                actuator,
+            }) => {
+                let i = self.body(&format!("{path}.body_i"), body_i);
+                let j = self.body(&format!("{path}.body_j"), body_j);
+                let k = self.non_negative(&format!("{path}.stiffness"), *stiffness);
+                let c = self.non_negative(&format!("{path}.damping"), *damping);
+                let act = self.load(&format!("{path}.actuator"), actuator);
+                let ok = self.distinct(path, body_i, body_j);
+                let (i, j, k, c, act) = (i?, j?, k?, c?, act?);
+                ok.then_some(())?;
+                let theta0 = match free_angle {
+                    Some(a) => self.finite(&format!("{path}.free_angle"), *a)?,
+                    None => i.coords(&self.q0)[2] - j.coords(&self.q0)[2],
+                };
+                Box::new(RotationalSpringDamper::new(i.0, j.0, k, c, theta0, act))
+            }
+        })
+    }
+
+    fn measure(&mut self, path: &str, m: &MeasureSpec) -> Option<MeasureKind> {
+        match m {
+            MeasureSpec::Expression(src) => self.state_expr(path, src, true).map(MeasureKind::Expression),
+            MeasureSpec::Point(PointMeasure { body, point, component }) => {
+                let b = self.moving(&format!("{path}.body"), body);
+                let s = self.point(&format!("{path}.point"), body, point);
+                Some(MeasureKind::Point { body: b?, s: s?, component: *component })
+            }
+        }
+    }
+
     fn function(&mut self, path: &str, src: &str) -> Option<TimeFunction> {
         match TimeFunction::parse(src) {
             Ok(f) => Some(f),
@@ -604,7 +805,11 @@ impl Cx<'_> {
             let t1 = self.finite(&format!("{path}.t_end"), a.t_end);
             let h = self.positive(&format!("{path}.step"), a.step);
             let settings = self.settings(&format!("{path}.solver"), &a.solver);
-            let (Some(t0), Some(t1), Some(h), Some(settings)) = (t0, t1, h, settings) else { continue };
+            let integrator = self.integrator(&path, a);
+            let (Some(t0), Some(t1), Some(h), Some(settings), Some(integrator)) = (t0, t1, h, settings, integrator)
+            else {
+                continue;
+            };
             if t1 < t0 {
                 self.problem(format!("{path}.t_end"), format!("t_end ({t1}) is before t_start ({t0})"));
                 continue;
@@ -619,13 +824,87 @@ impl Cx<'_> {
                 );
                 continue;
             }
-            let AnalysisKind::Kinematic = a.kind;
+            if a.kind == AnalysisKind::Kinematic && a.integrator.is_some() {
+                self.problem(format!("{path}.integrator"), "only a dynamic analysis has an integrator");
+                continue;
+            }
             out.insert(
                 name.clone(),
-                Analysis { name: name.clone(), kind: a.kind, drivers, t_start: t0, t_end: t1, step: h, settings },
+                Analysis {
+                    name: name.clone(),
+                    kind: a.kind,
+                    drivers,
+                    t_start: t0,
+                    t_end: t1,
+                    step: h,
+                    settings,
+                    integrator,
+                },
             );
         }
         out
+    }
+
+    /// The integrator and its settings; each given tolerance and step must be positive.
+    fn integrator(&mut self, path: &str, a: &AnalysisSpec) -> Option<IntegratorSettings> {
+        let s = &a.solver;
+        let d = IntegratorSettings::default();
+        let kind = a.integrator.unwrap_or(d.kind);
+        let spath = format!("{path}.solver");
+        let mut ok = true;
+        let mut pos = |cx: &mut Self, field: &str, v: Option<f64>| -> Option<f64> {
+            let v = v?;
+            let r = cx.positive(&format!("{spath}.{field}"), v);
+            ok &= r.is_some();
+            r
+        };
+        let rtol = pos(self, "rtol", s.rtol).unwrap_or(d.rtol);
+        let atol = pos(self, "atol", s.atol).unwrap_or(d.atol);
+        let initial_step = pos(self, "initial_step", s.initial_step);
+        let max_step = pos(self, "max_step", s.max_step);
+        if rtol < 1e-14 && ok {
+            self.problem(format!("{spath}.rtol"), format!("expected at least 1e-14 (double precision), found {rtol}"));
+            ok = false;
+        }
+        let bound = IntegratorSettings::order_bound(kind);
+        if let Some(k) = s.max_order {
+            if kind == IntegratorKind::Hht {
+                self.problem(format!("{spath}.max_order"), "hht has a fixed order (2); max_order is for bdf and abam");
+                ok = false;
+            } else if k == 0 || k > bound {
+                self.problem(format!("{spath}.max_order"), format!("expected 1 to {bound} for {kind:?}, found {k}"));
+                ok = false;
+            }
+        }
+        let alpha = match s.alpha {
+            Some(al) if kind != IntegratorKind::Hht => {
+                self.problem(format!("{spath}.alpha"), format!("alpha ({al}) is a setting of hht only"));
+                ok = false;
+                d.alpha
+            }
+            Some(al) if !(-1.0 / 3.0 - 1e-12..=0.0).contains(&al) => {
+                self.problem(format!("{spath}.alpha"), format!("expected alpha in [-1/3, 0], found {al}"));
+                ok = false;
+                d.alpha
+            }
+            Some(al) => al,
+            None => d.alpha,
+        };
+        if s.formulation.is_some() && kind != IntegratorKind::Bdf {
+            self.problem(format!("{spath}.formulation"), "formulation is a setting of bdf only");
+            ok = false;
+        }
+        let formulation = s.formulation.unwrap_or(d.formulation);
+        ok.then_some(IntegratorSettings {
+            kind,
+            rtol,
+            atol,
+            initial_step,
+            max_step,
+            max_order: s.max_order,
+            alpha,
+            formulation,
+        })
     }
 
     fn settings(&mut self, path: &str, s: &super::spec::SolverSpec) -> Option<SolverSettings> {

@@ -8,9 +8,10 @@ pub mod spec;
 pub use compile::{compile, compile_partial};
 pub use parse::{parse_partial, parse_spec, Parsed};
 
-use crate::analysis::SolverSettings;
+use crate::analysis::{IntegratorSettings, SolverSettings};
 use crate::constraints::Constraint;
 use crate::error::{Error, Result};
+use crate::forces::{Force, StateExpr};
 use indexmap::IndexMap;
 use spec::AnalysisKind;
 use std::path::Path;
@@ -47,6 +48,65 @@ pub struct Element {
     pub constraint: Box<dyn Constraint>,
 }
 
+/// A named applied force or force element.
+#[derive(Debug)]
+pub struct ForceElement {
+    /// Name in the model file.
+    pub name: String,
+    /// Its `type` in the model file.
+    pub kind: &'static str,
+    /// The force law.
+    pub force: Box<dyn Force>,
+}
+
+/// A named output quantity.
+#[derive(Debug)]
+pub struct Measure {
+    /// Name in the model file (the column's name).
+    pub name: String,
+    /// How it is computed.
+    pub kind: MeasureKind,
+}
+
+/// How a measure is computed.
+#[derive(Debug)]
+pub enum MeasureKind {
+    /// An expression of time, positions, velocities and accelerations.
+    Expression(StateExpr),
+    /// A component of a body point (global frame).
+    Point {
+        /// Index in `q` of the body's `x`.
+        body: usize,
+        /// The point, body frame, m.
+        s: [f64; 2],
+        /// Which component.
+        component: spec::PointComponent,
+    },
+}
+
+impl Measure {
+    /// The value at `(q, qdot, qddot, t)`, each `(n)`.
+    pub fn value(&self, q: &[f64], qdot: &[f64], qddot: &[f64], t: f64) -> f64 {
+        match &self.kind {
+            MeasureKind::Expression(e) => e.eval_global(q, qdot, qddot, t),
+            MeasureKind::Point { body: b, s, component } => {
+                use spec::PointComponent as C;
+                let (sn, c) = q[b + 2].sin_cos();
+                let a = [c * s[0] - sn * s[1], sn * s[0] + c * s[1]];
+                let (w, al) = (qdot[b + 2], qddot[b + 2]);
+                match component {
+                    C::X => q[*b] + a[0],
+                    C::Y => q[b + 1] + a[1],
+                    C::Vx => qdot[*b] - w * a[1],
+                    C::Vy => qdot[b + 1] + w * a[0],
+                    C::Ax => qddot[*b] - al * a[1] - w * w * a[0],
+                    C::Ay => qddot[b + 1] + al * a[0] - w * w * a[1],
+                }
+            }
+        }
+    }
+}
+
 /// A named analysis, resolved.
 #[derive(Debug, Clone)]
 pub struct Analysis {
@@ -64,6 +124,8 @@ pub struct Analysis {
     pub step: f64,
     /// Position solver settings.
     pub settings: SolverSettings,
+    /// Integrator settings (dynamic analyses).
+    pub integrator: IntegratorSettings,
 }
 
 /// A compiled mechanism: bodies with coordinate offsets, constraints built, names resolved.
@@ -77,6 +139,12 @@ pub struct Model {
     pub joints: Vec<Element>,
     /// Drivers (active per analysis).
     pub drivers: Vec<Element>,
+    /// Gravitational acceleration, m/s^2.
+    pub gravity: [f64; 2],
+    /// Applied forces and force elements.
+    pub forces: Vec<ForceElement>,
+    /// Named outputs.
+    pub measures: Vec<Measure>,
     /// Analyses by name, in file order.
     pub analyses: IndexMap<String, Analysis>,
 }

@@ -4,13 +4,16 @@
 //! column); each entry of each section is then deserialized on its own, so that one bad joint does
 //! not hide the problems of the next.
 
-use super::spec::{AnalysisSpec, BodySpec, DriverSpec, GroundSpec, JointSpec, ModelSpec};
+use super::spec::{
+    AnalysisSpec, BodySpec, DriverSpec, ForceSpec, GroundSpec, JointSpec, MeasureSpec, ModelSpec, PointMeasure,
+};
 use crate::error::Problem;
 use indexmap::IndexMap;
 use serde::de::DeserializeOwned;
 use serde_yaml_ng::Value;
 
-const SECTIONS: [&str; 7] = ["name", "description", "ground", "bodies", "joints", "drivers", "analyses"];
+const SECTIONS: [&str; 10] =
+    ["name", "description", "gravity", "ground", "bodies", "joints", "drivers", "forces", "measures", "analyses"];
 
 /// A model file read as far as it could be: the entries that deserialized, the problems of the
 /// others, and the names of those others (so that later checks do not call them unknown).
@@ -59,6 +62,7 @@ pub fn parse_partial(text: &str) -> Result<Parsed, Vec<Problem>> {
     let get = |k: &str| map.get(k).filter(|v| !v.is_null());
     let name = get("name").and_then(|v| entry::<String>("name", v, &mut problems));
     let description = get("description").and_then(|v| entry::<String>("description", v, &mut problems));
+    let gravity = get("gravity").and_then(|v| entry::<[f64; 2]>("gravity", v, &mut problems));
     let ground = get("ground").and_then(|v| entry::<GroundSpec>("ground", v, &mut problems));
     if get("bodies").is_none() {
         problems.push(Problem::new("bodies", "missing section: at least one moving body is required"));
@@ -67,8 +71,11 @@ pub fn parse_partial(text: &str) -> Result<Parsed, Vec<Problem>> {
     let bodies = section("bodies", get("bodies"), &mut problems, &mut broken, entry::<BodySpec>);
     let joints = section("joints", get("joints"), &mut problems, &mut broken, tagged(&JointSpec::TYPES, joint));
     let drivers = section("drivers", get("drivers"), &mut problems, &mut broken, tagged(&DriverSpec::TYPES, driver));
+    let forces = section("forces", get("forces"), &mut problems, &mut broken, tagged(&ForceSpec::TYPES, force));
+    let measures = section("measures", get("measures"), &mut problems, &mut broken, measure);
     let analyses = section("analyses", get("analyses"), &mut problems, &mut broken, entry::<AnalysisSpec>);
-    Ok(Parsed { spec: ModelSpec { name, description, ground, bodies, joints, drivers, analyses }, problems, broken })
+    let spec = ModelSpec { name, description, gravity, ground, bodies, joints, drivers, forces, measures, analyses };
+    Ok(Parsed { spec, problems, broken })
 }
 
 /// Deserialize one value, recording a problem (with the path inside the value) on failure.
@@ -119,6 +126,36 @@ fn driver(kind: &str, v: Value) -> Option<Tracked<DriverSpec>> {
         "y" => variant(v, D::Y),
         _ => return None,
     })
+}
+
+fn force(kind: &str, v: Value) -> Option<Tracked<ForceSpec>> {
+    use ForceSpec as F;
+    Some(match kind {
+        "force" => variant(v, F::Force),
+        "torque" => variant(v, F::Torque),
+        "spring_damper" => variant(v, F::SpringDamper),
+        "rotational_spring_damper" => variant(v, F::RotationalSpringDamper),
+        _ => return None,
+    })
+}
+
+/// A measure: an expression (a string) or a point component (a mapping), read by hand so that a
+/// bad field keeps its path.
+fn measure(path: &str, v: &Value, problems: &mut Vec<Problem>) -> Option<MeasureSpec> {
+    match v {
+        Value::String(s) => Some(MeasureSpec::Expression(s.clone())),
+        Value::Mapping(_) => entry::<PointMeasure>(path, v, problems).map(MeasureSpec::Point),
+        other => {
+            problems.push(Problem::new(
+                path,
+                format!(
+                    "expected an expression (a string) or a mapping with body, point and component, found {}",
+                    describe(other)
+                ),
+            ));
+            None
+        }
+    }
 }
 
 /// An entry of a section whose entries name their kind in `type`. Serde's internally tagged

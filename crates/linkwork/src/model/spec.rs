@@ -27,9 +27,218 @@ pub struct ModelSpec {
     /// Drivers (prescribed motions) by name; each analysis chooses which are active.
     #[serde(default)]
     pub drivers: IndexMap<String, DriverSpec>,
+    /// Gravitational acceleration `[gx, gy]`, m/s^2, acting on every body's centre of mass.
+    /// Default: none (`[0, 0]`).
+    #[serde(default)]
+    pub gravity: Option<[f64; 2]>,
+    /// Applied forces and force elements by name.
+    #[serde(default)]
+    pub forces: IndexMap<String, ForceSpec>,
+    /// Named output quantities, written as extra columns of `results.csv`.
+    #[serde(default)]
+    pub measures: IndexMap<String, MeasureSpec>,
     /// Analyses by name.
     #[serde(default)]
     pub analyses: IndexMap<String, AnalysisSpec>,
+}
+
+/// A number, or an expression of time `t` and the state (`crank.phi`, `crank.omega`,
+/// `slider_d.vx`: `<body>.x, .y, .phi, .vx, .vy, .omega`).
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+#[serde(untagged)]
+pub enum Quantity {
+    /// A constant.
+    Number(f64),
+    /// An expression such as `"-20*crank.omega + 100*sin(t)"`.
+    Expression(String),
+}
+
+impl Default for Quantity {
+    fn default() -> Self {
+        Quantity::Number(0.0)
+    }
+}
+
+/// Read by hand: an untagged enum's error would lose the field's path.
+impl<'de> Deserialize<'de> for Quantity {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = Quantity;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a number or an expression of t and the state, such as \"-20*crank.omega\"")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Quantity, E> {
+                Ok(Quantity::Expression(v.to_string()))
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Quantity, E> {
+                Ok(Quantity::Number(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Quantity, E> {
+                Ok(Quantity::Number(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Quantity, E> {
+                Ok(Quantity::Number(v as f64))
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
+}
+
+/// An applied force or a force element.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum ForceSpec {
+    /// A force `[fx, fy]` at a point of a body, in the global frame or the body's frame; each
+    /// component a number or an expression of time and state.
+    Force(PointForce),
+    /// A torque on a body (counter-clockwise positive), a number or an expression.
+    Torque(TorqueSpec),
+    /// Translational spring-damper-actuator between two points: the force pushing the points
+    /// apart is `-stiffness (l - free_length) - damping dl/dt + actuator`.
+    SpringDamper(SpringDamperSpec),
+    /// Rotational spring-damper-actuator between two bodies: the torque on `body_i` (its
+    /// opposite on `body_j`) is `-stiffness (theta - free_angle) - damping dtheta/dt + actuator`,
+    /// `theta = phi_i - phi_j`.
+    RotationalSpringDamper(RotationalSpringDamperSpec),
+}
+
+impl ForceSpec {
+    /// Every force `type`, as written in model files.
+    pub const TYPES: [&'static str; 4] = ["force", "torque", "spring_damper", "rotational_spring_damper"];
+}
+
+/// The frame a force's components are given in.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ForceFrame {
+    /// The global frame (the force keeps its direction as the body turns).
+    #[default]
+    Global,
+    /// The body's frame (the force turns with the body, a follower force).
+    Body,
+}
+
+/// A force at a point of a body.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PointForce {
+    /// The body the force acts on.
+    pub body: String,
+    /// Where it acts (default: the centre of mass).
+    #[serde(default)]
+    pub point: PointRef,
+    /// The frame of `fx` and `fy`. Default: global.
+    #[serde(default)]
+    pub frame: ForceFrame,
+    /// x component, N. Default 0.
+    #[serde(default)]
+    pub fx: Quantity,
+    /// y component, N. Default 0.
+    #[serde(default)]
+    pub fy: Quantity,
+}
+
+/// A torque on a body.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TorqueSpec {
+    /// The body.
+    pub body: String,
+    /// Torque, N m, counter-clockwise positive.
+    pub torque: Quantity,
+}
+
+/// Translational spring-damper-actuator between two points.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SpringDamperSpec {
+    /// First body.
+    pub body_i: String,
+    /// Attachment on the first body.
+    pub point_i: PointRef,
+    /// Second body.
+    pub body_j: String,
+    /// Attachment on the second body.
+    pub point_j: PointRef,
+    /// Stiffness, N/m. Default 0.
+    #[serde(default)]
+    pub stiffness: f64,
+    /// Damping, N s/m. Default 0.
+    #[serde(default)]
+    pub damping: f64,
+    /// Length at which the spring exerts no force, m. Default: the distance in the initial guess.
+    #[serde(default)]
+    pub free_length: Option<f64>,
+    /// Actuator force pushing the points apart, N: a number or an expression. Default 0.
+    #[serde(default)]
+    pub actuator: Quantity,
+}
+
+/// Rotational spring-damper-actuator between two bodies (or a body and ground).
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RotationalSpringDamperSpec {
+    /// First body (the torque is reported on it).
+    pub body_i: String,
+    /// Second body.
+    pub body_j: String,
+    /// Stiffness, N m/rad. Default 0.
+    #[serde(default)]
+    pub stiffness: f64,
+    /// Damping, N m s/rad. Default 0.
+    #[serde(default)]
+    pub damping: f64,
+    /// Relative angle `phi_i - phi_j` at which the spring exerts no torque, rad. Default: its
+    /// value in the initial guess.
+    #[serde(default)]
+    pub free_angle: Option<f64>,
+    /// Actuator torque on `body_i` (its opposite on `body_j`), N m: a number or an expression.
+    /// Default 0.
+    #[serde(default)]
+    pub actuator: Quantity,
+}
+
+/// A named output: an expression of time and state (`"slider_d.x + 4"`; besides positions and
+/// velocities it may use accelerations `<body>.ax, .ay, .alpha`), or a component of a body point.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum MeasureSpec {
+    /// An expression.
+    Expression(String),
+    /// A component of a point of a body.
+    Point(PointMeasure),
+}
+
+/// A component of a point of a body, global frame.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PointMeasure {
+    /// The body.
+    pub body: String,
+    /// The point (default: the centre of mass).
+    #[serde(default)]
+    pub point: PointRef,
+    /// Which component.
+    pub component: PointComponent,
+}
+
+/// A component of a point's position, velocity or acceleration, global frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum PointComponent {
+    /// x, m.
+    X,
+    /// y, m.
+    Y,
+    /// x-velocity, m/s.
+    Vx,
+    /// y-velocity, m/s.
+    Vy,
+    /// x-acceleration, m/s^2.
+    Ax,
+    /// y-acceleration, m/s^2.
+    Ay,
 }
 
 /// The fixed body.
@@ -443,9 +652,38 @@ pub struct AnalysisSpec {
     pub t_end: f64,
     /// Output step, s.
     pub step: f64,
+    /// Integrator of a dynamic analysis. Default: bdf.
+    #[serde(default)]
+    pub integrator: Option<IntegratorKind>,
     /// Solver settings; every field has a default.
     #[serde(default)]
     pub solver: SolverSpec,
+}
+
+/// The integrators of dynamic analyses (`docs/integrators.md`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum IntegratorKind {
+    /// Variable-order (1 to 5), variable-step BDF on the index-3 equations (or the stabilised
+    /// index-2 form), as Adams GSTIFF and DASSL.
+    #[default]
+    Bdf,
+    /// HHT-alpha on the index-3 equations with step-size control (Negrut et al. 2007).
+    Hht,
+    /// Coordinate partitioning with a variable-order, variable-step Adams-Bashforth-Moulton method
+    /// on the independent coordinates (Wehage and Haug 1982), as Adams ABAM.
+    Abam,
+}
+
+/// Which equations `bdf` discretises.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Formulation {
+    /// The position constraints `Phi = 0` (index 3).
+    #[default]
+    Index3,
+    /// The velocity constraints with a position correction (stabilised index 2, GGL; Adams SI2).
+    Si2,
 }
 
 /// Kinds of analysis.
@@ -454,6 +692,8 @@ pub struct AnalysisSpec {
 pub enum AnalysisKind {
     /// Position, velocity and acceleration of a fully driven mechanism.
     Kinematic,
+    /// Motion under forces: the equations of motion integrated in time, with joint reactions.
+    Dynamic,
 }
 
 /// Settings of the position solver (assembly and kinematics). Defaults and their reasons are in
@@ -476,4 +716,25 @@ pub struct SolverSpec {
     /// Condition number of the driven Jacobian above which the position counts as singular.
     #[serde(default)]
     pub singular_condition: Option<f64>,
+    /// Dynamics: relative error tolerance per step.
+    #[serde(default)]
+    pub rtol: Option<f64>,
+    /// Dynamics: absolute error tolerance per step (m, rad, m/s, rad/s).
+    #[serde(default)]
+    pub atol: Option<f64>,
+    /// Dynamics: first step, s.
+    #[serde(default)]
+    pub initial_step: Option<f64>,
+    /// Dynamics: largest step, s.
+    #[serde(default)]
+    pub max_step: Option<f64>,
+    /// Dynamics (`bdf`, `abam`): highest order.
+    #[serde(default)]
+    pub max_order: Option<usize>,
+    /// Dynamics (`hht`): numerical damping `alpha`, in [-1/3, 0].
+    #[serde(default)]
+    pub alpha: Option<f64>,
+    /// Dynamics (`bdf`): the equations discretised. Default: index3.
+    #[serde(default)]
+    pub formulation: Option<Formulation>,
 }

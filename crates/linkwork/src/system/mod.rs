@@ -78,6 +78,34 @@ impl<'m> System<'m> {
         }
     }
 
+    /// The elements (joints, then active drivers) with their rows.
+    pub fn elements(&self) -> impl Iterator<Item = (&'m Element, std::ops::Range<usize>)> + '_ {
+        self.elements.iter().zip(self.offsets.windows(2)).map(|(e, w)| (*e, w[0]..w[1]))
+    }
+
+    /// `(row, column)` of every entry of every element's Jacobian block, in block order (element
+    /// by element, each block row-major over its `columns()`): the layout of
+    /// [`System::jacobian_values`].
+    pub fn entries(&self) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        for (c, rows) in self.constraints() {
+            for row in rows {
+                out.extend(c.columns().iter().map(|&col| (row, col)));
+            }
+        }
+        out
+    }
+
+    /// `(q, t) => Phi_q` as the values of [`System::entries`], `out: (entries)`.
+    pub fn jacobian_values(&self, q: &Config<'_>, t: f64, out: &mut [f64]) {
+        let mut k = 0;
+        for (c, _) in self.constraints() {
+            let len = c.rows() * c.columns().len();
+            c.jacobian(q, t, &mut out[k..k + len]);
+            k += len;
+        }
+    }
+
     /// The joint (or driver) and equation of row `row`.
     pub fn row_name(&self, row: usize) -> RowName {
         let k = self.offsets.partition_point(|&o| o <= row) - 1;

@@ -1,0 +1,401 @@
+//! The equations of motion of one dynamic analysis, evaluated into buffers allocated once:
+//!
+//! ```text
+//! M qddot + Phi_q^T lambda = Q(q, qdot, t)      (n)   M = diag(m, m, J) per body, constant
+//! Phi(q, t) = 0                                 (m)   joints and active drivers
+//! ```
+//!
+//! and the one sparse matrix every implicit integrator factorises, the scaled Newton (KKT)
+//! matrix
+//!
+//! ```text
+//! K(c_v, c_q) = [ M - c_v Q_qdot - c_q Q_q    Phi_q^T ]     (n + m) x (n + m)
+//!               [ Phi_q                       -eps I  ]
+//! ```
+//!
+//! An integrator whose velocities and accelerations depend on the position iterate through
+//! `dqdot/dq = g` and `dqddot/dq = b` writes its Newton step in the unknowns
+//! `(b dq, lambda / b)`; the rows then have the sizes of `M` and of `Phi_q`, independent of the
+//! step, with `c_v = g / b` and `c_q = 1 / b` (Bottasso, Bauchau and Cardona 2007; Negrut et al.
+//! 2007 section 3). The term `(Phi_q^T lambda)_q` is left out of the Newton matrix: the residual
+//! stays exact, so only the convergence rate changes, and it needs second derivatives of every
+//! joint.
+//!
+//! `eps` (`EPS_REL / max mass`) is a regularisation far below the Schur complement
+//! `Phi_q M^-1 Phi_q^T` of a regular position, so it changes nothing there (a Newton contraction of
+//! `~1e-10`), while at a singular position (a flat N-four-bar, redundant rows) the matrix stays
+//! invertible and the multipliers take the bounded, minimum-norm-like values of the augmented
+//! Lagrangian method (Bayo and Ledesma 1996): the matrix is the saddle-point form of
+//! `M + Phi_q^T Phi_q / eps`.
+
+use crate::constraints::{Anchor, BodyIx, Config};
+use crate::forces::{derivatives, potential_rate, DualWork};
+use crate::linalg::{FactorError, SparseLu};
+use crate::model::Model;
+use crate::system::{Pattern, System};
+
+/// Regularisation of the constraint block, relative to `1 / max mass` (see the module docs).
+pub const EPS_REL: f64 = 1e-10;
+
+/// The scaled Newton matrix: pattern, position maps and factors.
+#[derive(Debug)]
+struct Kkt {
+    lu: SparseLu,
+    /// (n + m) value position of each diagonal entry.
+    diag: Vec<usize>,
+    /// (Jacobian entries) value positions of `Phi_q[r, c]` (row `n + r`) and of its transpose.
+    jac: Vec<(usize, usize)>,
+    /// (forces) value positions of each force's `(w x w)` block, row-major.
+    forces: Vec<Vec<usize>>,
+}
+
+impl Kkt {
+    fn new(n: usize, m: usize, entries: &[(usize, usize)], force_cols: &[&[usize]]) -> Result<Kkt, FactorError> {
+        let dim = n + m;
+        // (column, row) of every structural entry.
+        let mut all: Vec<(usize, usize)> = (0..dim).map(|k| (k, k)).collect();
+        for &(r, c) in entries {
+            all.push((c, n + r));
+            all.push((n + r, c));
+        }
+        for cols in force_cols {
+            for &r in cols.iter() {
+                all.extend(cols.iter().map(|&c| (c, r)));
+            }
+        }
+        all.sort_unstable();
+        all.dedup();
+        let mut col_ptr = vec![0; dim + 1];
+        for &(c, _) in &all {
+            col_ptr[c + 1] += 1;
+        }
+        for c in 0..dim {
+            col_ptr[c + 1] += col_ptr[c];
+        }
+        let row_idx = all.iter().map(|e| e.1).collect();
+        let pos = |col: usize, row: usize| all.binary_search(&(col, row)).unwrap_or(usize::MAX);
+        let diag = (0..dim).map(|k| pos(k, k)).collect();
+        let jac = entries.iter().map(|&(r, c)| (pos(c, n + r), pos(n + r, c))).collect();
+        let forces = force_cols
+            .iter()
+            .map(|cols| cols.iter().flat_map(|&r| cols.iter().map(move |&c| (c, r))).map(|(c, r)| pos(c, r)).collect())
+            .collect();
+        let lu = SparseLu::new(Pattern { col_ptr, row_idx, map: vec![], nrows: dim })?;
+        Ok(Kkt { lu, diag, jac, forces })
+    }
+}
+
+/// Counters of the work the linear algebra did.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+pub struct LinearStats {
+    /// Evaluations of the Newton matrix (constraint Jacobian and force derivatives).
+    pub jacobian_evaluations: usize,
+    /// Numeric factorizations of the Newton matrix.
+    pub factorizations: usize,
+}
+
+/// The equations of motion of one analysis, with every buffer they need.
+#[derive(Debug)]
+pub struct Dae<'m> {
+    /// The model.
+    pub model: &'m Model,
+    /// Joints and active drivers.
+    pub sys: System<'m>,
+    /// Number of coordinates.
+    pub n: usize,
+    /// Number of constraint rows.
+    pub m: usize,
+    /// (n) the diagonal of `M`.
+    pub mass: Vec<f64>,
+    /// (n) gravity's generalised force `(m g, 0)` per body.
+    gravity: Vec<f64>,
+    /// (Jacobian entries) `(row, column)` of each entry of `Phi_q`.
+    entries: Vec<(usize, usize)>,
+    /// (Jacobian entries) `Phi_q` at the last [`Dae::positions`].
+    jac: Vec<f64>,
+    /// (m) `Phi` at the last [`Dae::positions`].
+    pub phi: Vec<f64>,
+    /// (bodies) `(cos, sin)` of each angle at the last [`Dae::positions`].
+    rot: Vec<[f64; 2]>,
+    /// `-eps` on the constraint diagonal of the Newton matrix.
+    eps: f64,
+    kkt: Kkt,
+    /// Force scratch: local positions, velocities, loads, and derivative blocks.
+    fx: Vec<f64>,
+    fv: Vec<f64>,
+    fq: Vec<f64>,
+    fdx: Vec<f64>,
+    fdv: Vec<f64>,
+    dual: DualWork,
+    /// (n + m) right-hand side scratch.
+    rhs: Vec<f64>,
+    /// Work counters.
+    pub stats: LinearStats,
+}
+
+impl<'m> Dae<'m> {
+    /// The equations of `model` with the active drivers `drivers`.
+    pub fn new(model: &'m Model, drivers: &[usize]) -> Result<Dae<'m>, FactorError> {
+        let sys = System::new(model, drivers);
+        let (n, m) = (sys.n, sys.m);
+        let mass: Vec<f64> = model.bodies.iter().flat_map(|b| [b.mass, b.mass, b.inertia]).collect();
+        let gravity: Vec<f64> =
+            model.bodies.iter().flat_map(|b| [b.mass * model.gravity[0], b.mass * model.gravity[1], 0.0]).collect();
+        let entries = sys.entries();
+        let force_cols: Vec<&[usize]> = model.forces.iter().map(|f| f.force.columns()).collect();
+        let kkt = Kkt::new(n, m, &entries, &force_cols)?;
+        let w = force_cols.iter().map(|c| c.len()).max().unwrap_or(0);
+        let max_mass = mass.iter().fold(0.0f64, |a, &b| a.max(b));
+        let eps = if max_mass > 0.0 { EPS_REL / max_mass } else { EPS_REL };
+        Ok(Dae {
+            model,
+            n,
+            m,
+            mass,
+            gravity,
+            jac: vec![0.0; entries.len()],
+            entries,
+            phi: vec![0.0; m],
+            rot: vec![[1.0, 0.0]; n / 3],
+            eps,
+            kkt,
+            fx: vec![0.0; w],
+            fv: vec![0.0; w],
+            fq: vec![0.0; w],
+            fdx: vec![0.0; w * w],
+            fdv: vec![0.0; w * w],
+            dual: DualWork::new(w),
+            rhs: vec![0.0; n + m],
+            sys,
+            stats: LinearStats::default(),
+        })
+    }
+
+    /// `(q, t) => (Phi, Phi_q)` into [`Dae::phi`] and the Jacobian buffer; every other evaluation
+    /// at `q` (`nu`, `gamma`, products with `Phi_q`, the Newton matrix) uses these.
+    pub fn positions(&mut self, q: &[f64], t: f64) {
+        Config::rotations(q, &mut self.rot);
+        let c = Config::new(q, &self.rot);
+        self.sys.phi(&c, t, &mut self.phi);
+        self.sys.jacobian_values(&c, t, &mut self.jac);
+    }
+
+    /// `(q, t) => nu = -Phi_t`, `out: (m)`; `q` as at the last [`Dae::positions`].
+    pub fn nu(&self, q: &[f64], t: f64, out: &mut [f64]) {
+        self.sys.nu(&Config::new(q, &self.rot), t, out);
+    }
+
+    /// `(q, qdot, t) => gamma`, `out: (m)`; `q` as at the last [`Dae::positions`].
+    pub fn gamma(&self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) {
+        self.sys.gamma(&Config::new(q, &self.rot), qdot, t, out);
+    }
+
+    /// `out (n) += Phi_q^T lambda`, with `lambda: (m)`.
+    pub fn add_jt(&self, lambda: &[f64], out: &mut [f64]) {
+        for (&(r, c), &v) in self.entries.iter().zip(&self.jac) {
+            out[c] += v * lambda[r];
+        }
+    }
+
+    /// `out (m) = Phi_q v`, with `v: (n)`.
+    pub fn jv(&self, v: &[f64], out: &mut [f64]) {
+        out.fill(0.0);
+        for (&(r, c), &x) in self.entries.iter().zip(&self.jac) {
+            out[r] += x * v[c];
+        }
+    }
+
+    /// `(q, qdot, t) => Q`, `out: (n)`: gravity plus every force element.
+    pub fn load(&mut self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) {
+        out.copy_from_slice(&self.gravity);
+        for f in &self.model.forces {
+            let cols = f.force.columns();
+            let w = cols.len();
+            gather(q, cols, &mut self.fx[..w]);
+            gather(qdot, cols, &mut self.fv[..w]);
+            f.force.load(&self.fx[..w], &self.fv[..w], t, &mut self.fq[..w]);
+            for (&c, &v) in cols.iter().zip(&self.fq[..w]) {
+                out[c] += v;
+            }
+        }
+    }
+
+    /// Fill and factorise `K(c_v, c_q)` at `(q, qdot, t)`, with `Phi_q` from the last
+    /// [`Dae::positions`] (which must be at `q`).
+    pub fn factor(&mut self, q: &[f64], qdot: &[f64], t: f64, c_v: f64, c_q: f64) -> Result<(), FactorError> {
+        self.stats.jacobian_evaluations += 1;
+        let (_, values) = self.kkt.lu.pattern_and_values();
+        values.fill(0.0);
+        for (k, &p) in self.kkt.diag.iter().enumerate() {
+            values[p] = if k < self.n { self.mass[k] } else { -self.eps };
+        }
+        for (&(lower, upper), &v) in self.kkt.jac.iter().zip(&self.jac) {
+            values[lower] += v;
+            values[upper] += v;
+        }
+        if c_v != 0.0 || c_q != 0.0 {
+            for (f, pos) in self.model.forces.iter().zip(&self.kkt.forces) {
+                let cols = f.force.columns();
+                let w = cols.len();
+                gather(q, cols, &mut self.fx[..w]);
+                gather(qdot, cols, &mut self.fv[..w]);
+                let (dx, dv) = (&mut self.fdx[..w * w], &mut self.fdv[..w * w]);
+                derivatives(f.force.as_ref(), &self.fx[..w], &self.fv[..w], t, dx, dv, &mut self.dual);
+                for ((&p, &a), &b) in pos.iter().zip(dx.iter()).zip(dv.iter()) {
+                    values[p] -= c_q * a + c_v * b;
+                }
+            }
+        }
+        self.stats.factorizations += 1;
+        self.kkt.lu.factor()
+    }
+
+    /// Solve with the last factorization, in place, `rhs: (n + m)`.
+    pub fn solve(&mut self, rhs: &mut [f64]) {
+        self.kkt.lu.solve(rhs);
+    }
+
+    /// 1-norm condition estimate of the last factorization.
+    pub fn condition(&mut self) -> f64 {
+        self.kkt.lu.condition_estimate()
+    }
+
+    /// `(q, qdot, t) => (qddot, lambda)` from `[M, Phi_q^T; Phi_q, 0] [qddot; lambda] = [Q; gamma]`,
+    /// `out: (n + m)`, with two steps of iterative refinement that remove the regularisation's
+    /// effect. Evaluates positions at `q` and factorises.
+    pub fn accelerations(&mut self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) -> Result<(), FactorError> {
+        self.positions(q, t);
+        self.factor(q, qdot, t, 0.0, 0.0)?;
+        out.fill(0.0);
+        let mut r = std::mem::take(&mut self.rhs);
+        for _ in 0..3 {
+            self.residual(q, qdot, t, out, &mut r);
+            self.solve(&mut r);
+            for (o, d) in out.iter_mut().zip(&r) {
+                *o += d;
+            }
+        }
+        self.rhs = r;
+        Ok(())
+    }
+
+    /// `out (n + m) = [Q - M qddot - Phi_q^T lambda; gamma - Phi_q qddot]` for
+    /// `sol = [qddot; lambda]`, positions as at the last [`Dae::positions`].
+    pub fn residual(&mut self, q: &[f64], qdot: &[f64], t: f64, sol: &[f64], out: &mut [f64]) {
+        let n = self.n;
+        let (a, l) = sol.split_at(n);
+        let (f, g) = out.split_at_mut(n);
+        self.load(q, qdot, t, f);
+        for k in 0..n {
+            f[k] -= self.mass[k] * a[k];
+        }
+        for (&(r, c), &v) in self.entries.iter().zip(&self.jac) {
+            f[c] -= v * l[r];
+        }
+        self.gamma(q, qdot, t, g);
+        for (&(r, c), &v) in self.entries.iter().zip(&self.jac) {
+            g[r] -= v * a[c];
+        }
+    }
+
+    /// Kinetic energy `qdot^T M qdot / 2`, J.
+    pub fn kinetic_energy(&self, qdot: &[f64]) -> f64 {
+        0.5 * self.mass.iter().zip(qdot).map(|(m, v)| m * v * v).sum::<f64>()
+    }
+
+    /// Potential energy of gravity and of the springs, J (zero at the origin and at each
+    /// spring's free length).
+    pub fn potential_energy(&mut self, q: &[f64]) -> f64 {
+        let mut v = -self.gravity.iter().zip(q).map(|(g, x)| g * x).sum::<f64>();
+        for f in &self.model.forces {
+            let cols = f.force.columns();
+            let w = cols.len();
+            gather(q, cols, &mut self.fx[..w]);
+            v += f.force.potential(&self.fx[..w]);
+        }
+        v
+    }
+
+    /// Power of the non-conservative forces, W: every force's power `Q_e . qdot` plus the rate
+    /// of its potential (which cancels the conservative part), plus the drivers' power
+    /// `-lambda_d^T Phi_q,d qdot = -lambda_d^T nu_d`. `lambda: (m)`; positions as at the last
+    /// [`Dae::positions`].
+    pub fn nonconservative_power(&mut self, q: &[f64], qdot: &[f64], t: f64, lambda: &[f64], nu: &mut [f64]) -> f64 {
+        let mut p = 0.0;
+        for f in &self.model.forces {
+            let cols = f.force.columns();
+            let w = cols.len();
+            gather(q, cols, &mut self.fx[..w]);
+            gather(qdot, cols, &mut self.fv[..w]);
+            f.force.load(&self.fx[..w], &self.fv[..w], t, &mut self.fq[..w]);
+            p += self.fq[..w].iter().zip(&self.fv[..w]).map(|(a, b)| a * b).sum::<f64>();
+            p += potential_rate(f.force.as_ref(), &self.fx[..w], &self.fv[..w], &mut self.dual);
+        }
+        let joints = self.model.joints.iter().map(|j| j.constraint.rows()).sum::<usize>();
+        if joints < self.m {
+            self.nu(q, t, nu);
+            p -= lambda[joints..].iter().zip(&nu[joints..]).map(|(l, v)| l * v).sum::<f64>();
+        }
+        p
+    }
+
+    /// Each joint's reaction on its first body `(fx, fy, torque)` (global frame; torque about
+    /// the joint's point) and each active driver's effort `-lambda` (the generalised force it
+    /// applies in the direction that increases its coordinate), from the multipliers
+    /// `lambda: (m)` at `q` (positions as at the last [`Dae::positions`]). `out` gets `3` values
+    /// per joint, then one per driver.
+    pub fn reactions(&self, q: &[f64], lambda: &[f64], out: &mut Vec<f64>) {
+        out.clear();
+        let joints = self.model.joints.len();
+        let mut k = 0;
+        for (idx, (e, rows)) in self.sys.elements().enumerate() {
+            let c = e.constraint.as_ref();
+            let cols = c.columns();
+            let w = cols.len();
+            let block = &self.jac[k..k + rows.len() * w];
+            k += rows.len() * w;
+            if idx >= joints {
+                out.push(-lambda[rows.start]);
+                continue;
+            }
+            // g = -Phi_q,e^T lambda_e on the element's columns: the generalised reaction.
+            let generalised = |body: BodyIx| -> [f64; 3] {
+                let mut g = [0.0; 3];
+                let Some(b) = body.0 else { return g };
+                for (ci, &col) in cols.iter().enumerate() {
+                    if (b..b + 3).contains(&col) {
+                        g[col - b] =
+                            -rows.clone().enumerate().map(|(ri, r)| block[ri * w + ci] * lambda[r]).sum::<f64>();
+                    }
+                }
+                g
+            };
+            let Anchor { i, j, point } = c.anchor();
+            let (f, torque) = match i.0 {
+                Some(b) => {
+                    let [fx, fy, m] = generalised(i);
+                    // Moment about P = moment about the centre of mass - (A s'_P) x f.
+                    let [cs, sn] = self.rot[b / 3];
+                    let a = [cs * point[0] - sn * point[1], sn * point[0] + cs * point[1]];
+                    ([fx, fy], m - (a[0] * fy - a[1] * fx))
+                }
+                None => {
+                    // On ground: the opposite of the reaction on body j, its moment taken about P.
+                    let [fx, fy, m] = generalised(j);
+                    let rj = j.coords(q);
+                    let d = [rj[0] - point[0], rj[1] - point[1]];
+                    ([-fx, -fy], -(m + d[0] * fy - d[1] * fx))
+                }
+            };
+            out.extend([f[0], f[1], torque]);
+        }
+    }
+}
+
+/// `out[k] = v[cols[k]]`.
+#[inline]
+fn gather(v: &[f64], cols: &[usize], out: &mut [f64]) {
+    for (o, &c) in out.iter_mut().zip(cols) {
+        *o = v[c];
+    }
+}

@@ -1,0 +1,290 @@
+//! HHT-alpha on the index-3 equations with step-size control (Hilber, Hughes and Taylor 1977;
+//! for constrained multibody systems Negrut, Rampalli, Ottarsson and Sajdak 2007, "On the use of
+//! the HHT method in the context of index 3 differential algebraic equations of multibody
+//! dynamics", J. Comput. Nonlinear Dynam. 2(1)).
+//!
+//! With `alpha` in `[-1/3, 0]`, `beta = (1 - alpha)^2 / 4`, `gamma = 1/2 - alpha`, one step from
+//! `t_n` to `t_{n+1} = t_n + h` solves for `qddot_{n+1}` and `lambda_{n+1}`:
+//!
+//! ```text
+//! q_{n+1}    = q_n + h qdot_n + h^2/2 ((1 - 2 beta) qddot_n + 2 beta qddot_{n+1})      (Newmark)
+//! qdot_{n+1} = qdot_n + h ((1 - gamma) qddot_n + gamma qddot_{n+1})
+//! M qddot_{n+1} + (1 + alpha) F_{n+1} - alpha F_n = 0,   F = Phi_q^T lambda - Q
+//! Phi(q_{n+1}, t_{n+1}) / (beta h^2) = 0                                               (scaled)
+//! ```
+//!
+//! Newton in `(qddot, mu = (1 + alpha) lambda)` with the matrix [`Dae::factor`]`(c_v, c_q)`,
+//! `c_v = (1 + alpha) gamma h`, `c_q = (1 + alpha) beta h^2` (the scaled form of Negrut et al.
+//! section 3.1, well conditioned as `h -> 0`). The matrix is kept across iterations and steps
+//! while Newton contracts; it is re-evaluated when convergence is slow and after a change of
+//! step of more than 20%.
+//!
+//! Error control (Negrut et al. section 3.3): the local error of the positions is estimated as
+//! `(beta - 1/6) h^2 (qddot_{n+1} - qddot_n)`; a step is accepted when its weighted RMS norm
+//! ([`super::wrms`]) is at most 1, and the next step is `h (0.9 / err)^(1/3)` within
+//! `[h / 5, 2 h]` and the maximum step. Output by quintic Hermite interpolation
+//! ([`super::hermite5`]) of each accepted step.
+
+use super::{hermite5, step_failure, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Start, MAX_STEPS};
+use crate::error::Error;
+
+/// Newton iterations per attempt. Four: from the predictor `qddot_{n+1} = qddot_n` a converging
+/// iteration reaches the tolerance in two or three; more means the matrix is stale or the step too
+/// large.
+const MAX_NEWTON: usize = 4;
+/// Newton has converged when the weighted norm of the position correction is below this fraction
+/// of the error tolerance (the iteration error then stays well below the truncation error).
+const NEWTON_TOL: f64 = 0.01;
+
+struct Hht<'a, 'm> {
+    dae: &'a mut Dae<'m>,
+    n: usize,
+    alpha: f64,
+    beta: f64,
+    gamma: f64,
+    rtol: f64,
+    atol: f64,
+    /// State at `t_n`.
+    t: f64,
+    q: Vec<f64>,
+    v: Vec<f64>,
+    a: Vec<f64>,
+    /// (n) `F_n = Phi_q^T lambda_n - Q_n`.
+    f: Vec<f64>,
+    /// (m) `mu_n = (1 + alpha) lambda_n`.
+    mu: Vec<f64>,
+    /// Iterate of the step being tried.
+    q1: Vec<f64>,
+    v1: Vec<f64>,
+    a1: Vec<f64>,
+    mu1: Vec<f64>,
+    /// (n + m) residual and Newton step.
+    r: Vec<f64>,
+    /// (n) scratch.
+    work: Vec<f64>,
+    /// Step size of the current factorization, or `None` when there is none.
+    factored_h: Option<f64>,
+    stats: DynamicStats,
+}
+
+/// How a Newton attempt ended.
+enum Newton {
+    Converged,
+    /// Did not converge; `fresh` tells whether the matrix was evaluated in this attempt.
+    Failed {
+        fresh: bool,
+    },
+}
+
+impl Hht<'_, '_> {
+    /// `(q1, v1)` from `a1` by the Newmark formulas over a step `h`.
+    fn newmark(&mut self, h: f64) {
+        let (b, g) = (self.beta, self.gamma);
+        for k in 0..self.n {
+            self.q1[k] = self.q[k] + h * self.v[k] + 0.5 * h * h * ((1.0 - 2.0 * b) * self.a[k] + 2.0 * b * self.a1[k]);
+            self.v1[k] = self.v[k] + h * ((1.0 - g) * self.a[k] + g * self.a1[k]);
+        }
+    }
+
+    /// Newton iterations at `t1 = t + h`, starting from `a1`, `mu1`.
+    fn newton(&mut self, h: f64) -> Result<Newton, Error> {
+        let (n, t1) = (self.n, self.t + h);
+        let (al, b) = (self.alpha, self.beta);
+        let mut fresh = false;
+        let mut previous = f64::INFINITY;
+        for it in 0..MAX_NEWTON {
+            self.newmark(h);
+            self.dae.positions(&self.q1, t1);
+            // r = -[M a + Phi_q^T mu - (1 + alpha) Q - alpha F_n;  Phi / (beta h^2)]
+            self.dae.load(&self.q1, &self.v1, t1, &mut self.work);
+            let (r1, r2) = self.r.split_at_mut(n);
+            for k in 0..n {
+                r1[k] = (1.0 + al) * self.work[k] + al * self.f[k] - self.dae.mass[k] * self.a1[k];
+            }
+            self.work.fill(0.0);
+            self.dae.add_jt(&self.mu1, &mut self.work);
+            for k in 0..n {
+                r1[k] -= self.work[k];
+            }
+            for (r, p) in r2.iter_mut().zip(&self.dae.phi) {
+                *r = -p / (b * h * h);
+            }
+            if !self.r.iter().all(|x| x.is_finite()) {
+                return Ok(Newton::Failed { fresh });
+            }
+            let stale = self.factored_h.is_none_or(|fh| !(0.8..=1.25).contains(&(h / fh)));
+            if stale || (it >= 2 && !fresh) {
+                self.dae
+                    .factor(&self.q1, &self.v1, t1, (1.0 + al) * self.gamma * h, (1.0 + al) * b * h * h)
+                    .map_err(|e| super::factor_error(e, t1))?;
+                self.factored_h = Some(h);
+                fresh = true;
+            }
+            self.dae.solve(&mut self.r);
+            self.stats.newton_iterations += 1;
+            for k in 0..n {
+                self.a1[k] += self.r[k];
+            }
+            for (mu, d) in self.mu1.iter_mut().zip(&self.r[n..]) {
+                *mu += d;
+            }
+            // Position correction beta h^2 da, weighted like the error test.
+            let dq: f64 = wrms_scaled(&self.r[..n], &self.q1, b * h * h, self.rtol, self.atol);
+            let rate = dq / previous;
+            if dq <= NEWTON_TOL || (it > 0 && rate < 1.0 && rate / (1.0 - rate) * dq <= NEWTON_TOL) {
+                self.newmark(h);
+                return Ok(Newton::Converged);
+            }
+            if it > 0 && rate > 0.9 {
+                break;
+            }
+            previous = dq;
+        }
+        Ok(Newton::Failed { fresh })
+    }
+}
+
+/// `wrms(c v, y)` without a buffer.
+fn wrms_scaled(v: &[f64], y: &[f64], c: f64, rtol: f64, atol: f64) -> f64 {
+    let s: f64 = v.iter().zip(y).map(|(e, x)| (c * e / (atol + rtol * x.abs())).powi(2)).sum();
+    (s / v.len().max(1) as f64).sqrt()
+}
+
+/// Integrate from `start` to the output's end time.
+pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, start: Start) -> Outcome {
+    let (n, m) = (dae.n, dae.m);
+    let alpha = settings.alpha;
+    let Start { t, q, qdot, qddot, lambda } = start;
+    // F_0 = Phi_q^T lambda_0 - Q_0 = -M qddot_0 at a consistent start.
+    let f: Vec<f64> = qddot.iter().zip(&dae.mass).map(|(a, mass)| -mass * a).collect();
+    let mu: Vec<f64> = lambda.iter().map(|l| (1.0 + alpha) * l).collect();
+    let mut s = Hht {
+        dae,
+        n,
+        alpha,
+        beta: (1.0 - alpha) * (1.0 - alpha) / 4.0,
+        gamma: 0.5 - alpha,
+        rtol: settings.rtol,
+        atol: settings.atol,
+        t,
+        q1: q.clone(),
+        v1: qdot.clone(),
+        a1: qddot.clone(),
+        mu1: mu.clone(),
+        q,
+        v: qdot,
+        a: qddot,
+        f,
+        mu,
+        r: vec![0.0; n + m],
+        work: vec![0.0; n],
+        factored_h: None,
+        stats: DynamicStats { max_order_used: 2, ..Default::default() },
+    };
+    let t_end = out.t_end();
+    let span = t_end - t;
+    let h_out = out_step(out, span);
+    let h_max = settings.max_step.unwrap_or(h_out).min(span.max(f64::MIN_POSITIVE));
+    let mut h = settings.initial_step.unwrap_or(h_out / 100.0).min(h_max);
+    let (mut qo, mut vo) = (vec![0.0; n], vec![0.0; n]);
+    let mut lambda1 = vec![0.0; m];
+    let outcome = (|| -> Result<(), Error> {
+        while s.t < t_end - 1e-12 * span.max(1e-300) {
+            if s.stats.steps >= MAX_STEPS {
+                return Err(Error::Integration {
+                    time: s.t,
+                    step: h,
+                    cause: format!("more than {MAX_STEPS} steps; the model may be too stiff for the tolerances, or loosen rtol/atol"),
+                    rows: vec![],
+                });
+            }
+            let h_min = 16.0 * f64::EPSILON * s.t.abs().max(span);
+            if s.t + h > t_end || t_end - (s.t + h) < 1e-3 * h {
+                h = t_end - s.t;
+            }
+            // Predictor: qddot_{n+1} = qddot_n, lambda_{n+1} = lambda_n.
+            s.a1.copy_from_slice(&s.a);
+            s.mu1.copy_from_slice(&s.mu);
+            let newton = s.newton(h)?;
+            let converged = match newton {
+                Newton::Converged => true,
+                Newton::Failed { fresh: false, .. } => {
+                    // Retry once with a fresh matrix before shrinking the step.
+                    s.factored_h = None;
+                    s.a1.copy_from_slice(&s.a);
+                    s.mu1.copy_from_slice(&s.mu);
+                    matches!(s.newton(h)?, Newton::Converged)
+                }
+                Newton::Failed { fresh: true, .. } => false,
+            };
+            if !converged {
+                s.stats.newton_failures += 1;
+                s.factored_h = None;
+                h *= 0.25;
+                if h < h_min {
+                    let residual = s.dae.phi.iter().fold(0.0f64, |x, p| x.max(p.abs()));
+                    let cause = format!(
+                        "Newton's method does not converge (constraint residual {residual:.3e}) even with the smallest step"
+                    );
+                    return Err(step_failure(s.dae, &s.q, s.t, h, &cause));
+                }
+                continue;
+            }
+            // Error test on positions.
+            let c = s.beta - 1.0 / 6.0;
+            let err = {
+                let e: f64 = (0..n)
+                    .map(|k| {
+                        let d = c * h * h * (s.a1[k] - s.a[k]);
+                        (d / (s.atol + s.rtol * s.q1[k].abs().max(s.q[k].abs()))).powi(2)
+                    })
+                    .sum();
+                (e / n.max(1) as f64).sqrt()
+            };
+            let factor = (0.9 * err.max(1e-10).powf(-1.0 / 3.0)).clamp(0.2, 2.0);
+            if err > 1.0 {
+                s.stats.rejected_steps += 1;
+                h *= factor.min(0.9);
+                if h < h_min {
+                    return Err(step_failure(
+                        s.dae,
+                        &s.q,
+                        s.t,
+                        h,
+                        &format!("the error test fails (error {err:.3e} of the tolerance) even with the smallest step"),
+                    ));
+                }
+                continue;
+            }
+            // Accept.
+            let t1 = s.t + h;
+            s.stats.accept(h);
+            for (l, mu) in lambda1.iter_mut().zip(&s.mu1) {
+                *l = mu / (1.0 + s.alpha);
+            }
+            out.advance_work(s.dae, t1, &s.q1, &s.v1, &lambda1);
+            while let Some(to) = out.due(t1) {
+                let theta = ((to - s.t) / h).clamp(0.0, 1.0);
+                hermite5(theta, h, [&s.q, &s.v, &s.a], [&s.q1, &s.v1, &s.a1], &mut qo, &mut vo);
+                out.push(s.dae, to, &qo, &vo)?;
+            }
+            // F_{n+1} from the converged equation: M a + (1 + alpha) F_{n+1} - alpha F_n = 0.
+            for k in 0..n {
+                s.f[k] = (s.alpha * s.f[k] - s.dae.mass[k] * s.a1[k]) / (1.0 + s.alpha);
+            }
+            std::mem::swap(&mut s.q, &mut s.q1);
+            std::mem::swap(&mut s.v, &mut s.v1);
+            std::mem::swap(&mut s.a, &mut s.a1);
+            std::mem::swap(&mut s.mu, &mut s.mu1);
+            s.t = t1;
+            h = (h * factor).min(h_max);
+        }
+        Ok(())
+    })();
+    (s.stats, outcome)
+}
+
+/// The output step (the spacing of the output times), or the span when there is one output.
+fn out_step(out: &Output, span: f64) -> f64 {
+    out.step().min(span.max(f64::MIN_POSITIVE))
+}

@@ -1,0 +1,266 @@
+//! Dynamic analysis: Lagrange's equations of the first kind, an index-3 DAE,
+//!
+//! ```text
+//! M qddot + Phi_q^T lambda = Q(q, qdot, t)
+//! Phi(q, t) = 0
+//! ```
+//!
+//! (Haug 1989 chapter 6; Nikravesh 2018 chapter 11). The analysis assembles the initial guess
+//! (holding each body's `given` coordinates and velocities), computes consistent accelerations
+//! and multipliers, and integrates with the method the analysis names:
+//!
+//! - [`bdf`]: variable order, variable step BDF on the index-3 (or stabilised index-2) form,
+//!   as Adams GSTIFF / DASSL;
+//! - [`hht`]: HHT-alpha on the index-3 form with step-size control (Negrut et al. 2007);
+//! - [`abam`]: coordinate partitioning with Adams-Bashforth-Moulton on the independent
+//!   coordinates (Wehage and Haug 1982), as Adams ABAM.
+//!
+//! Each integrator writes the output times through [`Output`], which computes accelerations,
+//! multipliers, reactions, energies and residuals from the state it is given.
+
+// Numerical kernels index several arrays with one loop variable.
+#![allow(clippy::needless_range_loop)]
+
+pub mod abam;
+pub mod bdf;
+mod dae;
+pub mod hht;
+mod output;
+mod settings;
+
+pub use dae::{Dae, LinearStats, EPS_REL};
+pub use output::{factor_error, Output, ENERGY_COLUMNS};
+pub use settings::{Formulation, IntegratorKind, IntegratorSettings};
+
+use super::{assemble, independent_rows};
+use crate::constraints::ConfigBuf;
+use crate::error::{Error, RowName};
+use crate::model::{Analysis, Model};
+use crate::results::{Failure, Results};
+use faer::Mat;
+use serde_json::json;
+
+/// The most steps one analysis may take before it stops with an error, so that no input can keep
+/// the program busy for hours: 5 million steps of a small model take about a minute.
+pub const MAX_STEPS: usize = 5_000_000;
+
+/// What an integrator did, for `summary.json`.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct DynamicStats {
+    /// Accepted steps.
+    pub steps: usize,
+    /// Steps rejected by the error test.
+    pub rejected_steps: usize,
+    /// Steps rejected because Newton's method did not converge.
+    pub newton_failures: usize,
+    /// Newton iterations in all attempts.
+    pub newton_iterations: usize,
+    /// Evaluations of the Newton matrix (`jacobian_evaluations` of the linear algebra).
+    pub jacobian_evaluations: usize,
+    /// Numeric factorizations.
+    pub factorizations: usize,
+    /// Smallest and largest accepted step, s.
+    pub smallest_step: f64,
+    /// Largest accepted step, s.
+    pub largest_step: f64,
+    /// Highest order used (`bdf`, `abam`; 2 for `hht`).
+    pub max_order_used: usize,
+    /// Times the independent coordinates were chosen (`abam`).
+    pub partitions: usize,
+}
+
+impl DynamicStats {
+    /// Record an accepted step of size `h`.
+    pub fn accept(&mut self, h: f64) {
+        self.steps += 1;
+        if self.steps == 1 {
+            self.smallest_step = h;
+        }
+        self.smallest_step = self.smallest_step.min(h);
+        self.largest_step = self.largest_step.max(h);
+    }
+}
+
+/// The consistent initial state handed to an integrator.
+#[derive(Debug, Clone)]
+pub struct Start {
+    /// Start time, s.
+    pub t: f64,
+    /// (n) positions.
+    pub q: Vec<f64>,
+    /// (n) velocities.
+    pub qdot: Vec<f64>,
+    /// (n) accelerations.
+    pub qddot: Vec<f64>,
+    /// (m) multipliers.
+    pub lambda: Vec<f64>,
+}
+
+/// Weighted root-mean-square norm `sqrt(mean((v_k / (atol + rtol |y_k|))^2))` of the error
+/// estimate `v` against the solution `y`, as DASSL and Hairer-Wanner: 1 means "at the tolerance".
+pub fn wrms(v: &[f64], y: &[f64], rtol: f64, atol: f64) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let s: f64 = v.iter().zip(y).map(|(e, x)| (e / (atol + rtol * x.abs())).powi(2)).sum();
+    (s / v.len() as f64).sqrt()
+}
+
+/// The rows of the smallest singular value of `Phi_q` at `(q, t)` (those with at least a fifth
+/// of the largest component of its left singular vector), and the ratio of the smallest to the
+/// largest singular value: the evidence of a singular position.
+pub fn singular_rows(dae: &mut Dae<'_>, q: &[f64], t: f64) -> (f64, Vec<RowName>) {
+    let (n, m) = (dae.n, dae.m);
+    if m == 0 {
+        return (1.0, vec![]);
+    }
+    let mut jac = Mat::<f64>::zeros(m, n);
+    dae.sys.jacobian_dense(&ConfigBuf::new(q).view(), t, jac.as_mut());
+    let Ok(svd) = jac.thin_svd() else { return (0.0, vec![]) };
+    let s = svd.S().column_vector();
+    let k = s.nrows() - 1;
+    let ratio = if s[0] > 0.0 { s[k] / s[0] } else { 0.0 };
+    let u = svd.U();
+    let umax = (0..m).map(|i| u[(i, k)].abs()).fold(0.0f64, f64::max);
+    let rows = (0..m).filter(|&i| u[(i, k)].abs() >= 0.2 * umax).map(|i| dae.sys.row_name(i)).collect();
+    (ratio, rows)
+}
+
+/// The failure of an integrator whose step fell below `h_min` at `t`: names the rows with the
+/// largest position residual, or, where `Phi_q` has (nearly) lost rank, the rows of the
+/// singularity.
+pub fn step_failure(dae: &mut Dae<'_>, q: &[f64], t: f64, h: f64, cause: &str) -> Error {
+    let (ratio, rows) = singular_rows(dae, q, t);
+    if ratio < 1e-6 {
+        return Error::Singular {
+            time: t,
+            rows,
+            detail: format!(
+                "the integrator cannot step past this position ({cause}, step {h:.3e} s); the constraint Jacobian is nearly singular there (smallest/largest singular value {ratio:.3e}): a dead centre or bifurcation"
+            ),
+        };
+    }
+    Error::Integration { time: t, step: h, cause: cause.to_string(), rows }
+}
+
+/// Hermite interpolation on `[t0, t0 + h]` of positions from `(q, qdot, qddot)` at both ends
+/// (quintic) and of velocities as its derivative; `theta = (t - t0) / h`.
+pub fn hermite5(theta: f64, h: f64, y0: [&[f64]; 3], y1: [&[f64]; 3], q: &mut [f64], qdot: &mut [f64]) {
+    let t = theta;
+    let (t2, t3, t4, t5) = (t * t, t * t * t, t.powi(4), t.powi(5));
+    let h0 = 1.0 - 10.0 * t3 + 15.0 * t4 - 6.0 * t5;
+    let h1 = t - 6.0 * t3 + 8.0 * t4 - 3.0 * t5;
+    let h2 = 0.5 * t2 - 1.5 * t3 + 1.5 * t4 - 0.5 * t5;
+    let h3 = 0.5 * t3 - t4 + 0.5 * t5;
+    let h4 = -4.0 * t3 + 7.0 * t4 - 3.0 * t5;
+    let h5 = 10.0 * t3 - 15.0 * t4 + 6.0 * t5;
+    let d0 = -30.0 * t2 + 60.0 * t3 - 30.0 * t4;
+    let d1 = 1.0 - 18.0 * t2 + 32.0 * t3 - 15.0 * t4;
+    let d2 = t - 4.5 * t2 + 6.0 * t3 - 2.5 * t4;
+    let d3 = 1.5 * t2 - 4.0 * t3 + 2.5 * t4;
+    let d4 = -12.0 * t2 + 28.0 * t3 - 15.0 * t4;
+    let d5 = 30.0 * t2 - 60.0 * t3 + 30.0 * t4;
+    let [q0, v0, a0] = y0;
+    let [q1, v1, a1] = y1;
+    for k in 0..q.len() {
+        let (hv0, ha0, hv1, ha1) = (h * v0[k], h * h * a0[k], h * v1[k], h * h * a1[k]);
+        q[k] = h0 * q0[k] + h1 * hv0 + h2 * ha0 + h3 * ha1 + h4 * hv1 + h5 * q1[k];
+        qdot[k] = (d0 * q0[k] + d1 * hv0 + d2 * ha0 + d3 * ha1 + d4 * hv1 + d5 * q1[k]) / h;
+    }
+}
+
+/// Run a dynamic analysis. On failure the results up to the last good output time are kept.
+pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
+    let settings = analysis.integrator;
+    let n = model.n();
+    let fail = |results: Results, error: Error| Box::new(Failure { error, results });
+    let mut dae = match Dae::new(model, &analysis.drivers) {
+        Ok(d) => d,
+        Err(e) => return Err(fail(Results::new(model, analysis), factor_error(e, analysis.t_start))),
+    };
+    let m = dae.m;
+    let mut out = Output::new(model, analysis, n, m);
+    let t0 = analysis.t_start;
+    // Assembly holds what the user marked as given: positions first, then velocities.
+    let given: Vec<bool> = (0..2)
+        .flat_map(|half| model.bodies.iter().flat_map(move |b| b.given[3 * half..3 * half + 3].to_vec()))
+        .collect();
+    let assembly = match assemble(&mut dae.sys, &model.q0(), &model.qdot0(), &given, t0, analysis.settings.tolerance) {
+        Ok(a) => a,
+        Err(e) => return Err(fail(out.results, e)),
+    };
+    let mut jac = Mat::<f64>::zeros(m, n);
+    dae.sys.jacobian_dense(&ConfigBuf::new(&assembly.q).view(), t0, jac.as_mut());
+    let (independent, redundant) = independent_rows(jac.as_ref());
+    let redundant_rows: Vec<String> = redundant.iter().map(|&r| dae.sys.row_name(r).to_string()).collect();
+    let mut sol = vec![0.0; n + m];
+    if let Err(e) = dae.accelerations(&assembly.q, &assembly.qdot, t0, &mut sol) {
+        return Err(fail(out.results, factor_error(e, t0)));
+    }
+    let start = Start {
+        t: t0,
+        q: assembly.q.clone(),
+        qdot: assembly.qdot.clone(),
+        qddot: sol[..n].to_vec(),
+        lambda: sol[n..].to_vec(),
+    };
+    out.start_work(&mut dae, t0, &start.q, &start.qdot, &start.lambda);
+    let (mut stats, outcome) = match out.push(&mut dae, t0, &start.q, &start.qdot) {
+        Err(e) => (DynamicStats::default(), Err(e)),
+        Ok(()) => match settings.kind {
+            IntegratorKind::Hht => hht::run(&mut dae, &mut out, &settings, start),
+            IntegratorKind::Bdf => bdf::run(&mut dae, &mut out, &settings, start),
+            IntegratorKind::Abam => abam::run(&mut dae, &mut out, &settings, start),
+        },
+    };
+    let error = outcome.err();
+    stats.jacobian_evaluations = dae.stats.jacobian_evaluations;
+    stats.factorizations = dae.stats.factorizations;
+    let mut results = out.results;
+    let s = &mut results.summary;
+    s.insert("output_points".into(), json!(results.time.len()));
+    s.insert("dof".into(), json!(n - independent.len()));
+    s.insert("integrator".into(), json!(settings));
+    s.insert("statistics".into(), json!(stats));
+    s.insert("redundant_rows".into(), json!(redundant_rows));
+    s.insert(
+        "assembly".into(),
+        json!({"iterations": assembly.iterations, "residual": assembly.residual, "velocity_residual": assembly.velocity_residual}),
+    );
+    s.insert(
+        "residuals".into(),
+        json!({"max_position": out.max_position_residual, "max_velocity": out.max_velocity_residual}),
+    );
+    match error {
+        None => Ok(results),
+        Some(e) => Err(fail(results, e)),
+    }
+}
+
+/// An integrator's outcome: its statistics, and the error that stopped it if one did.
+pub type Outcome = (DynamicStats, Result<(), Error>);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The quintic Hermite interpolant reproduces a quintic polynomial and its derivative
+    /// exactly (to rounding), from values, first and second derivatives at both ends.
+    #[test]
+    fn hermite5_reproduces_quintics() {
+        let p = |t: f64| [1.0 - 2.0 * t + 0.5 * t.powi(3) + 0.3 * t.powi(5), 3.0 * t * t - t.powi(4)];
+        let dp = |t: f64| [-2.0 + 1.5 * t * t + 1.5 * t.powi(4), 6.0 * t - 4.0 * t.powi(3)];
+        let ddp = |t: f64| [3.0 * t + 6.0 * t.powi(3), 6.0 - 12.0 * t * t];
+        let (t0, h) = (0.4, 0.7);
+        let (q0, v0, a0) = (p(t0), dp(t0), ddp(t0));
+        let (q1, v1, a1) = (p(t0 + h), dp(t0 + h), ddp(t0 + h));
+        for theta in [0.0, 0.13, 0.5, 0.77, 1.0] {
+            let (mut q, mut v) = ([0.0; 2], [0.0; 2]);
+            hermite5(theta, h, [&q0, &v0, &a0], [&q1, &v1, &a1], &mut q, &mut v);
+            let (qe, ve) = (p(t0 + theta * h), dp(t0 + theta * h));
+            for k in 0..2 {
+                assert!((q[k] - qe[k]).abs() < 1e-14 && (v[k] - ve[k]).abs() < 1e-13, "{theta}: {q:?} {v:?}");
+            }
+        }
+    }
+}

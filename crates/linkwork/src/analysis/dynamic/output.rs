@@ -1,0 +1,168 @@
+//! Output of a dynamic analysis at the requested times, shared by every integrator.
+//!
+//! An integrator steps at its own pace; after each accepted step it hands every output time the
+//! step covered to [`Output::push`], with positions and velocities from its own interpolant.
+//! At each output time the accelerations and multipliers are then computed from the state,
+//! `[M, Phi_q^T; Phi_q, 0] [qddot; lambda] = [Q; gamma]`, so that reactions, driver efforts and
+//! accelerations are those of the state written, whatever the integrator. The work of the
+//! non-conservative forces is integrated over the accepted steps by the trapezoidal rule
+//! ([`Output::advance_work`]) and interpolated linearly to the output times.
+
+use super::dae::Dae;
+use crate::error::Error;
+use crate::linalg::FactorError;
+use crate::model::{Analysis, Model};
+use crate::results::Results;
+
+/// Columns written after the body quantities, reactions and efforts.
+pub const ENERGY_COLUMNS: [&str; 5] =
+    ["kinetic_energy", "potential_energy", "nonconservative_work", "position_residual", "velocity_residual"];
+
+/// The requested output times and the results written so far.
+#[derive(Debug)]
+pub struct Output {
+    /// Output times, ascending.
+    times: Vec<f64>,
+    /// Index of the next time to write.
+    next: usize,
+    /// Output step, s.
+    h: f64,
+    /// The results.
+    pub results: Results,
+    /// `(t, W)` at the last two accepted steps, and the power at the last.
+    work_prev: (f64, f64),
+    work_last: (f64, f64),
+    power_last: f64,
+    /// Scratch: `(n + m)` solution, two `(m)` rows, reactions row, output row.
+    sol: Vec<f64>,
+    rows: Vec<f64>,
+    rows2: Vec<f64>,
+    react: Vec<f64>,
+    row: Vec<f64>,
+    /// Largest residuals at output times.
+    pub max_position_residual: f64,
+    /// Largest velocity-constraint residual at output times.
+    pub max_velocity_residual: f64,
+}
+
+impl Output {
+    /// Empty results with the columns of a dynamic analysis.
+    pub fn new(model: &Model, analysis: &Analysis, n: usize, m: usize) -> Output {
+        let mut results = Results::new(model, analysis);
+        let mut names = Vec::new();
+        for j in &model.joints {
+            names.extend(["fx", "fy", "torque"].map(|q| format!("{}.{q}", j.name)));
+        }
+        names.extend(analysis.drivers.iter().map(|&d| format!("{}.effort", model.drivers[d].name)));
+        names.extend(ENERGY_COLUMNS.map(String::from));
+        names.extend(model.measures.iter().map(|m| m.name.clone()));
+        results.add_columns(names);
+        let h = analysis.step;
+        let t0 = analysis.t_start;
+        let count = ((analysis.t_end - t0) / h + 1e-9).floor() as usize;
+        let mut times: Vec<f64> = (0..=count).map(|k| t0 + k as f64 * h).collect();
+        if analysis.t_end - times[count] > 1e-9 * h {
+            times.push(analysis.t_end);
+        }
+        results.reserve(times.len());
+        Output {
+            times,
+            next: 0,
+            h,
+            results,
+            work_prev: (t0, 0.0),
+            work_last: (t0, 0.0),
+            power_last: 0.0,
+            sol: vec![0.0; n + m],
+            rows: vec![0.0; m],
+            rows2: vec![0.0; m],
+            react: Vec::new(),
+            row: Vec::new(),
+            max_position_residual: 0.0,
+            max_velocity_residual: 0.0,
+        }
+    }
+
+    /// The output step, s.
+    pub fn step(&self) -> f64 {
+        self.h
+    }
+
+    /// The end time.
+    pub fn t_end(&self) -> f64 {
+        self.times[self.times.len() - 1]
+    }
+
+    /// The next output time if it is not after `t` (with a margin of `1e-9` output steps for
+    /// rounding), else `None`.
+    pub fn due(&self, t: f64) -> Option<f64> {
+        self.times.get(self.next).copied().filter(|&to| to <= t + 1e-9 * self.h)
+    }
+
+    /// Start the work integral at `t0` with the power at the initial state.
+    pub fn start_work(&mut self, dae: &mut Dae<'_>, t: f64, q: &[f64], qdot: &[f64], lambda: &[f64]) {
+        dae.positions(q, t);
+        self.power_last = dae.nonconservative_power(q, qdot, t, lambda, &mut self.rows);
+        self.work_prev = (t, 0.0);
+        self.work_last = (t, 0.0);
+    }
+
+    /// Advance the work integral over an accepted step to `t` (trapezoidal rule). `lambda`: the
+    /// integrator's multipliers at `t` (only the drivers' rows are used).
+    pub fn advance_work(&mut self, dae: &mut Dae<'_>, t: f64, q: &[f64], qdot: &[f64], lambda: &[f64]) {
+        dae.positions(q, t);
+        let p = dae.nonconservative_power(q, qdot, t, lambda, &mut self.rows);
+        let (t0, w0) = self.work_last;
+        self.work_prev = self.work_last;
+        self.work_last = (t, w0 + 0.5 * (t - t0) * (self.power_last + p));
+        self.power_last = p;
+    }
+
+    fn work_at(&self, t: f64) -> f64 {
+        let ((t0, w0), (t1, w1)) = (self.work_prev, self.work_last);
+        if t1 > t0 {
+            w0 + (w1 - w0) * (t - t0) / (t1 - t0)
+        } else {
+            w1
+        }
+    }
+
+    /// Write the next output time `t` from the state `(q, qdot)`.
+    pub fn push(&mut self, dae: &mut Dae<'_>, t: f64, q: &[f64], qdot: &[f64]) -> Result<(), Error> {
+        let n = dae.n;
+        dae.accelerations(q, qdot, t, &mut self.sol).map_err(|e| factor_error(e, t))?;
+        let (qddot, lambda) = self.sol.split_at(n);
+        dae.reactions(q, lambda, &mut self.react);
+        let position_residual = dae.phi.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        dae.jv(qdot, &mut self.rows);
+        dae.nu(q, t, &mut self.rows2);
+        let velocity_residual = self.rows.iter().zip(&self.rows2).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        self.max_position_residual = self.max_position_residual.max(position_residual);
+        self.max_velocity_residual = self.max_velocity_residual.max(velocity_residual);
+        let kinetic = dae.kinetic_energy(qdot);
+        let potential = dae.potential_energy(q);
+        self.row.clear();
+        self.row.extend_from_slice(&self.react);
+        self.row.extend([kinetic, potential, self.work_at(t), position_residual, velocity_residual]);
+        for m in &dae.model.measures {
+            self.row.push(m.value(q, qdot, qddot, t));
+        }
+        self.results.push(t, q, qdot, qddot, &self.row);
+        self.next += 1;
+        Ok(())
+    }
+}
+
+/// A factorization failure at time `t` as an error.
+pub fn factor_error(e: FactorError, t: f64) -> Error {
+    match e {
+        FactorError::StructurallySingular { column } => Error::Singular {
+            time: t,
+            rows: vec![],
+            detail: format!(
+                "the equations of motion do not determine coordinate {column}: a body with no mass or inertia in a direction no joint fixes"
+            ),
+        },
+        FactorError::OutOfMemory => Error::Io { path: String::new(), message: "out of memory while factorizing".into() },
+    }
+}

@@ -1,0 +1,113 @@
+//! Expressions of time and state inside force elements: `"-20*crank.omega + 100*sin(t)"`.
+//!
+//! The model compiler resolves each name to a [`StateVar`] (a global coordinate, velocity or
+//! time); the force element then maps the coordinates onto its local columns
+//! ([`Load::localize`]), so that evaluation reads only the element's `x` and `v`.
+
+use crate::constraints::MAX_SLOTS;
+use crate::expr::{Expr, Scalar};
+
+/// What an expression slot stands for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StateVar {
+    /// `q[index]`.
+    Position(usize),
+    /// `qdot[index]`.
+    Velocity(usize),
+    /// `qddot[index]` (measures only).
+    Acceleration(usize),
+    /// The time `t`.
+    Time,
+}
+
+/// An expression over state slots, with at most [`MAX_SLOTS`] names.
+#[derive(Debug, Clone)]
+pub struct StateExpr {
+    expr: Expr,
+    /// (slots) what each slot stands for, global indices.
+    vars: Vec<StateVar>,
+}
+
+impl StateExpr {
+    /// `expr` with slot `k` standing for `vars[k]`.
+    ///
+    /// # Errors
+    ///
+    /// More than [`MAX_SLOTS`] names.
+    pub fn try_new(expr: Expr, vars: Vec<StateVar>) -> Result<StateExpr, String> {
+        if vars.len() > MAX_SLOTS {
+            return Err(format!("the expression uses {} names; at most {MAX_SLOTS} are supported", vars.len()));
+        }
+        Ok(StateExpr { expr, vars })
+    }
+
+    /// The source text.
+    pub fn source(&self) -> &str {
+        self.expr.source()
+    }
+
+    /// Value from global `q`, `qdot`, `qddot` (the last may be empty when no slot needs it).
+    pub fn eval_global(&self, q: &[f64], qdot: &[f64], qddot: &[f64], t: f64) -> f64 {
+        let mut z = [0.0; MAX_SLOTS];
+        for (zk, v) in z.iter_mut().zip(&self.vars) {
+            *zk = match *v {
+                StateVar::Position(c) => q[c],
+                StateVar::Velocity(c) => qdot[c],
+                StateVar::Acceleration(c) => qddot[c],
+                StateVar::Time => t,
+            };
+        }
+        self.expr.eval(&z[..self.vars.len()])
+    }
+}
+
+/// A force magnitude: a constant or an expression of time and state over local columns.
+#[derive(Debug, Clone)]
+pub enum Load {
+    /// A constant.
+    Constant(f64),
+    /// An expression; after [`Load::localize`] its coordinate slots index the element's columns.
+    Expression(StateExpr),
+}
+
+impl Load {
+    /// Map the expression's coordinates onto local columns, appending those not yet in
+    /// `columns`.
+    pub(crate) fn localize(&mut self, columns: &mut Vec<usize>) {
+        let Load::Expression(e) = self else { return };
+        let mut local = |c: usize| match columns.iter().position(|&k| k == c) {
+            Some(k) => k,
+            None => {
+                columns.push(c);
+                columns.len() - 1
+            }
+        };
+        for v in e.vars.iter_mut() {
+            *v = match *v {
+                StateVar::Position(c) => StateVar::Position(local(c)),
+                StateVar::Velocity(c) => StateVar::Velocity(local(c)),
+                other => other,
+            };
+        }
+    }
+
+    /// The value from local `x`, `v` (after [`Load::localize`]).
+    #[inline]
+    pub(crate) fn value<S: Scalar>(&self, x: &[S], v: &[S], t: f64) -> S {
+        match self {
+            Load::Constant(c) => S::constant(*c),
+            Load::Expression(e) => {
+                let mut z = [S::constant(0.0); MAX_SLOTS];
+                for (zk, var) in z.iter_mut().zip(&e.vars) {
+                    *zk = match *var {
+                        StateVar::Position(k) => x[k],
+                        StateVar::Velocity(k) => v[k],
+                        StateVar::Acceleration(_) => S::constant(f64::NAN),
+                        StateVar::Time => S::constant(t),
+                    };
+                }
+                e.expr.eval(&z[..e.vars.len()])
+            }
+        }
+    }
+}
