@@ -3,6 +3,8 @@
 ::
 
     linkwork run MODEL [--analysis NAME] [--out DIR]   run an analysis, write results.csv and summary.json
+        [--integrator bdf|hht|abam] [--rtol R] [--atol A] [--t-end T] [--step H]
+                                                       change the analysis for this run
     linkwork check MODEL [--json]                      degrees of freedom, redundant rows, assembly
     linkwork schema                                    the JSON Schema of model files
 
@@ -81,6 +83,11 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("model", metavar="MODEL", help="model file (YAML)")
     run.add_argument("--analysis", "-a", metavar="NAME", help="analysis to run (default: the first in the file)")
     run.add_argument("--out", "-o", metavar="DIR", type=Path, help="output folder (default: out/<model file stem>/)")
+    run.add_argument("--integrator", choices=("bdf", "hht", "abam"), help="integrator of a dynamic analysis")
+    run.add_argument("--rtol", type=float, metavar="R", help="relative error tolerance of a dynamic analysis")
+    run.add_argument("--atol", type=float, metavar="A", help="absolute error tolerance of a dynamic analysis")
+    run.add_argument("--t-end", type=float, metavar="T", help="end time, s")
+    run.add_argument("--step", type=float, metavar="H", help="output step, s")
     run.set_defaults(command=_run)
 
     check = commands.add_parser(
@@ -106,7 +113,9 @@ def _run(args: argparse.Namespace) -> int:
     model = Model.load(args.model)
     out: Path = args.out if args.out is not None else Path("out") / Path(args.model).stem
     try:
-        results = model.run(args.analysis)
+        results = model.run(
+            args.analysis, integrator=args.integrator, rtol=args.rtol, atol=args.atol, t_end=args.t_end, step=args.step
+        )
     except (SolverError, AssemblyError) as error:
         _print_failure(error)
         partial = error.results
@@ -131,7 +140,20 @@ def _print_summary(results: Results) -> None:
     drivers = ", ".join(s.get("active_drivers", [])) or "none"
     print(f"  {s.get('bodies', '?')} bodies, {s.get('coordinates', '?')} coordinates; drivers: {drivers}")
     print(f"  {_span(results)}")
-    if stats:
+    if stats and s.get("type") == "dynamic":
+        integrator: dict[str, Any] = s.get("integrator") or {}
+        print(
+            f"  {integrator.get('kind', '?')}: {stats.get('steps', '?')} steps "
+            f"({stats.get('rejected_steps', '?')} rejected by the error test, "
+            f"{stats.get('newton_failures', '?')} by Newton), {stats.get('newton_iterations', '?')} Newton iterations, "
+            f"{stats.get('factorizations', '?')} factorizations"
+        )
+        residuals: dict[str, Any] = s.get("residuals") or {}
+        print(
+            f"  largest constraint residuals at output: position {_num(residuals.get('max_position'))}, "
+            f"velocity {_num(residuals.get('max_velocity'))}"
+        )
+    elif stats:
         print(
             f"  {stats.get('substeps', '?')} sub-steps ({stats.get('rejected_substeps', '?')} rejected), "
             f"{stats.get('newton_iterations', '?')} Newton iterations, "

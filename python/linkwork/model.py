@@ -85,8 +85,21 @@ class Model:
         report: dict[str, Any] = self._native.check()
         return report
 
-    def run(self, analysis: str | None = None) -> Results:
+    def run(
+        self,
+        analysis: str | None = None,
+        *,
+        integrator: str | None = None,
+        rtol: float | None = None,
+        atol: float | None = None,
+        t_end: float | None = None,
+        step: float | None = None,
+    ) -> Results:
         """Run the analysis called ``analysis`` (default: the first one in the file).
+
+        The keyword arguments change the analysis for this run only: ``integrator`` (``"bdf"``,
+        ``"hht"`` or ``"abam"``), the tolerances ``rtol`` and ``atol`` (dynamic analyses), the end
+        time ``t_end`` and the output step ``step`` (s). A bad value raises :class:`ModelError`.
 
         On a solver failure the exception (:class:`SolverError`, :class:`AssemblyError`) has
         ``results``: the :class:`Results` computed before the failure.
@@ -100,7 +113,7 @@ class Model:
                 )
             analysis = self.analyses[0]
         try:
-            return Results(self._native.run(analysis))
+            return Results(self._native.run(analysis, integrator, rtol, atol, t_end, step))
         except (SolverError, AssemblyError) as error:
             if isinstance(error.results, _linkwork.PyResults):
                 error.results = Results(error.results)

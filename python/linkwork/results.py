@@ -18,7 +18,10 @@ class Results:
 
     ``results["rocker.phi"]`` is one column (a read-only numpy array, one value per output time);
     the columns are named ``<body>.x, .y, .phi, .vx, .vy, .omega, .ax, .ay, .alpha`` per body,
-    in SI units, angles unwrapped. ``results["time"]`` is the output times.
+    in SI units, angles unwrapped; a dynamic analysis adds ``<joint>.fx, .fy, .torque``,
+    ``<driver>.effort``, ``kinetic_energy``, ``potential_energy``, ``nonconservative_work``,
+    ``position_residual`` and ``velocity_residual``; measures come last, by name.
+    ``results["time"]`` is the output times.
     """
 
     __slots__ = ("_columns", "_index", "_native", "_time", "_values")
@@ -74,6 +77,24 @@ class Results:
     def __len__(self) -> int:
         """Number of output points."""
         return len(self._time)
+
+    def reaction(self, joint: str, frame: str = "global") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(fx, fy, torque)`` of ``joint`` (dynamic analyses): the force it exerts on its first
+        body and the moment about the joint's point on that body. ``frame="global"`` gives the
+        columns ``<joint>.fx``, ``.fy``; ``frame="body"`` resolves the force in the first body's
+        frame (rotated by ``-phi`` of that body; ground's frame is the global one).
+        """
+        if frame not in ("global", "body"):
+            raise ValueError(f"frame must be 'global' or 'body', not {frame!r}")
+        fx, fy, torque = (self[f"{joint}.{q}"] for q in ("fx", "fy", "torque"))
+        if frame == "global":
+            return fx, fy, torque
+        body = (self.summary.get("reaction_bodies") or {}).get(joint)
+        if body is None or body == "ground":
+            return fx, fy, torque
+        phi = self[f"{body}.phi"]
+        c, s = np.cos(phi), np.sin(phi)
+        return c * fx + s * fy, -s * fx + c * fy, torque
 
     def to_pandas(self) -> pandas.DataFrame:
         """A DataFrame indexed by ``time``, one column per quantity (needs pandas:

@@ -75,10 +75,37 @@ impl PyModel {
         json::to_py(py, &value)
     }
 
-    /// Run the analysis called `analysis`. A failure raises the matching exception, whose
-    /// `results` attribute holds the output computed before it.
-    fn run(&self, py: Python<'_>, analysis: &str) -> PyResult<PyResults> {
-        match py.detach(|| guard(|| self.model.run(analysis)))? {
+    /// Run the analysis called `analysis`, with optional changes for this run (`integrator`:
+    /// "bdf", "hht" or "abam"; tolerances; end time and output step). A failure raises the
+    /// matching exception, whose `results` attribute holds the output computed before it.
+    #[pyo3(signature = (analysis, integrator=None, rtol=None, atol=None, t_end=None, step=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn run(
+        &self,
+        py: Python<'_>,
+        analysis: &str,
+        integrator: Option<&str>,
+        rtol: Option<f64>,
+        atol: Option<f64>,
+        t_end: Option<f64>,
+        step: Option<f64>,
+    ) -> PyResult<PyResults> {
+        use linkwork::analysis::dynamic::IntegratorKind;
+        let integrator = match integrator {
+            None => None,
+            Some("bdf") => Some(IntegratorKind::Bdf),
+            Some("hht") => Some(IntegratorKind::Hht),
+            Some("abam") => Some(IntegratorKind::Abam),
+            Some(other) => {
+                let problem = linkwork::Problem::new(
+                    "--integrator",
+                    format!("unknown integrator '{other}'; expected bdf, hht or abam"),
+                );
+                return Err(to_pyerr(py, Error::Model(vec![problem]), None));
+            }
+        };
+        let overrides = linkwork::Overrides { integrator, rtol, atol, t_end, step };
+        match py.detach(|| guard(|| self.model.run_with(analysis, &overrides)))? {
             Ok(results) => Ok(PyResults { results, error: None }),
             Err(failure) => {
                 let linkwork::Failure { error, results } = *failure;
@@ -99,7 +126,8 @@ struct PyResults {
 
 #[pymethods]
 impl PyResults {
-    /// Column names after `time`: `<body>.x, .y, .phi, .vx, .vy, .omega, .ax, .ay, .alpha` per body.
+    /// Column names after `time`: `<body>.x, .y, .phi, .vx, .vy, .omega, .ax, .ay, .alpha` per
+    /// body, then (dynamics) reactions, driver efforts, energies and residuals, then measures.
     #[getter]
     fn names(&self) -> Vec<String> {
         self.results.names.clone()

@@ -24,4 +24,4 @@ pub mod system;
 
 pub use error::{Error, Problem, RowName};
 pub use model::Model;
-pub use results::{Failure, Results};
+pub use results::{Failure, Overrides, Results};

@@ -164,10 +164,101 @@ impl Results {
     }
 }
 
+/// Changes to an analysis for one run (the command line's `--integrator`, `--rtol`, `--atol`,
+/// `--t-end` and `--step`); `None` keeps the file's value.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Overrides {
+    /// The integrator of a dynamic analysis.
+    pub integrator: Option<crate::analysis::dynamic::IntegratorKind>,
+    /// Relative tolerance of a dynamic analysis.
+    pub rtol: Option<f64>,
+    /// Absolute tolerance of a dynamic analysis.
+    pub atol: Option<f64>,
+    /// End time, s.
+    pub t_end: Option<f64>,
+    /// Output step, s.
+    pub step: Option<f64>,
+}
+
+impl Overrides {
+    /// `analysis` with these changes, or every problem (paths are the option names).
+    fn apply(&self, analysis: &Analysis) -> Result<Analysis, Error> {
+        use crate::model::spec::AnalysisKind;
+        let mut a = analysis.clone();
+        let mut problems = Vec::new();
+        let mut positive = |name: &str, v: Option<f64>| -> Option<f64> {
+            let v = v?;
+            if v.is_finite() && v > 0.0 {
+                Some(v)
+            } else {
+                problems.push(crate::Problem::new(name, format!("expected a positive number, found {v}")));
+                None
+            }
+        };
+        let rtol = positive("--rtol", self.rtol);
+        let atol = positive("--atol", self.atol);
+        let step = positive("--step", self.step);
+        if let Some(t) = self.t_end {
+            if !t.is_finite() || t < a.t_start {
+                problems.push(crate::Problem::new(
+                    "--t-end",
+                    format!("expected a time at or after the analysis' start ({} s), found {t}", a.t_start),
+                ));
+            } else {
+                a.t_end = t;
+            }
+        }
+        if let Some(h) = step {
+            a.step = h;
+        }
+        if (a.t_end - a.t_start) / a.step > 1e7 {
+            problems.push(crate::Problem::new("--step", "more than 1e7 output points requested"));
+        }
+        let dynamic = a.kind == AnalysisKind::Dynamic;
+        for (name, given) in
+            [("--integrator", self.integrator.is_some()), ("--rtol", rtol.is_some()), ("--atol", atol.is_some())]
+        {
+            if given && !dynamic {
+                problems.push(crate::Problem::new(
+                    name,
+                    format!("only a dynamic analysis has an integrator; '{}' is {:?}", a.name, a.kind),
+                ));
+            }
+        }
+        if let Some(k) = self.integrator {
+            if k != a.integrator.kind {
+                // Settings that belong to the file's integrator do not carry over.
+                let d = crate::analysis::IntegratorSettings::default();
+                a.integrator = crate::analysis::IntegratorSettings { kind: k, ..d };
+                a.integrator.rtol = analysis.integrator.rtol;
+                a.integrator.atol = analysis.integrator.atol;
+                a.integrator.initial_step = analysis.integrator.initial_step;
+                a.integrator.max_step = analysis.integrator.max_step;
+            }
+        }
+        if let Some(r) = rtol {
+            a.integrator.rtol = r;
+        }
+        if let Some(t) = atol {
+            a.integrator.atol = t;
+        }
+        if problems.is_empty() {
+            Ok(a)
+        } else {
+            Err(Error::Model(problems))
+        }
+    }
+}
+
 impl Model {
     /// Run the analysis called `name`.
     pub fn run(&self, name: &str) -> Result<Results, Box<Failure>> {
-        let analysis = self.analysis(name).map_err(|error| {
+        self.run_with(name, &Overrides::default())
+    }
+
+    /// Run the analysis called `name` with `overrides` applied.
+    pub fn run_with(&self, name: &str, overrides: &Overrides) -> Result<Results, Box<Failure>> {
+        let analysis = self.analysis(name).and_then(|a| overrides.apply(a)).map_err(|error| {
             let empty = Analysis {
                 name: name.into(),
                 kind: crate::model::spec::AnalysisKind::Kinematic,
@@ -181,8 +272,8 @@ impl Model {
             Box::new(Failure { error, results: Results::new(self, &empty) })
         })?;
         match analysis.kind {
-            crate::model::spec::AnalysisKind::Kinematic => crate::analysis::run_kinematic(self, analysis),
-            crate::model::spec::AnalysisKind::Dynamic => crate::analysis::dynamic::run_dynamic(self, analysis),
+            crate::model::spec::AnalysisKind::Kinematic => crate::analysis::run_kinematic(self, &analysis),
+            crate::model::spec::AnalysisKind::Dynamic => crate::analysis::dynamic::run_dynamic(self, &analysis),
         }
     }
 }

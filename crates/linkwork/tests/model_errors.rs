@@ -159,3 +159,65 @@ fn fields_of_joints_and_drivers_keep_their_paths() {
     let fun = "drivers:\n  d: {type: x, body: a, point: [0, 0], function: 3}\n";
     has(&problems(&(base.to_string() + fun)), "drivers.d.function", "expected a string");
 }
+
+const BAD_DYNAMICS: &str = r#"
+gravity: [0, "down"]
+bodies:
+  crank: {mass: -1, inertia: -0.5, position: [0, 0], angle: 0}
+  rocker: {mass: 1, inertia: 1, position: [1, 0], angle: 0}
+joints:
+  O: {type: revolute, body_i: crank, point_i: [0, 0], body_j: ground, point_j: [0, 0]}
+forces:
+  drag: {type: torque, body: crank, torque: "-2*crank.omgea"}
+  push: {type: force, body: ground, fx: 1}
+  spring: {type: spring_damper, body_i: crank, point_i: [0, 0], body_j: rocker, point_j: tip, stiffness: -3}
+  twist: {type: rotational_spring_damper, body_i: crank, body_j: crank}
+  what: {type: magnet, body: crank}
+measures:
+  stroke: "crank.x + rokcer.ax"
+  tip: {body: crank, component: z}
+analyses:
+  dyn: {type: dynamic, integrator: hht, t_end: 1, step: 0.1, solver: {rtol: 0, atol: -1, alpha: 0.5, max_order: 3}}
+  kin: {type: kinematic, integrator: bdf, t_end: 1, step: 0.1}
+  abam: {type: dynamic, integrator: abam, t_end: 1, step: 0.1, solver: {alpha: -0.1, formulation: si2}}
+"#;
+
+/// The bad inputs the dynamics issue names (an unknown state name in a force expression, a
+/// negative mass or inertia, a tolerance of zero) and their neighbours, each with its path.
+#[test]
+fn dynamics_problems_are_listed_with_their_paths() {
+    let p = problems(BAD_DYNAMICS);
+    has(&p, "gravity[1]", "invalid type: string");
+    has(&p, "bodies.crank.mass", "mass >= 0");
+    has(&p, "bodies.crank.inertia", ">= 0");
+    has(&p, "forces.drag.torque", "unknown name 'crank.omgea'");
+    has(&p, "forces.push.body", "ground does not move");
+    has(&p, "forces.spring.point_j", "unknown point 'tip'");
+    has(&p, "forces.spring.stiffness", ">= 0");
+    has(&p, "forces.twist.body_j", "two different bodies");
+    has(&p, "forces.what.type", "unknown type `magnet`");
+    has(&p, "measures.stroke", "unknown name 'rokcer.ax'");
+    has(&p, "measures.tip.component", "unknown variant `z`");
+    has(&p, "analyses.dyn.solver.rtol", "positive");
+    has(&p, "analyses.dyn.solver.atol", "positive");
+    has(&p, "analyses.dyn.solver.alpha", "[-1/3, 0]");
+    has(&p, "analyses.dyn.solver.max_order", "fixed order");
+    has(&p, "analyses.kin.integrator", "only a dynamic analysis");
+    has(&p, "analyses.abam.solver.alpha", "hht only");
+    has(&p, "analyses.abam.solver.formulation", "bdf only");
+}
+
+/// Command-line overrides are checked like file values; the option is the path.
+#[test]
+fn overrides_are_checked() {
+    let model = Model::load(example("double_pendulum.yaml")).unwrap();
+    let bad = linkwork::Overrides { rtol: Some(0.0), t_end: Some(-1.0), ..Default::default() };
+    let e = model.run_with("dynamics", &bad).unwrap_err().error;
+    let Error::Model(p) = e else { panic!("expected a model error") };
+    let p: Vec<String> = p.iter().map(|p| p.to_string()).collect();
+    has(&p, "--rtol", "positive");
+    has(&p, "--t-end", "start");
+    let kin = Model::load(example("fourbar.yaml")).unwrap();
+    let e = kin.run_with("kinematics", &linkwork::Overrides { atol: Some(1e-3), ..Default::default() }).unwrap_err();
+    assert!(e.error.to_string().contains("--atol: only a dynamic analysis"), "{}", e.error);
+}

@@ -208,7 +208,13 @@ fn tagged<T>(
 /// A problem at `path` plus the path serde tracked inside the value.
 fn located(path: &str, e: serde_path_to_error::Error<serde_yaml_ng::Error>) -> Problem {
     let inner = e.path().to_string();
-    let full = if inner == "." || inner.is_empty() { path.to_string() } else { format!("{path}.{inner}") };
+    let full = if inner == "." || inner.is_empty() {
+        path.to_string()
+    } else if inner.starts_with('[') {
+        format!("{path}{inner}")
+    } else {
+        format!("{path}.{inner}")
+    };
     Problem::new(full, e.into_inner().to_string())
 }
 

@@ -223,6 +223,16 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     s.insert("integrator".into(), json!(settings));
     s.insert("statistics".into(), json!(stats));
     s.insert("redundant_rows".into(), json!(redundant_rows));
+    // The body each joint's reaction acts on (its first body), for reactions in its frame.
+    let on: serde_json::Map<String, serde_json::Value> = model
+        .joints
+        .iter()
+        .map(|j| {
+            let body = j.constraint.anchor().i.0.map_or("ground", |k| model.bodies[k / 3].name.as_str());
+            (j.name.clone(), json!(body))
+        })
+        .collect();
+    s.insert("reaction_bodies".into(), serde_json::Value::Object(on));
     s.insert(
         "assembly".into(),
         json!({"iterations": assembly.iterations, "residual": assembly.residual, "velocity_residual": assembly.velocity_residual}),
