@@ -66,7 +66,7 @@ impl StateExpr {
 pub enum Load {
     /// A constant.
     Constant(f64),
-    /// An expression; after [`Load::localize`] its coordinate slots index the element's columns.
+    /// An expression; once localized to an element, its coordinate slots index the element's columns.
     Expression(StateExpr),
 }
 
