@@ -904,6 +904,7 @@ impl Cx<'_> {
             max_order: s.max_order,
             alpha,
             formulation,
+            fixed_step: None,
         })
     }
 

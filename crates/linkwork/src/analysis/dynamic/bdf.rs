@@ -1,10 +1,524 @@
-//! Placeholder while the bdf integrator is written.
+//! Variable-order (1 to 5), variable-step BDF on the equations of motion, in the manner of
+//! DASSL (Brenan, Campbell and Petzold 1996, chapter 5) and Adams GSTIFF.
+//!
+//! The method works on the first-order form `q' = v`, `M v' + Phi_q^T lambda = Q(q, v, t)`,
+//! `Phi(q, t) = 0`. Over the nodes `t_{n+1} > t_n > ... > t_{n+1-k}` it replaces each derivative
+//! by the derivative at `t_{n+1}` of the polynomial through the solution at the nodes
+//! (the variable-coefficient form):
+//!
+//! ```text
+//! y'_{n+1} = c y_{n+1} + b,    c = sum_{j=1..k} 1 / (t_{n+1} - t_{n+1-j}),   b from the history
+//! ```
+//!
+//! **Index 3** (the default formulation): `v = c q + b_q`, `a = c v + b_v` are functions of
+//! `q`, and Newton's method solves `M a + Phi_q^T lambda - Q = 0`, `Phi = 0` for `q` and
+//! `lambda` with the scaled matrix [`Dae::factor`]`(1/c, 1/c^2)` in the unknowns
+//! `(c^2 dq, dlambda)`: the constraint rows are multiplied by `c^2`, so the matrix has the
+//! sizes of `M` and `Phi_q` whatever the step (Bottasso, Bauchau and Cardona 2007), where the
+//! unscaled matrix has a condition number growing as `h^-4`.
+//!
+//! **Stabilised index 2** (`formulation: si2`, as Adams SI2; Gear, Gupta and Leimkuhler 1985):
+//! `q` and `v` are both unknowns, the velocity constraints `Phi_q v = nu` join the position
+//! constraints, and a second multiplier `mu` (zero on the exact solution) projects the
+//! positions back onto `Phi = 0`, mass-orthogonally:
+//!
+//! ```text
+//! M (q' - v) + Phi_q^T mu = 0,   M v' + Phi_q^T lambda = Q,   Phi = 0,   Phi_q v = nu
+//! ```
+//!
+//! Each Newton step solves two systems that share `Phi_q`: `[M, Phi_q^T; Phi_q, 0]` for `mu`
+//! and a position correction, then `K(1/c, 1/c^2)` for `(dv, dlambda / c)` (the second
+//! factorization is [`Dae::factor_mass`]). The velocities then satisfy their constraints at
+//! every step, and the error test may include them without the order reduction that index-3
+//! velocities suffer at small steps.
+//!
+//! **Predictor and corrector.** The predictor is the polynomial through `t_n, ..., t_{n-k}`
+//! extrapolated to `t_{n+1}`; Newton starts there, with the matrix kept across iterations and
+//! steps while it contracts (it is refreshed when `c` changes by more than 25%, when the
+//! contraction is slower than 0.9 per iteration, and after a failure). Newton has converged
+//! when the estimated distance to the solution, `rate / (1 - rate) |dy|`, is below a third of
+//! the error tolerance, as in DASSL.
+//!
+//! **Error test** on positions and velocities (never on the multipliers): the local error of
+//! order `k` is `|y_{n+1} - P_k(t_{n+1})| / (c (t_{n+1} - t_{n-k}))` in the weighted RMS norm
+//! ([`super::wrms`]; `1 / (c (t_{n+1} - t_{n-k}))` is the ratio of the method's error constant to
+//! the predictor's, `2/9` for BDF2 at constant step). In index 3 the velocities are weighted by
+//! the step (`h v`): they are index-2 variables there, whose local error estimate does not shrink
+//! with the step like that of the positions (Brenan et al. section 5.4), and `h v` has the units
+//! and size of a position change.
+//!
+//! **Order and step** as DASSL: estimates at orders `k - 1` and (after `k + 1` steps at one order)
+//! `k + 1` from the same formula with predictors of those orders; the order whose estimate is
+//! smallest is taken; the step changes by `r = (2 est + 1e-4)^(-1/(k+1))` when `r >= 2` (to `2 h`)
+//! or `r <= 1` (to `h max(0.5, min(0.9, r))`), and otherwise stays, which keeps the matrix valid.
+//! The first steps double the step and raise the order until the error estimate objects.
+//! After a rejection the step shrinks by `0.9 r` (within `[1/4, 0.9]`), then by `1/4`, then
+//! the order drops to 1. Output at the requested times by the interpolating polynomial of the
+//! last step (DASSL's DDATRP), for positions and velocities.
 
-use super::{Dae, DynamicStats, IntegratorSettings, Outcome, Output, Start};
+use super::{step_failure, Dae, DynamicStats, Formulation, IntegratorSettings, Outcome, Output, Start, MAX_STEPS};
 use crate::error::Error;
 
+/// Newton iterations per attempt, as DASSL.
+const MAX_NEWTON: usize = 4;
+/// Newton's convergence test: estimated remaining error below this fraction of the error
+/// tolerance (DASSL's 0.33).
+const NEWTON_TOL: f64 = 0.33;
+/// Most nodes kept: order 5 needs 6 for its predictor and 7 to estimate order 6.
+const MAX_NODES: usize = 7;
+
+/// The integrator's state.
+struct Bdf<'a, 'm> {
+    dae: &'a mut Dae<'m>,
+    n: usize,
+    si2: bool,
+    rtol: f64,
+    atol: f64,
+    /// History, newest first: times and the positions and velocities there.
+    ts: Vec<f64>,
+    qs: Vec<Vec<f64>>,
+    vs: Vec<Vec<f64>>,
+    /// (n) accelerations at the start (the predictor of the first step).
+    a0: Vec<f64>,
+    /// (m) multipliers of the last step.
+    lambda: Vec<f64>,
+    /// Iterate of the step being tried: positions, velocities, accelerations, multipliers
+    /// (`lambda`, and `mu` in SI2).
+    q1: Vec<f64>,
+    v1: Vec<f64>,
+    a1: Vec<f64>,
+    lam1: Vec<f64>,
+    mu1: Vec<f64>,
+    /// (n) `b_q`, `b_v` of the BDF derivatives.
+    bq: Vec<f64>,
+    bv: Vec<f64>,
+    /// (n + m) residuals and steps.
+    r: Vec<f64>,
+    r2: Vec<f64>,
+    /// (n) scratch.
+    work: Vec<f64>,
+    /// (m) scratch.
+    rows: Vec<f64>,
+    /// `c` of the current factorization, or `None` when there is none.
+    factored_c: Option<f64>,
+    stats: DynamicStats,
+}
+
+/// How a Newton attempt ended.
+enum Newton {
+    Converged,
+    /// Did not converge; `fresh` tells whether the matrix was evaluated in this attempt.
+    Failed {
+        fresh: bool,
+    },
+}
+
+/// Lagrange basis weights at `t` of the polynomial through `nodes`.
+fn value_weights(nodes: &[f64], t: f64, w: &mut [f64]) {
+    for (j, wj) in w.iter_mut().enumerate().take(nodes.len()) {
+        *wj = nodes.iter().enumerate().filter(|&(i, _)| i != j).map(|(_, &ti)| (t - ti) / (nodes[j] - ti)).product();
+    }
+}
+
+/// Weights of the derivative at `nodes[0]` of the polynomial through `nodes`.
+fn derivative_weights(nodes: &[f64], w: &mut [f64]) {
+    let t = nodes[0];
+    w[0] = nodes[1..].iter().map(|&ti| 1.0 / (t - ti)).sum();
+    for j in 1..nodes.len() {
+        let num: f64 = nodes[1..].iter().enumerate().filter(|&(i, _)| i + 1 != j).map(|(_, &ti)| t - ti).product();
+        let den: f64 = nodes.iter().enumerate().filter(|&(i, _)| i != j).map(|(_, &ti)| nodes[j] - ti).product();
+        w[j] = num / den;
+    }
+}
+
+impl Bdf<'_, '_> {
+    /// The weighted norm of a change `(dq, dv)` against the iterate, velocities weighted by
+    /// `vscale` (the step in index 3, 1 in SI2).
+    fn norm(&self, dq: impl Fn(usize) -> f64, dv: impl Fn(usize) -> f64, vscale: f64) -> f64 {
+        let (rt, at) = (self.rtol, self.atol);
+        let s: f64 = (0..self.n)
+            .map(|k| {
+                let eq = dq(k) / (at + rt * self.q1[k].abs());
+                let ev = vscale * dv(k) / (at + rt * (vscale * self.v1[k]).abs());
+                eq * eq + ev * ev
+            })
+            .sum();
+        (s / (2 * self.n).max(1) as f64).sqrt()
+    }
+
+    /// The error estimate of order `j` for the new point `(t1, q1, v1)`:
+    /// `|y - P_j(t1)| / (c_j (t1 - t_{n-j}))`, with `P_j` through the `j + 1` newest nodes.
+    fn error_at(&self, j: usize, t1: f64, vscale: f64) -> f64 {
+        let mut w = [0.0; MAX_NODES];
+        value_weights(&self.ts[..=j], t1, &mut w);
+        let c: f64 = self.ts[..j].iter().map(|&ti| 1.0 / (t1 - ti)).sum();
+        let p = |ys: &[Vec<f64>], k: usize| -> f64 { (0..=j).map(|i| w[i] * ys[i][k]).sum() };
+        let d = self.norm(|k| self.q1[k] - p(&self.qs, k), |k| self.v1[k] - p(&self.vs, k), vscale);
+        d / (c * (t1 - self.ts[j]))
+    }
+
+    /// Predict `(q1, v1)` at `t1` with order `k` and set `c`, `b_q`, `b_v` of the corrector.
+    /// Returns `c`.
+    fn predict(&mut self, k: usize, t1: f64) -> f64 {
+        let n = self.n;
+        let h = t1 - self.ts[0];
+        if self.ts.len() == 1 {
+            // First step: the Taylor predictor from the consistent start.
+            for i in 0..n {
+                self.q1[i] = self.qs[0][i] + h * self.vs[0][i];
+                self.v1[i] = self.vs[0][i] + h * self.a0[i];
+            }
+        } else {
+            let mut w = [0.0; MAX_NODES];
+            value_weights(&self.ts[..=k], t1, &mut w);
+            for i in 0..n {
+                self.q1[i] = (0..=k).map(|j| w[j] * self.qs[j][i]).sum();
+                self.v1[i] = (0..=k).map(|j| w[j] * self.vs[j][i]).sum();
+            }
+        }
+        let mut nodes = [0.0; MAX_NODES];
+        nodes[0] = t1;
+        nodes[1..=k].copy_from_slice(&self.ts[..k]);
+        let mut d = [0.0; MAX_NODES];
+        derivative_weights(&nodes[..=k], &mut d);
+        for i in 0..n {
+            self.bq[i] = (1..=k).map(|j| d[j] * self.qs[j - 1][i]).sum();
+            self.bv[i] = (1..=k).map(|j| d[j] * self.vs[j - 1][i]).sum();
+        }
+        d[0]
+    }
+
+    /// Factorise the Newton matrices at the iterate.
+    fn refactor(&mut self, t1: f64, c: f64) -> Result<(), Error> {
+        self.dae.factor(&self.q1, &self.v1, t1, 1.0 / c, 1.0 / (c * c)).map_err(|e| super::factor_error(e, t1))?;
+        if self.si2 {
+            self.dae.factor_mass().map_err(|e| super::factor_error(e, t1))?;
+        }
+        self.factored_c = Some(c);
+        Ok(())
+    }
+
+    /// Newton iterations at `t1` from the predictor.
+    fn newton(&mut self, t1: f64, c: f64, vscale: f64) -> Result<Newton, Error> {
+        let n = self.n;
+        let mut fresh = false;
+        let mut previous = f64::INFINITY;
+        for it in 0..MAX_NEWTON {
+            if !self.si2 {
+                for i in 0..n {
+                    self.v1[i] = c * self.q1[i] + self.bq[i];
+                }
+            }
+            for i in 0..n {
+                self.a1[i] = c * self.v1[i] + self.bv[i];
+            }
+            self.dae.positions(&self.q1, t1);
+            // r = -[M a + Phi_q^T lambda - Q;  c^2 Phi] (index 3) or -[... ; Phi_q v - nu] (SI2).
+            self.dae.load(&self.q1, &self.v1, t1, &mut self.work);
+            let (r1, r2) = self.r.split_at_mut(n);
+            for i in 0..n {
+                r1[i] = self.work[i] - self.dae.mass[i] * self.a1[i];
+            }
+            self.work.fill(0.0);
+            self.dae.add_jt(&self.lam1, &mut self.work);
+            for i in 0..n {
+                r1[i] -= self.work[i];
+            }
+            if self.si2 {
+                self.dae.jv(&self.v1, r2);
+                self.dae.nu(&self.q1, t1, &mut self.rows);
+                for (r, nu) in r2.iter_mut().zip(&self.rows) {
+                    *r = nu - *r;
+                }
+                // [E1; c E3 - E4] for the projection, E1 = M (c q + b_q - v) + Phi_q^T mu.
+                let (p1, p2) = self.r2.split_at_mut(n);
+                self.work.fill(0.0);
+                self.dae.add_jt(&self.mu1, &mut self.work);
+                for i in 0..n {
+                    p1[i] = self.dae.mass[i] * (c * self.q1[i] + self.bq[i] - self.v1[i]) + self.work[i];
+                }
+                for ((p, phi), e4) in p2.iter_mut().zip(&self.dae.phi).zip(r2.iter()) {
+                    *p = c * phi + e4;
+                }
+                for x in r1.iter_mut() {
+                    *x /= c;
+                }
+            } else {
+                for (r, p) in r2.iter_mut().zip(&self.dae.phi) {
+                    *r = -c * c * p;
+                }
+            }
+            if !self.r.iter().chain(&self.r2).all(|x| x.is_finite()) {
+                return Ok(Newton::Failed { fresh });
+            }
+            let stale = self.factored_c.is_none_or(|fc| !(0.8..=1.25).contains(&(c / fc)));
+            if stale || (it >= 2 && !fresh) {
+                self.refactor(t1, c)?;
+                fresh = true;
+            }
+            self.dae.solve(&mut self.r);
+            self.stats.newton_iterations += 1;
+            let d = if self.si2 {
+                // mu from the projection, then dq = (dv - w) / c.
+                self.dae.solve_mass(&mut self.r2);
+                for (mu, y) in self.mu1.iter_mut().zip(&self.r2[n..]) {
+                    *mu -= y;
+                }
+                for (l, d) in self.lam1.iter_mut().zip(&self.r[n..]) {
+                    *l += c * d;
+                }
+                let (dv, w) = (&self.r[..n], &self.r2[..n]);
+                let d = self.norm(|i| (dv[i] - w[i]) / c, |i| dv[i], vscale);
+                for i in 0..n {
+                    self.q1[i] += (dv[i] - w[i]) / c;
+                    self.v1[i] += dv[i];
+                }
+                d
+            } else {
+                for (l, d) in self.lam1.iter_mut().zip(&self.r[n..]) {
+                    *l += d;
+                }
+                let x = &self.r[..n];
+                let d = self.norm(|i| x[i] / (c * c), |i| x[i] / c, vscale);
+                for i in 0..n {
+                    self.q1[i] += x[i] / (c * c);
+                }
+                d
+            };
+            let rate = d / previous;
+            if d <= 1e-3 * NEWTON_TOL || (it > 0 && rate < 1.0 && rate / (1.0 - rate) * d <= NEWTON_TOL) {
+                for i in 0..n {
+                    if !self.si2 {
+                        self.v1[i] = c * self.q1[i] + self.bq[i];
+                    }
+                    self.a1[i] = c * self.v1[i] + self.bv[i];
+                }
+                return Ok(Newton::Converged);
+            }
+            if it > 0 && rate > 0.9 {
+                break;
+            }
+            previous = d;
+        }
+        Ok(Newton::Failed { fresh })
+    }
+
+    /// Add the accepted point `(t1, q1, v1)` to the history, newest first.
+    fn push_history(&mut self, t1: f64) {
+        if self.ts.len() == MAX_NODES {
+            self.ts.pop();
+            let (mut q, mut v) = (self.qs.pop().unwrap_or_default(), self.vs.pop().unwrap_or_default());
+            q.copy_from_slice(&self.q1);
+            v.copy_from_slice(&self.v1);
+            self.qs.insert(0, q);
+            self.vs.insert(0, v);
+        } else {
+            self.qs.insert(0, self.q1.clone());
+            self.vs.insert(0, self.v1.clone());
+        }
+        self.ts.insert(0, t1);
+    }
+}
+
 /// Integrate from `start` to the output's end time.
-pub fn run(_dae: &mut Dae<'_>, _out: &mut Output, _settings: &IntegratorSettings, start: Start) -> Outcome {
-    let cause = "bdf is not available yet".into();
-    (DynamicStats::default(), Err(Error::Integration { time: start.t, step: 0.0, cause, rows: vec![] }))
+pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, start: Start) -> Outcome {
+    let (n, m) = (dae.n, dae.m);
+    let Start { t, q, qdot, qddot, lambda } = start;
+    let k_max = settings.order_limit().clamp(1, 5);
+    let mut s = Bdf {
+        dae,
+        n,
+        si2: settings.formulation == Formulation::Si2,
+        rtol: settings.rtol,
+        atol: settings.atol,
+        ts: vec![t],
+        q1: q.clone(),
+        v1: qdot.clone(),
+        a1: qddot.clone(),
+        qs: vec![q],
+        vs: vec![qdot],
+        a0: qddot,
+        lam1: lambda.clone(),
+        lambda,
+        mu1: vec![0.0; m],
+        bq: vec![0.0; n],
+        bv: vec![0.0; n],
+        r: vec![0.0; n + m],
+        r2: vec![0.0; n + m],
+        work: vec![0.0; n],
+        rows: vec![0.0; m],
+        factored_c: None,
+        stats: DynamicStats::default(),
+    };
+    let t_end = out.t_end();
+    let span = t_end - t;
+    let h_out = out.step().min(span.max(f64::MIN_POSITIVE));
+    let h_max = settings.max_step.unwrap_or(h_out).min(span.max(f64::MIN_POSITIVE));
+    let mut h = settings
+        .initial_step
+        .or(settings.fixed_step)
+        .unwrap_or(h_out / 100.0)
+        .min(settings.fixed_step.unwrap_or(h_max));
+    let (mut qo, mut vo) = (vec![0.0; n], vec![0.0; n]);
+    let mut k = 1;
+    // Steps taken at the current order, and whether the start-up (doubling) phase is on.
+    let mut at_order = 0;
+    let mut start_up = true;
+    let mut failures = 0;
+    let outcome = (|| -> Result<(), Error> {
+        while s.ts[0] < t_end - 1e-12 * span.max(1e-300) {
+            let t0 = s.ts[0];
+            if s.stats.steps >= MAX_STEPS {
+                return Err(Error::Integration {
+                    time: t0,
+                    step: h,
+                    cause: format!("more than {MAX_STEPS} steps; the model may be too stiff for the tolerances, or loosen rtol/atol"),
+                    rows: vec![],
+                });
+            }
+            let h_min = 16.0 * f64::EPSILON * t0.abs().max(span);
+            if t0 + h > t_end || t_end - (t0 + h) < 1e-3 * h {
+                h = t_end - t0;
+            }
+            let t1 = t0 + h;
+            // Order k needs k + 1 nodes for its predictor (the first step uses the start's
+            // derivatives instead).
+            k = k.min(s.ts.len().saturating_sub(1)).max(1);
+            let c = s.predict(k, t1);
+            s.lam1.copy_from_slice(&s.lambda);
+            s.mu1.fill(0.0);
+            let vscale = if s.si2 { 1.0 } else { h };
+            let converged = match s.newton(t1, c, vscale)? {
+                Newton::Converged => true,
+                Newton::Failed { fresh: false } => {
+                    s.factored_c = None;
+                    s.predict(k, t1);
+                    s.lam1.copy_from_slice(&s.lambda);
+                    s.mu1.fill(0.0);
+                    matches!(s.newton(t1, c, vscale)?, Newton::Converged)
+                }
+                Newton::Failed { fresh: true } => false,
+            };
+            if !converged {
+                s.stats.newton_failures += 1;
+                s.factored_c = None;
+                start_up = false;
+                h *= 0.25;
+                if h < h_min {
+                    let residual = s.dae.phi.iter().fold(0.0f64, |x, p| x.max(p.abs()));
+                    let cause = format!(
+                        "Newton's method does not converge (constraint residual {residual:.3e}) even with the smallest step"
+                    );
+                    return Err(step_failure(s.dae, &s.qs[0], t0, h, &cause));
+                }
+                continue;
+            }
+            let err = if settings.fixed_step.is_some() {
+                0.0
+            } else if s.ts.len() == 1 {
+                s.norm(|i| s.q1[i] - s.qs[0][i] - h * s.vs[0][i], |i| s.v1[i] - s.vs[0][i] - h * s.a0[i], vscale)
+            } else {
+                s.error_at(k, t1, vscale)
+            };
+            let lower = if k > 1 { s.error_at(k - 1, t1, vscale) } else { f64::INFINITY };
+            if err > 1.0 {
+                s.stats.rejected_steps += 1;
+                failures += 1;
+                start_up = false;
+                at_order = 0;
+                let (est, order) = if lower <= err { (lower, k - 1) } else { (err, k) };
+                let r = match failures {
+                    1 => (0.9 * (2.0 * est + 1e-4).powf(-1.0 / (order as f64 + 1.0))).clamp(0.25, 0.9),
+                    _ => 0.25,
+                };
+                k = if failures >= 3 { 1 } else { order };
+                h *= r;
+                if h < h_min {
+                    return Err(step_failure(
+                        s.dae,
+                        &s.qs[0],
+                        t0,
+                        h,
+                        &format!("the error test fails (error {err:.3e} of the tolerance) even with the smallest step"),
+                    ));
+                }
+                continue;
+            }
+            // Accept: estimate the next order before the history moves.
+            failures = 0;
+            at_order += 1;
+            let raise = k < k_max && at_order > k && s.ts.len() > k + 1;
+            let higher = if raise { s.error_at(k + 1, t1, vscale) } else { f64::INFINITY };
+            s.stats.accept(h);
+            s.stats.max_order_used = s.stats.max_order_used.max(k);
+            s.push_history(t1);
+            s.lambda.copy_from_slice(&s.lam1);
+            out.advance_work(s.dae, t1, &s.q1, &s.v1, &s.lam1);
+            while let Some(to) = out.due(t1) {
+                let mut w = [0.0; MAX_NODES];
+                value_weights(&s.ts[..=k], to, &mut w);
+                for i in 0..n {
+                    qo[i] = (0..=k).map(|j| w[j] * s.qs[j][i]).sum();
+                    vo[i] = (0..=k).map(|j| w[j] * s.vs[j][i]).sum();
+                }
+                out.push(s.dae, to, &qo, &vo)?;
+            }
+            let (est, order) = if lower <= err {
+                (lower, k - 1)
+            } else if start_up && k < k_max {
+                (err, k + 1)
+            } else if higher < err {
+                (higher, k + 1)
+            } else {
+                (err, k)
+            };
+            if order != k {
+                at_order = 0;
+            }
+            k = order;
+            if let Some(fixed) = settings.fixed_step {
+                // Verification: no error test; the start-up raises the order one step at a time
+                // to its limit and doubles the step from the initial step up to the fixed one.
+                h = (1.25 * h).min(fixed);
+                continue;
+            }
+            let r = (2.0 * est + 1e-4).powf(-1.0 / (k as f64 + 1.0));
+            if start_up && r >= 2.0 {
+                h *= 2.0;
+            } else {
+                start_up = false;
+                if r >= 2.0 {
+                    h *= 2.0;
+                } else if r <= 1.0 {
+                    h *= r.clamp(0.5, 0.9);
+                }
+            }
+            h = h.min(h_max);
+        }
+        Ok(())
+    })();
+    (s.stats, outcome)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The weights reproduce a cubic's value and derivative exactly on uneven nodes.
+    #[test]
+    fn weights_are_exact_for_polynomials() {
+        let p = |t: f64| 2.0 - t + 0.5 * t * t - 0.25 * t.powi(3);
+        let dp = |t: f64| -1.0 + t - 0.75 * t * t;
+        let nodes = [1.3, 1.1, 0.95, 0.4];
+        let mut w = [0.0; 4];
+        value_weights(&nodes, 1.7, &mut w);
+        let v: f64 = nodes.iter().zip(&w).map(|(&t, w)| w * p(t)).sum();
+        assert!((v - p(1.7)).abs() < 1e-13, "{v}");
+        derivative_weights(&nodes, &mut w);
+        let d: f64 = nodes.iter().zip(&w).map(|(&t, w)| w * p(t)).sum();
+        assert!((d - dp(1.3)).abs() < 1e-12, "{d}");
+        // The leading weight is the BDF coefficient c.
+        let c: f64 = nodes[1..].iter().map(|t| 1.0 / (1.3 - t)).sum();
+        assert!((w[0] - c).abs() < 1e-12);
+    }
 }

@@ -83,6 +83,20 @@ impl Kkt {
         let lu = SparseLu::new(Pattern { col_ptr, row_idx, map: vec![], nrows: dim })?;
         Ok(Kkt { lu, diag, jac, forces })
     }
+
+    /// Set the values to `[M, Phi_q^T; Phi_q, -eps I]`.
+    fn fill(&mut self, mass: &[f64], eps: f64, jac: &[f64]) {
+        let n = mass.len();
+        let (_, values) = self.lu.pattern_and_values();
+        values.fill(0.0);
+        for (k, &p) in self.diag.iter().enumerate() {
+            values[p] = if k < n { mass[k] } else { -eps };
+        }
+        for (&(lower, upper), &v) in self.jac.iter().zip(jac) {
+            values[lower] += v;
+            values[upper] += v;
+        }
+    }
 }
 
 /// Counters of the work the linear algebra did.
@@ -120,6 +134,8 @@ pub struct Dae<'m> {
     /// `-eps` on the constraint diagonal of the Newton matrix.
     eps: f64,
     kkt: Kkt,
+    /// The projection matrix of the stabilised index-2 formulation, built at its first use.
+    kkt_mass: Option<Kkt>,
     /// Force scratch: local positions, velocities, loads, and derivative blocks.
     fx: Vec<f64>,
     fv: Vec<f64>,
@@ -159,6 +175,7 @@ impl<'m> Dae<'m> {
             rot: vec![[1.0, 0.0]; n / 3],
             eps,
             kkt,
+            kkt_mass: None,
             fx: vec![0.0; w],
             fv: vec![0.0; w],
             fq: vec![0.0; w],
@@ -224,15 +241,8 @@ impl<'m> Dae<'m> {
     /// [`Dae::positions`] (which must be at `q`).
     pub fn factor(&mut self, q: &[f64], qdot: &[f64], t: f64, c_v: f64, c_q: f64) -> Result<(), FactorError> {
         self.stats.jacobian_evaluations += 1;
+        self.kkt.fill(&self.mass, self.eps, &self.jac);
         let (_, values) = self.kkt.lu.pattern_and_values();
-        values.fill(0.0);
-        for (k, &p) in self.kkt.diag.iter().enumerate() {
-            values[p] = if k < self.n { self.mass[k] } else { -self.eps };
-        }
-        for (&(lower, upper), &v) in self.kkt.jac.iter().zip(&self.jac) {
-            values[lower] += v;
-            values[upper] += v;
-        }
         if c_v != 0.0 || c_q != 0.0 {
             for (f, pos) in self.model.forces.iter().zip(&self.kkt.forces) {
                 let cols = f.force.columns();
@@ -248,6 +258,28 @@ impl<'m> Dae<'m> {
         }
         self.stats.factorizations += 1;
         self.kkt.lu.factor()
+    }
+
+    /// Factorise `[M, Phi_q^T; Phi_q, -eps I]` (the mass-orthogonal projection of the stabilised
+    /// index-2 formulation), a second matrix beside the Newton matrix, with `Phi_q` from the last
+    /// [`Dae::positions`].
+    pub fn factor_mass(&mut self) -> Result<(), FactorError> {
+        let mut kkt = match self.kkt_mass.take() {
+            Some(k) => k,
+            None => Kkt::new(self.n, self.m, &self.entries, &[])?,
+        };
+        kkt.fill(&self.mass, self.eps, &self.jac);
+        self.stats.factorizations += 1;
+        let result = kkt.lu.factor();
+        self.kkt_mass = Some(kkt);
+        result
+    }
+
+    /// Solve with the last [`Dae::factor_mass`], in place, `rhs: (n + m)`.
+    pub fn solve_mass(&mut self, rhs: &mut [f64]) {
+        if let Some(kkt) = self.kkt_mass.as_mut() {
+            kkt.lu.solve(rhs);
+        }
     }
 
     /// Solve with the last factorization, in place, `rhs: (n + m)`.

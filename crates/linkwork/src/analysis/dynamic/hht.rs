@@ -185,7 +185,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let span = t_end - t;
     let h_out = out_step(out, span);
     let h_max = settings.max_step.unwrap_or(h_out).min(span.max(f64::MIN_POSITIVE));
-    let mut h = settings.initial_step.unwrap_or(h_out / 100.0).min(h_max);
+    let mut h = settings.fixed_step.unwrap_or(settings.initial_step.unwrap_or(h_out / 100.0).min(h_max));
     let (mut qo, mut vo) = (vec![0.0; n], vec![0.0; n]);
     let mut lambda1 = vec![0.0; m];
     let outcome = (|| -> Result<(), Error> {
@@ -242,7 +242,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                 (e / n.max(1) as f64).sqrt()
             };
             let factor = (0.9 * err.max(1e-10).powf(-1.0 / 3.0)).clamp(0.2, 2.0);
-            if err > 1.0 {
+            if err > 1.0 && settings.fixed_step.is_none() {
                 s.stats.rejected_steps += 1;
                 h *= factor.min(0.9);
                 if h < h_min {
@@ -277,7 +277,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             std::mem::swap(&mut s.a, &mut s.a1);
             std::mem::swap(&mut s.mu, &mut s.mu1);
             s.t = t1;
-            h = (h * factor).min(h_max);
+            h = settings.fixed_step.unwrap_or((h * factor).min(h_max));
         }
         Ok(())
     })();

@@ -25,6 +25,8 @@ pub mod abam;
 pub mod bdf;
 mod dae;
 pub mod hht;
+#[cfg(test)]
+mod order_tests;
 mod output;
 mod settings;
 

@@ -27,6 +27,10 @@ pub struct IntegratorSettings {
     pub alpha: f64,
     /// The equations `bdf` discretises. Default index 3.
     pub formulation: Formulation,
+    /// A constant step with no error test, for measuring a method's order of convergence in
+    /// the tests; not a model-file setting (a constant step gives no control of the error).
+    #[serde(skip)]
+    pub(crate) fixed_step: Option<f64>,
 }
 
 impl Default for IntegratorSettings {
@@ -40,6 +44,7 @@ impl Default for IntegratorSettings {
             max_order: None,
             alpha: -0.3,
             formulation: Formulation::Index3,
+            fixed_step: None,
         }
     }
 }
