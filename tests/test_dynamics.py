@@ -1,0 +1,64 @@
+"""Dynamics from Python and the command line: overrides, reactions in the body frame, exit codes."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import linkwork
+from conftest import EXAMPLES
+
+
+def test_overrides_change_the_run():
+    model = linkwork.load(EXAMPLES / "double_pendulum.yaml")
+    results = model.run("dynamics_hht", t_end=0.5, step=0.1, rtol=1e-7)
+    assert len(results) == 6
+    assert results.summary["integrator"]["kind"] == "hht"
+    assert results.summary["integrator"]["rtol"] == 1e-7
+    for name in ("O.fx", "O.fy", "O.torque", "kinetic_energy", "potential_energy", "tip_x"):
+        assert name in results
+    other = model.run("dynamics_hht", integrator="hht", t_end=0.2, step=0.1)
+    assert other.summary["integrator"]["kind"] == "hht"
+
+
+def test_bad_override_is_a_model_error():
+    model = linkwork.load(EXAMPLES / "double_pendulum.yaml")
+    with pytest.raises(linkwork.ModelError) as info:
+        model.run("dynamics_hht", rtol=0.0)
+    assert info.value.problems[0][0] == "--rtol"
+    with pytest.raises(linkwork.ModelError) as info:
+        model.run("dynamics_hht", integrator="rk4")
+    assert info.value.problems[0][0] == "--integrator"
+
+
+def test_reaction_in_the_body_frame_is_the_rotated_global_one():
+    results = linkwork.load(EXAMPLES / "double_pendulum.yaml").run("dynamics_hht", t_end=0.5)
+    fx, fy, torque = results.reaction("E")
+    bx, by, btorque = results.reaction("E", frame="body")
+    phi = results["upper.phi"]
+    # Rotating back by +phi recovers the global components; the magnitude is unchanged.
+    assert np.allclose(np.cos(phi) * bx - np.sin(phi) * by, fx, rtol=1e-12, atol=1e-12)
+    assert np.allclose(np.hypot(bx, by), np.hypot(fx, fy), rtol=1e-12)
+    assert np.array_equal(btorque, torque)
+    with pytest.raises(ValueError):
+        results.reaction("E", frame="local")
+
+
+def test_cli_overrides_and_dynamic_summary(linkwork, tmp_path):
+    out = tmp_path / "dp"
+    done = linkwork(
+        "run", EXAMPLES / "double_pendulum.yaml", "-a", "dynamics_hht", "--t-end", "0.3", "--rtol", "1e-5", "-o", out
+    )
+    assert done.code == 0, done.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["integrator"]["rtol"] == 1e-5
+    assert summary["output_points"] == 31
+    assert "hht:" in done.stdout and "steps" in done.stdout
+    bad = linkwork("run", EXAMPLES / "double_pendulum.yaml", "-a", "dynamics_hht", "--atol", "0")
+    assert bad.code == 2
+    assert "--atol" in bad.stderr
+    kin = linkwork("run", EXAMPLES / "fourbar.yaml", "--integrator", "hht")
+    assert kin.code == 2
+    assert "only a dynamic analysis" in kin.stderr
