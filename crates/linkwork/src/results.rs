@@ -263,6 +263,7 @@ impl Model {
                 name: name.into(),
                 kind: crate::model::spec::AnalysisKind::Kinematic,
                 drivers: vec![],
+                forces: vec![],
                 t_start: 0.0,
                 t_end: 0.0,
                 step: 1.0,

@@ -62,6 +62,30 @@ fn every_problem_is_listed_with_its_path() {
     assert_eq!(p.len(), 14, "{p:#?}");
 }
 
+/// An analysis' `forces` list names forces of the model; an unknown name is reported at its
+/// index with the names there are, and the known names around it are no problem.
+#[test]
+fn unknown_force_of_an_analysis_is_listed_with_its_path() {
+    let text = r#"
+bodies:
+  crank: {mass: 1, inertia: 1, position: [0, 0], angle: 0}
+joints:
+  O: {type: revolute, body_i: crank, point_i: [0, 0], body_j: ground, point_j: [0, 0]}
+forces:
+  motor: {type: torque, body: crank, torque: 1}
+  push: {type: force, body: crank, fx: 2}
+analyses:
+  dyn: {type: dynamic, forces: [push, motr, motor], t_end: 1, step: 0.1}
+"#;
+    let p = problems(text);
+    has(&p, "analyses.dyn.forces[1]", "unknown force 'motr'; the model's forces are: motor, push");
+    assert_eq!(p.len(), 1, "{p:#?}");
+    let none = text.replace("forces: [push, motr, motor]", "forces: []");
+    assert!(Model::from_yaml(&none).is_ok(), "an empty list is valid");
+    let no_forces = text.split("forces:\n").next().unwrap().to_string() + "analyses:\n  dyn: {type: dynamic, forces: [motor], t_end: 1, step: 0.1}\n";
+    has(&problems(&no_forces), "analyses.dyn.forces[0]", "the model has no forces");
+}
+
 #[test]
 fn negative_mass_is_refused_once_the_body_reads() {
     let text = "bodies:\n  a: {mass: -2, inertia: -1, position: [0, 0], angle: 0}\n";

@@ -782,25 +782,10 @@ impl Cx<'_> {
         let mut out = IndexMap::new();
         for (name, a) in &spec.analyses {
             let path = format!("analyses.{name}");
-            let drivers: Vec<usize> = match &a.drivers {
-                None => (0..spec.drivers.len()).collect(),
-                Some(list) => list
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(k, d)| match spec.drivers.get_index_of(d.as_str()) {
-                        Some(i) => Some(i),
-                        None if self.broken.contains(&format!("drivers.{d}")) => None,
-                        None => {
-                            let known: Vec<&str> = spec.drivers.keys().map(String::as_str).collect();
-                            self.problem(
-                                format!("{path}.drivers[{k}]"),
-                                format!("unknown driver '{d}'; the model's drivers are: {}", known.join(", ")),
-                            );
-                            None
-                        }
-                    })
-                    .collect(),
-            };
+            let driver_names: Vec<&str> = spec.drivers.keys().map(String::as_str).collect();
+            let drivers = self.selection(&path, "drivers", "driver", &driver_names, a.drivers.as_deref());
+            let force_names: Vec<&str> = spec.forces.keys().map(String::as_str).collect();
+            let forces = self.selection(&path, "forces", "force", &force_names, a.forces.as_deref());
             let t0 = self.finite(&format!("{path}.t_start"), a.t_start);
             let t1 = self.finite(&format!("{path}.t_end"), a.t_end);
             let h = self.positive(&format!("{path}.step"), a.step);
@@ -834,6 +819,7 @@ impl Cx<'_> {
                     name: name.clone(),
                     kind: a.kind,
                     drivers,
+                    forces,
                     t_start: t0,
                     t_end: t1,
                     step: h,
@@ -843,6 +829,36 @@ impl Cx<'_> {
             );
         }
         out
+    }
+
+    /// The indices into `known` (the model's `section`: drivers or forces) of the names an
+    /// analysis at `path` lists, every one when it lists none; each unknown name is a problem at
+    /// `<path>.<section>[k]` (a name whose own entry is broken was reported there already).
+    fn selection(
+        &mut self,
+        path: &str,
+        section: &str,
+        what: &str,
+        known: &[&str],
+        list: Option<&[String]>,
+    ) -> Vec<usize> {
+        let Some(list) = list else { return (0..known.len()).collect() };
+        list.iter()
+            .enumerate()
+            .filter_map(|(k, d)| match known.iter().position(|&n| n == d) {
+                Some(i) => Some(i),
+                None if self.broken.contains(&format!("{section}.{d}")) => None,
+                None => {
+                    let message = if known.is_empty() {
+                        format!("unknown {what} '{d}'; the model has no {section}")
+                    } else {
+                        format!("unknown {what} '{d}'; the model's {section} are: {}", known.join(", "))
+                    };
+                    self.problem(format!("{path}.{section}[{k}]"), message);
+                    None
+                }
+            })
+            .collect()
     }
 
     /// The integrator and its settings; each given tolerance and step must be positive.

@@ -116,6 +116,9 @@ pub struct Analysis {
     pub kind: AnalysisKind,
     /// Indices into [`Model::drivers`] of the active drivers.
     pub drivers: Vec<usize>,
+    /// Indices into [`Model::forces`] of the active forces (a dynamic analysis applies only
+    /// these).
+    pub forces: Vec<usize>,
     /// Start time, s.
     pub t_start: f64,
     /// End time, s.

@@ -645,6 +645,10 @@ pub struct AnalysisSpec {
     /// Names of the drivers active in this analysis. Default: every driver of the model.
     #[serde(default)]
     pub drivers: Option<Vec<String>>,
+    /// Names of the forces (applied forces and force elements) that load the mechanism in this
+    /// analysis. Default: every force of the model.
+    #[serde(default)]
+    pub forces: Option<Vec<String>>,
     /// Start time, s. Default: 0.
     #[serde(default)]
     pub t_start: f64,

@@ -31,7 +31,7 @@
 use crate::constraints::{Anchor, BodyIx, Config};
 use crate::forces::{derivatives, potential_rate, DualWork};
 use crate::linalg::{FactorError, SparseLu};
-use crate::model::Model;
+use crate::model::{ForceElement, Model};
 use crate::system::{Pattern, System};
 
 /// Regularisation of the constraint block, relative to `1 / max mass` (see the module docs).
@@ -123,6 +123,8 @@ pub struct Dae<'m> {
     pub mass: Vec<f64>,
     /// (n) gravity's generalised force `(m g, 0)` per body.
     gravity: Vec<f64>,
+    /// The forces active in the analysis (the only ones that load the mechanism).
+    pub forces: Vec<&'m ForceElement>,
     /// (Jacobian entries) `(row, column)` of each entry of `Phi_q`.
     entries: Vec<(usize, usize)>,
     /// (Jacobian entries) `Phi_q` at the last [`Dae::positions`].
@@ -150,15 +152,17 @@ pub struct Dae<'m> {
 }
 
 impl<'m> Dae<'m> {
-    /// The equations of `model` with the active drivers `drivers`.
-    pub fn new(model: &'m Model, drivers: &[usize]) -> Result<Dae<'m>, FactorError> {
+    /// The equations of `model` with the active drivers `drivers` and the active forces `forces`
+    /// (indices into the model's drivers and forces).
+    pub fn new(model: &'m Model, drivers: &[usize], forces: &[usize]) -> Result<Dae<'m>, FactorError> {
         let sys = System::new(model, drivers);
         let (n, m) = (sys.n, sys.m);
         let mass: Vec<f64> = model.bodies.iter().flat_map(|b| [b.mass, b.mass, b.inertia]).collect();
         let gravity: Vec<f64> =
             model.bodies.iter().flat_map(|b| [b.mass * model.gravity[0], b.mass * model.gravity[1], 0.0]).collect();
         let entries = sys.entries();
-        let force_cols: Vec<&[usize]> = model.forces.iter().map(|f| f.force.columns()).collect();
+        let forces: Vec<&ForceElement> = forces.iter().map(|&k| &model.forces[k]).collect();
+        let force_cols: Vec<&[usize]> = forces.iter().map(|f| f.force.columns()).collect();
         let kkt = Kkt::new(n, m, &entries, &force_cols)?;
         let w = force_cols.iter().map(|c| c.len()).max().unwrap_or(0);
         let max_mass = mass.iter().fold(0.0f64, |a, &b| a.max(b));
@@ -169,6 +173,7 @@ impl<'m> Dae<'m> {
             m,
             mass,
             gravity,
+            forces,
             jac: vec![0.0; entries.len()],
             entries,
             phi: vec![0.0; m],
@@ -222,10 +227,10 @@ impl<'m> Dae<'m> {
         }
     }
 
-    /// `(q, qdot, t) => Q`, `out: (n)`: gravity plus every force element.
+    /// `(q, qdot, t) => Q`, `out: (n)`: gravity plus every active force.
     pub fn load(&mut self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) {
         out.copy_from_slice(&self.gravity);
-        for f in &self.model.forces {
+        for f in &self.forces {
             let cols = f.force.columns();
             let w = cols.len();
             gather(q, cols, &mut self.fx[..w]);
@@ -244,7 +249,7 @@ impl<'m> Dae<'m> {
         self.kkt.fill(&self.mass, self.eps, &self.jac);
         let (_, values) = self.kkt.lu.pattern_and_values();
         if c_v != 0.0 || c_q != 0.0 {
-            for (f, pos) in self.model.forces.iter().zip(&self.kkt.forces) {
+            for (f, pos) in self.forces.iter().zip(&self.kkt.forces) {
                 let cols = f.force.columns();
                 let w = cols.len();
                 gather(q, cols, &mut self.fx[..w]);
@@ -335,11 +340,11 @@ impl<'m> Dae<'m> {
         0.5 * self.mass.iter().zip(qdot).map(|(m, v)| m * v * v).sum::<f64>()
     }
 
-    /// Potential energy of gravity and of the springs, J (zero at the origin and at each
+    /// Potential energy of gravity and of the active springs, J (zero at the origin and at each
     /// spring's free length).
     pub fn potential_energy(&mut self, q: &[f64]) -> f64 {
         let mut v = -self.gravity.iter().zip(q).map(|(g, x)| g * x).sum::<f64>();
-        for f in &self.model.forces {
+        for f in &self.forces {
             let cols = f.force.columns();
             let w = cols.len();
             gather(q, cols, &mut self.fx[..w]);
@@ -348,13 +353,13 @@ impl<'m> Dae<'m> {
         v
     }
 
-    /// Power of the non-conservative forces, W: every force's power `Q_e . qdot` plus the rate
+    /// Power of the non-conservative forces, W: every active force's power `Q_e . qdot` plus the rate
     /// of its potential (which cancels the conservative part), plus the drivers' power
     /// `-lambda_d^T Phi_q,d qdot = -lambda_d^T nu_d`. `lambda: (m)`; positions as at the last
     /// [`Dae::positions`].
     pub fn nonconservative_power(&mut self, q: &[f64], qdot: &[f64], t: f64, lambda: &[f64], nu: &mut [f64]) -> f64 {
         let mut p = 0.0;
-        for f in &self.model.forces {
+        for f in &self.forces {
             let cols = f.force.columns();
             let w = cols.len();
             gather(q, cols, &mut self.fx[..w]);

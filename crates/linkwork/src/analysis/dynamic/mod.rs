@@ -176,7 +176,7 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     let settings = analysis.integrator;
     let n = model.n();
     let fail = |results: Results, error: Error| Box::new(Failure { error, results });
-    let mut dae = match Dae::new(model, &analysis.drivers) {
+    let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
         Ok(d) => d,
         Err(e) => return Err(fail(Results::new(model, analysis), factor_error(e, analysis.t_start))),
     };
