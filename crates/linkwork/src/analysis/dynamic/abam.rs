@@ -39,21 +39,25 @@
 //!
 //! **Re-partition.** The partition is chosen again at the last accepted state when
 //! - Newton for `q_D` needs more than [`NEWTON_SLOW`] iterations at an accepted step, or
-//! - the pivot ratio (smallest over largest pivot of the partial-pivoting LU) of `B` falls below
-//!   [`DEGRADATION`] times its value when the partition was chosen (a condition estimate of `B`
-//!   ten times worse), or
+//! - the sensitivity of the dependent coordinates to the independent ones, `max |dq_D / dq_I|`
+//!   (the largest entry of `-B^-1 Phi_q[rows, I]`), has grown by more than [`GROWTH`] since the
+//!   partition was chosen: the independent coordinates approach a position where they no longer
+//!   determine the others (a crank's `x` at its extreme), or
 //! - Newton fails or `B` is singular during a step, and the partition was chosen before the last
 //!   accepted step.
 //!
-//! If the new choice keeps the same independent coordinates, only the reference pivot ratio is
-//! updated; otherwise the Adams history (which belongs to the old coordinates) is discarded and the
-//! method restarts at order 1 with at most the initial step. `partitions` counts the choices
-//! that set up the coordinates: the first and each change.
+//! The sensitivity measures what matters directly; the pivot ratio of `B` was tried and rejected:
+//! it is dominated by pivots unrelated to the fold and only falls within a few hundredths of a
+//! radian of it, which one step can straddle. If the new choice keeps the same independent
+//! coordinates, only the reference sensitivity is updated; otherwise the Adams history (which
+//! belongs to the old coordinates) is discarded and the method restarts at order 1 with at most
+//! the initial step. `partitions` counts the choices that set up the coordinates: the first and
+//! each change.
 
 use super::{factor_error, step_failure, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Start, MAX_STEPS};
 use crate::analysis::RANK_TOLERANCE;
 use crate::error::Error;
-use faer::Mat;
+use faer::{Mat, MatRef};
 
 /// Highest order of the Adams formulas: 12, as DE/STEP. Beyond it the coefficient arrays below
 /// end, and higher orders gain nothing in double precision.
@@ -69,9 +73,12 @@ const NEWTON_SLOW: usize = 3;
 /// `atol + rtol |q|`) is below this; Newton's quadratic convergence leaves the remaining error
 /// far smaller still, so the dependent coordinates add no noise to the Adams differences.
 const NEWTON_TOL: f64 = 1e-4;
-/// Re-partition when the pivot ratio of the dependent block falls below this fraction of its value
-/// at the partition (its condition estimate ten times worse).
-const DEGRADATION: f64 = 0.1;
+/// Re-partition when the sensitivity `max |dq_D / dq_I|` has grown by more than this factor since
+/// the partition was chosen. Near a position where `q_I` stops determining `q_D` (a fold: the
+/// independent coordinate at an extreme) the sensitivity grows as `1 / distance`; a factor 4 is
+/// reached about three steps of a well-resolved motion before the fold, early enough that no step
+/// straddles it, and late enough that a coordinate far from its fold is kept.
+const GROWTH: f64 = 4.0;
 /// A pivot ratio below this makes the dependent block singular in double precision.
 const SINGULAR_PIVOT: f64 = 1e-13;
 /// Shampine and Gordon's `gstr(k)`, the magnitudes of the error constants `gamma*_k` of the Adams
@@ -84,8 +91,8 @@ const HALF_TOL: f64 = 0.5;
 /// How an evaluation at `(t, y)` ended.
 #[derive(Debug, Clone, Copy)]
 enum Eval {
-    /// Converged in `iterations` Newton corrections; `ratio` is the pivot ratio of `B` there.
-    Done { iterations: usize, ratio: f64 },
+    /// Converged in `iterations` Newton corrections.
+    Done { iterations: usize },
     /// Newton did not converge or `B` is singular; `residual` is the largest `|Phi|` reached.
     Failed { residual: f64 },
 }
@@ -101,8 +108,8 @@ struct Split<'a, 'm> {
     dep: Vec<usize>,
     /// (n - r) independent coordinates, ascending.
     ind: Vec<usize>,
-    /// Pivot ratio of `B` when the partition was chosen.
-    ratio0: f64,
+    /// `max |dq_D / dq_I|` when the partition was chosen.
+    influence0: f64,
     /// (m x n) dense `Phi_q`.
     jac: Mat<f64>,
     /// (r x r) row-major LU factors of `B = Phi_q[rows, dep]`, and (r) its row interchanges.
@@ -134,17 +141,7 @@ impl Split<'_, '_> {
         let (n, m) = (self.dae.n, self.dae.m);
         self.dae.positions(&self.qa, self.ta);
         self.dae.jacobian_dense(self.jac.as_mut());
-        let (mut rows, mut dep) = (Vec::new(), Vec::new());
-        if m > 0 {
-            let lu = self.jac.full_piv_lu();
-            let u = lu.U();
-            let big = u[(0, 0)].abs();
-            let rank = (0..m.min(n)).take_while(|&k| big > 0.0 && u[(k, k)].abs() > RANK_TOLERANCE * big).count();
-            rows.extend_from_slice(&lu.P().arrays().0[..rank]);
-            dep.extend_from_slice(&lu.Q().arrays().0[..rank]);
-        }
-        rows.sort_unstable();
-        dep.sort_unstable();
+        let (rows, dep) = if m > 0 { pivots(self.jac.as_ref()) } else { (vec![], vec![]) };
         let ind: Vec<usize> = (0..n).filter(|c| !dep.contains(c)).collect();
         let changed = ind != self.ind;
         let r = dep.len();
@@ -152,12 +149,30 @@ impl Split<'_, '_> {
         self.lu.resize(r * r, 0.0);
         self.piv.resize(r, 0);
         self.rhs.resize(r, 0.0);
-        self.ratio0 = self.factor();
+        self.factor();
+        self.influence0 = self.influence();
         changed
     }
 
+    /// `max |dq_D / dq_I|`, the largest entry of `-B^-1 Phi_q[rows, I]`, with `B` factored and
+    /// `jac` evaluated at the same position: how strongly the independent coordinates move the
+    /// others (0 when there are none).
+    fn influence(&mut self) -> f64 {
+        let mut big = 0.0f64;
+        for j in 0..self.ind.len() {
+            let c = self.ind[j];
+            for (b, &row) in self.rhs.iter_mut().zip(&self.rows) {
+                *b = self.jac[(row, c)];
+            }
+            self.solve();
+            big = self.rhs.iter().fold(big, |a, x| a.max(x.abs()));
+        }
+        big
+    }
+
     /// Factor `B = Phi_q[rows, dep]` from `jac` by LU with partial pivoting; the ratio of the
-    /// smallest to the largest pivot (1 when `B` is empty, 0 when exactly singular).
+    /// smallest to the largest pivot (1 when `B` is empty, 0 when exactly singular), the test of a
+    /// singular `B`.
     fn factor(&mut self) -> f64 {
         let r = self.dep.len();
         let a = &mut self.lu;
@@ -229,22 +244,21 @@ impl Split<'_, '_> {
         let tol = NEWTON_TOL.max(64.0 * f64::EPSILON / self.rtol);
         let (mut iterations, mut previous, mut converged) = (0, f64::INFINITY, false);
         // (q_I, q_D guess, t) => q_D with Phi(q, t) = 0, and B factored at the solution.
-        let ratio = loop {
+        loop {
             self.dae.positions(&self.q, t);
             let residual = self.dae.phi.iter().fold(0.0f64, |a, x| a.max(x.abs()));
             if !residual.is_finite() {
                 return Ok(Eval::Failed { residual });
             }
             if r == 0 {
-                break 1.0;
+                break;
             }
             self.dae.jacobian_dense(self.jac.as_mut());
-            let ratio = self.factor();
-            if ratio < SINGULAR_PIVOT {
+            if self.factor() < SINGULAR_PIVOT {
                 return Ok(Eval::Failed { residual });
             }
             if converged {
-                break ratio;
+                break;
             }
             if iterations == MAX_NEWTON {
                 return Ok(Eval::Failed { residual });
@@ -265,7 +279,7 @@ impl Split<'_, '_> {
             }
             converged = size <= tol;
             previous = size;
-        };
+        }
         self.newton_iterations += iterations;
         // (q, v_I, t) => v_D from B v_D = nu - Phi_q[rows, I] v_I.
         if r > 0 {
@@ -289,7 +303,7 @@ impl Split<'_, '_> {
                 yp[p + j] = self.sol[c];
             }
         }
-        Ok(Eval::Done { iterations, ratio })
+        Ok(Eval::Done { iterations })
     }
 
     /// The last evaluation (with accelerations) at `t` becomes the accepted state.
@@ -310,6 +324,21 @@ impl Split<'_, '_> {
             (yp[j], yp[p + j]) = (self.va[c], self.aa[c]);
         }
     }
+}
+
+/// The pivot rows and columns, ascending, of a full-pivoting LU factorization of `jac (m x n)`,
+/// `m > 0`, as many as its numerical rank (pivots above `RANK_TOLERANCE` times the largest).
+fn pivots(jac: MatRef<'_, f64>) -> (Vec<usize>, Vec<usize>) {
+    let lu = jac.full_piv_lu();
+    let u = lu.U();
+    let big = u[(0, 0)].abs();
+    let d = jac.nrows().min(jac.ncols());
+    let rank = (0..d).take_while(|&k| big > 0.0 && u[(k, k)].abs() > RANK_TOLERANCE * big).count();
+    let mut rows = lu.P().arrays().0[..rank].to_vec();
+    let mut cols = lu.Q().arrays().0[..rank].to_vec();
+    rows.sort_unstable();
+    cols.sort_unstable();
+    (rows, cols)
 }
 
 /// Shampine and Gordon's STEP and INTRP on `neq` equations. Arrays follow the book's 1-based
@@ -473,8 +502,8 @@ impl Adams {
             }
             for iq in 1..=kp1 - ns {
                 v[iq] -= alpha[ns] * v[iq + 1];
-                w[iq] = v[iq];
             }
+            w[1..=kp1 - ns].copy_from_slice(&v[1..=kp1 - ns]);
             g[ns + 1] = w[1];
         }
         for i in ns + 2..=kp1 {
@@ -702,7 +731,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         rows: vec![],
         dep: vec![],
         ind: vec![],
-        ratio0: 1.0,
+        influence0: 0.0,
         jac: Mat::zeros(m, n),
         lu: vec![],
         piv: vec![],
@@ -760,8 +789,8 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                     eval = s.evaluate(t1, &ad.yc, Some(&mut ad.yp))?;
                 }
             }
-            let (iterations, ratio) = match eval {
-                Eval::Done { iterations, ratio } if err <= 1.0 => (iterations, ratio),
+            let iterations = match eval {
+                Eval::Done { iterations } if err <= 1.0 => iterations,
                 Eval::Done { .. } => {
                     stats.rejected_steps += 1;
                     h = ad.reject(h);
@@ -798,6 +827,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             s.commit(ad.x);
             stats.accept(h_used);
             stats.max_order_used = stats.max_order_used.max(ad.kold);
+            let degraded = iterations > NEWTON_SLOW || s.influence() > GROWTH * s.influence0;
             out.advance_work(s.dae, s.ta, &s.qa, &s.va, &s.la);
             let neq = ad.neq;
             while let Some(to) = out.due(ad.x) {
@@ -812,7 +842,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                     }
                 }
             }
-            if iterations > NEWTON_SLOW || ratio < DEGRADATION * s.ratio0 {
+            if degraded {
                 chosen_at = stats.steps;
                 if s.choose() {
                     stats.partitions += 1;
@@ -865,6 +895,17 @@ mod tests {
             top = top.max(ad.kold);
         }
         (ad.y.clone(), steps, top)
+    }
+
+    /// The pivots skip a redundant row and a column that no constraint touches, and take the
+    /// largest entries first: rows 0 and 2 (row 1 = row 0 + row 2 / 2), columns 1 (entry 5) and
+    /// 2 (entry 4 beats the 2 that row 1 keeps after elimination).
+    #[test]
+    fn pivots_skip_redundant_rows() {
+        let jac = faer::mat![[1.0, 5.0, 0.0, 0.0], [1.0, 5.0, 2.0, 0.0], [0.0, 0.0, 4.0, 0.0]];
+        assert_eq!(pivots(jac.as_ref()), (vec![0, 2], vec![1, 2]));
+        let jac = faer::mat![[0.0, 0.0, 4.0]];
+        assert_eq!(pivots(jac.as_ref()), (vec![0], vec![2]));
     }
 
     fn oscillator(_: f64, y: &[f64], yp: &mut [f64]) {
