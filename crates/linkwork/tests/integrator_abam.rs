@@ -24,10 +24,12 @@ fn energy_drift(r: &linkwork::Results) -> f64 {
 /// step 0.01 s, alone needs 500).
 #[test]
 fn double_pendulum_energy_abam() {
+    let clock = std::time::Instant::now();
     let (_, r) = run("double_pendulum.yaml", "dynamics_abam");
+    let elapsed = clock.elapsed();
     let drift = energy_drift(&r);
     let stats = &r.summary["statistics"];
-    eprintln!("abam drift {drift:e} stats {stats}");
+    eprintln!("abam drift {drift:e} in {elapsed:?}, stats {stats}");
     assert!(drift < 1e-3, "drift {drift}");
     let count = |k: &str| stats[k].as_u64().unwrap();
     assert!((500..=650).contains(&count("steps")), "{stats}");

@@ -6,7 +6,7 @@
 //!
 //! **Partition.** A full-pivoting LU factorization `P Phi_q Q = L U` of the dense `(m x n)`
 //! constraint Jacobian picks `r` pivots, `r` the numerical rank (pivots above
-//! [`RANK_TOLERANCE`](crate::analysis::RANK_TOLERANCE) times the largest): the pivot rows are the
+//! [`crate::analysis::RANK_TOLERANCE`] times the largest): the pivot rows are the
 //! independent rows (redundant rows are left out, they hold wherever the others do), the pivot
 //! columns the dependent coordinates `q_D`, and the other `n - r` columns the independent
 //! coordinates `q_I`, the ones with the smallest coupling to the constraints there.
@@ -38,9 +38,9 @@
 //! replaced by the smallest-step failure.
 //!
 //! **Re-partition.** The partition is chosen again at the last accepted state when
-//! - Newton for `q_D` needs more than [`NEWTON_SLOW`] iterations at an accepted step, or
+//! - Newton for `q_D` needs more than `NEWTON_SLOW` (3) iterations at an accepted step, or
 //! - the sensitivity of the dependent coordinates to the independent ones, `max |dq_D / dq_I|`
-//!   (the largest entry of `-B^-1 Phi_q[rows, I]`), has grown by more than [`GROWTH`] since the
+//!   (the largest entry of `-B^-1 Phi_q[rows, I]`), has grown by more than `GROWTH` (4) since the
 //!   partition was chosen: the independent coordinates approach a position where they no longer
 //!   determine the others (a crank's `x` at its extreme), or
 //! - Newton fails or `B` is singular during a step, and the partition was chosen before the last
