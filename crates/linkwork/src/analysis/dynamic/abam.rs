@@ -138,10 +138,10 @@ impl Split<'_, '_> {
     /// Choose the partition at the accepted state `(qa, ta)`; true when the independent
     /// coordinates changed.
     fn choose(&mut self) -> bool {
-        let (n, m) = (self.dae.n, self.dae.m);
+        let n = self.dae.n;
         self.dae.positions(&self.qa, self.ta);
         self.dae.jacobian_dense(self.jac.as_mut());
-        let (rows, dep) = if m > 0 { pivots(self.jac.as_ref()) } else { (vec![], vec![]) };
+        let (rows, dep) = pivots(self.jac.as_ref());
         let ind: Vec<usize> = (0..n).filter(|c| !dep.contains(c)).collect();
         let changed = ind != self.ind;
         let r = dep.len();
@@ -327,12 +327,15 @@ impl Split<'_, '_> {
 }
 
 /// The pivot rows and columns, ascending, of a full-pivoting LU factorization of `jac (m x n)`,
-/// `m > 0`, as many as its numerical rank (pivots above `RANK_TOLERANCE` times the largest).
+/// as many as its numerical rank (pivots above `RANK_TOLERANCE` times the largest).
 fn pivots(jac: MatRef<'_, f64>) -> (Vec<usize>, Vec<usize>) {
+    let d = jac.nrows().min(jac.ncols());
+    if d == 0 {
+        return (vec![], vec![]);
+    }
     let lu = jac.full_piv_lu();
     let u = lu.U();
     let big = u[(0, 0)].abs();
-    let d = jac.nrows().min(jac.ncols());
     let rank = (0..d).take_while(|&k| big > 0.0 && u[(k, k)].abs() > RANK_TOLERANCE * big).count();
     let mut rows = lu.P().arrays().0[..rank].to_vec();
     let mut cols = lu.Q().arrays().0[..rank].to_vec();
@@ -906,6 +909,7 @@ mod tests {
         assert_eq!(pivots(jac.as_ref()), (vec![0, 2], vec![1, 2]));
         let jac = faer::mat![[0.0, 0.0, 4.0]];
         assert_eq!(pivots(jac.as_ref()), (vec![0], vec![2]));
+        assert_eq!(pivots(Mat::<f64>::zeros(0, 3).as_ref()), (vec![], vec![]));
     }
 
     fn oscillator(_: f64, y: &[f64], yp: &mut [f64]) {
