@@ -33,6 +33,7 @@ use crate::forces::{derivatives, potential_rate, DualWork};
 use crate::linalg::{FactorError, SparseLu};
 use crate::model::{ForceElement, Model};
 use crate::system::{Pattern, System};
+use faer::MatMut;
 
 /// Regularisation of the constraint block, relative to `1 / max mass` (see the module docs).
 pub const EPS_REL: f64 = 1e-10;
@@ -216,6 +217,14 @@ impl<'m> Dae<'m> {
     pub fn add_jt(&self, lambda: &[f64], out: &mut [f64]) {
         for (&(r, c), &v) in self.entries.iter().zip(&self.jac) {
             out[c] += v * lambda[r];
+        }
+    }
+
+    /// `out (m x n) = Phi_q`, dense, from the last [`Dae::positions`].
+    pub fn jacobian_dense(&self, mut out: MatMut<'_, f64>) {
+        out.fill(0.0);
+        for (&(r, c), &v) in self.entries.iter().zip(&self.jac) {
+            out[(r, c)] += v;
         }
     }
 

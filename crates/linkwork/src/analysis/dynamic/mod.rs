@@ -67,7 +67,7 @@ pub struct DynamicStats {
     pub largest_step: f64,
     /// Highest order used (`bdf`, `abam`; 2 for `hht`).
     pub max_order_used: usize,
-    /// Times the independent coordinates were chosen (`abam`).
+    /// Independent coordinates used by `abam`: the first choice and each change of it.
     pub partitions: usize,
 }
 
