@@ -82,10 +82,13 @@ fn kinematic_analysis_needs_a_fully_driven_model() {
 /// other analyses are still checked.
 #[test]
 fn an_analysis_that_cannot_assemble_is_reported_in_its_entry() {
-    let text = std::fs::read_to_string(example("quick_return_b.yaml")).unwrap().replace(
-        "analyses:\n",
-        "  too_far: {type: angle, body: rocker, function: \"9\"}\nanalyses:\n  clash: {type: kinematic, drivers: [crank_drive, too_far], t_end: 1, step: 0.1}\n",
-    );
+    let text = std::fs::read_to_string(example("quick_return_b.yaml"))
+        .unwrap()
+        .replace("drivers:\n", "drivers:\n  too_far: {type: angle, body: rocker, function: \"9\"}\n")
+        .replace(
+            "analyses:\n",
+            "analyses:\n  clash: {type: kinematic, drivers: [crank_drive, too_far], t_end: 1, step: 0.1}\n",
+        );
     let model = Model::from_yaml(&text).unwrap();
     let report = check(&model).unwrap();
     assert_eq!(report.mechanism.dof, 1);

@@ -82,7 +82,8 @@ analyses:
     assert_eq!(p.len(), 1, "{p:#?}");
     let none = text.replace("forces: [push, motr, motor]", "forces: []");
     assert!(Model::from_yaml(&none).is_ok(), "an empty list is valid");
-    let no_forces = text.split("forces:\n").next().unwrap().to_string() + "analyses:\n  dyn: {type: dynamic, forces: [motor], t_end: 1, step: 0.1}\n";
+    let no_forces = text.split("forces:\n").next().unwrap().to_string()
+        + "analyses:\n  dyn: {type: dynamic, forces: [motor], t_end: 1, step: 0.1}\n";
     has(&problems(&no_forces), "analyses.dyn.forces[0]", "the model has no forces");
 }
 
