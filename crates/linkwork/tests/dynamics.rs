@@ -196,3 +196,26 @@ fn error_follows_the_tolerance() {
         }
     }
 }
+
+/// HHT with `alpha = 0` (the trapezoidal rule, no damping) on Andrews' stiff mechanism: the
+/// undamped oscillation of the index-3 accelerations drives the step down through accepted
+/// steps. The run must stop with a typed error naming the time, soon, not creep on for millions
+/// of steps (before the smallest-step check covered accepted steps it ran to the 5-million-step
+/// limit, the step near 1e-84 s).
+#[test]
+fn a_vanishing_step_stops_the_run() {
+    let text = std::fs::read_to_string(common::example("andrews.yaml")).unwrap();
+    let text = text
+        .replace("solver: {rtol: 1e-8, atol: 1e-8}", "integrator: hht\n    solver: {rtol: 1e-9, atol: 1e-9, alpha: 0}");
+    let model = linkwork::Model::from_yaml(&text).unwrap();
+    let failure = model.run("dynamics").expect_err("the undamped run cannot finish");
+    match failure.error {
+        linkwork::Error::Integration { time, step, .. } => {
+            assert!(time > 0.0 && time < 0.03 && step < 1e-15, "t {time}, step {step}");
+            // The results up to the failure are kept.
+            let last = failure.results.time.last().copied().unwrap_or(-1.0);
+            assert!(failure.results.len() > 1 && last <= time, "{} outputs to {last}", failure.results.len());
+        }
+        other => panic!("expected an integration error, got {other}"),
+    }
+}

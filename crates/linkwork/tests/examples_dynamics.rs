@@ -8,8 +8,8 @@ mod common;
 use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::{Error, Model, Overrides, Results};
 
-/// The integrators every example runs with. `bdf` and `abam` are added here when they land.
-const INTEGRATORS: &[&str] = &["hht"];
+/// The integrators every example runs with.
+const INTEGRATORS: &[&str] = &["bdf", "hht", "abam"];
 
 fn kind(name: &str) -> IntegratorKind {
     match name {
@@ -95,8 +95,10 @@ fn quick_return_coasts_with_constant_kinetic_energy() {
 /// work integral and that the zero force on slider D (model A) does nothing. At rtol = atol =
 /// 1e-8; tolerances: `5e-3` of the largest kinetic energy, HHT's energy error (model A: 1.9e-3
 /// at 1e-8, 6e-4 at 1e-10, as the crank speeds up to ~100 rad/s) with a factor 2.5 of margin;
-/// the work against the crank angle `1e-6` relative (trapezoidal work between accepted steps of
-/// a smooth power, measured 5e-9).
+/// the work against the crank angle `1e-4` relative: the work integral is the trapezoidal rule
+/// between accepted steps, second order whatever the integrator's order, so its error follows
+/// the step length (measured on model A: hht 4.8e-9, bdf 1.3e-6, abam 1.7e-5 with the longest
+/// steps).
 #[test]
 fn quick_return_loaded_gains_the_torque_work() {
     for file in ["quick_return_a.yaml", "quick_return_b.yaml"] {
@@ -111,7 +113,7 @@ fn quick_return_loaded_gains_the_torque_work() {
             eprintln!("{file} {integrator}: energy balance {drift:.2e}, work against angle {work_err:.2e}");
             assert!(t[r.len() - 1] > 2.0 * t[0], "{file}: the torque speeds the crank up");
             assert!(drift < 5e-3, "{file} {integrator}: energy balance {drift}");
-            assert!(work_err < 1e-6, "{file} {integrator}: work {work_err}");
+            assert!(work_err < 1e-4, "{file} {integrator}: work {work_err}");
         }
     }
 }

@@ -377,6 +377,12 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                 });
             }
             let h_min = 16.0 * f64::EPSILON * t0.abs().max(span);
+            if h < h_min {
+                // Accepted steps may shrink the step too (an error estimate that grows from step
+                // to step); stop here rather than creep towards zero.
+                let cause = "the error estimate has driven the step below the smallest step";
+                return Err(step_failure(s.dae, &s.qs[0], t0, h, cause));
+            }
             if t0 + h > t_end || t_end - (t0 + h) < 1e-3 * h {
                 h = t_end - t0;
             }
