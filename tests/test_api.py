@@ -31,7 +31,7 @@ def test_model_names(model_a):
     assert model_a.bodies == ["crank", "rocker", "slider_b", "link", "slider_d"]
     assert model_a.joints == ["O", "A", "B", "B_slot", "C", "D", "D_guide"]
     assert model_a.drivers == ["crank_drive"]
-    assert model_a.analyses == ["kinematics", "dynamics", "dynamics_loaded"]
+    assert model_a.analyses == ["kinematics", "dynamics", "dynamics_loaded", "inverse"]
     assert "quick_return_a.yaml" in repr(model_a)
 
 

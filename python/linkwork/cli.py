@@ -129,7 +129,8 @@ def _run(args: argparse.Namespace) -> int:
         return EXIT_SOLVER
     results.write(out)
     _print_summary(results)
-    print(f"wrote {_folder(out)}results.csv and summary.json")
+    files = "results.csv, summary.json and modes.csv" if results.modes else "results.csv and summary.json"
+    print(f"wrote {_folder(out)}{files}")
     return EXIT_OK
 
 
@@ -153,6 +154,19 @@ def _print_summary(results: Results) -> None:
             f"  largest constraint residuals at output: position {_num(residuals.get('max_position'))}, "
             f"velocity {_num(residuals.get('max_velocity'))}"
         )
+    elif s.get("type") == "static":
+        print(
+            f"  {stats.get('iterations', '?')} Newton iterations, {stats.get('load_steps', '?')} load steps; "
+            f"largest residuals: force {_num(stats.get('force_residual'))}, "
+            f"position {_num(stats.get('position_residual'))}; stable: {s.get('stable')}"
+        )
+    elif s.get("type") == "modes":
+        about = s.get("about", "?")
+        print(f"  {s.get('dof', '?')} degree(s) of freedom, linearised about the {about} state")
+        for k, mode in enumerate(results.modes, 1):
+            zeta = mode.get("damping_ratio")
+            damping = "" if zeta is None else f", damping ratio {zeta:.4g}"
+            print(f"  mode {k}: {mode['frequency']:.6g} Hz{damping}")
     elif stats:
         print(
             f"  {stats.get('substeps', '?')} sub-steps ({stats.get('rejected_substeps', '?')} rejected), "
@@ -166,6 +180,24 @@ def _print_summary(results: Results) -> None:
         redundant = [f"{r['element']}.{r['equation']}" for r in stats.get("redundant_rows", [])]
         if redundant:
             print(f"  redundant rows (hold implicitly): {', '.join(redundant)}")
+    _print_peaks(s)
+
+
+def _print_peaks(s: dict[str, Any]) -> None:
+    """The largest driver efforts and joint forces, and the joints whose shares are open."""
+    peaks: dict[str, Any] = s.get("peaks") or {}
+    efforts = [name for name in peaks if name.endswith(".effort")]
+    forces = sorted((n for n in peaks if n.endswith(".force")), key=lambda n: -(peaks[n].get("max_abs") or 0.0))
+    for name in efforts + forces[:5]:
+        peak = peaks[name]
+        print(f"  peak {name:<24} {_num(peak.get('max_abs'))} at t = {peak.get('time') or 0:g} s")
+    if len(forces) > 5:
+        print(f"  ({len(forces) - 5} more joints' peaks in summary.json)")
+    indeterminate = s.get("indeterminate_joints") or []
+    if indeterminate:
+        print(
+            f"  indeterminate joints (redundant supports; minimum-norm reactions): {', '.join(indeterminate)}"
+        )
 
 
 def _print_failure(error: SolverError | AssemblyError) -> None:
@@ -233,6 +265,11 @@ def _print_system(title: str, system: dict[str, Any], bodies: list[str]) -> None
             print(f"    joint {row['element']}, equation {row['equation']}")
     else:
         print("  redundant rows       none")
+    if system.get("indeterminate"):
+        print(
+            f"  indeterminate joints {', '.join(system['indeterminate'])} "
+            "(reactions not unique; the minimum-norm ones are reported)"
+        )
     assembly = system["assembly"]
     print(
         f"  assembly             residual {_num(assembly['residual'])} after {assembly['iterations']} "

@@ -20,8 +20,11 @@ class Results:
     the columns are named ``<body>.x, .y, .phi, .vx, .vy, .omega, .ax, .ay, .alpha`` per body,
     in SI units, angles unwrapped; a dynamic analysis adds ``<joint>.fx, .fy, .torque``,
     ``<driver>.effort``, ``kinetic_energy``, ``potential_energy``, ``nonconservative_work``,
-    ``position_residual`` and ``velocity_residual``; measures come last, by name.
-    ``results["time"]`` is the output times.
+    ``position_residual`` and ``velocity_residual``; an inverse analysis the reactions, efforts,
+    ``kinetic_energy``, ``potential_energy``, ``driver_power`` and ``applied_power``; a static
+    analysis the reactions, efforts and ``potential_energy``; measures come last, by name.
+    ``results["time"]`` is the output times. A modes analysis has one row (the state it
+    linearised about) and its modes in :attr:`modes`.
     """
 
     __slots__ = ("_columns", "_index", "_native", "_time", "_values")
@@ -62,6 +65,15 @@ class Results:
         """True when the analysis reached its end time."""
         return self._native.ok
 
+    @property
+    def modes(self) -> list[dict[str, Any]]:
+        """The modes of a modes analysis, lowest frequency first (empty for other analyses): each a
+        dict with ``frequency`` (undamped natural frequency, Hz), ``damped_frequency`` (Hz),
+        ``damping_ratio`` (``None`` for a zero eigenvalue), ``eigenvalue`` (``[re, im]``, 1/s) and
+        ``shape`` (``{"<body>.x": ..., ...}``, the largest component 1)."""
+        modes: list[dict[str, Any]] = self.summary.get("modes") or []
+        return modes
+
     def __getitem__(self, name: str) -> np.ndarray:
         """The column called ``name`` (``"time"`` included), as a read-only numpy array."""
         if name == "time":
@@ -79,7 +91,7 @@ class Results:
         return len(self._time)
 
     def reaction(self, joint: str, frame: str = "global") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(fx, fy, torque)`` of ``joint`` (dynamic analyses): the force it exerts on its first
+        """``(fx, fy, torque)`` of ``joint`` (dynamic, inverse and static analyses): the force it exerts on its first
         body and the moment about the joint's point on that body. ``frame="global"`` gives the
         columns ``<joint>.fx``, ``.fy``; ``frame="body"`` resolves the force in the first body's
         frame (rotated by ``-phi`` of that body; ground's frame is the global one).
@@ -107,8 +119,8 @@ class Results:
         return pd.DataFrame(self._values.copy(), index=index, columns=list(self._columns))
 
     def write(self, out_dir: str | os.PathLike[str]) -> None:
-        """Write ``results.csv`` and ``summary.json`` into ``out_dir`` (created if missing), in the
-        engine's format: the same files as ``linkwork run``."""
+        """Write ``results.csv`` and ``summary.json`` (and ``modes.csv`` for a modes analysis) into
+        ``out_dir`` (created if missing), in the engine's format: the same files as ``linkwork run``."""
         self._native.write(os.fspath(out_dir))
 
     def __repr__(self) -> str:

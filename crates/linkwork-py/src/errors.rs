@@ -169,6 +169,19 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
                 ("results", results()?.into_bound(py)),
             ],
         ),
+        Error::Equilibrium { time, residual, row, iterations, load_fraction } => (
+            ConvergenceError::new_err(message),
+            vec![
+                ("time", time.into_pyobject(py)?.into_any()),
+                ("joints", joints.into_pyobject(py)?.into_any()),
+                ("rows", vec![row.to_string()].into_pyobject(py)?.into_any()),
+                ("row", row.to_string().into_pyobject(py)?.into_any()),
+                ("residual", residual.into_pyobject(py)?.into_any()),
+                ("iterations", iterations.into_pyobject(py)?.into_any()),
+                ("load_fraction", load_fraction.into_pyobject(py)?.into_any()),
+                ("results", results()?.into_bound(py)),
+            ],
+        ),
         Error::Integration { time, step, cause, rows } => (
             IntegrationError::new_err(message),
             vec![

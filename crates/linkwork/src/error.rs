@@ -104,6 +104,22 @@ pub enum Error {
         /// The rows with the largest residual or involved in a singularity, if known.
         rows: Vec<RowName>,
     },
+    /// Static equilibrium was not found: Newton with a line search, then load stepping, stopped
+    /// short of the tolerance.
+    #[error("no static equilibrium found at t = {time:.6} s: residual {residual:.3e} (largest in {row}) after {iterations} Newton iterations, {:.1}% of the applied load reached", 100.0 * .load_fraction)]
+    Equilibrium {
+        /// Time of the equilibrium sought.
+        time: f64,
+        /// Largest residual (force over the load scale, or `|Phi|`) at the last iterate.
+        residual: f64,
+        /// The equation with the largest residual: a constraint row, or a body coordinate's
+        /// force balance (`<body>.x`).
+        row: RowName,
+        /// Newton iterations in all attempts.
+        iterations: usize,
+        /// The fraction of the applied loads at which the last equilibrium was found.
+        load_fraction: f64,
+    },
     /// Reading or writing a file failed.
     #[error("{path}: {message}")]
     Io {
@@ -119,7 +135,7 @@ impl Error {
     pub fn elements(&self) -> Vec<String> {
         let rows: Vec<&RowName> = match self {
             Error::Singular { rows, .. } | Error::Integration { rows, .. } => rows.iter().collect(),
-            Error::Convergence { row, .. } | Error::Assembly { row, .. } => vec![row],
+            Error::Convergence { row, .. } | Error::Assembly { row, .. } | Error::Equilibrium { row, .. } => vec![row],
             _ => vec![],
         };
         let mut out: Vec<String> = Vec::new();

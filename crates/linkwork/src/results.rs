@@ -107,6 +107,50 @@ impl Results {
         );
     }
 
+    /// Add to the summary of an analysis with reactions: `reaction_bodies` (the body each joint's
+    /// reaction acts on, its first, for reactions in that body's frame) and `peaks` (for every
+    /// joint the largest resultant force `|(fx, fy)|` and the largest `|torque|`, for every
+    /// active driver the largest `|effort|`, each with its time, for sizing bearings and motors).
+    pub(crate) fn insert_reaction_summary(&mut self, model: &Model, analysis: &Analysis) {
+        let on: Map<String, Value> = model
+            .joints
+            .iter()
+            .map(|j| {
+                let body = j.constraint.anchor().i.0.map_or("ground", |k| model.bodies[k / 3].name.as_str());
+                (j.name.clone(), json!(body))
+            })
+            .collect();
+        self.summary.insert("reaction_bodies".into(), Value::Object(on));
+        let peak = |values: &mut dyn Iterator<Item = f64>| -> Value {
+            let (mut best, mut at) = (0.0f64, None);
+            for (k, v) in values.enumerate() {
+                if v.abs() >= best || at.is_none() {
+                    (best, at) = (v.abs(), Some(k));
+                }
+            }
+            json!({"max_abs": best, "time": at.map(|k| self.time[k])})
+        };
+        let mut peaks = Map::new();
+        for j in &model.joints {
+            let (Some(fx), Some(fy), Some(m)) = (
+                self.column(&format!("{}.fx", j.name)),
+                self.column(&format!("{}.fy", j.name)),
+                self.column(&format!("{}.torque", j.name)),
+            ) else {
+                continue;
+            };
+            peaks.insert(format!("{}.force", j.name), peak(&mut fx.iter().zip(fy).map(|(a, b)| a.hypot(*b))));
+            peaks.insert(format!("{}.torque", j.name), peak(&mut m.iter().copied()));
+        }
+        for &d in &analysis.drivers {
+            let name = format!("{}.effort", model.drivers[d].name);
+            if let Some(e) = self.column(&name) {
+                peaks.insert(name, peak(&mut e.iter().copied()));
+            }
+        }
+        self.summary.insert("peaks".into(), Value::Object(peaks));
+    }
+
     /// The column called `name` (`time` included).
     pub fn column(&self, name: &str) -> Option<&[f64]> {
         if name == "time" {
@@ -145,6 +189,7 @@ impl Results {
             s.insert("error_elements".into(), json!(e.elements()));
             if let Error::Singular { time, .. }
             | Error::Convergence { time, .. }
+            | Error::Equilibrium { time, .. }
             | Error::Assembly { time, .. }
             | Error::Integration { time, .. } = e
             {
@@ -154,11 +199,42 @@ impl Results {
         Value::Object(s)
     }
 
-    /// Write `results.csv` and `summary.json` into `dir` (created if missing).
+    /// Write `modes.csv` of a modes analysis: one line per mode, `mode, frequency, damped_frequency,
+    /// damping_ratio` (Hz, Hz, 1; empty for a zero eigenvalue), then the shape's
+    /// `<body>.x, .y, .phi`.
+    pub fn write_modes_csv(&self, path: &Path) -> Result<(), Error> {
+        let Some(Value::Array(modes)) = self.summary.get("modes") else { return Ok(()) };
+        let io = |e: std::io::Error| Error::Io { path: path.display().to_string(), message: e.to_string() };
+        let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
+        // The shape's coordinates in the order of the columns (bodies in file order).
+        let shape = modes.first().and_then(|m| m["shape"].as_object());
+        let coords: Vec<&String> = self.names.iter().filter(|n| shape.is_some_and(|s| s.contains_key(*n))).collect();
+        write!(w, "mode,frequency,damped_frequency,damping_ratio").map_err(io)?;
+        for c in &coords {
+            write!(w, ",{c}").map_err(io)?;
+        }
+        writeln!(w).map_err(io)?;
+        let num = |v: &Value| v.as_f64().map(|x| format!("{x:?}")).unwrap_or_default();
+        for (k, m) in modes.iter().enumerate() {
+            write!(w, "{}", k + 1).map_err(io)?;
+            for key in ["frequency", "damped_frequency", "damping_ratio"] {
+                write!(w, ",{}", num(&m[key])).map_err(io)?;
+            }
+            for c in &coords {
+                write!(w, ",{}", num(&m["shape"][c.as_str()])).map_err(io)?;
+            }
+            writeln!(w).map_err(io)?;
+        }
+        w.flush().map_err(io)
+    }
+
+    /// Write `results.csv` and `summary.json` into `dir` (created if missing), and `modes.csv`
+    /// for a modes analysis.
     pub fn write(&self, dir: &Path, error: Option<&Error>) -> Result<(), Error> {
         let io = |e: std::io::Error| Error::Io { path: dir.display().to_string(), message: e.to_string() };
         std::fs::create_dir_all(dir).map_err(io)?;
         self.write_csv(&dir.join("results.csv"))?;
+        self.write_modes_csv(&dir.join("modes.csv"))?;
         let text = serde_json::to_string_pretty(&self.summary_json(error)).unwrap_or_default();
         std::fs::write(dir.join("summary.json"), text + "\n").map_err(io)
     }
@@ -206,6 +282,13 @@ impl Overrides {
                 ));
             } else {
                 a.t_end = t;
+            }
+        }
+        if a.kind == AnalysisKind::Modes {
+            for (name, given) in [("--t-end", self.t_end.is_some()), ("--step", step.is_some())] {
+                if given {
+                    problems.push(crate::Problem::new(name, "a modes analysis is at one time (its t_start)"));
+                }
             }
         }
         if let Some(h) = step {
@@ -269,12 +352,17 @@ impl Model {
                 step: 1.0,
                 settings: Default::default(),
                 integrator: Default::default(),
+                about: Default::default(),
             };
             Box::new(Failure { error, results: Results::new(self, &empty) })
         })?;
+        use crate::model::spec::AnalysisKind as K;
         match analysis.kind {
-            crate::model::spec::AnalysisKind::Kinematic => crate::analysis::run_kinematic(self, &analysis),
-            crate::model::spec::AnalysisKind::Dynamic => crate::analysis::dynamic::run_dynamic(self, &analysis),
+            K::Kinematic => crate::analysis::run_kinematic(self, &analysis),
+            K::Dynamic => crate::analysis::dynamic::run_dynamic(self, &analysis),
+            K::Inverse => crate::analysis::run_inverse(self, &analysis),
+            K::Static => crate::analysis::run_static(self, &analysis),
+            K::Modes => crate::analysis::run_modes(self, &analysis),
         }
     }
 }

@@ -29,6 +29,9 @@ pub struct SystemCheck {
     pub dof: usize,
     /// Rows that depend on earlier rows.
     pub redundant: Vec<RowName>,
+    /// Joints (and drivers) whose share of a load rigid bodies do not determine: those with
+    /// rows in a dependent set. Their reactions are the minimum-norm ones.
+    pub indeterminate: Vec<String>,
     /// The assembled configuration.
     pub assembly: Assembly,
 }
@@ -116,6 +119,7 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
         rank: keep.len(),
         dof: n - keep.len(),
         redundant: drop.iter().map(|&r| sys.row_name(r)).collect(),
+        indeterminate: super::element_names(&sys, &super::indeterminate_rows(jac.as_ref())),
         assembly,
     })
 }
@@ -130,15 +134,27 @@ pub fn check(model: &Model) -> Result<CheckReport> {
         .values()
         .map(|a| {
             // Dynamics assembles holding the given coordinates, as the mechanism alone does.
-            let hold = a.kind == AnalysisKind::Dynamic;
+            let hold = a.kind == AnalysisKind::Dynamic
+                || (a.kind == AnalysisKind::Modes && a.about == crate::model::spec::LinearisePoint::Initial);
             let entry = match check_system(model, &a.drivers, hold, a.t_start) {
                 Ok(system) => {
+                    let loaded = model.gravity != [0.0, 0.0] || !a.forces.is_empty();
                     let warning = match a.kind {
-                        AnalysisKind::Kinematic if system.dof > 0 => Some(format!(
-                            "a kinematic analysis needs a fully driven model: {} degree(s) of freedom remain, add {} driver(s)",
-                            system.dof, system.dof
+                        AnalysisKind::Kinematic | AnalysisKind::Inverse if system.dof > 0 => Some(format!(
+                            "a{} {} analysis needs a fully driven model: {} degree(s) of freedom remain, add {} driver(s)",
+                            if a.kind == AnalysisKind::Inverse { "n" } else { "" },
+                            a.kind.name(),
+                            system.dof,
+                            system.dof
                         )),
-                        AnalysisKind::Kinematic | AnalysisKind::Dynamic => None,
+                        AnalysisKind::Static if system.dof > 0 && !loaded => Some(format!(
+                            "a static analysis needs every degree of freedom held: {} remain with no gravity, force or spring to hold them",
+                            system.dof
+                        )),
+                        AnalysisKind::Modes if system.dof == 0 => {
+                            Some("a modes analysis needs a degree of freedom: the drivers leave none".to_string())
+                        }
+                        _ => None,
                     };
                     AnalysisCheck { kind: a.kind, system: Some(system), error: None, warning }
                 }

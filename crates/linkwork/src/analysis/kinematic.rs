@@ -190,9 +190,26 @@ fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
 
 /// Run a kinematic analysis. On failure the results up to the last good output time are kept.
 pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
+    let names = model.measures.iter().map(|m| m.name.clone()).collect();
+    run_driven(model, analysis, names, |t, q, qdot, qddot, extra| {
+        extra.clear();
+        extra.extend(model.measures.iter().map(|m| m.value(q, qdot, qddot, t)));
+        Ok(())
+    })
+}
+
+/// The kinematic solution of a fully driven mechanism, with the columns `names` after the body
+/// quantities, whose values at each output time `extra(t, q, qdot, qddot, values)` writes into
+/// `values`. Shared by the kinematic and the inverse dynamic analyses.
+pub(crate) fn run_driven(
+    model: &Model,
+    analysis: &Analysis,
+    names: Vec<String>,
+    mut extra_values: impl FnMut(f64, &[f64], &[f64], &[f64], &mut Vec<f64>) -> Result<(), Error>,
+) -> Result<Results, Box<Failure>> {
     let mut results = Results::new(model, analysis);
-    results.add_columns(model.measures.iter().map(|m| m.name.clone()));
-    let mut extra = vec![0.0; model.measures.len()];
+    let mut extra = Vec::with_capacity(names.len());
+    results.add_columns(names);
     let fail = |results: Results, error: Error| Box::new(Failure { error, results });
     let settings = analysis.settings;
     let n = model.n();
@@ -219,7 +236,9 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
         let problem = Problem::new(
             format!("analyses.{}.drivers", analysis.name),
             format!(
-                "a kinematic analysis needs a fully driven model, but {dof} degree(s) of freedom remain with these drivers ({n} coordinates, {} independent equations): add {dof} driver(s){or_singular}",
+                "a{} {} analysis needs a fully driven model, but {dof} degree(s) of freedom remain with these drivers ({n} coordinates, {} independent equations): add {dof} driver(s){or_singular}",
+                if analysis.kind.name().starts_with('i') { "n" } else { "" },
+                analysis.kind.name(),
                 rows.len()
             ),
         );
@@ -276,7 +295,7 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
         s.factor_at(false, t0)?;
         s.velocities();
         check_condition(&mut s, settings.singular_condition)?;
-        measures(model, &s, &mut extra);
+        extra_values(t0, &s.q, &s.qdot, &s.qddot, &mut extra)?;
         results.push(t0, &s.q, &s.qdot, &s.qddot, &extra);
         let mut dt = h;
         let mut q_pred = vec![0.0; n];
@@ -324,7 +343,7 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
                 }
             }
             check_condition(&mut s, settings.singular_condition)?;
-            measures(model, &s, &mut extra);
+            extra_values(target, &s.q, &s.qdot, &s.qddot, &mut extra)?;
             results.push(target, &s.q, &s.qdot, &s.qddot, &extra);
         }
         Ok(())
@@ -334,13 +353,6 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
     match outcome {
         Ok(()) => Ok(results),
         Err(e) => Err(fail(results, e)),
-    }
-}
-
-/// The model's measures at the solver's current state, `out: (measures)`.
-fn measures(model: &Model, s: &Solver<'_>, out: &mut [f64]) {
-    for (o, m) in out.iter_mut().zip(&model.measures) {
-        *o = m.value(&s.q, &s.qdot, &s.qddot, s.t);
     }
 }
 

@@ -5,12 +5,19 @@
 mod assembly;
 mod check;
 pub mod dynamic;
+mod inverse;
 mod kinematic;
+mod modes;
+mod statics;
 
 pub use assembly::{assemble, Assembly};
 pub use check::{check, independent_rows, AnalysisCheck, CheckReport, SystemCheck};
 pub use dynamic::IntegratorSettings;
+pub(crate) use inverse::reaction_columns;
+pub use inverse::run_inverse;
 pub use kinematic::{run_kinematic, KinematicStats};
+pub use modes::run_modes;
+pub use statics::run_static;
 
 use faer::{Mat, MatRef};
 
@@ -82,4 +89,34 @@ pub(crate) fn min_norm_solve(a: MatRef<'_, f64>, b: &[f64]) -> Option<Vec<f64>> 
 /// The columns `cols` of `a`, as a new matrix.
 pub(crate) fn select_columns(a: MatRef<'_, f64>, cols: &[usize]) -> Mat<f64> {
     Mat::from_fn(a.nrows(), cols.len(), |i, j| a[(i, cols[j])])
+}
+
+/// Rows of `jac (m x n)` whose multipliers `Phi_q^T lambda = g` does not determine: those with a
+/// component in the left null space of `jac` (the combinations of rows that vanish, one per
+/// redundant row). Their joints share a load in a way rigid bodies leave open; the minimum-norm
+/// multipliers are one choice. Empty when the rows are independent.
+pub(crate) fn indeterminate_rows(jac: MatRef<'_, f64>) -> Vec<usize> {
+    let (m, n) = (jac.nrows(), jac.ncols());
+    if m == 0 || n == 0 {
+        return (0..m).collect();
+    }
+    let Ok(svd) = jac.svd() else { return vec![] };
+    let s = svd.S().column_vector();
+    let smax = (0..s.nrows()).map(|k| s[k]).fold(0.0f64, f64::max);
+    let rank = (0..s.nrows()).filter(|&k| s[k] > RANK_TOLERANCE * smax).count();
+    let u = svd.U();
+    // The left singular vectors are unit vectors: a component above 1e-8 is far above rounding.
+    (0..m).filter(|&i| (rank..m).any(|k| u[(i, k)].abs() > 1e-8)).collect()
+}
+
+/// The names of the elements (joints, drivers) of `rows`, each once, in row order.
+pub(crate) fn element_names(sys: &crate::system::System<'_>, rows: &[usize]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    for &r in rows {
+        let e = sys.row_name(r).element;
+        if !names.contains(&e) {
+            names.push(e);
+        }
+    }
+    names
 }

@@ -787,12 +787,10 @@ impl Cx<'_> {
             let force_names: Vec<&str> = spec.forces.keys().map(String::as_str).collect();
             let forces = self.selection(&path, "forces", "force", &force_names, a.forces.as_deref());
             let t0 = self.finite(&format!("{path}.t_start"), a.t_start);
-            let t1 = self.finite(&format!("{path}.t_end"), a.t_end);
-            let h = self.positive(&format!("{path}.step"), a.step);
+            let span = self.span(&path, a, t0);
             let settings = self.settings(&format!("{path}.solver"), &a.solver);
             let integrator = self.integrator(&path, a);
-            let (Some(t0), Some(t1), Some(h), Some(settings), Some(integrator)) = (t0, t1, h, settings, integrator)
-            else {
+            let (Some(t0), Some((t1, h)), Some(settings), Some(integrator)) = (t0, span, settings, integrator) else {
                 continue;
             };
             if t1 < t0 {
@@ -809,8 +807,12 @@ impl Cx<'_> {
                 );
                 continue;
             }
-            if a.kind == AnalysisKind::Kinematic && a.integrator.is_some() {
+            if a.kind != AnalysisKind::Dynamic && a.integrator.is_some() {
                 self.problem(format!("{path}.integrator"), "only a dynamic analysis has an integrator");
+                continue;
+            }
+            if a.kind != AnalysisKind::Modes && a.about.is_some() {
+                self.problem(format!("{path}.about"), "only a modes analysis has a point to linearise about");
                 continue;
             }
             out.insert(
@@ -825,10 +827,47 @@ impl Cx<'_> {
                     step: h,
                     settings,
                     integrator,
+                    about: a.about.unwrap_or_default(),
                 },
             );
         }
         out
+    }
+
+    /// `(t_end, step)` of an analysis: both required, except that `static` defaults to one
+    /// equilibrium at `t_start` and `modes` is at `t_start` and takes neither.
+    fn span(&mut self, path: &str, a: &AnalysisSpec, t0: Option<f64>) -> Option<(f64, f64)> {
+        let kind = a.kind;
+        if kind == AnalysisKind::Modes {
+            for (field, given) in [("t_end", a.t_end.is_some()), ("step", a.step.is_some())] {
+                if given {
+                    self.problem(
+                        format!("{path}.{field}"),
+                        "a modes analysis is at one time (t_start); remove t_end and step",
+                    );
+                }
+            }
+            return if a.t_end.is_some() || a.step.is_some() { None } else { Some((t0?, 1.0)) };
+        }
+        let t1 = match a.t_end {
+            Some(t) => self.finite(&format!("{path}.t_end"), t),
+            None if kind == AnalysisKind::Static && a.step.is_none() => return Some((t0?, 1.0)),
+            None => {
+                self.problem(
+                    format!("{path}.t_end"),
+                    format!("required: the end time of the {} analysis, s", kind.name()),
+                );
+                None
+            }
+        };
+        let h = match a.step {
+            Some(h) => self.positive(&format!("{path}.step"), h),
+            None => {
+                self.problem(format!("{path}.step"), "required: the output step, s");
+                None
+            }
+        };
+        Some((t1?, h?))
     }
 
     /// The indices into `known` (the model's `section`: drivers or forces) of the names an

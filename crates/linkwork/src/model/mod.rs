@@ -129,6 +129,8 @@ pub struct Analysis {
     pub settings: SolverSettings,
     /// Integrator settings (dynamic analyses).
     pub integrator: IntegratorSettings,
+    /// Where a modes analysis linearises.
+    pub about: spec::LinearisePoint,
 }
 
 /// A compiled mechanism: bodies with coordinate offsets, constraints built, names resolved.

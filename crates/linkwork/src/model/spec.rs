@@ -652,10 +652,17 @@ pub struct AnalysisSpec {
     /// Start time, s. Default: 0.
     #[serde(default)]
     pub t_start: f64,
-    /// End time, s.
-    pub t_end: f64,
-    /// Output step, s.
-    pub step: f64,
+    /// End time, s. Required, except for `static` (default: `t_start`, one equilibrium) and
+    /// `modes` (which is at `t_start` and takes none).
+    #[serde(default)]
+    pub t_end: Option<f64>,
+    /// Output step, s. Required with `t_end`; `modes` takes none.
+    #[serde(default)]
+    pub step: Option<f64>,
+    /// Where `modes` linearises: `equilibrium` (default: the static equilibrium under the
+    /// analysis's loads, found first) or `initial` (the assembled initial state).
+    #[serde(default)]
+    pub about: Option<LinearisePoint>,
     /// Integrator of a dynamic analysis. Default: bdf.
     #[serde(default)]
     pub integrator: Option<IntegratorKind>,
@@ -698,6 +705,39 @@ pub enum AnalysisKind {
     Kinematic,
     /// Motion under forces: the equations of motion integrated in time, with joint reactions.
     Dynamic,
+    /// Inverse dynamics (kinetostatics) of a fully driven mechanism: the kinematic motion, and
+    /// the joint reactions and driver efforts it needs.
+    Inverse,
+    /// Static equilibrium under the loads, at `t_start` or, quasi-statically, at each output time
+    /// of a slowly driven mechanism.
+    Static,
+    /// Linearisation about an equilibrium (or the initial state): natural frequencies, damping
+    /// ratios and mode shapes.
+    Modes,
+}
+
+impl AnalysisKind {
+    /// Its `type` in the model file.
+    pub fn name(self) -> &'static str {
+        match self {
+            AnalysisKind::Kinematic => "kinematic",
+            AnalysisKind::Dynamic => "dynamic",
+            AnalysisKind::Inverse => "inverse",
+            AnalysisKind::Static => "static",
+            AnalysisKind::Modes => "modes",
+        }
+    }
+}
+
+/// The state a `modes` analysis linearises about.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum LinearisePoint {
+    /// The static equilibrium under the analysis's loads.
+    #[default]
+    Equilibrium,
+    /// The assembled initial positions and velocities, as they are.
+    Initial,
 }
 
 /// Settings of the position solver (assembly and kinematics). Defaults and their reasons are in

@@ -148,6 +148,9 @@ pub struct Dae<'m> {
     dual: DualWork,
     /// (n + m) right-hand side scratch.
     rhs: Vec<f64>,
+    /// Factor on gravity and on the applied forces and torques (not on the spring-dampers), for
+    /// the load stepping of static equilibrium. 1 everywhere else.
+    pub external_scale: f64,
     /// Work counters.
     pub stats: LinearStats,
 }
@@ -190,6 +193,7 @@ impl<'m> Dae<'m> {
             dual: DualWork::new(w),
             rhs: vec![0.0; n + m],
             sys,
+            external_scale: 1.0,
             stats: LinearStats::default(),
         })
     }
@@ -238,15 +242,48 @@ impl<'m> Dae<'m> {
 
     /// `(q, qdot, t) => Q`, `out: (n)`: gravity plus every active force.
     pub fn load(&mut self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) {
-        out.copy_from_slice(&self.gravity);
+        let s = self.external_scale;
+        for (o, g) in out.iter_mut().zip(&self.gravity) {
+            *o = s * g;
+        }
         for f in &self.forces {
             let cols = f.force.columns();
             let w = cols.len();
             gather(q, cols, &mut self.fx[..w]);
             gather(qdot, cols, &mut self.fv[..w]);
             f.force.load(&self.fx[..w], &self.fv[..w], t, &mut self.fq[..w]);
+            let scale = if is_element(f) { 1.0 } else { s };
             for (&c, &v) in cols.iter().zip(&self.fq[..w]) {
-                out[c] += v;
+                out[c] += scale * v;
+            }
+        }
+    }
+
+    /// `dq (n x n) = dQ/dq` and `dv (n x n) = dQ/dqdot` at `(q, qdot, t)`, dense, exact (dual
+    /// numbers), with [`Dae::external_scale`] applied as in [`Dae::load`].
+    pub fn load_jacobians(
+        &mut self,
+        q: &[f64],
+        qdot: &[f64],
+        t: f64,
+        mut dq: MatMut<'_, f64>,
+        mut dv: MatMut<'_, f64>,
+    ) {
+        dq.fill(0.0);
+        dv.fill(0.0);
+        for f in &self.forces {
+            let cols = f.force.columns();
+            let w = cols.len();
+            gather(q, cols, &mut self.fx[..w]);
+            gather(qdot, cols, &mut self.fv[..w]);
+            let (dx, dxv) = (&mut self.fdx[..w * w], &mut self.fdv[..w * w]);
+            derivatives(f.force.as_ref(), &self.fx[..w], &self.fv[..w], t, dx, dxv, &mut self.dual);
+            let scale = if is_element(f) { 1.0 } else { self.external_scale };
+            for (ri, &r) in cols.iter().enumerate() {
+                for (ci, &c) in cols.iter().enumerate() {
+                    dq[(r, c)] += scale * dx[ri * w + ci];
+                    dv[(r, c)] += scale * dxv[ri * w + ci];
+                }
             }
         }
     }
@@ -377,12 +414,32 @@ impl<'m> Dae<'m> {
             p += self.fq[..w].iter().zip(&self.fv[..w]).map(|(a, b)| a * b).sum::<f64>();
             p += potential_rate(f.force.as_ref(), &self.fx[..w], &self.fv[..w], &mut self.dual);
         }
-        let joints = self.model.joints.iter().map(|j| j.constraint.rows()).sum::<usize>();
-        if joints < self.m {
-            self.nu(q, t, nu);
-            p -= lambda[joints..].iter().zip(&nu[joints..]).map(|(l, v)| l * v).sum::<f64>();
+        p + self.driver_power(q, t, lambda, nu)
+    }
+
+    /// Power of the active forces (not gravity) `Q_e . qdot`, W.
+    pub fn applied_power(&mut self, q: &[f64], qdot: &[f64], t: f64) -> f64 {
+        let mut p = 0.0;
+        for f in &self.forces {
+            let cols = f.force.columns();
+            let w = cols.len();
+            gather(q, cols, &mut self.fx[..w]);
+            gather(qdot, cols, &mut self.fv[..w]);
+            f.force.load(&self.fx[..w], &self.fv[..w], t, &mut self.fq[..w]);
+            p += self.fq[..w].iter().zip(&self.fv[..w]).map(|(a, b)| a * b).sum::<f64>();
         }
         p
+    }
+
+    /// Power of the active drivers, `-lambda_d^T nu_d` (each effort times its driver's rate), W;
+    /// `nu: (m)` scratch, positions as at the last [`Dae::positions`].
+    pub fn driver_power(&self, q: &[f64], t: f64, lambda: &[f64], nu: &mut [f64]) -> f64 {
+        let joints = self.model.joints.iter().map(|j| j.constraint.rows()).sum::<usize>();
+        if joints == self.m {
+            return 0.0;
+        }
+        self.nu(q, t, nu);
+        -lambda[joints..].iter().zip(&nu[joints..]).map(|(l, v)| l * v).sum::<f64>()
     }
 
     /// Each joint's reaction on its first body `(fx, fy, torque)` (global frame; torque about
@@ -436,6 +493,11 @@ impl<'m> Dae<'m> {
             out.extend([f[0], f[1], torque]);
         }
     }
+}
+
+/// A force element between bodies (a spring-damper), as opposed to an applied load.
+fn is_element(f: &ForceElement) -> bool {
+    matches!(f.kind, "spring_damper" | "rotational_spring_damper")
 }
 
 /// `out[k] = v[cols[k]]`.

@@ -195,6 +195,7 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     dae.sys.jacobian_dense(&ConfigBuf::new(&assembly.q).view(), t0, jac.as_mut());
     let (independent, redundant) = independent_rows(jac.as_ref());
     let redundant_rows: Vec<String> = redundant.iter().map(|&r| dae.sys.row_name(r).to_string()).collect();
+    let indeterminate = crate::analysis::element_names(&dae.sys, &crate::analysis::indeterminate_rows(jac.as_ref()));
     let mut sol = vec![0.0; n + m];
     if let Err(e) = dae.accelerations(&assembly.q, &assembly.qdot, t0, &mut sol) {
         return Err(fail(out.results, factor_error(e, t0)));
@@ -225,16 +226,7 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     s.insert("integrator".into(), json!(settings));
     s.insert("statistics".into(), json!(stats));
     s.insert("redundant_rows".into(), json!(redundant_rows));
-    // The body each joint's reaction acts on (its first body), for reactions in its frame.
-    let on: serde_json::Map<String, serde_json::Value> = model
-        .joints
-        .iter()
-        .map(|j| {
-            let body = j.constraint.anchor().i.0.map_or("ground", |k| model.bodies[k / 3].name.as_str());
-            (j.name.clone(), json!(body))
-        })
-        .collect();
-    s.insert("reaction_bodies".into(), serde_json::Value::Object(on));
+    s.insert("indeterminate_joints".into(), json!(indeterminate));
     s.insert(
         "assembly".into(),
         json!({"iterations": assembly.iterations, "residual": assembly.residual, "velocity_residual": assembly.velocity_residual}),
@@ -243,6 +235,7 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         "residuals".into(),
         json!({"max_position": out.max_position_residual, "max_velocity": out.max_velocity_residual}),
     );
+    results.insert_reaction_summary(model, analysis);
     match error {
         None => Ok(results),
         Some(e) => Err(fail(results, e)),

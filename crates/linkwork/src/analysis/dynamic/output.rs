@@ -49,11 +49,7 @@ impl Output {
     /// Empty results with the columns of a dynamic analysis.
     pub fn new(model: &Model, analysis: &Analysis, n: usize, m: usize) -> Output {
         let mut results = Results::new(model, analysis);
-        let mut names = Vec::new();
-        for j in &model.joints {
-            names.extend(["fx", "fy", "torque"].map(|q| format!("{}.{q}", j.name)));
-        }
-        names.extend(analysis.drivers.iter().map(|&d| format!("{}.effort", model.drivers[d].name)));
+        let mut names = crate::analysis::reaction_columns(model, analysis);
         names.extend(ENERGY_COLUMNS.map(String::from));
         names.extend(model.measures.iter().map(|m| m.name.clone()));
         results.add_columns(names);

@@ -1,0 +1,97 @@
+//! Inverse dynamics (kinetostatics) of a fully driven mechanism.
+//!
+//! The drivers fix the motion, so the kinematic analysis gives `q`, `qdot` and `qddot` at each
+//! output time; the equations of motion then leave only the multipliers unknown:
+//!
+//! ```text
+//! Phi_q^T lambda = Q(q, qdot, t) - M qddot          (n equations, m unknowns, rank n)
+//! ```
+//!
+//! Joint reactions and driver efforts follow from `lambda` as in dynamics
+//! ([`Dae::reactions`]). With redundant rows (`m > rank`) `lambda` is not unique: the
+//! minimum-norm solution (SVD) is taken, and the joints that share a load in a way rigid bodies
+//! leave open are named in the summary (`indeterminate_joints`). The solve is dense, `O(n m^2)`
+//! per output time: the inverse analyses of machines (tens of bodies) take milliseconds.
+
+use super::dynamic::{factor_error, Dae};
+use super::kinematic::run_driven;
+use super::{element_names, indeterminate_rows, min_norm_solve};
+use crate::error::Error;
+use crate::model::{Analysis, Model};
+use crate::results::{Failure, Results};
+use faer::Mat;
+use serde_json::json;
+
+/// Columns after the reactions and efforts.
+pub const INVERSE_COLUMNS: [&str; 4] = ["kinetic_energy", "potential_energy", "driver_power", "applied_power"];
+
+/// Run an inverse dynamic analysis. On failure the results up to the last good output time are
+/// kept.
+pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
+    let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
+        Ok(d) => d,
+        Err(e) => {
+            let error = factor_error(e, analysis.t_start);
+            return Err(Box::new(Failure { error, results: Results::new(model, analysis) }));
+        }
+    };
+    let (n, m) = (dae.n, dae.m);
+    let mut names = reaction_columns(model, analysis);
+    names.extend(INVERSE_COLUMNS.map(String::from));
+    names.extend(model.measures.iter().map(|m| m.name.clone()));
+    let mut rhs = vec![0.0; n];
+    let mut nu = vec![0.0; m];
+    let mut react = Vec::new();
+    let mut jac = Mat::<f64>::zeros(m, n);
+    let mut indeterminate: Option<Vec<String>> = None;
+    let outcome = run_driven(model, analysis, names, |t, q, qdot, qddot, extra| {
+        dae.positions(q, t);
+        dae.load(q, qdot, t, &mut rhs);
+        for k in 0..n {
+            rhs[k] -= dae.mass[k] * qddot[k];
+        }
+        dae.jacobian_dense(jac.as_mut());
+        let lambda = min_norm_solve(jac.transpose(), &rhs).ok_or_else(|| Error::Singular {
+            time: t,
+            rows: vec![],
+            detail: "the singular value decomposition of the constraint Jacobian failed (a non-finite entry)".into(),
+        })?;
+        if indeterminate.is_none() {
+            indeterminate = Some(element_names(&dae.sys, &indeterminate_rows(jac.as_ref())));
+        }
+        dae.reactions(q, &lambda, &mut react);
+        extra.clear();
+        extra.extend_from_slice(&react);
+        let kinetic = dae.kinetic_energy(qdot);
+        let potential = dae.potential_energy(q);
+        let driver = dae.driver_power(q, t, &lambda, &mut nu);
+        let applied = dae.applied_power(q, qdot, t);
+        extra.extend([kinetic, potential, driver, applied]);
+        extra.extend(model.measures.iter().map(|m| m.value(q, qdot, qddot, t)));
+        Ok(())
+    });
+    let finish = |results: &mut Results| {
+        results.summary.insert("indeterminate_joints".into(), json!(indeterminate.clone().unwrap_or_default()));
+        results.insert_reaction_summary(model, analysis);
+    };
+    match outcome {
+        Ok(mut results) => {
+            finish(&mut results);
+            Ok(results)
+        }
+        Err(mut failure) => {
+            finish(&mut failure.results);
+            Err(failure)
+        }
+    }
+}
+
+/// `<joint>.fx, .fy, .torque` for every joint, then `<driver>.effort` for every active driver.
+pub(crate) fn reaction_columns(model: &Model, analysis: &Analysis) -> Vec<String> {
+    let mut names = Vec::new();
+    for j in &model.joints {
+        names.extend(["fx", "fy", "torque"].map(|q| format!("{}.{q}", j.name)));
+    }
+    names.extend(analysis.drivers.iter().map(|&d| format!("{}.effort", model.drivers[d].name)));
+    names
+}

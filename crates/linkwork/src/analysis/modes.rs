@@ -1,0 +1,224 @@
+//! Linearisation about an equilibrium (or the initial state): natural frequencies, damping
+//! ratios and mode shapes.
+//!
+//! Small motions `dq = N z` stay on the constraints to first order when the columns of `N`
+//! span the null space of `Phi_q` (an orthonormal basis from the SVD). Projecting
+//! `M dqddot + C dqdot + K dq = 0` onto them gives the reduced matrices
+//!
+//! ```text
+//! M_r = N^T M N,   C_r = N^T C N,   K_r = N^T K N,
+//! K = -d(Q - Phi_q^T lambda)/dq,    C = -dQ/dqdot
+//! ```
+//!
+//! where the term `d(Phi_q^T lambda)/dq` carries the curvature of the constraints (a
+//! pendulum's stiffness `m g / L` comes from it). Without damping and with a symmetric `K_r` the
+//! modes come from the symmetric-definite problem `K_r v = omega^2 M_r v` (Cholesky of `M_r`, then
+//! a symmetric eigensolver): the frequencies are accurate to rounding. Otherwise from the
+//! eigenvalues `s` of the first-order form `[0, I; -M_r^-1 K_r, -M_r^-1 C_r]`: a complex pair
+//! `s = -zeta omega_n +- i omega_n sqrt(1 - zeta^2)` is one mode, a real `s` a non-oscillating
+//! one. Shapes are `N v` in body coordinates, scaled so that the largest component is 1.
+
+use super::dynamic::{factor_error, Dae};
+use super::statics::{solve, Statics};
+use super::{assemble, element_names, indeterminate_rows};
+use crate::error::Error;
+use crate::model::spec::LinearisePoint;
+use crate::model::{Analysis, Model};
+use crate::results::{Failure, Results};
+use faer::linalg::solvers::DenseSolveCore;
+use faer::Mat;
+use serde_json::{json, Map, Value};
+
+/// One mode of the linearised mechanism.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Mode {
+    /// Undamped natural frequency `|s| / 2 pi`, Hz.
+    pub frequency: f64,
+    /// Damped frequency `Im s / 2 pi`, Hz (0 for a non-oscillating mode).
+    pub damped_frequency: f64,
+    /// Damping ratio `-Re s / |s|` (negative: the motion grows; `None` when `s = 0`).
+    pub damping_ratio: Option<f64>,
+    /// The eigenvalue `s = [Re, Im]` (with `Im >= 0`), 1/s.
+    pub eigenvalue: [f64; 2],
+    /// The shape: each coordinate `<body>.x, .y, .phi`'s share, the largest 1 (the real part
+    /// after turning the complex shape so that its largest component is real).
+    pub shape: Map<String, Value>,
+}
+
+/// Run a modes analysis.
+pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
+    let fail = |results: Results, error: Error| Box::new(Failure { error, results });
+    let t = analysis.t_start;
+    let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
+        Ok(d) => d,
+        Err(e) => return Err(fail(Results::new(model, analysis), factor_error(e, t))),
+    };
+    let n = dae.n;
+    let mut results = Results::new(model, analysis);
+    results.add_columns(model.measures.iter().map(|m| m.name.clone()));
+    let path = format!("analyses.{}", analysis.name);
+    let equilibrium = analysis.about == LinearisePoint::Equilibrium;
+    // The initial state keeps what the user gave, as dynamics does; an equilibrium moves it.
+    let given: Vec<bool> = if equilibrium {
+        vec![false; 2 * n]
+    } else {
+        (0..2)
+            .flat_map(|half| model.bodies.iter().flat_map(move |b| b.given[3 * half..3 * half + 3].to_vec()))
+            .collect()
+    };
+    let assembly = match assemble(&mut dae.sys, &model.q0(), &model.qdot0(), &given, t, analysis.settings.tolerance) {
+        Ok(a) => a,
+        Err(e) => return Err(fail(results, e)),
+    };
+    let (q, qdot, lambda) = if equilibrium {
+        let mut st = Statics::new(&mut dae, analysis.settings.tolerance);
+        st.scale = super::statics::load_scale(st.dae, &assembly.q, t);
+        match solve(&mut st, &path, &assembly.q, t, true) {
+            Ok(eq) => (eq.q, vec![0.0; n], eq.lambda),
+            Err(e) => return Err(fail(results, e)),
+        }
+    } else {
+        let mut sol = vec![0.0; n + dae.m];
+        if let Err(e) = dae.accelerations(&assembly.q, &assembly.qdot, t, &mut sol) {
+            return Err(fail(results, factor_error(e, t)));
+        }
+        (assembly.q.clone(), assembly.qdot.clone(), sol[n..].to_vec())
+    };
+    let mass = dae.mass.clone();
+    let mut st = Statics::new(&mut dae, analysis.settings.tolerance);
+    let (k, c) = st.tangent(&q, &qdot, &lambda, t);
+    let (kr, basis) = st.reduced(k.as_ref(), &q, t);
+    let f = basis.ncols();
+    if f == 0 {
+        let problem = crate::Problem::new(
+            format!("{path}.drivers"),
+            "a modes analysis needs a degree of freedom: the joints and drivers leave none; drop a driver",
+        );
+        return Err(fail(results, Error::Model(vec![problem])));
+    }
+    let m_n = Mat::from_fn(n, f, |i, j| mass[i] * basis[(i, j)]);
+    let mr = basis.transpose() * &m_n;
+    let cr = basis.transpose() * &c * &basis;
+    let names: Vec<String> =
+        model.bodies.iter().flat_map(|b| ["x", "y", "phi"].map(|q| format!("{}.{q}", b.name))).collect();
+    let kscale = (0..f).flat_map(|i| (0..f).map(move |j| (i, j))).map(|(i, j)| kr[(i, j)].abs()).fold(0.0, f64::max);
+    let symmetric = (0..f).all(|i| (0..i).all(|j| (kr[(i, j)] - kr[(j, i)]).abs() <= 1e-8 * kscale));
+    let undamped = (0..f).all(|i| (0..f).all(|j| cr[(i, j)] == 0.0));
+    let modes = if undamped && symmetric {
+        undamped_modes(&mr, &kr, &basis, &names)
+    } else {
+        state_space_modes(&mr, &kr, &cr, &basis, &names)
+    };
+    let Some(mut modes) = modes else {
+        let error = Error::Singular {
+            time: t,
+            rows: vec![],
+            detail: "the eigenvalue solver failed on the reduced matrices (a non-finite entry)".into(),
+        };
+        return Err(fail(results, error));
+    };
+    modes.sort_by(|a, b| a.frequency.total_cmp(&b.frequency));
+    let zero = vec![0.0; n];
+    let extra: Vec<f64> = model.measures.iter().map(|m| m.value(&q, &qdot, &zero, t)).collect();
+    results.push(t, &q, &qdot, &zero, &extra);
+    st.dae.positions(&q, t);
+    let mut jac = Mat::<f64>::zeros(st.dae.m, n);
+    st.dae.jacobian_dense(jac.as_mut());
+    let s = &mut results.summary;
+    s.insert("output_points".into(), json!(1));
+    s.insert("dof".into(), json!(f));
+    s.insert("about".into(), json!(analysis.about));
+    s.insert("modes".into(), json!(modes));
+    s.insert("indeterminate_joints".into(), json!(element_names(&st.dae.sys, &indeterminate_rows(jac.as_ref()))));
+    Ok(results)
+}
+
+/// Modes of `K_r v = omega^2 M_r v` (symmetric `K_r`, SPD `M_r`), through the Cholesky factor
+/// `M_r = L L^T` and the symmetric eigenproblem of `L^-1 K_r L^-T`.
+fn undamped_modes(mr: &Mat<f64>, kr: &Mat<f64>, basis: &Mat<f64>, names: &[String]) -> Option<Vec<Mode>> {
+    let f = mr.nrows();
+    let llt = mr.llt(faer::Side::Lower).ok()?;
+    let l = llt.L().to_owned();
+    let linv = l.as_ref().partial_piv_lu().inverse();
+    let ks = Mat::from_fn(f, f, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]));
+    let s = &linv * &ks * linv.transpose();
+    let s = Mat::from_fn(f, f, |i, j| 0.5 * (s[(i, j)] + s[(j, i)]));
+    let eig = s.self_adjoint_eigen(faer::Side::Lower).ok()?;
+    let (w2, u) = (eig.S().column_vector(), eig.U());
+    // v = L^-T u: the modal coordinates, then N v the body coordinates.
+    let v = linv.transpose() * u;
+    let modes = (0..f)
+        .map(|k| {
+            let lam: f64 = w2[k];
+            let eigenvalue = if lam >= 0.0 { [0.0, lam.sqrt()] } else { [(-lam).sqrt(), 0.0] };
+            let shape: Vec<f64> = (0..basis.nrows()).map(|i| (0..f).map(|j| basis[(i, j)] * v[(j, k)]).sum()).collect();
+            mode(eigenvalue, &shape, &vec![0.0; shape.len()], names)
+        })
+        .collect();
+    Some(modes)
+}
+
+/// Modes from the eigenvalues of the first-order form `[0, I; -M_r^-1 K_r, -M_r^-1 C_r]`.
+fn state_space_modes(
+    mr: &Mat<f64>,
+    kr: &Mat<f64>,
+    cr: &Mat<f64>,
+    basis: &Mat<f64>,
+    names: &[String],
+) -> Option<Vec<Mode>> {
+    let f = mr.nrows();
+    let minv = mr.as_ref().partial_piv_lu().inverse();
+    let (a21, a22) = (-(&minv * kr), -(&minv * cr));
+    let a = Mat::from_fn(2 * f, 2 * f, |i, j| match (i < f, j < f) {
+        (true, true) => 0.0,
+        (true, false) => f64::from(u8::from(j - f == i)),
+        (false, true) => a21[(i - f, j)],
+        (false, false) => a22[(i - f, j - f)],
+    });
+    let eig = a.eigen().ok()?;
+    let (s, u) = (eig.S().column_vector(), eig.U());
+    let mut modes = Vec::new();
+    for k in 0..2 * f {
+        let (re, im) = (s[k].re, s[k].im);
+        // One mode per complex pair (the member with Im > 0); every real eigenvalue on its own.
+        if im < 0.0 && im.abs() > 1e-12 * re.hypot(im) {
+            continue;
+        }
+        let im = if im.abs() <= 1e-12 * re.hypot(im) { 0.0 } else { im };
+        let (sr, si): (Vec<f64>, Vec<f64>) = (0..basis.nrows())
+            .map(|i| {
+                (0..f)
+                    .fold((0.0, 0.0), |(a, b), j| (a + basis[(i, j)] * u[(j, k)].re, b + basis[(i, j)] * u[(j, k)].im))
+            })
+            .unzip();
+        modes.push(mode([re, im], &sr, &si, names));
+    }
+    Some(modes)
+}
+
+/// A [`Mode`] from its eigenvalue and complex shape `re + i im` in body coordinates.
+fn mode(eigenvalue: [f64; 2], re: &[f64], im: &[f64], names: &[String]) -> Mode {
+    let [sr, si] = eigenvalue;
+    let omega = sr.hypot(si);
+    // Turn the shape so that its largest component is real and positive, then scale it to 1.
+    let big = (0..re.len()).max_by(|&a, &b| re[a].hypot(im[a]).total_cmp(&re[b].hypot(im[b]))).unwrap_or(0);
+    let (br, bi) = (re[big], im[big]);
+    let norm = br.hypot(bi);
+    let shape = (0..re.len())
+        .map(|i| {
+            let v = match i {
+                _ if norm == 0.0 => 0.0,
+                _ if i == big => 1.0,
+                _ => (re[i] * br + im[i] * bi) / (norm * norm),
+            };
+            (names[i].clone(), json!(v))
+        })
+        .collect();
+    Mode {
+        frequency: omega / (2.0 * std::f64::consts::PI),
+        damped_frequency: si / (2.0 * std::f64::consts::PI),
+        damping_ratio: (omega > 0.0).then(|| -sr / omega),
+        eigenvalue,
+        shape,
+    }
+}

@@ -1,0 +1,307 @@
+//! Statics, inverse dynamics, redundant supports and modes against closed forms, virtual work
+//! and hand derivations.
+
+use linkwork::{Model, Results};
+
+fn col<'a>(r: &'a Results, name: &str) -> &'a [f64] {
+    r.column(name).unwrap_or_else(|| panic!("no column {name}"))
+}
+
+fn run(yaml: &str, analysis: &str) -> Results {
+    let model = Model::from_yaml(yaml).unwrap_or_else(|e| panic!("{e}"));
+    model.run(analysis).unwrap_or_else(|f| panic!("{}", f.error))
+}
+
+/// A centred slider-crank (crank r = 0.1, rod L = 0.3) with a force `P` along the guide on the
+/// slider, the crank held by an angle driver at `theta = 0.3 + t`, `t` in 0..1.
+fn slider_crank(extra_bodies: &str, forces: &str, analysis: &str) -> String {
+    format!(
+        r#"
+gravity: [0, 0]
+bodies:
+  crank: {{mass: 1.0, inertia: 0.001, position: [0.05, 0.01], angle: 0.3, points: {{O: [-0.05, 0], A: [0.05, 0]}}}}
+  rod: {{mass: 2.0, inertia: 0.015, position: [0.24, 0.01], angle: -0.1, points: {{A: [-0.15, 0], B: [0.15, 0]}}}}
+  slider: {{mass: 1.5, inertia: 0.001, position: [0.38, 0.0], angle: 0.0}}
+{extra_bodies}
+joints:
+  O: {{type: revolute, body_i: crank, point_i: O, body_j: ground, point_j: [0, 0]}}
+  A: {{type: revolute, body_i: crank, point_i: A, body_j: rod, point_j: A}}
+  B: {{type: revolute, body_i: rod, point_i: B, body_j: slider, point_j: [0, 0]}}
+  guide: {{type: translational, body_i: ground, point_i: [0, 0], axis_i: [1, 0], body_j: slider, point_j: [0, 0], axis_j: [1, 0]}}
+drivers:
+  motor: {{type: angle, body: crank, function: "0.3 + t"}}
+forces:
+{forces}
+analyses:
+{analysis}
+"#
+    )
+}
+
+/// Virtual work on the slider-crank: the crank torque that holds a force `P` on the slider is
+/// `M = -P dx/dtheta`, `x = r cos(theta) + sqrt(L^2 - r^2 sin^2(theta))`. Quasi-static at five
+/// crank angles. Tolerance 1e-9 relative to `P r`: the force balance converges to 1e-10 of the
+/// load, the rest is rounding.
+#[test]
+fn slider_crank_torque_is_virtual_work() {
+    let p = -250.0;
+    let yaml = slider_crank(
+        "",
+        &format!("  push: {{type: force, body: slider, fx: {p}}}"),
+        "  hold: {type: static, drivers: [motor], t_end: 1.0, step: 0.25}",
+    );
+    let r = run(&yaml, "hold");
+    assert_eq!(r.len(), 5);
+    let (rc, l) = (0.1f64, 0.3f64);
+    for (k, &t) in r.time.iter().enumerate() {
+        let th = 0.3 + t;
+        let s = (l * l - rc * rc * th.sin().powi(2)).sqrt();
+        let dx = -rc * th.sin() - rc * rc * th.sin() * th.cos() / s;
+        let want = -p * dx;
+        let got = col(&r, "motor.effort")[k];
+        assert!((got - want).abs() <= 1e-9 * (p * rc).abs(), "t = {t}: {got} vs {want}");
+        assert!((col(&r, "slider.x")[k] - (rc * th.cos() + s)).abs() < 1e-11);
+    }
+}
+
+/// The ellipse trammel (bar of 1 m, ends A on the x-axis and B on the y-axis, `A = (cos psi, 0)`,
+/// `B = (0, -sin psi)`) with a force `Fx` on A and `Fy` on B rests where the virtual work
+/// `-Fx sin(psi) - Fy cos(psi)` vanishes: `tan(psi) = -Fy / Fx`. The reactions of the guides
+/// balance the forces (the guides carry only normal forces).
+#[test]
+fn ellipse_trammel_rests_where_the_virtual_work_vanishes() {
+    let model = Model::load(format!("{}/../../examples/ellipse_trammel.yaml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let r = model.run("equilibrium").unwrap_or_else(|f| panic!("{}", f.error));
+    let (fx, fy) = (30.0f64, -40.0f64);
+    let psi = col(&r, "bar.phi")[0];
+    assert!((psi - (-fy / fx).atan()).abs() < 1e-10, "psi = {psi}");
+    // The guide of A (ground first) pushes A vertically only: its reaction on ground balances it.
+    assert!(col(&r, "guide_a.fx")[0].abs() < 1e-8, "{}", col(&r, "guide_a.fx")[0]);
+    assert!(col(&r, "guide_b.fy")[0].abs() < 1e-8, "{}", col(&r, "guide_b.fy")[0]);
+    assert_eq!(r.summary["stable"], serde_json::json!(true));
+}
+
+/// A four-bar (ground pivots O = (0, 0) and C = (d, 0); crank a, coupler b, rocker c) with a
+/// rotational spring on the crank (k, free angle theta0) and a downward force F at the rocker's
+/// tip B. Equilibrium by virtual work: `k (theta - theta0) = -F dy_B/dtheta` with
+/// `dy_B/dtheta = c cos(psi) dpsi/dtheta` and, from the loop closure
+/// `a e^{i theta} + b e^{i beta} = d + c e^{i psi}`, `dpsi/dtheta = a sin(theta - beta) / (c sin(psi - beta))`.
+/// Modes about it: one degree of freedom, `omega^2 = V''(theta) / M(theta)` with the generalised
+/// mass from the same kinematic coefficients (`dbeta/dtheta = a sin(theta - psi) / (b sin(psi - beta))`)
+/// and `V''` from the derivative of `dy_B/dtheta`, by a central difference of the closed form
+/// (step 1e-5: error ~1e-10).
+const SPRING_FOURBAR: &str = r#"
+gravity: [0, 0]
+bodies:
+  crank: {mass: 2.0, inertia: 0.04, position: [0.2, 0.3], angle: 1.0, points: {O: [-0.25, 0], A: [0.25, 0]}}
+  coupler: {mass: 3.0, inertia: 0.1, position: [0.8, 0.6], angle: 0.0, points: {A: [-0.5, 0], B: [0.5, 0]}}
+  rocker: {mass: 2.5, inertia: 0.08, position: [1.1, 0.3], angle: 1.4, points: {C: [-0.35, 0], B: [0.35, 0]}}
+joints:
+  O: {type: revolute, body_i: crank, point_i: O, body_j: ground, point_j: [0, 0]}
+  A: {type: revolute, body_i: crank, point_i: A, body_j: coupler, point_j: A}
+  B: {type: revolute, body_i: coupler, point_i: B, body_j: rocker, point_j: B}
+  C: {type: revolute, body_i: rocker, point_i: C, body_j: ground, point_j: [1.0, 0]}
+forces:
+  spring: {type: rotational_spring_damper, body_i: crank, body_j: ground, stiffness: 400, free_angle: 1.2}
+  load: {type: force, body: rocker, point: B, fy: -300}
+analyses:
+  rest: {type: static}
+  vibration: {type: modes}
+"#;
+
+/// `(psi, beta, dpsi/dtheta, dbeta/dtheta)` of the four-bar of [`SPRING_FOURBAR`] at crank
+/// angle `theta`, on the assembly branch with B above the ground line.
+fn fourbar(theta: f64) -> (f64, f64, f64, f64) {
+    let (a, b, c, d) = (0.5f64, 1.0f64, 0.7f64, 1.0f64);
+    let (ax, ay) = (a * theta.cos(), a * theta.sin());
+    // B on the circles |B - A| = b and |B - C| = c.
+    let (dx, dy) = (d - ax, -ay);
+    let e = dx.hypot(dy);
+    let along = (b * b - c * c + e * e) / (2.0 * e);
+    let h = (b * b - along * along).sqrt();
+    let (ux, uy) = (dx / e, dy / e);
+    let (bx, by) = (ax + along * ux - h * uy, ay + along * uy + h * ux);
+    let (bx, by) = if by > 0.0 { (bx, by) } else { (ax + along * ux + h * uy, ay + along * uy - h * ux) };
+    let psi = (by).atan2(bx - d);
+    let beta = (by - ay).atan2(bx - ax);
+    let dpsi = a * (theta - beta).sin() / (c * (psi - beta).sin());
+    let dbeta = a * (theta - psi).sin() / (b * (psi - beta).sin());
+    (psi, beta, dpsi, dbeta)
+}
+
+#[test]
+fn spring_fourbar_rests_by_virtual_work_and_vibrates_as_derived() {
+    let (k, theta0, f, a, b, c) = (400.0f64, 1.2f64, 300.0f64, 0.5f64, 1.0f64, 0.7f64);
+    let r = run(SPRING_FOURBAR, "rest");
+    let theta = col(&r, "crank.phi")[0];
+    let dyb = |th: f64| {
+        let (psi, _, dpsi, _) = fourbar(th);
+        c * psi.cos() * dpsi
+    };
+    let balance = k * (theta - theta0) + f * dyb(theta);
+    assert!(balance.abs() < 1e-8 * k * (theta - theta0).abs(), "virtual work residual {balance} at theta {theta}");
+    let (psi, beta, _, _) = fourbar(theta);
+    assert!((col(&r, "rocker.phi")[0] - psi).abs() < 1e-10 && (col(&r, "coupler.phi")[0] - beta).abs() < 1e-10);
+
+    // Modes: generalised mass and stiffness at the equilibrium.
+    let (_, _, dpsi, dbeta) = fourbar(theta);
+    let (m1, j1, m2, j2, m3, j3) = (2.0, 0.04, 3.0, 0.1, 2.5, 0.08);
+    // Coupler centre of mass: A + (b/2) e^{i beta}; its velocity per unit crank rate.
+    let vx = -a * theta.sin() - 0.5 * b * dbeta * beta.sin();
+    let vy = a * theta.cos() + 0.5 * b * dbeta * beta.cos();
+    let mass =
+        m1 * a * a / 4.0 + j1 + m2 * (vx * vx + vy * vy) + j2 * dbeta * dbeta + (m3 * c * c / 4.0 + j3) * dpsi * dpsi;
+    let h = 1e-5;
+    let stiffness = k + f * (dyb(theta + h) - dyb(theta - h)) / (2.0 * h);
+    let want = (stiffness / mass).sqrt() / (2.0 * std::f64::consts::PI);
+    let modes = run(SPRING_FOURBAR, "vibration");
+    let list = modes.summary["modes"].as_array().unwrap();
+    assert_eq!(list.len(), 1);
+    let got = list[0]["frequency"].as_f64().unwrap();
+    assert!((got - want).abs() < 1e-7 * want, "{got} Hz vs {want} Hz");
+    assert!((col(&modes, "crank.phi")[0] - theta).abs() < 1e-10);
+}
+
+/// A door (10 kg, 1 m wide, centre of mass midway between its hinges) hung on two hinges 2 m
+/// apart on a vertical line: the vertical loads are indeterminate (one redundant row), and the
+/// minimum-norm reactions share the weight equally; the horizontal ones are determinate, the
+/// couple `m g (w / 2) / 2 m` that holds the door's moment.
+#[test]
+fn symmetric_door_hinges_share_the_weight() {
+    let yaml = r#"
+gravity: [0, -9.81]
+bodies:
+  door: {mass: 10, inertia: 4.2, position: [0.5, 1.0], angle: 0, points: {low: [-0.5, -1.0], high: [-0.5, 1.0]}}
+joints:
+  lower: {type: revolute, body_i: door, point_i: low, body_j: ground, point_j: [0, 0]}
+  upper: {type: revolute, body_i: door, point_i: high, body_j: ground, point_j: [0, 2]}
+analyses:
+  hang: {type: static}
+"#;
+    let r = run(yaml, "hang");
+    let w = 10.0 * 9.81;
+    for j in ["lower", "upper"] {
+        assert!((col(&r, &format!("{j}.fy"))[0] - w / 2.0).abs() < 1e-10 * w, "{j}");
+    }
+    assert!((col(&r, "lower.fx")[0] - w * 0.5 / 2.0).abs() < 1e-10 * w);
+    assert!((col(&r, "upper.fx")[0] + w * 0.5 / 2.0).abs() < 1e-10 * w);
+    assert_eq!(r.summary["indeterminate_joints"], serde_json::json!(["lower", "upper"]));
+    let model = Model::from_yaml(yaml).unwrap();
+    let check = linkwork::analysis::check(&model).unwrap();
+    assert_eq!(check.mechanism.indeterminate, ["lower", "upper"]);
+}
+
+/// Small oscillations of a simple pendulum (a point mass: a body with no inertia about its centre
+/// of mass, pinned at `L` from it) and a compound one (a uniform rod about its end):
+/// `omega = sqrt(g / L)` and `sqrt(3 g / (2 L))`, about the equilibrium found from a guess 0.4 rad
+/// off. Tolerance 1e-9: the geometric stiffness is a central difference (~1e-10), the eigenvalues
+/// are exact to rounding.
+#[test]
+fn pendulum_frequencies_are_the_closed_forms() {
+    let (g, l) = (9.81f64, 1.5f64);
+    for (inertia, arm, want) in [(0.0, l, (g / l).sqrt()), (4.0 * l * l / 12.0, l / 2.0, (1.5 * g / l).sqrt())] {
+        let yaml = format!(
+            r#"
+gravity: [0, -{g}]
+bodies:
+  bob: {{mass: 4.0, inertia: {inertia}, position: [0.6, -{arm}], angle: 0.4, points: {{P: [0, {arm}]}}}}
+joints:
+  pivot: {{type: revolute, body_i: bob, point_i: P, body_j: ground, point_j: [0, 0]}}
+analyses:
+  small: {{type: modes}}
+"#
+        );
+        let r = run(&yaml, "small");
+        let modes = r.summary["modes"].as_array().unwrap();
+        assert_eq!(modes.len(), 1);
+        let got = 2.0 * std::f64::consts::PI * modes[0]["frequency"].as_f64().unwrap();
+        assert!((got - want).abs() < 1e-9 * want, "{got} vs {want}");
+        assert!(col(&r, "bob.phi")[0].abs() < 1e-12, "hangs straight down");
+    }
+}
+
+/// A slider (m) on a horizontal guide held by a spring-damper (k, c) to ground: one mode with
+/// `omega_n = sqrt(k / m)` and `zeta = c / (2 sqrt(k m))`, through the first-order eigenproblem.
+#[test]
+fn spring_mass_slider_has_the_closed_form_frequency_and_damping() {
+    let (m, k, c) = (2.0f64, 800.0f64, 12.0f64);
+    let yaml = format!(
+        r#"
+gravity: [0, -9.81]
+bodies:
+  block: {{mass: {m}, inertia: 0.01, position: [0.3, 0], angle: 0}}
+joints:
+  guide: {{type: translational, body_i: ground, point_i: [0, 0], axis_i: [1, 0], body_j: block, point_j: [0, 0], axis_j: [1, 0]}}
+forces:
+  spring: {{type: spring_damper, body_i: ground, point_i: [-1, 0], body_j: block, point_j: [0, 0], stiffness: {k}, damping: {c}, free_length: 1.2}}
+analyses:
+  shake: {{type: modes}}
+"#
+    );
+    let r = run(&yaml, "shake");
+    let modes = r.summary["modes"].as_array().unwrap();
+    assert_eq!(modes.len(), 1, "{modes:?}");
+    let wn = 2.0 * std::f64::consts::PI * modes[0]["frequency"].as_f64().unwrap();
+    let zeta = modes[0]["damping_ratio"].as_f64().unwrap();
+    assert!((wn - (k / m).sqrt()).abs() < 1e-10 * wn, "{wn}");
+    assert!((zeta - c / (2.0 * (k * m).sqrt())).abs() < 1e-10, "{zeta}");
+    assert!((col(&r, "block.x")[0] - 0.2).abs() < 1e-12, "rest at the free length");
+    assert_eq!(modes[0]["shape"]["block.x"], serde_json::json!(1.0));
+}
+
+/// Inverse dynamics of a slider-crank under gravity, a spring-damper on the slider and a torque
+/// on the crank, driven at `theta = 0.3 + t`: at every output time the motor's power equals
+/// `dT/dt + dV_gravity/dt` minus the power of the applied forces, each computed here from the
+/// body columns alone (`dT/dt = sum m v.a + J omega alpha`). Tolerance 1e-8 relative to the
+/// largest term: the multipliers are exact solutions of a linear system, so only rounding remains.
+#[test]
+fn inverse_dynamics_balances_power() {
+    let (k, c, x0, torque) = (500.0, 20.0, 0.3, 7.0);
+    let yaml = slider_crank(
+        "",
+        &format!(
+            "  spring: {{type: spring_damper, body_i: ground, point_i: [0, 0], body_j: slider, point_j: [0, 0], stiffness: {k}, damping: {c}, free_length: {x0}}}\n  drag: {{type: torque, body: crank, torque: \"{torque}*cos(3*t)\"}}"
+        ),
+        "  drive: {type: inverse, drivers: [motor], t_end: 2.0, step: 0.1}",
+    )
+    .replace("gravity: [0, 0]", "gravity: [0, -9.81]");
+    let r = run(&yaml, "drive");
+    let bodies = [("crank", 1.0, 0.001), ("rod", 2.0, 0.015), ("slider", 1.5, 0.001)];
+    for (i, &t) in r.time.iter().enumerate() {
+        let v = |b: &str, q: &str| col(&r, &format!("{b}.{q}"))[i];
+        let mut dt = 0.0;
+        let mut dv = 0.0;
+        for (b, m, j) in bodies {
+            dt += m * (v(b, "vx") * v(b, "ax") + v(b, "vy") * v(b, "ay")) + j * v(b, "omega") * v(b, "alpha");
+            dv += m * 9.81 * v(b, "vy");
+        }
+        let (x, vx) = (v("slider", "x"), v("slider", "vx"));
+        let applied = (-k * (x - x0) - c * vx) * vx + torque * (3.0 * t).cos() * v("crank", "omega");
+        let motor = col(&r, "motor.effort")[i] * v("crank", "omega");
+        let scale = dt.abs().max(dv.abs()).max(applied.abs()).max(1.0);
+        assert!((motor - (dt + dv - applied)).abs() < 1e-8 * scale, "t = {t}: {motor} vs {}", dt + dv - applied);
+        assert!((col(&r, "driver_power")[i] - motor).abs() < 1e-9 * scale);
+    }
+    let peak = &r.summary["peaks"]["motor.effort"];
+    let max = col(&r, "motor.effort").iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    assert_eq!(peak["max_abs"].as_f64().unwrap(), max);
+}
+
+/// Bad input: a static analysis of a mechanism free to move with nothing to hold it, and an
+/// inverse analysis of a model that is not fully driven, each get a model error naming the cause.
+#[test]
+fn statics_and_inverse_refuse_what_they_cannot_solve() {
+    let free =
+        slider_crank("", "  none: {type: torque, body: crank, torque: 0}", "  rest: {type: static, drivers: []}");
+    let model = Model::from_yaml(&free).unwrap();
+    let e = model.run("rest").unwrap_err().error.to_string();
+    assert!(e.contains("analyses.rest") && e.contains("free to move") && e.contains("crank.phi"), "{e}");
+    let undriven = slider_crank(
+        "",
+        "  none: {type: torque, body: crank, torque: 0}",
+        "  inv: {type: inverse, drivers: [], t_end: 1, step: 0.1}",
+    );
+    let model = Model::from_yaml(&undriven).unwrap();
+    let e = model.run("inv").unwrap_err().error.to_string();
+    assert!(e.contains("analyses.inv.drivers") && e.contains("an inverse analysis needs a fully driven model"), "{e}");
+}

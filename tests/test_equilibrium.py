@@ -1,0 +1,146 @@
+"""Inverse dynamics, statics and modes from Python and the command line."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+import linkwork
+from conftest import EXAMPLES
+
+# (mass, inertia) of each body, as in the model files.
+BODIES = {
+    "a": {"crank": (1000, 2000), "rocker": (100, 100), "slider_b": (5, 0.05), "link": (30, 10), "slider_d": (20, 1.5)},
+    "b": {"crank": (1000, 2000), "rocker": (100, 100), "link": (30, 10)},
+}
+
+
+@pytest.mark.parametrize("variant", ["a", "b"])
+def test_quick_return_inverse_balances_power(variant: str) -> None:
+    """The crank torque's power equals the rate of change of kinetic energy (no gravity, no load),
+    computed from the body columns alone: `dT/dt = sum m v.a + J omega alpha`. Tolerance 1e-8 of
+    the largest power: the multipliers solve a linear system exactly, the rest is rounding."""
+    results = linkwork.load(EXAMPLES / f"quick_return_{variant}.yaml").run("inverse")
+    assert len(results) == 41
+    dt = sum(
+        m * (results[f"{b}.vx"] * results[f"{b}.ax"] + results[f"{b}.vy"] * results[f"{b}.ay"])
+        + j * results[f"{b}.omega"] * results[f"{b}.alpha"]
+        for b, (m, j) in BODIES[variant].items()
+    )
+    motor = results["crank_drive.effort"] * results["crank.omega"]
+    scale = np.abs(motor).max()
+    assert np.abs(motor - dt).max() < 1e-8 * scale
+    assert np.allclose(results["crank.omega"], 2 * np.pi, rtol=0, atol=1e-9)
+    peak = results.summary["peaks"]["crank_drive.effort"]
+    assert peak["max_abs"] == np.abs(results["crank_drive.effort"]).max()
+
+
+def test_quick_return_models_share_the_motion_not_the_torque() -> None:
+    """A and B move alike under the same driver (their kinematics agree), but A's sliders carry
+    mass, so A needs more torque: the torques differ exactly by the sliders' power over omega."""
+    a = linkwork.load(EXAMPLES / "quick_return_a.yaml").run("inverse")
+    b = linkwork.load(EXAMPLES / "quick_return_b.yaml").run("inverse")
+    assert np.abs(a["rocker.phi"] - b["rocker.phi"]).max() < 1e-9
+    sliders = sum(
+        m * (a[f"{s}.vx"] * a[f"{s}.ax"] + a[f"{s}.vy"] * a[f"{s}.ay"]) + j * a[f"{s}.omega"] * a[f"{s}.alpha"]
+        for s, (m, j) in (("slider_b", (5, 0.05)), ("slider_d", (20, 1.5)))
+    )
+    difference = (a["crank_drive.effort"] - b["crank_drive.effort"]) * 2 * np.pi
+    assert np.abs(difference - sliders).max() < 1e-8 * np.abs(a["crank_drive.effort"]).max() * 2 * np.pi
+
+
+def test_cli_inverse_writes_reactions_and_crank_torque(linkwork, tmp_path) -> None:
+    out = linkwork("run", EXAMPLES / "quick_return_a.yaml", "--analysis", "inverse", "--out", "inv")
+    assert out.code == 0, out.output
+    assert "peak crank_drive.effort" in out.stdout
+    with open(tmp_path / "inv" / "results.csv") as f:
+        header = next(csv.reader(f))
+    for joint in ("O", "A", "B", "B_slot", "C", "D", "D_guide"):
+        for q in ("fx", "fy", "torque"):
+            assert f"{joint}.{q}" in header
+    assert "crank_drive.effort" in header
+    summary = json.loads((tmp_path / "inv" / "summary.json").read_text())
+    assert summary["type"] == "inverse" and summary["status"] == "ok"
+    assert set(summary["peaks"]) >= {"crank_drive.effort", "O.force", "O.torque"}
+
+
+def test_cli_static_and_modes(linkwork, write_model, tmp_path) -> None:
+    model = write_model(
+        """
+        gravity: [0, -9.81]
+        bodies:
+          bob: {mass: 2.0, inertia: 0.0, position: [0.3, -0.9], angle: 0.3, points: {P: [0, 1]}}
+        joints:
+          pivot: {type: revolute, body_i: bob, point_i: P, body_j: ground, point_j: [0, 0]}
+        analyses:
+          rest: {type: static}
+          swing: {type: modes}
+        """
+    )
+    out = linkwork("run", model, "--analysis", "rest", "--out", "rest")
+    assert out.code == 0, out.output
+    assert "stable: True" in out.stdout
+    out = linkwork("run", model, "--analysis", "swing", "--out", "swing")
+    assert out.code == 0, out.output
+    assert "mode 1: 0.498" in out.stdout  # sqrt(9.81) / (2 pi) = 0.49849 Hz
+    with open(tmp_path / "swing" / "modes.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 1
+    assert abs(float(rows[0]["frequency"]) - np.sqrt(9.81) / (2 * np.pi)) < 1e-9
+    # The bob swings about the pivot 1 m above it: x and phi move alike, y not at all.
+    assert abs(float(rows[0]["bob.phi"]) - float(rows[0]["bob.x"])) < 1e-12
+    assert max(abs(float(rows[0]["bob.phi"])), abs(float(rows[0]["bob.x"]))) == 1.0
+    assert abs(float(rows[0]["bob.y"])) < 1e-12
+
+
+def test_results_modes_from_python() -> None:
+    model = linkwork.Model.from_yaml(
+        """
+gravity: [0, 0]
+bodies:
+  block: {mass: 2.0, inertia: 0.01, position: [0.3, 0], angle: 0}
+joints:
+  guide: {type: translational, body_i: ground, point_i: [0, 0], axis_i: [1, 0], body_j: block, point_j: [0, 0], axis_j: [1, 0]}
+forces:
+  spring: {type: spring_damper, body_i: ground, point_i: [-1, 0], body_j: block, point_j: [0, 0], stiffness: 800, damping: 12, free_length: 1.2}
+analyses:
+  shake: {type: modes}
+"""
+    )
+    results = model.run("shake")
+    (mode,) = results.modes
+    assert abs(mode["frequency"] * 2 * np.pi - 20.0) < 1e-9
+    assert abs(mode["damping_ratio"] - 12 / (2 * 40)) < 1e-10
+    assert mode["shape"]["block.x"] == 1.0
+
+
+def test_static_free_mechanism_is_a_model_error(linkwork, write_model) -> None:
+    model = write_model(
+        """
+        gravity: [0, 0]
+        bodies:
+          wheel: {mass: 1, inertia: 0.1, position: [0, 0], angle: 0}
+        joints:
+          axle: {type: revolute, body_i: wheel, point_i: [0, 0], body_j: ground, point_j: [0, 0]}
+        analyses:
+          rest: {type: static}
+          inv: {type: inverse, t_end: 1, step: 0.1}
+        """
+    )
+    out = linkwork("run", model, "--analysis", "rest")
+    assert out.code == 2, out.output
+    assert "analyses.rest" in out.stderr and "free to move (wheel.phi)" in out.stderr
+    out = linkwork("run", model, "--analysis", "inv")
+    assert out.code == 2, out.output
+    assert "an inverse analysis needs a fully driven model" in out.stderr
+    out = linkwork("check", model)
+    assert "a static analysis needs every degree of freedom held" in out.stdout
+
+
+def test_check_names_indeterminate_joints(linkwork) -> None:
+    out = linkwork("check", EXAMPLES / "parallelogram.yaml")
+    assert out.code == 0
+    assert "indeterminate joints ground_1, coupler_1, ground_2, coupler_2, ground_3, coupler_3" in out.stdout
