@@ -305,3 +305,33 @@ fn statics_and_inverse_refuse_what_they_cannot_solve() {
     let e = model.run("inv").unwrap_err().error.to_string();
     assert!(e.contains("analyses.inv.drivers") && e.contains("an inverse analysis needs a fully driven model"), "{e}");
 }
+
+/// A pendulum under a torque larger than its weight can hold (`T > m g L`) has no equilibrium:
+/// Newton, then load stepping (which scales the torque and gravity together, so the ratio never
+/// becomes possible), give up with an `Equilibrium` error that names the time, the equation with
+/// the largest residual and the fraction of the load reached, instead of a wrong answer or a hang.
+#[test]
+fn no_equilibrium_is_an_error_not_an_answer() {
+    let yaml = r#"
+gravity: [0, -9.81]
+bodies:
+  bob: {mass: 1.0, inertia: 0.0, position: [0, -1], angle: 0, points: {P: [0, 1]}}
+joints:
+  pivot: {type: revolute, body_i: bob, point_i: P, body_j: ground, point_j: [0, 0]}
+forces:
+  twist: {type: torque, body: bob, torque: 20}
+analyses:
+  rest: {type: static}
+"#;
+    let model = Model::from_yaml(yaml).unwrap();
+    let failure = model.run("rest").unwrap_err();
+    match &failure.error {
+        linkwork::Error::Equilibrium { time, load_fraction, .. } => {
+            assert_eq!(*time, 0.0);
+            assert!(*load_fraction < 1.0);
+        }
+        other => panic!("expected an Equilibrium error, got {other}"),
+    }
+    assert!(failure.error.to_string().contains("no static equilibrium found"), "{}", failure.error);
+    assert!(failure.results.is_empty());
+}
