@@ -231,6 +231,12 @@ impl<'a, 'm> Statics<'a, 'm> {
             return direct.map_err(|e| NotConverged { load_fraction: 1.0, ..e });
         }
         x.copy_from_slice(&start);
+        self.step_load(x, t)
+    }
+
+    /// Load stepping from `x`: the applied loads scaled from zero to full, each step from the
+    /// equilibrium of the last; `x` ends at the last equilibrium found.
+    fn step_load(&mut self, x: &mut [f64], t: f64) -> Result<(), NotConverged> {
         let (mut done, mut inc) = (0.0f64, 0.25f64);
         let mut last = x.to_vec();
         while done < 1.0 {
@@ -361,30 +367,24 @@ pub(crate) fn solve(
     st.dae.load(q0, &zero, t, &mut load);
     st.dae.jacobian_dense(st.jac.as_mut());
     let lambda0 = min_norm_solve(st.jac.transpose(), &load).unwrap_or_else(|| vec![0.0; m]);
-    let mut x: Vec<f64> = q0.iter().chain(&lambda0).copied().collect();
+    let start: Vec<f64> = q0.iter().chain(&lambda0).copied().collect();
+    let mut x = start.clone();
+    let steps_before = st.stats.load_steps;
     let outcome = st.equilibrium(&mut x, t, stepping);
-    let (q, lambda) = x.split_at(n);
-    let (k, _) = st.tangent(q, &zero, lambda, t);
-    let (kr, basis) = st.reduced(k.as_ref(), q, t);
-    let f = kr.nrows();
-    let (mut min_stiffness, mut free) = (None, None);
-    if f > 0 {
-        let sym = Mat::from_fn(f, f, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]));
-        if let Ok(eig) = sym.self_adjoint_eigen(faer::Side::Lower) {
-            let s = eig.S().column_vector();
-            let largest = (0..f).map(|i| s[i].abs()).fold(0.0f64, f64::max);
-            min_stiffness = Some(s[0]);
-            // The stiffness scale: the largest eigenvalue, or the loads over a metre when every
-            // eigenvalue vanishes.
-            let scale = largest.max(1e-300);
-            let smallest = (0..f).min_by(|&a, &b| s[a].abs().total_cmp(&s[b].abs())).unwrap_or(0);
-            if largest == 0.0 || s[smallest].abs() <= 1e-9 * scale {
-                let u = eig.U();
-                let v: Vec<f64> = (0..n).map(|i| (0..f).map(|j| basis[(i, j)] * u[(j, smallest)]).sum()).collect();
-                free = Some(coordinates_of(st.dae.model, &v));
+    let (mut min_stiffness, mut free) = stability(st, &x, t);
+    // Newton finds the stationary point nearest the guess, which may be unstable (a load that
+    // turns a link over the top); load stepping from the unloaded mechanism follows the branch
+    // the loads bend it along. Prefer what it finds when it is stable.
+    if outcome.is_ok() && stepping && st.stats.load_steps == steps_before && min_stiffness.is_some_and(|s| s < 0.0) {
+        let mut y = start;
+        if st.step_load(&mut y, t).is_ok() {
+            let (s, f) = stability(st, &y, t);
+            if s.is_some_and(|s| s > 0.0) && f.is_none() {
+                (x, min_stiffness, free) = (y, s, f);
             }
         }
     }
+    let (q, lambda) = x.split_at(n);
     match (outcome, free) {
         (Ok(()), None) => Ok(Equilibrium { q: q.to_vec(), lambda: lambda.to_vec(), min_stiffness }),
         (outcome, Some(coords)) => Err(Error::Model(vec![crate::Problem::new(
@@ -403,6 +403,33 @@ pub(crate) fn solve(
             load_fraction: e.load_fraction,
         }),
     }
+}
+
+/// The smallest eigenvalue of the symmetric part of the reduced tangent stiffness at
+/// `x = [q; lambda]` (`None` without free directions), and the coordinates of a direction without
+/// stiffness if there is one.
+fn stability(st: &mut Statics<'_, '_>, x: &[f64], t: f64) -> (Option<f64>, Option<Vec<String>>) {
+    let n = st.n;
+    let (q, lambda) = x.split_at(n);
+    let zero = vec![0.0; n];
+    let (k, _) = st.tangent(q, &zero, lambda, t);
+    let (kr, basis) = st.reduced(k.as_ref(), q, t);
+    let f = kr.nrows();
+    if f == 0 {
+        return (None, None);
+    }
+    let sym = Mat::from_fn(f, f, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]));
+    let Ok(eig) = sym.self_adjoint_eigen(faer::Side::Lower) else { return (None, None) };
+    let s = eig.S().column_vector();
+    let largest = (0..f).map(|i| s[i].abs()).fold(0.0f64, f64::max);
+    // Zero relative to the largest eigenvalue; every eigenvalue zero is a free mechanism.
+    let smallest = (0..f).min_by(|&a, &b| s[a].abs().total_cmp(&s[b].abs())).unwrap_or(0);
+    let free = (largest == 0.0 || s[smallest].abs() <= 1e-9 * largest).then(|| {
+        let u = eig.U();
+        let v: Vec<f64> = (0..n).map(|i| (0..f).map(|j| basis[(i, j)] * u[(j, smallest)]).sum()).collect();
+        coordinates_of(st.dae.model, &v)
+    });
+    (Some(s[0]), free)
 }
 
 /// Run a static (or quasi-static) analysis. On failure the equilibria found until then are
