@@ -3,16 +3,7 @@
 
 mod common;
 
-fn col<'a>(r: &'a linkwork::Results, name: &str) -> &'a [f64] {
-    r.column(name).unwrap_or_else(|| panic!("no column {name}"))
-}
-
-/// Largest change of the total mechanical energy `T + V - W` over the run.
-fn energy_drift(r: &linkwork::Results) -> f64 {
-    let (t, v, w) = (col(r, "kinetic_energy"), col(r, "potential_energy"), col(r, "nonconservative_work"));
-    let e0 = t[0] + v[0] - w[0];
-    (0..r.len()).map(|k| (t[k] + v[k] - w[k] - e0).abs()).fold(0.0, f64::max)
-}
+use common::{col, energy_drift};
 
 /// The double pendulum's energy (about 15 J of motion) over 5 s at the default tolerances
 /// (1e-6): a per-step error of 1e-6 over some 600 to 1300 steps bounds the drift near 1e-2 J.

@@ -5,6 +5,8 @@
 
 mod common;
 
+use common::{col, energy_drift};
+
 use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::{Error, Model, Overrides, Results};
 
@@ -45,17 +47,6 @@ fn run(model: &Model, analysis: &str, overrides: &Overrides) -> Results {
         r.summary["statistics"]
     );
     r
-}
-
-fn col<'a>(r: &'a Results, name: &str) -> &'a [f64] {
-    r.column(name).unwrap_or_else(|| panic!("no column {name}"))
-}
-
-/// Largest change of the total mechanical energy `T + V - W` over the run.
-fn energy_drift(r: &Results) -> f64 {
-    let (t, v, w) = (col(r, "kinetic_energy"), col(r, "potential_energy"), col(r, "nonconservative_work"));
-    let e0 = t[0] + v[0] - w[0];
-    (0..r.len()).map(|k| (t[k] + v[k] - w[k] - e0).abs()).fold(0.0, f64::max)
 }
 
 fn max_abs(v: impl IntoIterator<Item = f64>) -> f64 {

@@ -70,22 +70,21 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
         Ok(a) => a,
         Err(e) => return Err(fail(results, e)),
     };
+    let mass = dae.mass.clone();
+    let m = dae.m;
+    let mut st = Statics::new(&mut dae, analysis.settings.tolerance, &assembly.q, t);
     let (q, qdot, lambda) = if equilibrium {
-        let mut st = Statics::new(&mut dae, analysis.settings.tolerance);
-        st.scale = super::statics::load_scale(st.dae, &assembly.q, t);
         match solve(&mut st, &path, &assembly.q, t, true) {
             Ok(eq) => (eq.q, vec![0.0; n], eq.lambda),
             Err(e) => return Err(fail(results, e)),
         }
     } else {
-        let mut sol = vec![0.0; n + dae.m];
-        if let Err(e) = dae.accelerations(&assembly.q, &assembly.qdot, t, &mut sol) {
+        let mut sol = vec![0.0; n + m];
+        if let Err(e) = st.dae.accelerations(&assembly.q, &assembly.qdot, t, &mut sol) {
             return Err(fail(results, factor_error(e, t)));
         }
         (assembly.q.clone(), assembly.qdot.clone(), sol[n..].to_vec())
     };
-    let mass = dae.mass.clone();
-    let mut st = Statics::new(&mut dae, analysis.settings.tolerance);
     let (k, c) = st.tangent(&q, &qdot, &lambda, t);
     let (kr, basis) = st.reduced(k.as_ref(), &q, t);
     let f = basis.ncols();

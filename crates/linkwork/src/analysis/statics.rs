@@ -92,14 +92,16 @@ pub(crate) struct Statics<'a, 'm> {
     residual: Vec<f64>,
     trial: Vec<f64>,
     /// The largest load, for the force tolerance and the merit function.
-    pub scale: f64,
+    scale: f64,
     tolerance: f64,
     pub stats: StaticStats,
 }
 
 impl<'a, 'm> Statics<'a, 'm> {
-    pub fn new(dae: &'a mut Dae<'m>, tolerance: f64) -> Self {
+    /// The solver of `dae`'s equilibria, with the load scale taken at the guess `(q, t)`.
+    pub fn new(dae: &'a mut Dae<'m>, tolerance: f64, q: &[f64], t: f64) -> Self {
         let (n, m) = (dae.n, dae.m);
+        let scale = load_scale(dae, q, t);
         Statics {
             dae,
             n,
@@ -114,9 +116,9 @@ impl<'a, 'm> Statics<'a, 'm> {
             big: Mat::zeros(n + m, n + m),
             residual: vec![0.0; n + m],
             trial: vec![0.0; n + m],
-            scale: 1.0,
+            scale,
             tolerance,
-            stats: StaticStats::default(),
+            stats: StaticStats { load_scale: scale, ..StaticStats::default() },
         }
     }
 
@@ -177,8 +179,8 @@ impl<'a, 'm> Statics<'a, 'm> {
                     self.big[(c, n + r)] = -self.jac[(r, c)];
                 }
             }
-            // The residual at x again (the tangent moved the positions).
-            self.residual_at(x, t);
+            // `self.residual` still holds R(x): the tangent leaves it alone and restores the
+            // positions at x.
             let rhs: Vec<f64> = self.residual.iter().map(|r| -r).collect();
             let Some(step) = min_norm_solve(self.big.as_ref(), &rhs) else { break };
             self.stats.iterations += 1;
@@ -316,7 +318,7 @@ pub(crate) fn null_space(jac: MatRef<'_, f64>) -> Mat<f64> {
 
 /// The load scale `F` of the force tolerance: the largest generalised load at `q`, or the largest
 /// weight, or the smallest positive number when nothing loads the mechanism.
-pub(crate) fn load_scale(dae: &mut Dae<'_>, q: &[f64], t: f64) -> f64 {
+fn load_scale(dae: &mut Dae<'_>, q: &[f64], t: f64) -> f64 {
     let n = q.len();
     let (mut load, zero) = (vec![0.0; n], vec![0.0; n]);
     dae.positions(q, t);
@@ -459,9 +461,7 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
         Ok(a) => a,
         Err(e) => return Err(fail(results, e)),
     };
-    let mut st = Statics::new(&mut dae, analysis.settings.tolerance);
-    st.scale = load_scale(st.dae, &assembly.q, t0);
-    st.stats.load_scale = st.scale;
+    let mut st = Statics::new(&mut dae, analysis.settings.tolerance, &assembly.q, t0);
     let zero = vec![0.0; n];
     let mut react = Vec::new();
     let mut row = Vec::new();

@@ -20,6 +20,18 @@ pub fn run(name: &str, analysis: &str) -> (Model, Results) {
     (model, results)
 }
 
+/// The column `name` of `r`; panics naming it when there is none.
+pub fn col<'a>(r: &'a Results, name: &str) -> &'a [f64] {
+    r.column(name).unwrap_or_else(|| panic!("no column {name}"))
+}
+
+/// Largest change of the total mechanical energy `T + V - W` over the run.
+pub fn energy_drift(r: &Results) -> f64 {
+    let (t, v, w) = (col(r, "kinetic_energy"), col(r, "potential_energy"), col(r, "nonconservative_work"));
+    let e0 = t[0] + v[0] - w[0];
+    (0..r.len()).map(|k| (t[k] + v[k] - w[k] - e0).abs()).fold(0.0, f64::max)
+}
+
 /// `(f(t), f'(t), f''(t))` of a closed form `f`, exactly.
 pub fn derivatives(f: impl Fn(HyperDual) -> HyperDual, t: f64) -> [f64; 3] {
     let y = f(HyperDual::variable(t));

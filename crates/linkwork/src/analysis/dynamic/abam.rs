@@ -54,7 +54,7 @@
 //! the initial step. `partitions` counts the choices that set up the coordinates: the first and
 //! each change.
 
-use super::{factor_error, step_failure, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Start, MAX_STEPS};
+use super::{factor_error, min_step, step_failure, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Start};
 use crate::analysis::RANK_TOLERANCE;
 use crate::error::Error;
 use faer::{Mat, MatRef};
@@ -765,15 +765,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let (mut yo, mut ypo) = (vec![0.0; 2 * n], vec![0.0; 2 * n]);
     let outcome = (|| -> Result<(), Error> {
         while ad.x < t_end - 1e-12 * span.max(1e-300) {
-            if stats.steps >= MAX_STEPS {
-                return Err(Error::Integration {
-                    time: ad.x,
-                    step: h,
-                    cause: format!("more than {MAX_STEPS} steps; the model may be too stiff for the tolerances, or loosen rtol/atol"),
-                    rows: vec![],
-                });
-            }
-            let h_min = 16.0 * f64::EPSILON * ad.x.abs().max(span);
+            let h_min = min_step(stats.steps, ad.x, h, span)?;
             if ad.x + h > t_end || t_end - (ad.x + h) < 1e-3 * h {
                 h = t_end - ad.x;
             }

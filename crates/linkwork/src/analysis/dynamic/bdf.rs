@@ -56,7 +56,7 @@
 //! the order drops to 1. Output at the requested times by the interpolating polynomial of the
 //! last step (DASSL's DDATRP), for positions and velocities.
 
-use super::{step_failure, Dae, DynamicStats, Formulation, IntegratorSettings, Outcome, Output, Start, MAX_STEPS};
+use super::{min_step, step_failure, Dae, DynamicStats, Formulation, IntegratorSettings, Outcome, Output, Start};
 use crate::error::Error;
 
 /// Newton iterations per attempt, as DASSL.
@@ -368,15 +368,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let outcome = (|| -> Result<(), Error> {
         while s.ts[0] < t_end - 1e-12 * span.max(1e-300) {
             let t0 = s.ts[0];
-            if s.stats.steps >= MAX_STEPS {
-                return Err(Error::Integration {
-                    time: t0,
-                    step: h,
-                    cause: format!("more than {MAX_STEPS} steps; the model may be too stiff for the tolerances, or loosen rtol/atol"),
-                    rows: vec![],
-                });
-            }
-            let h_min = 16.0 * f64::EPSILON * t0.abs().max(span);
+            let h_min = min_step(s.stats.steps, t0, h, span)?;
             if h < h_min {
                 // Accepted steps may shrink the step too (an error estimate that grows from step
                 // to step); stop here rather than creep towards zero.

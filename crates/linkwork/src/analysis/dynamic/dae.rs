@@ -151,6 +151,9 @@ pub struct Dae<'m> {
     /// Factor on gravity and on the applied forces and torques (not on the spring-dampers), for
     /// the load stepping of static equilibrium. 1 everywhere else.
     pub external_scale: f64,
+    /// (forces) whether each force is an applied load (scaled by `external_scale`) rather than a
+    /// spring-damper between bodies.
+    applied: Vec<bool>,
     /// Work counters.
     pub stats: LinearStats,
 }
@@ -167,6 +170,7 @@ impl<'m> Dae<'m> {
         let entries = sys.entries();
         let forces: Vec<&ForceElement> = forces.iter().map(|&k| &model.forces[k]).collect();
         let force_cols: Vec<&[usize]> = forces.iter().map(|f| f.force.columns()).collect();
+        let applied = forces.iter().map(|f| !matches!(f.kind, "spring_damper" | "rotational_spring_damper")).collect();
         let kkt = Kkt::new(n, m, &entries, &force_cols)?;
         let w = force_cols.iter().map(|c| c.len()).max().unwrap_or(0);
         let max_mass = mass.iter().fold(0.0f64, |a, &b| a.max(b));
@@ -194,6 +198,7 @@ impl<'m> Dae<'m> {
             rhs: vec![0.0; n + m],
             sys,
             external_scale: 1.0,
+            applied,
             stats: LinearStats::default(),
         })
     }
@@ -246,13 +251,13 @@ impl<'m> Dae<'m> {
         for (o, g) in out.iter_mut().zip(&self.gravity) {
             *o = s * g;
         }
-        for f in &self.forces {
+        for (f, &applied) in self.forces.iter().zip(&self.applied) {
             let cols = f.force.columns();
             let w = cols.len();
             gather(q, cols, &mut self.fx[..w]);
             gather(qdot, cols, &mut self.fv[..w]);
             f.force.load(&self.fx[..w], &self.fv[..w], t, &mut self.fq[..w]);
-            let scale = if is_element(f) { 1.0 } else { s };
+            let scale = if applied { s } else { 1.0 };
             for (&c, &v) in cols.iter().zip(&self.fq[..w]) {
                 out[c] += scale * v;
             }
@@ -271,14 +276,14 @@ impl<'m> Dae<'m> {
     ) {
         dq.fill(0.0);
         dv.fill(0.0);
-        for f in &self.forces {
+        for (f, &applied) in self.forces.iter().zip(&self.applied) {
             let cols = f.force.columns();
             let w = cols.len();
             gather(q, cols, &mut self.fx[..w]);
             gather(qdot, cols, &mut self.fv[..w]);
             let (dx, dxv) = (&mut self.fdx[..w * w], &mut self.fdv[..w * w]);
             derivatives(f.force.as_ref(), &self.fx[..w], &self.fv[..w], t, dx, dxv, &mut self.dual);
-            let scale = if is_element(f) { 1.0 } else { self.external_scale };
+            let scale = if applied { self.external_scale } else { 1.0 };
             for (ri, &r) in cols.iter().enumerate() {
                 for (ci, &c) in cols.iter().enumerate() {
                     dq[(r, c)] += scale * dx[ri * w + ci];
@@ -404,14 +409,12 @@ impl<'m> Dae<'m> {
     /// `-lambda_d^T Phi_q,d qdot = -lambda_d^T nu_d`. `lambda: (m)`; positions as at the last
     /// [`Dae::positions`].
     pub fn nonconservative_power(&mut self, q: &[f64], qdot: &[f64], t: f64, lambda: &[f64], nu: &mut [f64]) -> f64 {
-        let mut p = 0.0;
+        let mut p = self.applied_power(q, qdot, t);
         for f in &self.forces {
             let cols = f.force.columns();
             let w = cols.len();
             gather(q, cols, &mut self.fx[..w]);
             gather(qdot, cols, &mut self.fv[..w]);
-            f.force.load(&self.fx[..w], &self.fv[..w], t, &mut self.fq[..w]);
-            p += self.fq[..w].iter().zip(&self.fv[..w]).map(|(a, b)| a * b).sum::<f64>();
             p += potential_rate(f.force.as_ref(), &self.fx[..w], &self.fv[..w], &mut self.dual);
         }
         p + self.driver_power(q, t, lambda, nu)
@@ -493,11 +496,6 @@ impl<'m> Dae<'m> {
             out.extend([f[0], f[1], torque]);
         }
     }
-}
-
-/// A force element between bodies (a spring-damper), as opposed to an applied load.
-fn is_element(f: &ForceElement) -> bool {
-    matches!(f.kind, "spring_damper" | "rotational_spring_damper")
 }
 
 /// `out[k] = v[cols[k]]`.

@@ -25,7 +25,7 @@
 //! `[h / 5, 2 h]` and the maximum step. Output by quintic Hermite interpolation
 //! ([`super::hermite5`]) of each accepted step.
 
-use super::{hermite5, step_failure, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Start, MAX_STEPS};
+use super::{hermite5, min_step, step_failure, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Start};
 use crate::error::Error;
 
 /// Newton iterations per attempt. Four: from the predictor `qddot_{n+1} = qddot_n` a converging
@@ -190,15 +190,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let mut lambda1 = vec![0.0; m];
     let outcome = (|| -> Result<(), Error> {
         while s.t < t_end - 1e-12 * span.max(1e-300) {
-            if s.stats.steps >= MAX_STEPS {
-                return Err(Error::Integration {
-                    time: s.t,
-                    step: h,
-                    cause: format!("more than {MAX_STEPS} steps; the model may be too stiff for the tolerances, or loosen rtol/atol"),
-                    rows: vec![],
-                });
-            }
-            let h_min = 16.0 * f64::EPSILON * s.t.abs().max(span);
+            let h_min = min_step(s.stats.steps, s.t, h, span)?;
             if h < h_min {
                 // Accepted steps may shrink the step too (an error estimate that grows from step
                 // to step); stop here rather than creep towards zero.

@@ -46,6 +46,23 @@ use serde_json::json;
 /// the program busy for hours: 5 million steps of a small model take about a minute.
 pub const MAX_STEPS: usize = 5_000_000;
 
+/// The smallest step an integrator may take at `t` in a run of length `span`, s: 16 units of
+/// round-off of the time, below which `t + h` no longer differs from `t` in a useful way.
+/// Errors with [`MAX_STEPS`] when `steps` has used up the budget.
+pub fn min_step(steps: usize, t: f64, h: f64, span: f64) -> Result<f64, Error> {
+    if steps >= MAX_STEPS {
+        return Err(Error::Integration {
+            time: t,
+            step: h,
+            cause: format!(
+                "more than {MAX_STEPS} steps; the model may be too stiff for the tolerances, or loosen rtol/atol"
+            ),
+            rows: vec![],
+        });
+    }
+    Ok(16.0 * f64::EPSILON * t.abs().max(span))
+}
+
 /// What an integrator did, for `summary.json`.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct DynamicStats {
