@@ -1,11 +1,10 @@
 //! Statics, inverse dynamics, redundant supports and modes against closed forms, virtual work
 //! and hand derivations.
 
-use linkwork::{Model, Results};
+mod common;
 
-fn col<'a>(r: &'a Results, name: &str) -> &'a [f64] {
-    r.column(name).unwrap_or_else(|| panic!("no column {name}"))
-}
+use common::col;
+use linkwork::{Model, Results};
 
 fn run(yaml: &str, analysis: &str) -> Results {
     let model = Model::from_yaml(yaml).unwrap_or_else(|e| panic!("{e}"));
@@ -269,18 +268,24 @@ fn inverse_dynamics_balances_power() {
     let bodies = [("crank", 1.0, 0.001), ("rod", 2.0, 0.015), ("slider", 1.5, 0.001)];
     for (i, &t) in r.time.iter().enumerate() {
         let v = |b: &str, q: &str| col(&r, &format!("{b}.{q}"))[i];
-        let mut dt = 0.0;
-        let mut dv = 0.0;
+        let (mut dt, mut dv, mut kinetic, mut height) = (0.0, 0.0, 0.0, 0.0);
         for (b, m, j) in bodies {
             dt += m * (v(b, "vx") * v(b, "ax") + v(b, "vy") * v(b, "ay")) + j * v(b, "omega") * v(b, "alpha");
             dv += m * 9.81 * v(b, "vy");
+            kinetic += 0.5 * (m * (v(b, "vx").powi(2) + v(b, "vy").powi(2)) + j * v(b, "omega").powi(2));
+            height += m * 9.81 * v(b, "y");
         }
         let (x, vx) = (v("slider", "x"), v("slider", "vx"));
+        // The energy columns: T, and V of gravity plus the spring (its length is |x| on the guide).
+        assert!((col(&r, "kinetic_energy")[i] - kinetic).abs() < 1e-12 * kinetic.max(1.0));
+        let potential = height + 0.5 * k * (x.abs() - x0).powi(2);
+        assert!((col(&r, "potential_energy")[i] - potential).abs() < 1e-12 * potential.abs().max(1.0));
         let applied = (-k * (x - x0) - c * vx) * vx + torque * (3.0 * t).cos() * v("crank", "omega");
         let motor = col(&r, "motor.effort")[i] * v("crank", "omega");
         let scale = dt.abs().max(dv.abs()).max(applied.abs()).max(1.0);
         assert!((motor - (dt + dv - applied)).abs() < 1e-8 * scale, "t = {t}: {motor} vs {}", dt + dv - applied);
         assert!((col(&r, "driver_power")[i] - motor).abs() < 1e-9 * scale);
+        assert!((col(&r, "applied_power")[i] - applied).abs() < 1e-12 * scale);
     }
     let peak = &r.summary["peaks"]["motor.effort"];
     let max = col(&r, "motor.effort").iter().fold(0.0f64, |a, x| a.max(x.abs()));
@@ -356,4 +361,29 @@ fn load_stepping_finds_the_stable_equilibrium() {
     assert!(balance.abs() < 1e-8 * f * c, "virtual work residual {balance} at theta {theta}");
     let h = 1e-5;
     assert!(k + f * (dyb(theta + h) - dyb(theta - h)) / (2.0 * h) > 0.0, "V'' > 0: a minimum of the potential");
+}
+
+/// Modes about a state that is not an equilibrium (`about: initial`): a pendulum held at rest at
+/// `phi0 = 0.5` rad. The frozen linearisation's stiffness is the tension's `m g L cos(phi0)`
+/// (the multiplier from the equations of motion at rest is the tension `m g cos(phi0)`), so
+/// `omega^2 = g cos(phi0) / L`; about the equilibrium it would be `g / L`.
+#[test]
+fn modes_about_the_initial_state_use_its_multipliers() {
+    let (g, l, phi0) = (9.81f64, 1.5f64, 0.5f64);
+    let yaml = format!(
+        r#"
+gravity: [0, -{g}]
+bodies:
+  bob: {{mass: 4.0, inertia: 0.0, position: [0.7, -1.3], angle: {phi0}, points: {{P: [0, {l}]}}, given: [phi]}}
+joints:
+  pivot: {{type: revolute, body_i: bob, point_i: P, body_j: ground, point_j: [0, 0]}}
+analyses:
+  here: {{type: modes, about: initial}}
+"#
+    );
+    let r = run(&yaml, "here");
+    assert!((col(&r, "bob.phi")[0] - phi0).abs() < 1e-12, "the initial angle is held");
+    let got = 2.0 * std::f64::consts::PI * r.summary["modes"][0]["frequency"].as_f64().unwrap();
+    let want = (g * phi0.cos() / l).sqrt();
+    assert!((got - want).abs() < 1e-9 * want, "{got} vs {want}");
 }
