@@ -389,8 +389,10 @@ fn nfourbar_a02_moves_as_one_degree_of_freedom() {
 /// `(M + m) g sin / (M + m sin^2)` down the incline relative to it. At every output time the
 /// accelerations come from one linear solve at the state, so they match to `1e-9` relative
 /// (rounding and the regularisation's remainder after refinement). Positions and velocities
-/// are the quadratic and linear functions of time they imply, to `1e-6` (the default integrator
-/// tolerance; HHT integrates constant accelerations exactly, so only Newton's tolerance is left).
+/// are the quadratic and linear functions of time they imply, to `1e-5`: ten times the default
+/// integrator tolerance, a global error. HHT and BDF2 integrate constant accelerations exactly,
+/// but `bdf` starts at order 1, whose first steps' local errors (each within the tolerance) the
+/// later, exact steps carry along (measured: 5.5e-6 with `bdf`).
 #[test]
 fn wedge_accelerations_are_the_closed_form() {
     let model = load("wedge.yaml");
@@ -417,7 +419,7 @@ fn wedge_accelerations_are_the_closed_form() {
         }
         eprintln!("wedge {integrator}: accelerations to {acc:.2e} relative, positions and speeds to {pos:.2e}");
         assert!(acc < 1e-9, "{integrator}: accelerations {acc}");
-        assert!(pos < 1e-6, "{integrator}: positions {pos}");
+        assert!(pos < 1e-5, "{integrator}: positions {pos}");
         // Horizontal momentum stays zero.
         let momentum = max_abs((0..r.len()).map(|k| big_m * wvx[k] + m * col(&r, "block.vx")[k]));
         assert!(momentum < 1e-9, "momentum {momentum}");

@@ -54,7 +54,9 @@
 //! the initial step. `partitions` counts the choices that set up the coordinates: the first and
 //! each change.
 
-use super::{factor_error, min_step, step_failure, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Start};
+use super::{
+    factor_error, min_step, step_bounds, step_failure, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Start,
+};
 use crate::analysis::RANK_TOLERANCE;
 use crate::error::Error;
 use faer::{Mat, MatRef};
@@ -725,6 +727,7 @@ fn begin(s: &Split<'_, '_>, ad: &mut Adams) {
 /// Integrate from `start` to the output's end time.
 pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, start: Start) -> Outcome {
     let (n, m) = (dae.n, dae.m);
+    let (h_max, h_start) = step_bounds(settings, &start, out.t_end() - start.t);
     let Start { t, q, qdot, qddot, lambda } = start;
     let mut stats = DynamicStats::default();
     let mut s = Split {
@@ -753,9 +756,6 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let mut ad = Adams::new(settings.order_limit().clamp(1, MAX_ORDER));
     let t_end = out.t_end();
     let span = t_end - t;
-    let h_out = out.step().min(span.max(f64::MIN_POSITIVE));
-    let h_max = settings.max_step.unwrap_or(h_out).min(span.max(f64::MIN_POSITIVE));
-    let h_start = settings.initial_step.unwrap_or(h_out / 100.0).min(h_max);
     let mut h = h_start;
     // Partition at the start and (y, y') there.
     s.choose();

@@ -56,7 +56,9 @@
 //! the order drops to 1. Output at the requested times by the interpolating polynomial of the
 //! last step (DASSL's DDATRP), for positions and velocities.
 
-use super::{min_step, step_failure, Dae, DynamicStats, Formulation, IntegratorSettings, Outcome, Output, Start};
+use super::{
+    min_step, step_bounds, step_failure, Dae, DynamicStats, Formulation, IntegratorSettings, Outcome, Output, Start,
+};
 use crate::error::Error;
 
 /// Newton iterations per attempt, as DASSL.
@@ -323,6 +325,7 @@ impl Bdf<'_, '_> {
 /// Integrate from `start` to the output's end time.
 pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, start: Start) -> Outcome {
     let (n, m) = (dae.n, dae.m);
+    let (h_max, h0) = step_bounds(settings, &start, out.t_end() - start.t);
     let Start { t, q, qdot, qddot, lambda } = start;
     let k_max = settings.order_limit().clamp(1, 5);
     let mut s = Bdf {
@@ -352,13 +355,10 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     };
     let t_end = out.t_end();
     let span = t_end - t;
-    let h_out = out.step().min(span.max(f64::MIN_POSITIVE));
-    let h_max = settings.max_step.unwrap_or(h_out).min(span.max(f64::MIN_POSITIVE));
-    let mut h = settings
-        .initial_step
-        .or(settings.fixed_step)
-        .unwrap_or(h_out / 100.0)
-        .min(settings.fixed_step.unwrap_or(h_max));
+    let mut h = match settings.fixed_step {
+        Some(fixed) => settings.initial_step.unwrap_or(fixed).min(fixed),
+        None => h0,
+    };
     let (mut qo, mut vo) = (vec![0.0; n], vec![0.0; n]);
     let mut k = 1;
     // Steps taken at the current order, and whether the start-up (doubling) phase is on.

@@ -25,7 +25,9 @@
 //! `[h / 5, 2 h]` and the maximum step. Output by quintic Hermite interpolation
 //! ([`super::hermite5`]) of each accepted step.
 
-use super::{hermite5, min_step, step_failure, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Start};
+use super::{
+    hermite5, min_step, step_bounds, step_failure, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Start,
+};
 use crate::error::Error;
 
 /// Newton iterations per attempt. Four: from the predictor `qddot_{n+1} = qddot_n` a converging
@@ -154,6 +156,7 @@ fn wrms_scaled(v: &[f64], y: &[f64], c: f64, rtol: f64, atol: f64) -> f64 {
 pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, start: Start) -> Outcome {
     let (n, m) = (dae.n, dae.m);
     let alpha = settings.alpha;
+    let (h_max, h0) = step_bounds(settings, &start, out.t_end() - start.t);
     let Start { t, q, qdot, qddot, lambda } = start;
     // F_0 = Phi_q^T lambda_0 - Q_0 = -M qddot_0 at a consistent start.
     let f: Vec<f64> = qddot.iter().zip(&dae.mass).map(|(a, mass)| -mass * a).collect();
@@ -183,9 +186,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     };
     let t_end = out.t_end();
     let span = t_end - t;
-    let h_out = out_step(out, span);
-    let h_max = settings.max_step.unwrap_or(h_out).min(span.max(f64::MIN_POSITIVE));
-    let mut h = settings.fixed_step.unwrap_or(settings.initial_step.unwrap_or(h_out / 100.0).min(h_max));
+    let mut h = settings.fixed_step.unwrap_or(h0);
     let (mut qo, mut vo) = (vec![0.0; n], vec![0.0; n]);
     let mut lambda1 = vec![0.0; m];
     let outcome = (|| -> Result<(), Error> {
@@ -280,9 +281,4 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         Ok(())
     })();
     (s.stats, outcome)
-}
-
-/// The output step (the spacing of the output times), or the span when there is one output.
-fn out_step(out: &Output, span: f64) -> f64 {
-    out.step().min(span.max(f64::MIN_POSITIVE))
 }

@@ -125,6 +125,34 @@ pub fn wrms(v: &[f64], y: &[f64], rtol: f64, atol: f64) -> f64 {
     (s / v.len() as f64).sqrt()
 }
 
+/// The largest and the first step of an integrator, `(h_max, h0)`, s, for a run of length
+/// `span` from `start`.
+///
+/// - `h_max`: the user's `max_step`, else the span. The output times do not limit the step:
+///   every integrator interpolates at its own order between its steps, and the error test, not
+///   the output grid, decides the step (as DASSL, whose `HMAX` is unbounded by default).
+/// - `h0`: the user's `initial_step`, else Hairer, Norsett and Wanner's starting step (Solving ODEs
+///   I, section II.4): `0.01 |y| / |y'|` in the weighted norm [`wrms`] of `y = (q, qdot)`, the
+///   time in which the state changes by about 1% (`1e-6` s when either norm is below `1e-5`: a
+///   state at rest or at the origin). It depends on the tolerance and the motion, not on the
+///   output step; a first step too large is shrunk by the error test.
+pub fn step_bounds(settings: &IntegratorSettings, start: &Start, span: f64) -> (f64, f64) {
+    let span = span.max(f64::MIN_POSITIVE);
+    let h_max = settings.max_step.unwrap_or(span).min(span);
+    let h0 = settings.initial_step.unwrap_or_else(|| {
+        let (rt, at) = (settings.rtol, settings.atol);
+        let y: Vec<f64> = start.q.iter().chain(&start.qdot).copied().collect();
+        let dy: Vec<f64> = start.qdot.iter().chain(&start.qddot).copied().collect();
+        let (d0, d1) = (wrms(&y, &y, rt, at), wrms(&dy, &y, rt, at));
+        if d0 < 1e-5 || d1 < 1e-5 {
+            1e-6
+        } else {
+            0.01 * d0 / d1
+        }
+    });
+    (h_max, h0.min(h_max))
+}
+
 /// The rows of the smallest singular value of `Phi_q` at `(q, t)` (those with at least a fifth
 /// of the largest component of its left singular vector), and the ratio of the smallest to the
 /// largest singular value: the evidence of a singular position.

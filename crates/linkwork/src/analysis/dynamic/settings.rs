@@ -14,10 +14,14 @@ pub struct IntegratorSettings {
     /// Absolute local error tolerance per step, in m, rad, m/s and rad/s. Default `1e-6`: a
     /// micrometre on a metre-sized machine; it governs coordinates that pass through zero.
     pub atol: f64,
-    /// First step, s. Default: the output step / 100, shrunk by the error test if too large.
+    /// First step, s. Default: the time in which the state changes by about 1% (Hairer,
+    /// Norsett and Wanner's starting step, [`super::step_bounds`]), shrunk by the error test if
+    /// too large.
     pub initial_step: Option<f64>,
-    /// Largest step, s. Default: the output step, so that no output interval is stepped over
-    /// in one step (events between output times are then still resolved).
+    /// Largest step, s. Default: the run's length. The output step does not limit it: each
+    /// integrator interpolates at its own order between its steps, so a fine output grid costs
+    /// output evaluations, not steps. Set it to resolve short events (a pulse of force) that the
+    /// error test could step over.
     pub max_step: Option<f64>,
     /// Highest order of `bdf` (1 to 5, default 5, as DASSL; orders above 5 are not zero-stable)
     /// and of `abam` (1 to 12, default 12, as Shampine and Gordon's DE).
