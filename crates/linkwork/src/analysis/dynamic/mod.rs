@@ -125,6 +125,21 @@ pub fn wrms(v: &[f64], y: &[f64], rtol: f64, atol: f64) -> f64 {
     (s / v.len() as f64).sqrt()
 }
 
+/// Units of round-off that a Newton correction cannot get below: the residual of the equations
+/// carries a few units of round-off of its largest terms (forces, lever arms of metres), and the
+/// solve multiplies them by the condition of the Newton matrix (`1e2` to `1e4` on the examples).
+pub const ROUNDOFF_UNITS: f64 = 1e3;
+
+/// The largest correction `|dy_k|` relative to round-off at the scale of the state:
+/// `max_k |dy_k| / (ROUNDOFF_UNITS eps (|y_k| + scale))`, `scale` the size of the quantity (the
+/// largest `|y|` of its kind, so that a coordinate passing through zero is measured against the
+/// mechanism's size). At most 1: the correction is noise, Newton can do no better, and a
+/// convergence test that asks for more asks for the impossible.
+pub fn roundoff_ratio(dy: &[f64], y: &[f64], scale: f64) -> f64 {
+    let unit = ROUNDOFF_UNITS * f64::EPSILON;
+    dy.iter().zip(y).map(|(d, x)| d.abs() / (unit * (x.abs() + scale)).max(f64::MIN_POSITIVE)).fold(0.0, f64::max)
+}
+
 /// The largest and the first step of an integrator, `(h_max, h0)`, s, for a run of length
 /// `span` from `start`.
 ///
