@@ -5,6 +5,7 @@
 
 mod common;
 
+use common::references::elliptic_k;
 use common::{col, energy_drift};
 
 use linkwork::analysis::dynamic::IntegratorKind;
@@ -216,16 +217,6 @@ fn andrews_matches_the_test_set() {
 
 // ---------------------------------------------------------------------------------------------
 // IFToMM A01: simple pendulum
-
-/// Complete elliptic integral of the first kind `K(k) = pi / (2 AGM(1, sqrt(1 - k^2)))`.
-fn elliptic_k(k: f64) -> f64 {
-    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
-    // Quadratic convergence: 6 means reach rounding from k = sin 45 deg; 10 leave no doubt.
-    for _ in 0..10 {
-        (a, b) = (0.5 * (a + b), (a * b).sqrt());
-    }
-    std::f64::consts::PI / (2.0 * a)
-}
 
 /// Times where `x` changes sign, located by the cubic Hermite interpolant of `x` and its rate `v`
 /// between output times (bisection): an interpolation error `~h^4 x''''/384`, 1e-10 s at
