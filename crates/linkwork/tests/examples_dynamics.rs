@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::references::elliptic_k;
+use common::references::{elliptic_k, nfourbar_reference};
 use common::{col, energy_drift};
 
 use linkwork::analysis::dynamic::IntegratorKind;
@@ -284,34 +284,6 @@ fn pendulum_a01_period_and_energy() {
 
 // ---------------------------------------------------------------------------------------------
 // IFToMM A02: N-four-bar
-
-/// The N-four-bar as the one degree of freedom it has: every rocker at the angle `psi` (from
-/// +x), every coupler translating with the rockers' tops. Lagrange's equation of that system,
-/// `I psi'' = -g c cos psi` with `I = (N + 1)/3 + N` (rockers about their bases, couplers
-/// translating at the tops' speed) and `c = (N + 1)/2 + N`, integrated by classical RK4 with
-/// step 1e-4 s (error ~1e-13); returns `(psi, psi')` at the times `t`.
-fn nfourbar_reference(n: usize, times: &[f64]) -> Vec<[f64; 2]> {
-    let nf = n as f64;
-    let (inertia, c) = ((nf + 1.0) / 3.0 + nf, (nf + 1.0) / 2.0 + nf);
-    let f = |y: [f64; 2]| [y[1], -9.81 * c / inertia * y[0].cos()];
-    let (mut y, mut t, h) = ([std::f64::consts::FRAC_PI_2, -1.0], 0.0f64, 1e-4f64);
-    let mut out = Vec::with_capacity(times.len());
-    for &to in times {
-        while t < to - 1e-12 {
-            let hs = h.min(to - t);
-            let k1 = f(y);
-            let k2 = f([y[0] + 0.5 * hs * k1[0], y[1] + 0.5 * hs * k1[1]]);
-            let k3 = f([y[0] + 0.5 * hs * k2[0], y[1] + 0.5 * hs * k2[1]]);
-            let k4 = f([y[0] + hs * k3[0], y[1] + hs * k3[1]]);
-            for i in 0..2 {
-                y[i] += hs / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
-            t += hs;
-        }
-        out.push(y);
-    }
-    out
-}
 
 /// The N = 40 file over its first 2.5 s at rtol = atol = 1e-8: the chain falls through the flat
 /// position (B0_y = 0) at about 0.72 s, hangs at about 1 s and rises through the flat position on
