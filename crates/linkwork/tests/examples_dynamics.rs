@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::references::{elliptic_k, nfourbar_reference};
+use common::references::{elliptic_k, nfourbar_reference, ANDREWS, ANDREWS_END, ANDREWS_START};
 use common::{col, energy_drift};
 
 use linkwork::analysis::dynamic::IntegratorKind;
@@ -158,34 +158,6 @@ fn quick_return_a_moves_as_model_b_allows() {
 
 // ---------------------------------------------------------------------------------------------
 // Andrews' squeezing mechanism
-
-/// The test set's coordinates, in the order of its solution vector.
-const ANDREWS: [&str; 7] = ["beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon"];
-
-/// Initial values of the Test Set for IVP Solvers (Mazzia and Magherini, Bari, release 2.4,
-/// andrews.f, subroutine `init`), digits as published.
-#[allow(clippy::excessive_precision)]
-const ANDREWS_START: [f64; 7] = [
-    -0.0617138900142764496358948458001,
-    0.0,
-    0.455279819163070380255912382449,
-    0.222668390165885884674473185609,
-    0.487364979543842550225598953530,
-    -0.222668390165885884674473185609,
-    1.23054744454982119249735015568,
-];
-
-/// The test set's reference solution at t = 0.03 (andrews.f, subroutine `solut`; computed with
-/// PSIDE at tolerances 1e-14 on a Cray C90).
-const ANDREWS_END: [f64; 7] = [
-    0.1581077119629904e2,
-    -0.1575637105984298e2,
-    0.4082224013073101e-1,
-    -0.5347301163226948,
-    0.5244099658805304,
-    0.5347301163226948,
-    0.1048080741042263e1,
-];
 
 /// At t = 0 the measures are the test set's initial values: the file's positions are that state
 /// and assembly keeps them. Tolerance `1e-14` rad: the positions are written to ~17 digits.

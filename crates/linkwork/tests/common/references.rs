@@ -6,6 +6,7 @@
 //!   constant kinetic energy, so its motion is a quadrature, `t(theta) = int sqrt(I(theta) / 2E)`,
 //!   with the generalised inertia `I(theta)` from the kinematic analysis (its velocities per unit
 //!   crank speed), integrated spectrally: `I` is periodic and analytic in the crank angle.
+//! - Andrews' squeezing mechanism ([`ANDREWS_END`]): the Bari test set's published solution.
 //! - The IFToMM A02 N-four-bar ([`nfourbar_reference`]): its one-degree-of-freedom equation.
 //! - The IFToMM A01 pendulum released at 90 degrees ([`pendulum_a01`]): the exact solution in
 //!   Jacobi's elliptic function `sn`.
@@ -208,3 +209,31 @@ pub fn nfourbar_reference(n: usize, times: &[f64]) -> Vec<[f64; 2]> {
     }
     out
 }
+
+/// The test set's coordinates, in the order of its solution vector.
+pub const ANDREWS: [&str; 7] = ["beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon"];
+
+/// Initial values of the Test Set for IVP Solvers (Mazzia and Magherini, Bari, release 2.4,
+/// andrews.f, subroutine `init`), digits as published.
+#[allow(clippy::excessive_precision)]
+pub const ANDREWS_START: [f64; 7] = [
+    -0.0617138900142764496358948458001,
+    0.0,
+    0.455279819163070380255912382449,
+    0.222668390165885884674473185609,
+    0.487364979543842550225598953530,
+    -0.222668390165885884674473185609,
+    1.23054744454982119249735015568,
+];
+
+/// The test set's reference solution at t = 0.03 (andrews.f, subroutine `solut`; computed with
+/// PSIDE at tolerances 1e-14 on a Cray C90).
+pub const ANDREWS_END: [f64; 7] = [
+    0.1581077119629904e2,
+    -0.1575637105984298e2,
+    0.4082224013073101e-1,
+    -0.5347301163226948,
+    0.5244099658805304,
+    0.5347301163226948,
+    0.1048080741042263e1,
+];
