@@ -4,6 +4,8 @@
 //! ```sh
 //! cargo run --release -p linkwork --example work_precision            # every case
 //! cargo run --release -p linkwork --example work_precision -- a01    # cases whose name has "a01"
+//! cargo run --release -p linkwork --example work_precision -- output # A01 with and without the
+//!                                                                    # step capped at the output step
 //! ```
 //!
 //! Prints a Markdown table: the error (largest over the output times of the positions named
@@ -104,8 +106,45 @@ fn cases() -> Vec<Case> {
     ]
 }
 
+/// A01's 2000 s with its 200,001 output times, with the step capped at the output step (the old
+/// default, `solver.max_step: 0.01`) and free (the default): steps, time and error.
+fn output_step_effect() {
+    let text = std::fs::read_to_string(example("iftomm_a01_pendulum.yaml")).expect("A01");
+    let from = "dynamics: {type: dynamic, t_end: 2000, step: 0.01}";
+    assert!(text.contains(from), "the A01 file's analysis line changed");
+    let capped = text.replace(from, "dynamics: {type: dynamic, t_end: 2000, step: 0.01, solver: {max_step: 0.01}}");
+    println!("| A01, 200,001 outputs | integrator | rtol = atol | max_step | error (m) | CPU time (s) | steps |");
+    println!("| --- | --- | --- | --- | --- | --- | --- |");
+    for (label, kind) in INTEGRATORS {
+        for tol in [1e-6, 1e-8] {
+            for (cap, yaml) in [("0.01 (output step)", &capped), ("default", &text)] {
+                let model = Model::from_yaml(yaml).expect("model");
+                let o = Overrides { integrator: Some(kind), rtol: Some(tol), atol: Some(tol), ..Default::default() };
+                let start = Instant::now();
+                let (r, note) = match model.run_with("dynamics", &o) {
+                    Ok(r) => (r, String::new()),
+                    Err(f) => (f.results, format!(" (failed: {})", f.error)),
+                };
+                let time = start.elapsed().as_secs_f64();
+                let (x, y) = (r.column("P1_x").expect("P1_x"), r.column("P1_y").expect("P1_y"));
+                let err = (0..r.len())
+                    .map(|k| {
+                        let p = pendulum_a01(r.time[k]);
+                        (x[k] - p[0]).abs().max((y[k] - p[1]).abs())
+                    })
+                    .fold(0.0, f64::max);
+                let steps = &r.summary["statistics"]["steps"];
+                println!("| | {label} | {tol:e} | {cap} | {err:.2e}{note} | {time:.2} | {steps} |");
+            }
+        }
+    }
+}
+
 fn main() {
     let filter = std::env::args().nth(1).unwrap_or_default().to_lowercase();
+    if filter == "output" {
+        return output_step_effect();
+    }
     println!("| model | integrator | rtol = atol | error | unit | CPU time (s) | steps | rejected | factorizations |");
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     for case in cases() {
