@@ -20,7 +20,7 @@ mod references;
 
 use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::{Model, Overrides, Results};
-use references::{nfourbar_reference, pendulum_a01, QuickReturn, ANDREWS, ANDREWS_END, SAMPLES};
+use references::{nfourbar_reference, pendulum_error, QuickReturn, ANDREWS, ANDREWS_END, SAMPLES};
 use std::time::Instant;
 
 const INTEGRATORS: [(&str, IntegratorKind); 3] =
@@ -47,16 +47,7 @@ fn cases() -> Vec<Case> {
             name: "quick-return A, unloaded, 2 s",
             file: "quick_return_a.yaml",
             tolerances: &[1e-6, 1e-8, 1e-10, 1e-12],
-            error: Box::new(move |r| {
-                let e = reference
-                    .names()
-                    .flat_map(|name| {
-                        let c = r.column(name).expect("column");
-                        r.time.iter().zip(c).map(|(&t, &y)| (y - reference.position(name, t)).abs()).collect::<Vec<_>>()
-                    })
-                    .fold(0.0, f64::max);
-                (e, "m, rad")
-            }),
+            error: Box::new(move |r| (reference.error(r), "m, rad")),
         },
         Case {
             name: "Andrews, 0.03 s",
@@ -76,19 +67,7 @@ fn cases() -> Vec<Case> {
             name: "IFToMM A01 pendulum, 2000 s",
             file: "iftomm_a01_pendulum.yaml",
             tolerances: &[1e-6, 1e-8, 1e-10, 1e-12],
-            error: Box::new(|r| {
-                let (x, y) = (r.column("P1_x").expect("P1_x"), r.column("P1_y").expect("P1_y"));
-                let e = r
-                    .time
-                    .iter()
-                    .enumerate()
-                    .map(|(k, &t)| {
-                        let p = pendulum_a01(t);
-                        (x[k] - p[0]).abs().max((y[k] - p[1]).abs())
-                    })
-                    .fold(0.0, f64::max);
-                (e, "m")
-            }),
+            error: Box::new(|r| (pendulum_error(r), "m")),
         },
         Case {
             name: "IFToMM A02 N-four-bar, N = 40, 20 s",
@@ -126,13 +105,7 @@ fn output_step_effect() {
                     Err(f) => (f.results, format!(" (failed: {})", f.error)),
                 };
                 let time = start.elapsed().as_secs_f64();
-                let (x, y) = (r.column("P1_x").expect("P1_x"), r.column("P1_y").expect("P1_y"));
-                let err = (0..r.len())
-                    .map(|k| {
-                        let p = pendulum_a01(r.time[k]);
-                        (x[k] - p[0]).abs().max((y[k] - p[1]).abs())
-                    })
-                    .fold(0.0, f64::max);
+                let err = pendulum_error(&r);
                 let steps = &r.summary["statistics"]["steps"];
                 println!("| | {label} | {tol:e} | {cap} | {err:.2e}{note} | {time:.2} | {steps} |");
             }

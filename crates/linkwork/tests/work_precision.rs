@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::references::{pendulum_a01, QuickReturn, SAMPLES};
+use common::references::{pendulum_a01, pendulum_error, QuickReturn, SAMPLES};
 use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::{Model, Overrides, Results};
 
@@ -22,30 +22,6 @@ fn load(name: &str) -> Model {
 fn run(model: &Model, analysis: &str, integrator: IntegratorKind, tol: f64, t_end: Option<f64>) -> Results {
     let o = Overrides { integrator: Some(integrator), rtol: Some(tol), atol: Some(tol), t_end, ..Default::default() };
     model.run_with(analysis, &o).unwrap_or_else(|f| panic!("{} {integrator:?} {tol:e}: {}", model.name, f.error))
-}
-
-/// Largest error of every body's position columns against the quadrature reference.
-fn quick_return_error(r: &Results, reference: &QuickReturn) -> f64 {
-    reference
-        .names()
-        .flat_map(|name| {
-            let c = r.column(name).expect("column");
-            r.time.iter().zip(c).map(move |(&t, &y)| (y - reference.position(name, t)).abs())
-        })
-        .fold(0.0, f64::max)
-}
-
-/// Largest error of the pendulum's mass position against the exact solution.
-fn pendulum_error(r: &Results) -> f64 {
-    let (x, y) = (r.column("P1_x").expect("P1_x"), r.column("P1_y").expect("P1_y"));
-    r.time
-        .iter()
-        .enumerate()
-        .map(|(k, &t)| {
-            let p = pendulum_a01(t);
-            (x[k] - p[0]).abs().max((y[k] - p[1]).abs())
-        })
-        .fold(0.0, f64::max)
 }
 
 /// The references are what they claim. The quick-return's quadrature from 256 and from 512
@@ -104,7 +80,7 @@ fn quick_return_error_follows_the_tolerance() {
     for integrator in [IntegratorKind::Bdf, IntegratorKind::Abam] {
         for tol in TOLERANCES {
             let r = run(&model, "dynamics", integrator, tol, None);
-            let err = quick_return_error(&r, &reference);
+            let err = reference.error(&r);
             eprintln!(
                 "quick-return {integrator:?} {tol:e}: error {err:.2e} ({:.0} x tol), steps {}",
                 err / tol,
@@ -146,10 +122,7 @@ fn hht_is_second_order_under_error_control() {
     let pendulum = load("iftomm_a01_pendulum.yaml");
     let errors = |f: &dyn Fn(f64) -> f64| [1e-6, 1e-8].map(f);
     let cases: [(&str, [f64; 2]); 2] = [
-        (
-            "quick-return",
-            errors(&|tol| quick_return_error(&run(&qr, "dynamics", IntegratorKind::Hht, tol, None), &reference)),
-        ),
+        ("quick-return", errors(&|tol| reference.error(&run(&qr, "dynamics", IntegratorKind::Hht, tol, None)))),
         ("pendulum", errors(&|tol| pendulum_error(&run(&pendulum, "dynamics", IntegratorKind::Hht, tol, Some(20.0))))),
     ];
     for (name, [coarse, fine]) in cases {

@@ -11,7 +11,7 @@
 //! - The IFToMM A01 pendulum released at 90 degrees ([`pendulum_a01`]): the exact solution in
 //!   Jacobi's elliptic function `sn`.
 
-use linkwork::{Model, Overrides};
+use linkwork::{Model, Overrides, Results};
 use std::f64::consts::PI;
 
 /// Samples of the crank turn for [`QuickReturn::new`]: the reference moves by less than `1e-13`
@@ -128,6 +128,16 @@ impl QuickReturn {
         self.theta0 + psi
     }
 
+    /// The largest error of every body's position columns in `r` (m, rad).
+    pub fn error(&self, r: &Results) -> f64 {
+        self.names()
+            .flat_map(|name| {
+                let c = r.column(name).expect("column");
+                r.time.iter().zip(c).map(move |(&t, &y)| (y - self.position(name, t)).abs())
+            })
+            .fold(0.0, f64::max)
+    }
+
     /// The names of the position columns (`<body>.x`, `.y`, `.phi` of every body).
     pub fn names(&self) -> impl Iterator<Item = &str> {
         self.columns.iter().map(|c| c.0.as_str())
@@ -149,6 +159,17 @@ pub fn elliptic_k(k: f64) -> f64 {
         (a, b) = (0.5 * (a + b), (a * b).sqrt());
     }
     PI / (2.0 * a)
+}
+
+/// The largest error of the A01 mass's position (`P1_x`, `P1_y`) in `r` against [`pendulum_a01`], m.
+pub fn pendulum_error(r: &Results) -> f64 {
+    let (x, y) = (r.column("P1_x").expect("P1_x"), r.column("P1_y").expect("P1_y"));
+    (0..r.len())
+        .map(|k| {
+            let p = pendulum_a01(r.time[k]);
+            (x[k] - p[0]).abs().max((y[k] - p[1]).abs())
+        })
+        .fold(0.0, f64::max)
 }
 
 /// Jacobi's elliptic `sn(u | k)` by the arithmetic-geometric mean and descending Landen
