@@ -20,7 +20,9 @@ mod references;
 
 use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::{Model, Overrides, Results};
-use references::{nfourbar_reference, pendulum_error, QuickReturn, ANDREWS, ANDREWS_END, SAMPLES};
+use references::{
+    nfourbar_reference, pendulum_error, QuickReturn, ANDREWS, ANDREWS_END, QUICK_RETURN_CRANK_SPEED, SAMPLES,
+};
 use std::time::Instant;
 
 const INTEGRATORS: [(&str, IntegratorKind); 3] =
@@ -41,7 +43,7 @@ struct Case {
 
 fn cases() -> Vec<Case> {
     let qr = Model::load(example("quick_return_a.yaml")).expect("quick_return_a.yaml");
-    let reference = QuickReturn::new(&qr, 6.283, SAMPLES);
+    let reference = QuickReturn::new(&qr, QUICK_RETURN_CRANK_SPEED, SAMPLES);
     vec![
         Case {
             name: "quick-return A, unloaded, 2 s",

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::references::{pendulum_error as a01_error, QuickReturn, SAMPLES};
+use common::references::{pendulum_error as a01_error, QuickReturn, QUICK_RETURN_CRANK_SPEED, SAMPLES};
 use common::{col, energy_drift};
 use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::{Model, Overrides, Results};
@@ -28,10 +28,6 @@ forces:
 analyses:
   dynamics: {type: dynamic, t_end: 62.83185307179586, step: 0.1}
 ";
-
-/// The quick-return crank's initial speed in `quick_return_a.yaml`, rad/s (the file's value, not 2 pi).
-#[allow(clippy::approx_constant)]
-const CRANK_SPEED: f64 = 6.283;
 
 fn load(name: &str) -> Model {
     Model::load(common::example(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
@@ -58,7 +54,7 @@ fn steps(r: &Results) -> u64 {
 #[test]
 fn quick_return_error_follows_the_tolerance() {
     let m = load("quick_return_a.yaml");
-    let qr = QuickReturn::new(&m, CRANK_SPEED, SAMPLES);
+    let qr = QuickReturn::new(&m, QUICK_RETURN_CRANK_SPEED, SAMPLES);
     let e: Vec<f64> = [1e-6, 1e-8, 1e-10]
         .iter()
         .map(|&tol| {
@@ -162,7 +158,7 @@ fn diag() {
     }
     if what.contains("qr") {
         let m = load("quick_return_a.yaml");
-        let qr = QuickReturn::new(&m, CRANK_SPEED, SAMPLES);
+        let qr = QuickReturn::new(&m, QUICK_RETURN_CRANK_SPEED, SAMPLES);
         for &tol in &tols {
             let (r, cpu) = run_tol(&m, "dynamics", IntegratorKind::Hht, tol, None);
             eprintln!(

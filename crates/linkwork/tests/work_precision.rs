@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::references::{pendulum_a01, pendulum_error, QuickReturn, SAMPLES};
+use common::references::{pendulum_a01, pendulum_error, QuickReturn, QUICK_RETURN_CRANK_SPEED, SAMPLES};
 use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::{Model, Overrides, Results};
 
@@ -33,8 +33,8 @@ fn run(model: &Model, analysis: &str, integrator: IntegratorKind, tol: f64, t_en
 #[test]
 fn references_are_converged_and_exact() {
     let model = load("quick_return_a.yaml");
-    let fine = QuickReturn::new(&model, 6.283, SAMPLES);
-    let coarse = QuickReturn::new(&model, 6.283, SAMPLES / 2);
+    let fine = QuickReturn::new(&model, QUICK_RETURN_CRANK_SPEED, SAMPLES);
+    let coarse = QuickReturn::new(&model, QUICK_RETURN_CRANK_SPEED, SAMPLES / 2);
     let mut worst = 0.0f64;
     for k in 0..=40 {
         let t = 0.05 * k as f64;
@@ -46,7 +46,7 @@ fn references_are_converged_and_exact() {
     assert!(worst < 2e-11, "{worst}");
     let h = 1e-4;
     let speed = (fine.crank_angle(h) - fine.crank_angle(-h)) / (2.0 * h);
-    assert!((speed - 6.283).abs() < 1e-7, "initial crank speed {speed}");
+    assert!((speed - QUICK_RETURN_CRANK_SPEED).abs() < 1e-7, "initial crank speed {speed}");
 
     let theta = |t: f64| {
         let p = pendulum_a01(t);
@@ -75,7 +75,7 @@ fn references_are_converged_and_exact() {
 #[test]
 fn hht_is_second_order_under_error_control() {
     let qr = load("quick_return_a.yaml");
-    let reference = QuickReturn::new(&qr, 6.283, SAMPLES);
+    let reference = QuickReturn::new(&qr, QUICK_RETURN_CRANK_SPEED, SAMPLES);
     let pendulum = load("iftomm_a01_pendulum.yaml");
     let errors = |f: &dyn Fn(f64) -> f64| [1e-6, 1e-8].map(f);
     let cases: [(&str, [f64; 2], f64); 2] = [

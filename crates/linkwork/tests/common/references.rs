@@ -14,6 +14,11 @@
 use linkwork::{Model, Overrides, Results};
 use std::f64::consts::PI;
 
+/// The quick-return's initial crank speed, rad/s, as `examples/quick_return_a.yaml` gives it
+/// (`omega: 6.283`, held by `given`; not 2 pi).
+#[allow(clippy::approx_constant)]
+pub const QUICK_RETURN_CRANK_SPEED: f64 = 6.283;
+
 /// Samples of the crank turn for [`QuickReturn::new`]: the reference moves by less than `1e-13`
 /// from 256 to 512 samples (`tests/work_precision.rs`), so 512 leaves a wide margin.
 pub const SAMPLES: usize = 512;
