@@ -66,6 +66,7 @@ const MAX_NEWTON: usize = 4;
 /// Newton's convergence test: estimated remaining error below this fraction of the error
 /// tolerance (DASSL's 0.33).
 const NEWTON_TOL: f64 = 0.33;
+
 /// Most nodes kept: order 5 needs 6 for its predictor and 7 to estimate order 6.
 const MAX_NODES: usize = 7;
 
@@ -101,6 +102,10 @@ struct Bdf<'a, 'm> {
     work: Vec<f64>,
     /// (m) scratch.
     rows: Vec<f64>,
+    /// (n) Newton's corrections of positions and velocities.
+    dq: Vec<f64>,
+    dv: Vec<f64>,
+
     /// `c` of the current factorization, or `None` when there is none.
     factored_c: Option<f64>,
     stats: DynamicStats,
@@ -153,10 +158,21 @@ impl Bdf<'_, '_> {
     fn error_at(&self, j: usize, t1: f64, vscale: f64) -> f64 {
         let mut w = [0.0; MAX_NODES];
         value_weights(&self.ts[..=j], t1, &mut w);
-        let c: f64 = self.ts[..j].iter().map(|&ti| 1.0 / (t1 - ti)).sum();
         let p = |ys: &[Vec<f64>], k: usize| -> f64 { (0..=j).map(|i| w[i] * ys[i][k]).sum() };
         let d = self.norm(|k| self.q1[k] - p(&self.qs, k), |k| self.v1[k] - p(&self.vs, k), vscale);
-        d / (c * (t1 - self.ts[j]))
+        if self.si2 {
+            // DASSL's and IDA's constant, `alpha_{j+1} = h / (t1 - t_{n-j})`, `1/(j+1)` at
+            // constant steps: `sum_{i<=j} 1/i` times the method's own (the error in `h y'`
+            // rather than in `y`).
+            d * (t1 - self.ts[0]) / (t1 - self.ts[j])
+        } else {
+            // Index 3: the method's own constant `1 / (c (t1 - t_{n-j}))` (`2/9` for BDF2). Its
+            // step-weighted velocities carry Newton's position noise times `c h`, which does not
+            // shrink with the step: DASSL's larger constant lifts it over the tolerance and the
+            // step collapses (quick-return at 1e-8: 12477 steps instead of 749).
+            let c: f64 = self.ts[..j].iter().map(|&ti| 1.0 / (t1 - ti)).sum();
+            d / (c * (t1 - self.ts[j]))
+        }
     }
 
     /// Predict `(q1, v1)` at `t1` with order `k` and set `c`, `b_q`, `b_v` of the corrector.
@@ -205,6 +221,8 @@ impl Bdf<'_, '_> {
         let n = self.n;
         let mut fresh = false;
         let mut previous = f64::INFINITY;
+        // No rate is known before the second iteration: the first correction must be small.
+        let mut ss = 1e3;
         for it in 0..MAX_NEWTON {
             if !self.si2 {
                 for i in 0..n {
@@ -260,7 +278,9 @@ impl Bdf<'_, '_> {
             }
             self.dae.solve(&mut self.r);
             self.stats.newton_iterations += 1;
-            let d = if self.si2 {
+            // The corrections of positions and velocities (in index 3 the velocity follows the
+            // positions, `dv = c dq`).
+            if self.si2 {
                 // mu from the projection, then dq = (dv - w) / c.
                 self.dae.solve_mass(&mut self.r2);
                 for (mu, y) in self.mu1.iter_mut().zip(&self.r2[n..]) {
@@ -269,26 +289,58 @@ impl Bdf<'_, '_> {
                 for (l, d) in self.lam1.iter_mut().zip(&self.r[n..]) {
                     *l += c * d;
                 }
-                let (dv, w) = (&self.r[..n], &self.r2[..n]);
-                let d = self.norm(|i| (dv[i] - w[i]) / c, |i| dv[i], vscale);
                 for i in 0..n {
-                    self.q1[i] += (dv[i] - w[i]) / c;
-                    self.v1[i] += dv[i];
+                    self.dq[i] = (self.r[i] - self.r2[i]) / c;
+                    self.dv[i] = self.r[i];
                 }
-                d
             } else {
                 for (l, d) in self.lam1.iter_mut().zip(&self.r[n..]) {
                     *l += d;
                 }
-                let x = &self.r[..n];
-                let d = self.norm(|i| x[i] / (c * c), |i| x[i] / c, vscale);
                 for i in 0..n {
-                    self.q1[i] += x[i] / (c * c);
+                    self.dq[i] = self.r[i] / (c * c);
+                    self.dv[i] = self.r[i] / c;
                 }
-                d
-            };
-            let rate = d / previous;
-            if d <= 1e-3 * NEWTON_TOL || (it > 0 && rate < 1.0 && rate / (1.0 - rate) * d <= NEWTON_TOL) {
+            }
+            let d = self.norm(|i| self.dq[i], |i| self.dv[i], vscale);
+            // Round-off: a correction that is noise at the scale of the state (the largest
+            // position, the largest velocity) is as close as Newton can get.
+            // Round-off: the corrections against round-off at the scale of the state (the largest
+            // position, the largest velocity).
+            let qscale = self.q1.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            let mut noise = super::roundoff_ratio(&self.dq, &self.q1, qscale);
+            if self.si2 {
+                let vscale = self.v1.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+                noise = noise.max(super::roundoff_ratio(&self.dv, &self.v1, vscale));
+            }
+            for i in 0..n {
+                self.q1[i] += self.dq[i];
+                if self.si2 {
+                    self.v1[i] += self.dv[i];
+                }
+            }
+            let mut stalled = it + 1 == MAX_NEWTON;
+            if it > 0 {
+                // The contraction of the last iteration (Hairer and Wanner's RADAU5). DASSL's mean
+                // contraction since the first correction, (d / d_0)^(1 / it), was tried: a slow
+                // first contraction then fails steps that converge (SI2 BDF5 at h = 0.05 s in
+                // order_tests.rs), which shrinks the step by 4.
+                let rate = d / previous;
+                if rate > 0.9 {
+                    stalled = true;
+                    ss = f64::INFINITY;
+                } else {
+                    ss = rate / (1.0 - rate);
+                }
+            }
+            // A Newton that no longer contracts, or has run out of iterations, has converged when
+            // its corrections are round-off: at the state's scale, amplified by the matrix's
+            // condition beyond the `1e4` that `ROUNDOFF_UNITS` allows for (at a singular position,
+            // such as the flat N-four-bar, the condition reaches `1e9` and the round-off of `Phi`
+            // comes back as corrections of `1e-11` m).
+            let converged = ss * d <= NEWTON_TOL || d <= 1e-3 * NEWTON_TOL || (stalled && noise <= 1.0);
+            previous = d;
+            if converged {
                 for i in 0..n {
                     if !self.si2 {
                         self.v1[i] = c * self.q1[i] + self.bq[i];
@@ -297,10 +349,9 @@ impl Bdf<'_, '_> {
                 }
                 return Ok(Newton::Converged);
             }
-            if it > 0 && rate > 0.9 {
+            if stalled {
                 break;
             }
-            previous = d;
         }
         Ok(Newton::Failed { fresh })
     }
@@ -350,6 +401,8 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         r2: vec![0.0; n + m],
         work: vec![0.0; n],
         rows: vec![0.0; m],
+        dq: vec![0.0; n],
+        dv: vec![0.0; n],
         factored_c: None,
         stats: DynamicStats::default(),
     };
@@ -365,6 +418,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let mut at_order = 0;
     let mut start_up = true;
     let mut failures = 0;
+    let mut recent_index3 = 0usize;
     let outcome = (|| -> Result<(), Error> {
         while s.ts[0] < t_end - 1e-12 * span.max(1e-300) {
             let t0 = s.ts[0];
@@ -385,18 +439,32 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             let c = s.predict(k, t1);
             s.lam1.copy_from_slice(&s.lambda);
             s.mu1.fill(0.0);
-            let vscale = if s.si2 { 1.0 } else { h };
-            let converged = match s.newton(t1, c, vscale)? {
+            s.si2 = settings.formulation == Formulation::Si2;
+            // Velocities enter the error test in full in SI2, weighted by the step in index 3 (and
+            // while the history holds index-3 velocities).
+            let nvs = if s.si2 { 1.0 } else { h };
+            let mut evs = if recent_index3 > 0 { h } else { nvs };
+            let mut converged = match s.newton(t1, c, nvs)? {
                 Newton::Converged => true,
                 Newton::Failed { fresh: false } => {
                     s.factored_c = None;
                     s.predict(k, t1);
                     s.lam1.copy_from_slice(&s.lambda);
                     s.mu1.fill(0.0);
-                    matches!(s.newton(t1, c, vscale)?, Newton::Converged)
+                    matches!(s.newton(t1, c, nvs)?, Newton::Converged)
                 }
                 Newton::Failed { fresh: true } => false,
             };
+            if !converged && s.si2 && settings.fixed_step.is_none() {
+                // SI2's Newton fails where Phi_q loses rank (the flat N-four-bar): its velocity
+                // constraints and the projection multiply the round-off of Phi by c / sigma_min.
+                // The index-3 corrector, which imposes Phi = 0 alone, takes the step.
+                s.si2 = false;
+                s.predict(k, t1);
+                s.lam1.copy_from_slice(&s.lambda);
+                converged = matches!(s.newton(t1, c, h)?, Newton::Converged);
+                evs = h;
+            }
             if !converged {
                 s.stats.newton_failures += 1;
                 s.factored_c = None;
@@ -414,11 +482,11 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             let err = if settings.fixed_step.is_some() {
                 0.0
             } else if s.ts.len() == 1 {
-                s.norm(|i| s.q1[i] - s.qs[0][i] - h * s.vs[0][i], |i| s.v1[i] - s.vs[0][i] - h * s.a0[i], vscale)
+                s.norm(|i| s.q1[i] - s.qs[0][i] - h * s.vs[0][i], |i| s.v1[i] - s.vs[0][i] - h * s.a0[i], evs)
             } else {
-                s.error_at(k, t1, vscale)
+                s.error_at(k, t1, evs)
             };
-            let lower = if k > 1 { s.error_at(k - 1, t1, vscale) } else { f64::INFINITY };
+            let lower = if k > 1 { s.error_at(k - 1, t1, evs) } else { f64::INFINITY };
             if err > 1.0 {
                 s.stats.rejected_steps += 1;
                 failures += 1;
@@ -443,10 +511,16 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                 continue;
             }
             // Accept: estimate the next order before the history moves.
+            if !s.si2 && settings.formulation == Formulation::Si2 {
+                // The index-3 velocities (differences of positions) stay in the history for
+                // MAX_NODES steps; their error estimate does not shrink with the step.
+                recent_index3 = MAX_NODES + 1;
+            }
             failures = 0;
+            recent_index3 = recent_index3.saturating_sub(1);
             at_order += 1;
             let raise = k < k_max && at_order > k && s.ts.len() > k + 1;
-            let higher = if raise { s.error_at(k + 1, t1, vscale) } else { f64::INFINITY };
+            let higher = if raise { s.error_at(k + 1, t1, evs) } else { f64::INFINITY };
             s.stats.accept(h);
             s.stats.max_order_used = s.stats.max_order_used.max(k);
             s.push_history(t1);
