@@ -32,13 +32,15 @@ fn example(name: &str) -> String {
     format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))
 }
 
+/// How to measure a run's error: `(error, unit)`.
+type ErrorMeasure = Box<dyn Fn(&Results) -> (f64, &'static str)>;
+
 /// A model, its analysis, the tolerances to try and how to measure a run's error.
 struct Case {
     name: &'static str,
     file: &'static str,
     tolerances: &'static [f64],
-    /// `(error, unit)` of a run.
-    error: Box<dyn Fn(&Results) -> (f64, &'static str)>,
+    error: ErrorMeasure,
 }
 
 fn cases() -> Vec<Case> {
