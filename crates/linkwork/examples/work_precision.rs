@@ -6,6 +6,11 @@
 //! cargo run --release -p linkwork --example work_precision -- a01    # cases whose name has "a01"
 //! cargo run --release -p linkwork --example work_precision -- output # A01 with and without the
 //!                                                                    # step capped at the output step
+//! cargo run --release -p linkwork --example work_precision -- sweep [FILTER] [INTEGRATOR]
+//!     # every dynamic analysis of every example at rtol = atol = 1e-4 .. 1e-13: does it reach its end?
+//! cargo run --release -p linkwork --example work_precision -- one FILE INTEGRATOR TOL
+//!     # one run of a file's `dynamics` (for a profiler: `valgrind --tool=callgrind` counts its
+//!     # instructions whatever else the machine runs)
 //! ```
 //!
 //! Prints a Markdown table: the error (largest over the output times of the positions named
@@ -19,6 +24,7 @@
 mod references;
 
 use linkwork::analysis::dynamic::IntegratorKind;
+use linkwork::model::spec::AnalysisKind;
 use linkwork::{Model, Overrides, Results};
 use references::{
     nfourbar_reference, pendulum_error, QuickReturn, ANDREWS, ANDREWS_END, QUICK_RETURN_CRANK_SPEED, SAMPLES,
@@ -117,10 +123,81 @@ fn output_step_effect() {
     }
 }
 
+/// Every dynamic analysis of every example file whose name contains `filter`, with every
+/// integrator whose name contains `integrator`, at `rtol = atol = 1e-4, 1e-5, .., 1e-13`: whether
+/// it reaches its end, and if not, the error and where it stopped, with the steps and CPU time.
+fn sweep(filter: &str, integrator: &str) {
+    let dir = format!("{}/../../examples", env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<String> = std::fs::read_dir(&dir)
+        .expect("examples/")
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|f| f.ends_with(".yaml") && f.contains(filter))
+        .collect();
+    files.sort();
+    println!("| file | analysis | integrator | rtol = atol | outcome | CPU time (s) | steps |");
+    println!("| --- | --- | --- | --- | --- | --- | --- |");
+    let (mut runs, mut failures) = (0, 0);
+    for file in files {
+        let model = Model::load(example(&file)).expect("model");
+        let dynamic: Vec<&String> =
+            model.analyses.iter().filter(|(_, a)| a.kind == AnalysisKind::Dynamic).map(|(name, _)| name).collect();
+        for analysis in dynamic {
+            for (label, kind) in INTEGRATORS.iter().filter(|(l, _)| l.contains(integrator)) {
+                for e in 4..=13 {
+                    let tol = 10f64.powi(-e);
+                    let o =
+                        Overrides { integrator: Some(*kind), rtol: Some(tol), atol: Some(tol), ..Default::default() };
+                    let start = Instant::now();
+                    let run = model.run_with(analysis, &o);
+                    let time = start.elapsed().as_secs_f64();
+                    runs += 1;
+                    let (outcome, r) = match run {
+                        Ok(r) => ("end".to_string(), r),
+                        Err(f) => {
+                            failures += 1;
+                            (format!("**stopped**: {}", f.error), f.results)
+                        }
+                    };
+                    let steps = &r.summary["statistics"]["steps"];
+                    println!("| {file} | {analysis} | {label} | {tol:e} | {outcome} | {time:.2} | {steps} |");
+                }
+            }
+        }
+    }
+    println!("\n{runs} runs, {failures} stopped before their end");
+}
+
+/// One run of `file`'s `dynamics` with `integrator` at `rtol = atol = tol`: its outcome, CPU
+/// time and statistics.
+fn one(file: &str, integrator: &str, tol: f64) {
+    let (_, kind) = INTEGRATORS.iter().find(|(l, _)| *l == integrator).expect("INTEGRATOR: bdf, hht or abam");
+    let model = Model::load(example(file)).expect("model");
+    let o = Overrides { integrator: Some(*kind), rtol: Some(tol), atol: Some(tol), ..Default::default() };
+    let start = Instant::now();
+    let run = model.run_with("dynamics", &o);
+    let time = start.elapsed().as_secs_f64();
+    let r = match run {
+        Ok(r) => r,
+        Err(f) => {
+            println!("stopped: {}", f.error);
+            f.results
+        }
+    };
+    println!("{file} {integrator} {tol:e}: {time:.3} s, {}", r.summary["statistics"]);
+}
+
 fn main() {
-    let filter = std::env::args().nth(1).unwrap_or_default().to_lowercase();
+    let args: Vec<String> = std::env::args().skip(1).map(|a| a.to_lowercase()).collect();
+    let filter = args.first().cloned().unwrap_or_default();
     if filter == "output" {
         return output_step_effect();
+    }
+    let arg = |k: usize| args.get(k).map_or("", String::as_str);
+    if filter == "sweep" {
+        return sweep(arg(1), arg(2));
+    }
+    if filter == "one" {
+        return one(arg(1), arg(2), arg(3).parse().expect("TOL: a number"));
     }
     println!("| model | integrator | rtol = atol | error | unit | CPU time (s) | steps | rejected | factorizations |");
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
