@@ -357,12 +357,26 @@ impl Model {
             Box::new(Failure { error, results: Results::new(self, &empty) })
         })?;
         use crate::model::spec::AnalysisKind as K;
-        match analysis.kind {
+        let mut outcome = match analysis.kind {
             K::Kinematic => crate::analysis::run_kinematic(self, &analysis),
             K::Dynamic => crate::analysis::dynamic::run_dynamic(self, &analysis),
             K::Inverse => crate::analysis::run_inverse(self, &analysis),
             K::Static => crate::analysis::run_static(self, &analysis),
             K::Modes => crate::analysis::run_modes(self, &analysis),
-        }
+        };
+        let results = match &mut outcome {
+            Ok(r) => r,
+            Err(f) => &mut f.results,
+        };
+        // The first output's positions (the assembled start), else the file's guess.
+        let q = self
+            .bodies
+            .iter()
+            .flat_map(|b| ["x", "y", "phi"].map(|c| results.column(&format!("{}.{c}", b.name))?.first().copied()))
+            .collect::<Option<Vec<f64>>>()
+            .unwrap_or_else(|| self.q0());
+        let warnings = crate::analysis::tolerance_warnings(&analysis, &q);
+        results.summary.insert("warnings".into(), json!(warnings));
+        outcome
     }
 }

@@ -7,7 +7,7 @@
 //! the SVD so that redundant rows and remaining freedom are both handled; a backtracking line
 //! search on `|Phi|_2` keeps a rough guess from diverging.
 
-use super::{min_norm_solve, select_columns};
+use super::{min_norm_solve, residual_floor, select_columns};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Result};
 use crate::system::System;
@@ -58,7 +58,7 @@ pub fn assemble(
         let (row, residual) = sys.worst_row(phi);
         Error::Assembly { time: t, iterations, residual, row, hint: hint.to_string() }
     };
-    while maxabs(&phi) > tolerance {
+    while maxabs(&phi) > tolerance.max(residual_floor(&q)) {
         if iterations == MAX_ITERATIONS || !phi.iter().all(|x| x.is_finite()) {
             return Err(fail(sys, &phi, iterations, "the initial guess may be too far from an assembled configuration, or the joints, drivers and given coordinates cannot all hold at once (check lengths, points and given values)"));
         }

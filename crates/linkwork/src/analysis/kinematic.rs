@@ -12,7 +12,7 @@
 //! also serves as the chord-Newton matrix of the next sub-step); nothing is allocated in the time
 //! loop except the growth of the output columns, reserved up front.
 
-use super::{assemble, independent_rows, Assembly};
+use super::{assemble, independent_rows, residual_floor, Assembly};
 use crate::constraints::{Config, ConfigBuf};
 use crate::error::{Error, Problem, RowName};
 use crate::linalg::{FactorError, SparseLu};
@@ -128,7 +128,8 @@ impl Solver<'_> {
             self.sys.phi(&Config::new(&self.trial, &self.rot_trial), t, &mut self.full);
             gather(&self.full, &self.rows, &mut self.rhs);
             let (row, r) = worst(&self.rhs);
-            if r <= self.tolerance {
+            let tolerance = self.tolerance.max(residual_floor(&self.trial));
+            if r <= tolerance {
                 self.stats.max_residual = self.stats.max_residual.max(r);
                 return Ok(Ok(()));
             }
@@ -136,7 +137,7 @@ impl Solver<'_> {
                 return Ok(Err(NewtonFailure { residual: r, row: self.rows[row], iterations: it }));
             }
             let rho = r / previous;
-            if r * rho * rho * rho > self.tolerance {
+            if r * rho * rho * rho > tolerance {
                 self.factor_at(true, t)?;
             }
             previous = r;

@@ -58,6 +58,43 @@ impl Default for SolverSettings {
     }
 }
 
+/// Units of round-off in a constraint residual: each row of `Phi` adds a few products of
+/// coordinates, rotations and point offsets, each rounded to half a unit of the largest; 64
+/// covers the longest rows (gears, expressions) with a margin.
+pub const RESIDUAL_ROUNDOFF_UNITS: f64 = 64.0;
+
+/// The smallest max-norm of `Phi` that round-off lets Newton reach at positions `q`, m or rad:
+/// `RESIDUAL_ROUNDOFF_UNITS eps max(1, max |q_k|)` (`1.4e-14` on a mechanism of a metre or two
+/// whose angles are below a radian; `1.4e-11` after 1000 rad). Every position solver stops at
+/// `max(tolerance, residual_floor(q))`, so no tolerance asks for the impossible.
+pub fn residual_floor(q: &[f64]) -> f64 {
+    RESIDUAL_ROUNDOFF_UNITS * f64::EPSILON * q.iter().fold(1.0f64, |a, x| a.max(x.abs()))
+}
+
+/// The tightest relative tolerance of an integrator: 100 units of round-off, as DASSL. Below it
+/// the error estimate is round-off; a smaller `rtol` is raised to it, with a warning.
+pub const RTOL_FLOOR: f64 = 100.0 * f64::EPSILON;
+
+/// The summary's warnings about `analysis`: each tolerance below what the arithmetic can reach,
+/// and the value used instead. `q`: the positions at the start (assembled, or the guess).
+pub fn tolerance_warnings(analysis: &crate::model::Analysis, q: &[f64]) -> Vec<String> {
+    let mut warnings = Vec::new();
+    let floor = residual_floor(q);
+    if analysis.settings.tolerance < floor {
+        warnings.push(format!(
+            "solver.tolerance {:e} is below what round-off allows at this mechanism's size; the position solvers stop at {floor:.2e}",
+            analysis.settings.tolerance
+        ));
+    }
+    if analysis.kind == crate::model::spec::AnalysisKind::Dynamic && analysis.integrator.rtol < RTOL_FLOOR {
+        warnings.push(format!(
+            "solver.rtol {:e} is below what round-off allows (100 units, {RTOL_FLOOR:.2e}); the integrator uses {RTOL_FLOOR:.2e}",
+            analysis.integrator.rtol
+        ));
+    }
+    warnings
+}
+
 /// Relative size of a singular value (to the largest) below which it counts as zero when
 /// finding the rank of `Phi_q`: `1e-9` sits far above rounding (`~1e-16 * cond`) and far below
 /// any physical ratio of a well-posed mechanism.

@@ -34,7 +34,7 @@
 //! damping do not matter.
 
 use super::dynamic::{factor_error, Dae};
-use super::{assemble, element_names, indeterminate_rows, min_norm_solve, RANK_TOLERANCE};
+use super::{assemble, element_names, indeterminate_rows, min_norm_solve, residual_floor, RANK_TOLERANCE};
 use crate::error::{Error, RowName};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
@@ -162,7 +162,7 @@ impl<'a, 'm> Statics<'a, 'm> {
         let zero = vec![0.0; n];
         let (mut force, mut position) = self.residual_at(x, t);
         for _ in 0..MAX_ITERATIONS {
-            if force <= FORCE_TOLERANCE * self.scale && position <= self.tolerance {
+            if force <= FORCE_TOLERANCE * self.scale && position <= self.tolerance.max(residual_floor(&x[..n])) {
                 return Ok(());
             }
             let (k, _) = self.tangent(&x[..n], &zero, &x[n..], t);
@@ -206,7 +206,7 @@ impl<'a, 'm> Statics<'a, 'm> {
             }
         }
         let (force, position) = self.residual_at(x, t);
-        if force <= FORCE_TOLERANCE * self.scale && position <= self.tolerance {
+        if force <= FORCE_TOLERANCE * self.scale && position <= self.tolerance.max(residual_floor(&x[..n])) {
             return Ok(());
         }
         let worst = (0..dim)

@@ -5,6 +5,8 @@
 
 #![allow(dead_code)]
 
+pub mod references;
+
 use linkwork::expr::{HyperDual, Scalar};
 use linkwork::{Model, Results};
 

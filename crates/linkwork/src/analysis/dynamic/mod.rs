@@ -233,7 +233,9 @@ pub fn hermite5(theta: f64, h: f64, y0: [&[f64]; 3], y1: [&[f64]; 3], q: &mut [f
 
 /// Run a dynamic analysis. On failure the results up to the last good output time are kept.
 pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
-    let settings = analysis.integrator;
+    let mut settings = analysis.integrator;
+    // A tighter rtol would ask the error test to resolve round-off (warned in the summary).
+    settings.rtol = settings.rtol.max(super::RTOL_FLOOR);
     let n = model.n();
     let fail = |results: Results, error: Error| Box::new(Failure { error, results });
     let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
