@@ -229,6 +229,12 @@ impl<'m> Dae<'m> {
         }
     }
 
+    /// `(row, column)` of each entry of `Phi_q` (each pair once), and the entries' values at the
+    /// last [`Dae::positions`]: `Phi_q` in coordinate form, for solvers of its sparse blocks.
+    pub fn jacobian_entries(&self) -> (&[(usize, usize)], &[f64]) {
+        (&self.entries, &self.jac)
+    }
+
     /// `out (m x n) = Phi_q`, dense, from the last [`Dae::positions`].
     pub fn jacobian_dense(&self, mut out: MatMut<'_, f64>) {
         out.fill(0.0);
