@@ -139,7 +139,7 @@ fn diag() {
             let (r, cpu) = run_tol(&m, "dynamics", IntegratorKind::Hht, tol, t_end);
             let (ke, pe) = (col(&r, "kinetic_energy"), col(&r, "potential_energy"));
             let e: Vec<f64> = (0..r.len()).map(|k| ke[k] + pe[k]).collect();
-            let per = (2.3678419 / (r.time[1] - r.time[0])).round() as usize;
+            let per = ((2.3678419 / (r.time[1] - r.time[0])).round() as usize).min(r.len() / 2).max(1);
             let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
             let secular = mean(&e[..per]) - mean(&e[e.len() - per..]);
             let periods = (r.time[r.len() - 1] - 2.3678419) / 2.3678419;
