@@ -47,6 +47,26 @@ def test_run_with_analysis_and_out(linkwork, tmp_path):
     assert json.loads((tmp_path / "here" / "summary.json").read_text())["status"] == "ok"
 
 
+def test_a_tolerance_below_round_off_is_a_warning_not_a_failure(linkwork, tmp_path):
+    done = linkwork(
+        "run",
+        EXAMPLES / "iftomm_a01_pendulum.yaml",
+        "--integrator",
+        "hht",
+        "--rtol",
+        "1e-17",
+        "--t-end",
+        "0.1",
+        "--out",
+        tmp_path / "o",
+    )
+    assert done.code == 0, done.output
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert summary["status"] == "ok"
+    assert len(summary["warnings"]) == 1 and "solver.rtol 1e-17" in summary["warnings"][0]
+    assert "warning: solver.rtol 1e-17 is below what round-off allows" in done.stdout
+
+
 def test_unknown_analysis_is_a_model_error(linkwork):
     done = linkwork("run", EXAMPLES / "fourbar.yaml", "--analysis", "dynamics")
     assert done.code == 2

@@ -198,6 +198,8 @@ def _print_peaks(s: dict[str, Any]) -> None:
         print(
             f"  indeterminate joints (redundant supports; minimum-norm reactions): {', '.join(indeterminate)}"
         )
+    for warning in s.get("warnings") or []:
+        print(f"  warning: {warning}")
 
 
 def _print_failure(error: SolverError | AssemblyError) -> None:

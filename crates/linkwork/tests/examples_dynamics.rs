@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::references::elliptic_k;
+use common::references::{elliptic_k, nfourbar_reference, ANDREWS, ANDREWS_END, ANDREWS_START};
 use common::{col, energy_drift};
 
 use linkwork::analysis::dynamic::IntegratorKind;
@@ -159,34 +159,6 @@ fn quick_return_a_moves_as_model_b_allows() {
 // ---------------------------------------------------------------------------------------------
 // Andrews' squeezing mechanism
 
-/// The test set's coordinates, in the order of its solution vector.
-const ANDREWS: [&str; 7] = ["beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon"];
-
-/// Initial values of the Test Set for IVP Solvers (Mazzia and Magherini, Bari, release 2.4,
-/// andrews.f, subroutine `init`), digits as published.
-#[allow(clippy::excessive_precision)]
-const ANDREWS_START: [f64; 7] = [
-    -0.0617138900142764496358948458001,
-    0.0,
-    0.455279819163070380255912382449,
-    0.222668390165885884674473185609,
-    0.487364979543842550225598953530,
-    -0.222668390165885884674473185609,
-    1.23054744454982119249735015568,
-];
-
-/// The test set's reference solution at t = 0.03 (andrews.f, subroutine `solut`; computed with
-/// PSIDE at tolerances 1e-14 on a Cray C90).
-const ANDREWS_END: [f64; 7] = [
-    0.1581077119629904e2,
-    -0.1575637105984298e2,
-    0.4082224013073101e-1,
-    -0.5347301163226948,
-    0.5244099658805304,
-    0.5347301163226948,
-    0.1048080741042263e1,
-];
-
 /// At t = 0 the measures are the test set's initial values: the file's positions are that state
 /// and assembly keeps them. Tolerance `1e-14` rad: the positions are written to ~17 digits.
 /// At t = 0.03 they match the reference solution to `1e-4` rad (`6e-6` relative on the crank
@@ -284,34 +256,6 @@ fn pendulum_a01_period_and_energy() {
 
 // ---------------------------------------------------------------------------------------------
 // IFToMM A02: N-four-bar
-
-/// The N-four-bar as the one degree of freedom it has: every rocker at the angle `psi` (from
-/// +x), every coupler translating with the rockers' tops. Lagrange's equation of that system,
-/// `I psi'' = -g c cos psi` with `I = (N + 1)/3 + N` (rockers about their bases, couplers
-/// translating at the tops' speed) and `c = (N + 1)/2 + N`, integrated by classical RK4 with
-/// step 1e-4 s (error ~1e-13); returns `(psi, psi')` at the times `t`.
-fn nfourbar_reference(n: usize, times: &[f64]) -> Vec<[f64; 2]> {
-    let nf = n as f64;
-    let (inertia, c) = ((nf + 1.0) / 3.0 + nf, (nf + 1.0) / 2.0 + nf);
-    let f = |y: [f64; 2]| [y[1], -9.81 * c / inertia * y[0].cos()];
-    let (mut y, mut t, h) = ([std::f64::consts::FRAC_PI_2, -1.0], 0.0f64, 1e-4f64);
-    let mut out = Vec::with_capacity(times.len());
-    for &to in times {
-        while t < to - 1e-12 {
-            let hs = h.min(to - t);
-            let k1 = f(y);
-            let k2 = f([y[0] + 0.5 * hs * k1[0], y[1] + 0.5 * hs * k1[1]]);
-            let k3 = f([y[0] + 0.5 * hs * k2[0], y[1] + 0.5 * hs * k2[1]]);
-            let k4 = f([y[0] + hs * k3[0], y[1] + hs * k3[1]]);
-            for i in 0..2 {
-                y[i] += hs / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
-            t += hs;
-        }
-        out.push(y);
-    }
-    out
-}
 
 /// The N = 40 file over its first 2.5 s at rtol = atol = 1e-8: the chain falls through the flat
 /// position (B0_y = 0) at about 0.72 s, hangs at about 1 s and rises through the flat position on

@@ -6,11 +6,11 @@ mod common;
 use common::{col, energy_drift, run};
 
 /// The double pendulum at the default tolerances (1e-6) over 5 s, falling from rest through a
-/// drop of about 20 J of potential energy. Measured: drift 1.5e-4 J in 580 steps (7 rejected),
+/// drop of about 20 J of potential energy. Measured: drift 3.1e-4 J in 457 steps (18 rejected),
 /// orders up to 12, 2 partitions (the first choice keeps the lower rod's `y`, which turns back
-/// as the rods swing down). The bound leaves a factor 7 for platform rounding; the step counts are pinned loosely
-/// so that a change that makes the method work harder is seen (the largest step, the output
-/// step 0.01 s, alone needs 500).
+/// as the rods swing down); with the step capped at the output step 0.01 s (the old default)
+/// 1.5e-4 J in 580 steps. The bound leaves a factor 3 for platform rounding; the step counts are
+/// pinned loosely so that a change that makes the method work harder is seen.
 #[test]
 fn double_pendulum_energy_abam() {
     let clock = std::time::Instant::now();
@@ -21,8 +21,8 @@ fn double_pendulum_energy_abam() {
     eprintln!("abam drift {drift:e} in {elapsed:?}, stats {stats}");
     assert!(drift < 1e-3, "drift {drift}");
     let count = |k: &str| stats[k].as_u64().unwrap();
-    assert!((500..=650).contains(&count("steps")), "{stats}");
-    assert!(count("rejected_steps") <= 20 && count("newton_failures") == 0, "{stats}");
+    assert!((400..=550).contains(&count("steps")), "{stats}");
+    assert!(count("rejected_steps") <= 30 && count("newton_failures") == 0, "{stats}");
     assert_eq!(count("max_order_used"), 12, "{stats}");
 }
 
@@ -132,8 +132,9 @@ fn slider_crank_repartitions_through_full_turns() {
     eprintln!("{turns:.2} turns, drift {drift:.2e} J of {energy:.1} J, {stats}");
     assert!(turns > 2.0, "turns {turns}");
     // Measured: 12 partitions in 2.9 turns (x and y of the crank's centre each fold twice a turn),
-    // drift 1.1e-4 J of 76 J. Without the re-partition the integration ran through the folds on a
-    // degraded coordinate with a drift of 0.35 J.
+    // drift 2.3e-3 J of 76 J in 378 steps (1.1e-4 J when the output step capped the step). Without
+    // the re-partition the integration ran through the folds on a degraded coordinate with a drift
+    // of 0.35 J: the bound 1e-2 J tells the two apart.
     assert!(stats["partitions"].as_u64().unwrap() >= 8, "{stats}");
-    assert!(drift < 1e-3, "drift {drift}");
+    assert!(drift < 1e-2, "drift {drift}");
 }

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::references::{pendulum_a01, QuickReturn};
+use common::references::{pendulum_error as a01_error, QuickReturn, QUICK_RETURN_CRANK_SPEED, SAMPLES};
 use common::{col, energy_drift};
 use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::{Model, Overrides, Results};
@@ -29,10 +29,6 @@ analyses:
   dynamics: {type: dynamic, t_end: 62.83185307179586, step: 0.1}
 ";
 
-/// The quick-return crank's initial speed in `quick_return_a.yaml`, rad/s (the file's value, not 2 pi).
-#[allow(clippy::approx_constant)]
-const CRANK_SPEED: f64 = 6.283;
-
 fn load(name: &str) -> Model {
     Model::load(common::example(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
@@ -48,30 +44,6 @@ fn steps(r: &Results) -> u64 {
     r.summary["statistics"]["steps"].as_u64().unwrap()
 }
 
-/// Largest position error of A01 against the exact solution.
-fn a01_error(r: &Results) -> f64 {
-    let (x, y) = (col(r, "P1_x"), col(r, "P1_y"));
-    r.time
-        .iter()
-        .enumerate()
-        .map(|(k, &t)| {
-            let [xe, ye] = pendulum_a01(t);
-            (x[k] - xe).abs().max((y[k] - ye).abs())
-        })
-        .fold(0.0, f64::max)
-}
-
-fn qr_error(qr: &QuickReturn, r: &Results) -> f64 {
-    let mut worst = 0.0f64;
-    for name in qr.names() {
-        let c = col(r, name);
-        for (i, &t) in r.time.iter().enumerate() {
-            worst = worst.max((c[i] - qr.position(name, t)).abs());
-        }
-    }
-    worst
-}
-
 /// The coasting quick-return A (analysis `dynamics`, 2 s) at 1e-6, 1e-8, 1e-10 against the
 /// quadrature reference. Measured: 1.79e-3, 8.22e-5, 3.71e-6 in 886, 4115, 19101 steps: 22 times
 /// smaller per 100 times tighter tolerance, the `tol^(2/3)` of a second-order method whose step
@@ -82,12 +54,12 @@ fn qr_error(qr: &QuickReturn, r: &Results) -> f64 {
 #[test]
 fn quick_return_error_follows_the_tolerance() {
     let m = load("quick_return_a.yaml");
-    let qr = QuickReturn::new(&m, CRANK_SPEED);
+    let qr = QuickReturn::new(&m, QUICK_RETURN_CRANK_SPEED, SAMPLES);
     let e: Vec<f64> = [1e-6, 1e-8, 1e-10]
         .iter()
         .map(|&tol| {
             let (r, cpu) = run_tol(&m, "dynamics", IntegratorKind::Hht, tol, None);
-            let e = qr_error(&qr, &r);
+            let e = qr.error(&r);
             eprintln!("quick-return hht {tol:e}: error {e:.3e}, {} steps, {cpu:.2} s", steps(&r));
             e
         })
@@ -186,12 +158,12 @@ fn diag() {
     }
     if what.contains("qr") {
         let m = load("quick_return_a.yaml");
-        let qr = QuickReturn::new(&m, CRANK_SPEED);
+        let qr = QuickReturn::new(&m, QUICK_RETURN_CRANK_SPEED, SAMPLES);
         for &tol in &tols {
             let (r, cpu) = run_tol(&m, "dynamics", IntegratorKind::Hht, tol, None);
             eprintln!(
                 "QR hht tol {tol:e}: error {:.3e} steps {} cpu {cpu:.2} s stats {}",
-                qr_error(&qr, &r),
+                qr.error(&r),
                 steps(&r),
                 r.summary["statistics"]
             );

@@ -690,10 +690,13 @@ pub enum IntegratorKind {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Formulation {
-    /// The position constraints `Phi = 0` (index 3).
-    #[default]
+    /// The position constraints `Phi = 0` (index 3); the error test weights the velocities by the
+    /// step, so they are not controlled.
     Index3,
-    /// The velocity constraints with a position correction (stabilised index 2, GGL; Adams SI2).
+    /// The velocity constraints with a position correction (stabilised index 2, GGL; Adams SI2);
+    /// the error test includes the velocities. The default: the global error follows the
+    /// tolerance (docs/integrators.md).
+    #[default]
     Si2,
 }
 
@@ -778,7 +781,7 @@ pub struct SolverSpec {
     /// Dynamics (`hht`): numerical damping `alpha`, in [-1/3, 0].
     #[serde(default)]
     pub alpha: Option<f64>,
-    /// Dynamics (`bdf`): the equations discretised. Default: index3.
+    /// Dynamics (`bdf`): the equations discretised. Default: si2.
     #[serde(default)]
     pub formulation: Option<Formulation>,
 }

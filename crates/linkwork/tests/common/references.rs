@@ -6,16 +6,22 @@
 //!   constant kinetic energy, so its motion is a quadrature, `t(theta) = int sqrt(I(theta) / 2E)`,
 //!   with the generalised inertia `I(theta)` from the kinematic analysis (its velocities per unit
 //!   crank speed), integrated spectrally: `I` is periodic and analytic in the crank angle.
+//! - Andrews' squeezing mechanism ([`ANDREWS_END`]): the Bari test set's published solution.
+//! - The IFToMM A02 N-four-bar ([`nfourbar_reference`]): its one-degree-of-freedom equation.
 //! - The IFToMM A01 pendulum released at 90 degrees ([`pendulum_a01`]): the exact solution in
 //!   Jacobi's elliptic function `sn`.
 
-use linkwork::{Model, Overrides};
+use linkwork::{Model, Overrides, Results};
 use std::f64::consts::PI;
 
-/// Samples of the crank turn. The Fourier coefficients of the quick-return's `sqrt(I)` and
-/// positions fall below `1e-15` of the largest by harmonic ~60 (measured: the reference moves by
-/// `< 1e-13` rad from 256 to 512 samples), so 512 leaves a wide margin.
-const SAMPLES: usize = 512;
+/// The quick-return's initial crank speed, rad/s, as `examples/quick_return_a.yaml` gives it
+/// (`omega: 6.283`, held by `given`; not 2 pi).
+#[allow(clippy::approx_constant)]
+pub const QUICK_RETURN_CRANK_SPEED: f64 = 6.283;
+
+/// Samples of the crank turn for [`QuickReturn::new`]: the reference moves by less than `1e-13`
+/// from 256 to 512 samples (`tests/work_precision.rs`), so 512 leaves a wide margin.
+pub const SAMPLES: usize = 512;
 
 /// A real trigonometric series `a0 + sum_k (a_k cos k psi + b_k sin k psi)` from equally spaced
 /// samples of a periodic function over one period (the discrete Fourier transform; exact for
@@ -77,16 +83,16 @@ pub struct QuickReturn {
 
 impl QuickReturn {
     /// From the model's `kinematics` analysis (the crank driven at 2 pi rad/s from its initial
-    /// angle) over one turn, and the crank's given initial speed `omega0`, rad/s.
-    pub fn new(model: &Model, omega0: f64) -> QuickReturn {
-        let o = Overrides { t_end: Some(1.0), step: Some(1.0 / SAMPLES as f64), ..Default::default() };
+    /// angle) at `samples` points of one turn, and the crank's given initial speed `omega0`, rad/s.
+    pub fn new(model: &Model, omega0: f64, samples: usize) -> QuickReturn {
+        let o = Overrides { t_end: Some(1.0), step: Some(1.0 / samples as f64), ..Default::default() };
         let r = model.run_with("kinematics", &o).unwrap_or_else(|f| panic!("kinematics: {}", f.error));
-        assert_eq!(r.len(), SAMPLES + 1);
+        assert_eq!(r.len(), samples + 1);
         let col = |name: &str| r.column(name).unwrap_or_else(|| panic!("no column {name}"));
         let crank = col("crank.phi");
         let theta0 = crank[0];
         // Generalised inertia per unit crank speed: sum m v^2 + J omega^2 at crank speed 2 pi.
-        let inertia: Vec<f64> = (0..SAMPLES)
+        let inertia: Vec<f64> = (0..samples)
             .map(|j| {
                 model
                     .bodies
@@ -106,8 +112,8 @@ impl QuickReturn {
             for c in ["x", "y", "phi"] {
                 let name = format!("{}.{c}", b.name);
                 let y = col(&name);
-                let growth = y[SAMPLES] - y[0];
-                let periodic: Vec<f64> = (0..SAMPLES).map(|j| y[j] - growth * j as f64 / SAMPLES as f64).collect();
+                let growth = y[samples] - y[0];
+                let periodic: Vec<f64> = (0..samples).map(|j| y[j] - growth * j as f64 / samples as f64).collect();
                 columns.push((name, Fourier::new(&periodic), growth));
             }
         }
@@ -125,6 +131,16 @@ impl QuickReturn {
             }
         }
         self.theta0 + psi
+    }
+
+    /// The largest error of every body's position columns in `r` (m, rad).
+    pub fn error(&self, r: &Results) -> f64 {
+        self.names()
+            .flat_map(|name| {
+                let c = r.column(name).expect("column");
+                r.time.iter().zip(c).map(move |(&t, &y)| (y - self.position(name, t)).abs())
+            })
+            .fold(0.0, f64::max)
     }
 
     /// The names of the position columns (`<body>.x`, `.y`, `.phi` of every body).
@@ -148,6 +164,17 @@ pub fn elliptic_k(k: f64) -> f64 {
         (a, b) = (0.5 * (a + b), (a * b).sqrt());
     }
     PI / (2.0 * a)
+}
+
+/// The largest error of the A01 mass's position (`P1_x`, `P1_y`) in `r` against [`pendulum_a01`], m.
+pub fn pendulum_error(r: &Results) -> f64 {
+    let (x, y) = (r.column("P1_x").expect("P1_x"), r.column("P1_y").expect("P1_y"));
+    (0..r.len())
+        .map(|k| {
+            let p = pendulum_a01(r.time[k]);
+            (x[k] - p[0]).abs().max((y[k] - p[1]).abs())
+        })
+        .fold(0.0, f64::max)
 }
 
 /// Jacobi's elliptic `sn(u | k)` by the arithmetic-geometric mean and descending Landen
@@ -180,3 +207,59 @@ pub fn pendulum_a01(t: f64) -> [f64; 2] {
     let theta = 2.0 * (k * sn(elliptic_k(k) - 9.81f64.sqrt() * t, k)).asin();
     [-theta.sin(), -theta.cos()]
 }
+
+/// The N-four-bar as the one degree of freedom it has: every rocker at the angle `psi` (from
+/// +x), every coupler translating with the rockers' tops. Lagrange's equation of that system,
+/// `I psi'' = -g c cos psi` with `I = (N + 1)/3 + N` (rockers about their bases, couplers
+/// translating at the tops' speed) and `c = (N + 1)/2 + N`, integrated by classical RK4 with
+/// step 1e-4 s (error ~1e-13); returns `(psi, psi')` at the times `t`.
+pub fn nfourbar_reference(n: usize, times: &[f64]) -> Vec<[f64; 2]> {
+    let nf = n as f64;
+    let (inertia, c) = ((nf + 1.0) / 3.0 + nf, (nf + 1.0) / 2.0 + nf);
+    let f = |y: [f64; 2]| [y[1], -9.81 * c / inertia * y[0].cos()];
+    let (mut y, mut t, h) = ([std::f64::consts::FRAC_PI_2, -1.0], 0.0f64, 1e-4f64);
+    let mut out = Vec::with_capacity(times.len());
+    for &to in times {
+        while t < to - 1e-12 {
+            let hs = h.min(to - t);
+            let k1 = f(y);
+            let k2 = f([y[0] + 0.5 * hs * k1[0], y[1] + 0.5 * hs * k1[1]]);
+            let k3 = f([y[0] + 0.5 * hs * k2[0], y[1] + 0.5 * hs * k2[1]]);
+            let k4 = f([y[0] + hs * k3[0], y[1] + hs * k3[1]]);
+            for i in 0..2 {
+                y[i] += hs / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+            }
+            t += hs;
+        }
+        out.push(y);
+    }
+    out
+}
+
+/// The test set's coordinates, in the order of its solution vector.
+pub const ANDREWS: [&str; 7] = ["beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon"];
+
+/// Initial values of the Test Set for IVP Solvers (Mazzia and Magherini, Bari, release 2.4,
+/// andrews.f, subroutine `init`), digits as published.
+#[allow(clippy::excessive_precision)]
+pub const ANDREWS_START: [f64; 7] = [
+    -0.0617138900142764496358948458001,
+    0.0,
+    0.455279819163070380255912382449,
+    0.222668390165885884674473185609,
+    0.487364979543842550225598953530,
+    -0.222668390165885884674473185609,
+    1.23054744454982119249735015568,
+];
+
+/// The test set's reference solution at t = 0.03 (andrews.f, subroutine `solut`; computed with
+/// PSIDE at tolerances 1e-14 on a Cray C90).
+pub const ANDREWS_END: [f64; 7] = [
+    0.1581077119629904e2,
+    -0.1575637105984298e2,
+    0.4082224013073101e-1,
+    -0.5347301163226948,
+    0.5244099658805304,
+    0.5347301163226948,
+    0.1048080741042263e1,
+];

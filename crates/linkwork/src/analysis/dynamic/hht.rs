@@ -19,7 +19,7 @@
 //! steps. The matrix is kept across iterations and steps while Newton contracts; it is
 //! re-evaluated when convergence is slow and after a change of step of more than 20%. Newton
 //! has converged when both the position and the velocity corrections are below
-//! [`NEWTON_TOL`] of the tolerance, or are round-off ([`super::roundoff_ratio`]).
+//! `NEWTON_TOL` (0.1%) of the tolerance, or are round-off ([`super::roundoff_ratio`]).
 //!
 //! Error control (Negrut et al. section 3.3): the local error of the positions is estimated as
 //! `(beta - 1/6) h^2 (qddot_{n+1} - qddot_n)`; a step is accepted when its weighted RMS norm

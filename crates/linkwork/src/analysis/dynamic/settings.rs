@@ -29,7 +29,9 @@ pub struct IntegratorSettings {
     /// HHT numerical damping, in [-1/3, 0]. Default `-0.3`, as Adams HHT: strong damping of the
     /// highest frequencies (spectral radius at infinity 0.54), little of the resolved ones.
     pub alpha: f64,
-    /// The equations `bdf` discretises. Default index 3.
+    /// The equations `bdf` discretises. Default SI2 (stabilised index 2, as Adams SI2): its error
+    /// test controls the velocities, whose local errors, uncontrolled in index 3, add up to a
+    /// global position error 1e4 times the tolerance (docs/integrators.md).
     pub formulation: Formulation,
     /// A constant step with no error test, for measuring a method's order of convergence in
     /// the tests; not a model-file setting (a constant step gives no control of the error).
@@ -47,7 +49,7 @@ impl Default for IntegratorSettings {
             max_step: None,
             max_order: None,
             alpha: -0.3,
-            formulation: Formulation::Index3,
+            formulation: Formulation::Si2,
             fixed_step: None,
         }
     }

@@ -1,0 +1,159 @@
+//! The work-precision table of docs/integrators.md: for each model, integrator and tolerance
+//! (`rtol = atol`), the global error against an independent reference and the cost.
+//!
+//! ```sh
+//! cargo run --release -p linkwork --example work_precision            # every case
+//! cargo run --release -p linkwork --example work_precision -- a01    # cases whose name has "a01"
+//! cargo run --release -p linkwork --example work_precision -- output # A01 with and without the
+//!                                                                    # step capped at the output step
+//! ```
+//!
+//! Prints a Markdown table: the error (largest over the output times of the positions named
+//! per model, m or rad; for Andrews the significant digits at t = 0.03 as the test set counts
+//! them, `-log10` of the largest relative error), the CPU time of `Model::run_with` (the best of
+//! three for runs under a second), steps, rejected steps and factorizations. A failed run prints
+//! its error and where it stopped.
+
+#[path = "../tests/common/references.rs"]
+#[allow(dead_code)]
+mod references;
+
+use linkwork::analysis::dynamic::IntegratorKind;
+use linkwork::{Model, Overrides, Results};
+use references::{
+    nfourbar_reference, pendulum_error, QuickReturn, ANDREWS, ANDREWS_END, QUICK_RETURN_CRANK_SPEED, SAMPLES,
+};
+use std::time::Instant;
+
+const INTEGRATORS: [(&str, IntegratorKind); 3] =
+    [("bdf", IntegratorKind::Bdf), ("hht", IntegratorKind::Hht), ("abam", IntegratorKind::Abam)];
+
+fn example(name: &str) -> String {
+    format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// How to measure a run's error: `(error, unit)`.
+type ErrorMeasure = Box<dyn Fn(&Results) -> (f64, &'static str)>;
+
+/// A model, its analysis, the tolerances to try and how to measure a run's error.
+struct Case {
+    name: &'static str,
+    file: &'static str,
+    tolerances: &'static [f64],
+    error: ErrorMeasure,
+}
+
+fn cases() -> Vec<Case> {
+    let qr = Model::load(example("quick_return_a.yaml")).expect("quick_return_a.yaml");
+    let reference = QuickReturn::new(&qr, QUICK_RETURN_CRANK_SPEED, SAMPLES);
+    vec![
+        Case {
+            name: "quick-return A, unloaded, 2 s",
+            file: "quick_return_a.yaml",
+            tolerances: &[1e-6, 1e-8, 1e-10, 1e-12],
+            error: Box::new(move |r| (reference.error(r), "m, rad")),
+        },
+        Case {
+            name: "Andrews, 0.03 s",
+            file: "andrews.yaml",
+            tolerances: &[1e-6, 1e-8, 1e-10, 1e-12],
+            error: Box::new(|r| {
+                let n = r.len() - 1;
+                let rel = ANDREWS
+                    .iter()
+                    .zip(ANDREWS_END)
+                    .map(|(name, want)| ((r.column(name).expect("column")[n] - want) / want).abs())
+                    .fold(0.0, f64::max);
+                (-rel.log10(), "digits")
+            }),
+        },
+        Case {
+            name: "IFToMM A01 pendulum, 2000 s",
+            file: "iftomm_a01_pendulum.yaml",
+            tolerances: &[1e-6, 1e-8, 1e-10, 1e-12],
+            error: Box::new(|r| (pendulum_error(r), "m")),
+        },
+        Case {
+            name: "IFToMM A02 N-four-bar, N = 40, 20 s",
+            file: "iftomm_a02_nfourbar.yaml",
+            tolerances: &[1e-6, 1e-8, 1e-10, 1e-12],
+            error: Box::new(|r| {
+                let psi = nfourbar_reference(40, &r.time);
+                let (bx, by) = (r.column("B0_x").expect("B0_x"), r.column("B0_y").expect("B0_y"));
+                let e = (0..r.len())
+                    .map(|k| (bx[k] - psi[k][0].cos()).abs().max((by[k] - psi[k][0].sin()).abs()))
+                    .fold(0.0, f64::max);
+                (e, "m")
+            }),
+        },
+    ]
+}
+
+/// A01's 2000 s with its 200,001 output times, with the step capped at the output step (the old
+/// default, `solver.max_step: 0.01`) and free (the default): steps, time and error.
+fn output_step_effect() {
+    let text = std::fs::read_to_string(example("iftomm_a01_pendulum.yaml")).expect("A01");
+    let from = "dynamics: {type: dynamic, t_end: 2000, step: 0.01}";
+    assert!(text.contains(from), "the A01 file's analysis line changed");
+    let capped = text.replace(from, "dynamics: {type: dynamic, t_end: 2000, step: 0.01, solver: {max_step: 0.01}}");
+    println!("| A01, 200,001 outputs | integrator | rtol = atol | max_step | error (m) | CPU time (s) | steps |");
+    println!("| --- | --- | --- | --- | --- | --- | --- |");
+    for (label, kind) in INTEGRATORS {
+        for tol in [1e-6, 1e-8] {
+            for (cap, yaml) in [("0.01 (output step)", &capped), ("default", &text)] {
+                let model = Model::from_yaml(yaml).expect("model");
+                let o = Overrides { integrator: Some(kind), rtol: Some(tol), atol: Some(tol), ..Default::default() };
+                let start = Instant::now();
+                let (r, note) = match model.run_with("dynamics", &o) {
+                    Ok(r) => (r, String::new()),
+                    Err(f) => (f.results, format!(" (failed: {})", f.error)),
+                };
+                let time = start.elapsed().as_secs_f64();
+                let err = pendulum_error(&r);
+                let steps = &r.summary["statistics"]["steps"];
+                println!("| | {label} | {tol:e} | {cap} | {err:.2e}{note} | {time:.2} | {steps} |");
+            }
+        }
+    }
+}
+
+fn main() {
+    let filter = std::env::args().nth(1).unwrap_or_default().to_lowercase();
+    if filter == "output" {
+        return output_step_effect();
+    }
+    println!("| model | integrator | rtol = atol | error | unit | CPU time (s) | steps | rejected | factorizations |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    for case in cases() {
+        if !case.name.to_lowercase().contains(&filter) && !case.file.contains(&filter) {
+            continue;
+        }
+        let model = Model::load(example(case.file)).expect("model");
+        for (label, kind) in INTEGRATORS {
+            for &tol in case.tolerances {
+                let o = Overrides { integrator: Some(kind), rtol: Some(tol), atol: Some(tol), ..Default::default() };
+                let (mut best, mut outcome) = (f64::INFINITY, None);
+                for _ in 0..3 {
+                    let start = Instant::now();
+                    let run = model.run_with("dynamics", &o);
+                    best = best.min(start.elapsed().as_secs_f64());
+                    outcome = Some(run);
+                    if best > 1.0 {
+                        break;
+                    }
+                }
+                let (results, failure) = match outcome.expect("ran") {
+                    Ok(r) => (r, String::new()),
+                    Err(f) => (f.results, format!(" (failed: {})", f.error)),
+                };
+                let (error, unit) = (case.error)(&results);
+                let s = &results.summary["statistics"];
+                let error = if unit == "digits" { format!("{error:.2}") } else { format!("{error:.2e}") };
+                println!(
+                    "| {} | {label} | {tol:e} | {error}{failure} | {unit} | {best:.3} | {} | {} | {} |",
+                    case.name, s["steps"], s["rejected_steps"], s["factorizations"]
+                );
+            }
+        }
+    }
+}
