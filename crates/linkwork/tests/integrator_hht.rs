@@ -68,20 +68,52 @@ fn quick_return_error_follows_the_tolerance() {
     assert!(e[0] > 10.0 * e[1] && e[1] > 10.0 * e[2], "{e:?}");
 }
 
+/// A01's period, s: `4 sqrt(L / g) K(sin 45 deg)`.
+const A01_PERIOD: f64 = 2.3678419;
+
+/// The secular energy change of A01 per period, relative to `m g L = 9.81 J` (positive: a loss):
+/// the mean energy over the first period minus that over the last, per period between them
+/// (the means remove the energy's oscillation within a swing, `1.6e-4` at 1e-8).
+fn a01_energy_loss_per_period(r: &Results) -> f64 {
+    let (ke, pe) = (col(r, "kinetic_energy"), col(r, "potential_energy"));
+    let e: Vec<f64> = (0..r.len()).map(|k| ke[k] + pe[k]).collect();
+    let per = ((A01_PERIOD / (r.time[1] - r.time[0])).round() as usize).clamp(1, r.len() / 2);
+    let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
+    let periods = (r.time[r.len() - 1] - A01_PERIOD) / A01_PERIOD;
+    (mean(&e[..per]) - mean(&e[e.len() - per..])) / 9.81 / periods
+}
+
 /// IFToMM A01 over the benchmark's 2000 s (845 swings) at 1e-8 against the exact solution.
-/// Measured: 8.5e-2 m in 1.89 M steps (6 s); before the fix of Newton's convergence test 2.0 m
-/// (the phase lost) in 1.89 M steps. Bound 0.1: the issue asks for 5e-2, which is not met yet:
-/// at a constant step of 1e-3 s the same code is within 2.2e-2, and the extra error of the
-/// variable step (an energy loss of 1.4e-7 per swing against 6.9e-8 at constant steps, which
-/// shortens the period swing after swing) is not yet explained (docs/integrators.md).
+/// Measured: 9.3e-3 m in 1.89 M steps (4 s). Before the step-size controller was centred on the
+/// step it sizes: 8.5e-2 m in the same 1.89 M steps (its energy loss twice the method's own, see
+/// the next test), and 2.0 m before the fix of Newton's convergence test. Bound: the issue's
+/// 5e-2, which the lagging controller missed by 1.7 times.
 #[test]
 fn pendulum_a01_keeps_its_phase_over_2000_s() {
     let m = load("iftomm_a01_pendulum.yaml");
     let (r, cpu) = run_tol(&m, "dynamics", IntegratorKind::Hht, 1e-8, None);
     let e = a01_error(&r);
     eprintln!("A01 hht 1e-8: error {e:.3e}, {} steps, {cpu:.2} s", steps(&r));
-    assert!(e < 0.1, "{e}");
+    assert!(e < 5e-2, "{e}");
     assert!(steps(&r) < 2_500_000, "{}", steps(&r));
+}
+
+/// The step-size control costs A01 no energy beyond the method's damping: over 100 s at 1e-8
+/// (94,000 steps) the secular energy loss per period is 4.2e-8 of `m g L`, less than the 6.9e-8
+/// that a constant step of 1e-3 s (100,000 steps, about as many) loses. Before the controller
+/// was centred on the step it sizes it was 1.38e-7 in the same number of steps: the classical
+/// controller sizes each step from the previous step's error, so the step lags the motion by
+/// about 1.3 steps and is not symmetric in time over a swing, which leaves the method's `O(h^2)`
+/// energy oscillation (1.6e-4 within a swing) a secular part (docs/integrators.md). Bound: the
+/// constant step's loss.
+#[test]
+fn pendulum_a01_step_control_costs_no_energy() {
+    let m = load("iftomm_a01_pendulum.yaml");
+    let (r, cpu) = run_tol(&m, "dynamics", IntegratorKind::Hht, 1e-8, Some(100.0));
+    let loss = a01_energy_loss_per_period(&r);
+    eprintln!("A01 hht 1e-8, 100 s: energy loss per period {loss:.3e}, {} steps, {cpu:.2} s", steps(&r));
+    assert!(loss < 6.9e-8, "{loss:e}");
+    assert!(steps(&r) < 100_000, "{}", steps(&r));
 }
 
 /// The measurements of docs/integrators.md (`DIAG=a01,qr,andr,iftomm_a02 TOLS=1e-6,1e-8
@@ -111,13 +143,10 @@ fn diag() {
             let (r, cpu) = run_tol(&m, "dynamics", IntegratorKind::Hht, tol, t_end);
             let (ke, pe) = (col(&r, "kinetic_energy"), col(&r, "potential_energy"));
             let e: Vec<f64> = (0..r.len()).map(|k| ke[k] + pe[k]).collect();
-            let per = (2.3678419 / (r.time[1] - r.time[0])).round() as usize;
-            let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
-            let secular = mean(&e[..per]) - mean(&e[e.len() - per..]);
-            let periods = (r.time[r.len() - 1] - 2.3678419) / 2.3678419;
+            let per = ((A01_PERIOD / (r.time[1] - r.time[0])).round() as usize).clamp(1, r.len() / 2);
             eprintln!(
                 "A01 secular energy loss per period {:.3e} relative (of 9.81 J), oscillation {:.3e}",
-                secular / 9.81 / periods,
+                a01_energy_loss_per_period(&r),
                 e[..per].iter().map(|x| (x - e[0]).abs()).fold(0.0, f64::max)
             );
             eprintln!("A01 residuals {}", r.summary["residuals"]);
@@ -152,6 +181,41 @@ fn diag() {
                 ),
                 Err(f) => {
                     eprintln!("{name} hht {tol:e}: stopped in {:.2} s: {}", clock.elapsed().as_secs_f64(), f.error)
+                }
+            }
+        }
+    }
+    if what.contains("all") {
+        // Every dynamic analysis of every example (t_end from the file unless TEND).
+        let mut names: Vec<String> = std::fs::read_dir(common::example(""))
+            .unwrap()
+            .filter_map(|e| e.ok()?.file_name().into_string().ok())
+            .filter(|n| n.ends_with(".yaml"))
+            .collect();
+        names.sort();
+        for name in names {
+            let m = load(&name);
+            let analyses: Vec<String> = m
+                .analyses
+                .iter()
+                .filter(|(_, a)| a.kind == linkwork::model::spec::AnalysisKind::Dynamic)
+                .map(|(k, _)| k.clone())
+                .collect();
+            for a in analyses {
+                for &tol in &tols {
+                    let o = Overrides {
+                        integrator: Some(IntegratorKind::Hht),
+                        rtol: Some(tol),
+                        atol: Some(tol),
+                        t_end,
+                        ..Default::default()
+                    };
+                    let clock = std::time::Instant::now();
+                    let cpu = || clock.elapsed().as_secs_f64();
+                    match m.run_with(&a, &o) {
+                        Ok(r) => eprintln!("ALL {name} {a} {tol:e}: ok, {} steps, {:.2} s", steps(&r), cpu()),
+                        Err(f) => eprintln!("ALL {name} {a} {tol:e}: STOPPED ({:.2} s): {}", cpu(), f.error),
+                    }
                 }
             }
         }
