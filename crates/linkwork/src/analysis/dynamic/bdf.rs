@@ -1,4 +1,4 @@
-//! Variable-order (1 to 5), variable-step BDF on the equations of motion, in the manner of
+//! Variable-order (1 to 6), variable-step BDF on the equations of motion, in the manner of
 //! DASSL (Brenan, Campbell and Petzold 1996, chapter 5) and Adams GSTIFF.
 //!
 //! The method works on the first-order form `q' = v`, `M v' + Phi_q^T lambda = Q(q, v, t)`,
@@ -40,7 +40,9 @@
 //! contraction is slower than 0.9 per iteration, and after a failure). Newton has converged
 //! when the estimated distance to the solution, `rate / (1 - rate) |dy|`, is below a third of
 //! the error tolerance, as in DASSL; when it stops contracting or runs out of iterations, it has
-//! converged if its corrections are round-off ([`super::roundoff_ratio`]), failed otherwise.
+//! converged if its corrections are round-off ([`super::roundoff_ratio`]), or (index 3, with a
+//! fresh matrix) if its iterate satisfies the constraints to round-off (near a singular position
+//! the matrix amplifies that round-off over the floor), failed otherwise.
 //!
 //! **Error test** on positions and velocities (never on the multipliers), in the weighted RMS
 //! norm ([`super::wrms`]): in SI2 the local error of order `k` is
@@ -49,7 +51,9 @@
 //! weighted by the step (`h v`): they are index-2 variables there, whose local error estimate does
 //! not shrink with the step like that of the positions (Brenan et al. section 5.4); the constant
 //! is the method's own, `1 / (c (t_{n+1} - t_{n-k}))` (`2/9` for BDF2), as DASSL's larger one
-//! lifts that estimate's noise over the tolerance. Velocities outside the error test are why
+//! lifts that estimate's noise over the tolerance. The estimate is floored at round-off
+//! (`roundoff_ratio` of `y_{n+1} - P_k(t_{n+1})` when smaller than the norm), so that no tolerance
+//! asks the error test to resolve noise. Velocities outside the error test are why
 //! index 3's global error is 1e3 to 1e4 times the tolerance (docs/integrators.md).
 //!
 //! **Order and step** as DASSL: estimates at orders `k - 1` and (after `k + 1` steps at one order)
@@ -62,7 +66,8 @@
 //! last step (DASSL's DDATRP), for positions and velocities.
 
 use super::{
-    min_step, step_bounds, step_failure, Dae, DynamicStats, Formulation, IntegratorSettings, Outcome, Output, Start,
+    min_step, step_bounds, step_failure, Dae, DynamicStats, Formulation, IntegratorKind, IntegratorSettings, Outcome,
+    Output, Start,
 };
 use crate::error::Error;
 
@@ -72,8 +77,8 @@ const MAX_NEWTON: usize = 4;
 /// tolerance (DASSL's 0.33).
 const NEWTON_TOL: f64 = 0.33;
 
-/// Most nodes kept: order 5 needs 6 for its predictor and 7 to estimate order 6.
-const MAX_NODES: usize = 7;
+/// Most nodes kept: order 6 needs 7 for its predictor and 8 to estimate order 7.
+const MAX_NODES: usize = 8;
 
 /// The integrator's state.
 struct Bdf<'a, 'm> {
@@ -111,6 +116,12 @@ struct Bdf<'a, 'm> {
     dq: Vec<f64>,
     dv: Vec<f64>,
 
+    /// Round-off of the positions in the history in units of [`super::roundoff_ratio`]'s floor:
+    /// 1, or the largest correction that a settled Newton (index 3 at a singular position) left
+    /// in the last `MAX_NODES` steps.
+    noise_amp: f64,
+    /// The last Newton's settled correction in those units (1 when it converged otherwise).
+    settled_amp: f64,
     /// `c` of the current factorization, or `None` when there is none.
     factored_c: Option<f64>,
     stats: DynamicStats,
@@ -159,12 +170,32 @@ impl Bdf<'_, '_> {
     }
 
     /// The error estimate of order `j` for the new point `(t1, q1, v1)`:
-    /// `|y - P_j(t1)| / (c_j (t1 - t_{n-j}))`, with `P_j` through the `j + 1` newest nodes.
-    fn error_at(&self, j: usize, t1: f64, vscale: f64) -> f64 {
+    /// `|y - P_j(t1)| / (c_j (t1 - t_{n-j}))`, with `P_j` through the `j + 1` newest nodes, in
+    /// the weighted norm, floored at round-off: where the difference `y - P_j(t1)` is smaller
+    /// than round-off at the state's scale ([`super::roundoff_ratio`] below the norm), the ratio
+    /// takes the norm's place. The tolerance is then in effect raised to round-off, as for
+    /// Newton: the estimate of noise measures nothing, and at tolerances near round-off it hovers
+    /// between 0.25 and 1 whatever the step, which stops the step from growing and ratchets it
+    /// down (A02 at `1e-13` fell to `5e-15` s before its flat position). Above `rtol ~ 1e-11`
+    /// the ratio is always the larger and this changes nothing.
+    fn error_at(&mut self, j: usize, t1: f64, vscale: f64) -> f64 {
         let mut w = [0.0; MAX_NODES];
         value_weights(&self.ts[..=j], t1, &mut w);
-        let p = |ys: &[Vec<f64>], k: usize| -> f64 { (0..=j).map(|i| w[i] * ys[i][k]).sum() };
-        let d = self.norm(|k| self.q1[k] - p(&self.qs, k), |k| self.v1[k] - p(&self.vs, k), vscale);
+        for k in 0..self.n {
+            self.dq[k] = self.q1[k] - (0..=j).map(|i| w[i] * self.qs[i][k]).sum::<f64>();
+            self.dv[k] = self.v1[k] - (0..=j).map(|i| w[i] * self.vs[i][k]).sum::<f64>();
+        }
+        let d = self.norm(|k| self.dq[k], |k| self.dv[k], vscale);
+        let scale = |y: &[f64]| y.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let mut noise = super::roundoff_ratio(&self.dq, &self.q1, scale(&self.q1));
+        if vscale == 1.0 {
+            // Velocities tested in full (in index 3 they are differences of the positions and
+            // inherit their noise).
+            noise = noise.max(super::roundoff_ratio(&self.dv, &self.v1, scale(&self.v1)));
+        }
+        // Near a singular position the history carries Newton's settled noise, `noise_amp` times
+        // the floor (see `newton`).
+        let d = d.min(noise / self.noise_amp);
         if self.si2 {
             // DASSL's and IDA's constant, `alpha_{j+1} = h / (t1 - t_{n-j})`, `1/(j+1)` at
             // constant steps: `sum_{i<=j} 1/i` times the method's own (the error in `h y'`
@@ -228,6 +259,7 @@ impl Bdf<'_, '_> {
         let mut previous = f64::INFINITY;
         // No rate is known before the second iteration: the first correction must be small.
         let mut ss = 1e3;
+        self.settled_amp = 1.0;
         for it in 0..MAX_NEWTON {
             if !self.si2 {
                 for i in 0..n {
@@ -308,8 +340,6 @@ impl Bdf<'_, '_> {
                 }
             }
             let d = self.norm(|i| self.dq[i], |i| self.dv[i], vscale);
-            // Round-off: a correction that is noise at the scale of the state (the largest
-            // position, the largest velocity) is as close as Newton can get.
             // Round-off: the corrections against round-off at the scale of the state (the largest
             // position, the largest velocity).
             let qscale = self.q1.iter().fold(0.0f64, |a, x| a.max(x.abs()));
@@ -339,13 +369,22 @@ impl Bdf<'_, '_> {
                 }
             }
             // A Newton that no longer contracts, or has run out of iterations, has converged when
-            // its corrections are round-off: at the state's scale, amplified by the matrix's
-            // condition beyond the `1e4` that `ROUNDOFF_UNITS` allows for (at a singular position,
-            // such as the flat N-four-bar, the condition reaches `1e9` and the round-off of `Phi`
-            // comes back as corrections of `1e-11` m).
-            let converged = ss * d <= NEWTON_TOL || d <= 1e-3 * NEWTON_TOL || (stalled && noise <= 1.0);
+            // its corrections are round-off at the state's scale, or (index 3, a fresh matrix)
+            // when the iterate it started this iteration from satisfies the constraints to
+            // round-off: near a singular position (the flat N-four-bar) the matrix, whose
+            // condition reaches `1e9` there, amplifies the round-off of `Phi` (`7e-15`) into
+            // corrections of `1e-11` m that no iteration can remove (the backward error is
+            // round-off; hht's test is the same).
+            let settled = stalled && !self.si2 && fresh && {
+                self.rows.fill(0.0);
+                super::roundoff_ratio(&self.dae.phi, &self.rows, qscale) <= 1.0
+            };
+            let converged = ss * d <= NEWTON_TOL || d <= 1e-3 * NEWTON_TOL || (stalled && noise <= 1.0) || settled;
             previous = d;
             if converged {
+                if settled && ss * d > NEWTON_TOL {
+                    self.settled_amp = noise.max(1.0);
+                }
                 for i in 0..n {
                     if !self.si2 {
                         self.v1[i] = c * self.q1[i] + self.bq[i];
@@ -383,7 +422,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let (n, m) = (dae.n, dae.m);
     let (h_max, h0) = step_bounds(settings, &start, out.t_end() - start.t);
     let Start { t, q, qdot, qddot, lambda } = start;
-    let k_max = settings.order_limit().clamp(1, 5);
+    let k_max = settings.order_limit().clamp(1, IntegratorSettings::order_bound(IntegratorKind::Bdf));
     let mut s = Bdf {
         dae,
         n,
@@ -409,6 +448,8 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         dq: vec![0.0; n],
         dv: vec![0.0; n],
         factored_c: None,
+        noise_amp: 1.0,
+        settled_amp: 1.0,
         stats: DynamicStats::default(),
     };
     let t_end = out.t_end();
@@ -424,6 +465,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let mut start_up = true;
     let mut failures = 0;
     let mut recent_index3 = 0usize;
+    let mut recent_settled = 0usize;
     let outcome = (|| -> Result<(), Error> {
         while s.ts[0] < t_end - 1e-12 * span.max(1e-300) {
             let t0 = s.ts[0];
@@ -484,6 +526,10 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                 }
                 continue;
             }
+            if s.settled_amp > 1.0 {
+                s.noise_amp = s.noise_amp.max(s.settled_amp);
+                recent_settled = MAX_NODES + 1;
+            }
             let err = if settings.fixed_step.is_some() {
                 0.0
             } else if s.ts.len() == 1 {
@@ -523,6 +569,10 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             }
             failures = 0;
             recent_index3 = recent_index3.saturating_sub(1);
+            recent_settled = recent_settled.saturating_sub(1);
+            if recent_settled == 0 {
+                s.noise_amp = 1.0;
+            }
             at_order += 1;
             let raise = k < k_max && at_order > k && s.ts.len() > k + 1;
             let higher = if raise { s.error_at(k + 1, t1, evs) } else { f64::INFINITY };
@@ -540,7 +590,12 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                 }
                 out.push(s.dae, to, &qo, &vo)?;
             }
-            let (est, order) = if lower <= err {
+            let (est, order) = if let Some(fixed) = settings.fixed_step {
+                // Verification: the order climbs to its limit and stays there; order 6 waits
+                // until every node of its history is the fixed step apart (below).
+                let even = s.ts.len() == MAX_NODES && s.ts.windows(2).all(|w| w[0] - w[1] >= fixed * (1.0 - 1e-9));
+                (err, if k < k_max && (k < 5 || even) { k + 1 } else { k })
+            } else if lower <= err {
                 (lower, k - 1)
             } else if start_up && k < k_max {
                 (err, k + 1)
@@ -555,7 +610,10 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             k = order;
             if let Some(fixed) = settings.fixed_step {
                 // Verification: no error test; the start-up raises the order one step at a time
-                // to its limit and doubles the step from the initial step up to the fixed one.
+                // and grows the step by 1.25 a step from the initial step up to the fixed one.
+                // (A variable step is zero-stable only for step ratios below a bound that falls
+                // with the order: growing by 1.25 a step at order 6 left an error of 5e-4
+                // whatever the fixed step.)
                 h = (1.25 * h).min(fixed);
                 continue;
             }
