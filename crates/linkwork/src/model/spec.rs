@@ -675,8 +675,8 @@ pub struct AnalysisSpec {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum IntegratorKind {
-    /// Variable-order (1 to 5), variable-step BDF on the index-3 equations (or the stabilised
-    /// index-2 form), as Adams GSTIFF and DASSL.
+    /// Variable-order (1 to 6), variable-step BDF on the stabilised index-2 equations (or the
+    /// index-3 ones), as Adams GSTIFF and DASSL.
     #[default]
     Bdf,
     /// HHT-alpha on the index-3 equations with step-size control (Negrut et al. 2007).
