@@ -37,7 +37,9 @@
 //! **Predictor and corrector.** The predictor is the polynomial through `t_n, ..., t_{n-k}`
 //! extrapolated to `t_{n+1}`; Newton starts there, with the matrix kept across iterations and
 //! steps while it contracts (it is refreshed when `c` changes by more than 25%, when the
-//! contraction is slower than 0.9 per iteration, and after a failure). Newton has converged
+//! contraction is slower than 0.9 per iteration, and after a failure; a Newton that fails with a
+//! matrix from an earlier attempt is retried once with a fresh one before the step is reduced,
+//! in either corrector). Newton has converged
 //! when the estimated distance to the solution, `rate / (1 - rate) |dy|`, is below a third of
 //! the error tolerance, as in DASSL; when it stops contracting or runs out of iterations, it has
 //! converged if its corrections are round-off ([`super::roundoff_ratio`]), or (index 3, with a
@@ -400,6 +402,28 @@ impl Bdf<'_, '_> {
         Ok(Newton::Failed { fresh })
     }
 
+    /// The corrector from the predictor of order `k` at `t1` (already set by [`Self::predict`]):
+    /// Newton's method, and when it fails with a matrix from an earlier attempt, once more from
+    /// the predictor with a matrix evaluated there (DASSL), before the step is reduced. Returns
+    /// whether it converged. The index-3 fallback after an SI2 failure goes through here too: it
+    /// inherits the matrix SI2 evaluated at its own (diverged) iterate, and near a singular
+    /// position it stalls at once at the noise that matrix makes of `Phi`'s round-off; only a
+    /// fresh matrix lets `newton` judge that stall (A02 at `1e-12` stopped at 0.7216 s: the stall
+    /// is the same at every step size, so reducing the step could not help).
+    fn correct(&mut self, k: usize, t1: f64, c: f64, vscale: f64) -> Result<bool, Error> {
+        match self.newton(t1, c, vscale)? {
+            Newton::Converged => Ok(true),
+            Newton::Failed { fresh: true } => Ok(false),
+            Newton::Failed { fresh: false } => {
+                self.factored_c = None;
+                self.predict(k, t1);
+                self.lam1.copy_from_slice(&self.lambda);
+                self.mu1.fill(0.0);
+                Ok(matches!(self.newton(t1, c, vscale)?, Newton::Converged))
+            }
+        }
+    }
+
     /// Add the accepted point `(t1, q1, v1)` to the history, newest first.
     fn push_history(&mut self, t1: f64) {
         if self.ts.len() == MAX_NODES {
@@ -491,17 +515,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             // while the history holds index-3 velocities).
             let nvs = if s.si2 { 1.0 } else { h };
             let mut evs = if recent_index3 > 0 { h } else { nvs };
-            let mut converged = match s.newton(t1, c, nvs)? {
-                Newton::Converged => true,
-                Newton::Failed { fresh: false } => {
-                    s.factored_c = None;
-                    s.predict(k, t1);
-                    s.lam1.copy_from_slice(&s.lambda);
-                    s.mu1.fill(0.0);
-                    matches!(s.newton(t1, c, nvs)?, Newton::Converged)
-                }
-                Newton::Failed { fresh: true } => false,
-            };
+            let mut converged = s.correct(k, t1, c, nvs)?;
             if !converged && s.si2 && settings.fixed_step.is_none() {
                 // SI2's Newton fails where Phi_q loses rank (the flat N-four-bar): its velocity
                 // constraints and the projection multiply the round-off of Phi by c / sigma_min.
@@ -509,7 +523,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                 s.si2 = false;
                 s.predict(k, t1);
                 s.lam1.copy_from_slice(&s.lambda);
-                converged = matches!(s.newton(t1, c, h)?, Newton::Converged);
+                converged = s.correct(k, t1, c, h)?;
                 evs = h;
             }
             if !converged {
