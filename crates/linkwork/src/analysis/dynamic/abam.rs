@@ -4,7 +4,7 @@
 //! Des. 104(1); Haug 1989 section 7.3; Shampine and Gordon 1975, "Computer Solution of Ordinary
 //! Differential Equations: The Initial Value Problem", Freeman, chapters 4 to 10).
 //!
-//! **Partition.** A sparse Gaussian elimination of the constraint Jacobian `Phi_q` ([`pivots`]:
+//! **Partition.** A sparse Gaussian elimination of the constraint Jacobian `Phi_q` (`pivots`:
 //! threshold pivoting, each pivot at least 0.9 times the largest remaining entry and, among
 //! those, of least Markowitz count) picks `r` pivots, `r` the numerical rank (it stops when no
 //! entry above [`crate::analysis::RANK_TOLERANCE`] times the largest of `Phi_q` remains): the
@@ -41,7 +41,7 @@
 //! by a factor in `[0.5, 0.9]`. Steps start at order 1 and raise the order and double the step
 //! every step ("phase 1") until the order is lowered or reaches the limit. The sums of the
 //! predictor and the corrector are compensated for rounding (STEP's `phi(15)`, `phi(16)`).
-//! **Error norm** ([`Split::norm`]): each error estimate, a change of `(q_I, v_I)`, is mapped to
+//! **Error norm** (`Split::norm`): each error estimate, a change of `(q_I, v_I)`, is mapped to
 //! the change of every position and velocity it makes (`dq_D = -B^-1 Phi_q[rows, I] dq_I`, and
 //! `dv_D` with the derivative of `Phi_q v` in the positions), each weighted by
 //! `atol + rtol |y_k|`, and the norm is the largest; a step passes at an error of 1. Near a
