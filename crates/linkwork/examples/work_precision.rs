@@ -82,7 +82,8 @@ fn cases() -> Vec<Case> {
         Case {
             name: "IFToMM A02 N-four-bar, N = 40, 20 s",
             file: "iftomm_a02_nfourbar.yaml",
-            tolerances: &[1e-6, 1e-8, 1e-10, 1e-12],
+            // Not 1e-12: `abam` creeps at the flat position there (docs/integrators.md, `abam`).
+            tolerances: &[1e-6, 1e-8, 1e-10],
             error: Box::new(|r| {
                 let psi = nfourbar_reference(40, &r.time);
                 let (bx, by) = (r.column("B0_x").expect("B0_x"), r.column("B0_y").expect("B0_y"));
