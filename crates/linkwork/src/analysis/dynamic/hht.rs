@@ -312,7 +312,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let (mut a_prev, mut mu_prev, mut h_prev) = (vec![0.0; n], vec![0.0; m], 0.0);
     let outcome = (|| -> Result<(), Error> {
         while s.t < t_end - 1e-12 * span.max(1e-300) {
-            let h_min = min_step(s.stats.steps, s.t, h, span)?;
+            let h_min = min_step(s.stats.steps, s.t, h, span, settings)?;
             if h < h_min {
                 // Accepted steps may shrink the step too (an error estimate that grows from step
                 // to step); stop here rather than creep towards zero.

@@ -48,14 +48,16 @@ pub const MAX_STEPS: usize = 5_000_000;
 
 /// The smallest step an integrator may take at `t` in a run of length `span`, s: 16 units of
 /// round-off of the time, below which `t + h` no longer differs from `t` in a useful way.
-/// Errors with [`MAX_STEPS`] when `steps` has used up the budget.
-pub fn min_step(steps: usize, t: f64, h: f64, span: f64) -> Result<f64, Error> {
+/// Errors with [`MAX_STEPS`] when `steps` has used up the budget, naming the tolerances of
+/// `settings` that asked for so many steps.
+pub fn min_step(steps: usize, t: f64, h: f64, span: f64, settings: &IntegratorSettings) -> Result<f64, Error> {
     if steps >= MAX_STEPS {
+        let (rtol, atol) = (settings.rtol, settings.atol);
         return Err(Error::Integration {
             time: t,
             step: h,
             cause: format!(
-                "more than {MAX_STEPS} steps; the model may be too stiff for the tolerances, or loosen rtol/atol"
+                "more than {MAX_STEPS} steps (the step budget) at rtol {rtol:e}, atol {atol:e}; loosen rtol/atol, or the model may be too stiff for this integrator"
             ),
             rows: vec![],
         });
