@@ -15,7 +15,7 @@
 mod common;
 
 use common::col;
-use common::references::{nfourbar_reference, pendulum_a01, QuickReturn, SAMPLES};
+use common::references::{nfourbar_reference, pendulum_a01, QuickReturn, ANDREWS, ANDREWS_END, SAMPLES};
 use linkwork::analysis::dynamic::{Formulation, IntegratorKind};
 use linkwork::{Model, Overrides, Results};
 use std::time::Instant;
@@ -87,18 +87,6 @@ fn nfourbar_error(r: &Results) -> f64 {
         .map(|k| (bx[k] - reference[k][0].cos()).abs().max((by[k] - reference[k][0].sin()).abs()))
         .fold(0.0, f64::max)
 }
-
-const ANDREWS: [&str; 7] = ["beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon"];
-/// The test set's solution at t = 0.03 (andrews.f, `solut`), as in `examples_dynamics.rs`.
-const ANDREWS_END: [f64; 7] = [
-    0.1581077119629904e2,
-    -0.1575637105984298e2,
-    0.4082224013073101e-1,
-    -0.5347301163226948,
-    0.5244099658805304,
-    0.5347301163226948,
-    0.1048080741042263e1,
-];
 
 /// Significant correct digits of Andrews' end state: the test set's `scd`, `-log10` of the
 /// largest relative error of the seven coordinates.

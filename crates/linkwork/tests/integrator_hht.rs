@@ -185,41 +185,6 @@ fn diag() {
             }
         }
     }
-    if what.contains("all") {
-        // Every dynamic analysis of every example (t_end from the file unless TEND).
-        let mut names: Vec<String> = std::fs::read_dir(common::example(""))
-            .unwrap()
-            .filter_map(|e| e.ok()?.file_name().into_string().ok())
-            .filter(|n| n.ends_with(".yaml"))
-            .collect();
-        names.sort();
-        for name in names {
-            let m = load(&name);
-            let analyses: Vec<String> = m
-                .analyses
-                .iter()
-                .filter(|(_, a)| a.kind == linkwork::model::spec::AnalysisKind::Dynamic)
-                .map(|(k, _)| k.clone())
-                .collect();
-            for a in analyses {
-                for &tol in &tols {
-                    let o = Overrides {
-                        integrator: Some(IntegratorKind::Hht),
-                        rtol: Some(tol),
-                        atol: Some(tol),
-                        t_end,
-                        ..Default::default()
-                    };
-                    let clock = std::time::Instant::now();
-                    let cpu = || clock.elapsed().as_secs_f64();
-                    match m.run_with(&a, &o) {
-                        Ok(r) => eprintln!("ALL {name} {a} {tol:e}: ok, {} steps, {:.2} s", steps(&r), cpu()),
-                        Err(f) => eprintln!("ALL {name} {a} {tol:e}: STOPPED ({:.2} s): {}", cpu(), f.error),
-                    }
-                }
-            }
-        }
-    }
     if what.contains("qr") {
         let m = load("quick_return_a.yaml");
         let qr = QuickReturn::new(&m, QUICK_RETURN_CRANK_SPEED, SAMPLES);
