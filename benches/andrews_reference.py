@@ -101,7 +101,7 @@ def main():
     for method, tol in runs:
         sol = solve_ivp(rhs, (0.0, 0.03), y0, method=method, rtol=tol, atol=1e-18)
         ends[(method, tol)] = sol.y[:7, -1]
-        print(f"{method} rtol {tol:g} ({sol.nfev} evaluations): " + ", ".join(f"{x:.16e}" for x in sol.y[:7, -1]))
+        print(f"{method} rtol {tol:g} ({sol.nfev} evaluations): " + ", ".join(repr(float(x)) for x in sol.y[:7, -1]))
     best = ends[runs[0]]
     print("\nrelative difference from DOP853 at 3e-14, per angle (" + ", ".join(NAMES) + "):")
     for key, end in ends.items():
