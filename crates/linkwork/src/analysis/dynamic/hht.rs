@@ -24,7 +24,9 @@
 //! Error control (Negrut et al. section 3.3): the local error of the positions is estimated as
 //! `(beta - 1/6) h^2 (qddot_{n+1} - qddot_n)`; a step is accepted when its weighted RMS norm
 //! ([`super::wrms`]) is at most 1, or when the estimate is round-off of the positions
-//! ([`super::roundoff_ratio`]; the step is then kept). The next step is sized for `0.9^3` of the
+//! ([`super::roundoff_ratio`]), or within `NOISE_MARGIN` times the noise Newton left when it
+//! stopped at round-off (near a singular position, where the Jacobian amplifies round-off); the
+//! step is then kept. The next step is sized for `0.9^3` of the
 //! tolerance from the error coefficient `err / h^3` extrapolated to the centre of that step
 //! (`Controller`: the classical `h (0.9^3 / err)^(1/3)` lags the motion and costs a pendulum its
 //! energy), within `[h / 5, 2 h]` and the maximum step. Output by quintic Hermite interpolation
@@ -82,6 +84,10 @@ struct Hht<'a, 'm> {
     zero_m: Vec<f64>,
     /// Step size of the current factorization, or `None` when there is none.
     factored_h: Option<f64>,
+    /// When this step's Newton stopped at round-off ([`Self::at_roundoff`]): its last position
+    /// correction, the noise it left in the iterate, in units of [`super::roundoff_ratio`]'s
+    /// floor and at least 1 (above 1 only when settled near a singular position).
+    noise: Option<f64>,
     stats: DynamicStats,
 }
 
@@ -110,6 +116,7 @@ impl Hht<'_, '_> {
         let (al, b) = (self.alpha, self.beta);
         let mut fresh = false;
         let mut previous = f64::INFINITY;
+        self.noise = None;
         for it in 0..MAX_NEWTON {
             self.newmark(h);
             self.dae.positions(&self.q1, t1);
@@ -187,26 +194,29 @@ impl Hht<'_, '_> {
     ///   singular position (A02's flat positions) the nearly singular matrix amplifies the
     ///   round-off of the residual into position corrections a few times the floor (measured
     ///   2.6 times on A02 at 1e-8, constraint residual 7e-15, while Newton stalled).
+    ///
+    /// When it is, the position correction's ratio is kept in `noise` for the error test.
     fn at_roundoff(&mut self, h: f64, stalled: bool, fresh: bool) -> bool {
         let n = self.n;
         let scale = |y: &[f64]| y.iter().fold(0.0f64, |x, y| x.max(y.abs()));
         let qscale = scale(&self.q1);
-        if stalled && fresh {
-            // The constraint residual (of the iterate before this correction) against zero.
-            if super::roundoff_ratio(&self.dae.phi, &self.zero_m, qscale) <= 1.0 {
-                return true;
-            }
-        }
         for k in 0..n {
             self.work[k] = self.beta * h * h * self.r[k];
         }
-        if super::roundoff_ratio(&self.work, &self.q1, qscale) > 1.0 {
-            return false;
+        let position = super::roundoff_ratio(&self.work, &self.q1, qscale);
+        // The constraint residual (of the iterate before this correction) against zero.
+        let settled = stalled && fresh && super::roundoff_ratio(&self.dae.phi, &self.zero_m, qscale) <= 1.0;
+        let at_floor = settled
+            || position <= 1.0 && {
+                for k in 0..n {
+                    self.work[k] = self.gamma * h * self.r[k];
+                }
+                stalled || super::roundoff_ratio(&self.work, &self.v1, scale(&self.v1)) <= 1.0
+            };
+        if at_floor {
+            self.noise = Some(position.max(1.0));
         }
-        for k in 0..n {
-            self.work[k] = self.gamma * h * self.r[k];
-        }
-        stalled || super::roundoff_ratio(&self.work, &self.v1, scale(&self.v1)) <= 1.0
+        at_floor
     }
 }
 
@@ -215,6 +225,20 @@ fn wrms_scaled(v: &[f64], y: &[f64], c: f64, rtol: f64, atol: f64) -> f64 {
     let s: f64 = v.iter().zip(y).map(|(e, x)| (c * e / (atol + rtol * x.abs())).powi(2)).sum();
     (s / v.len().max(1) as f64).sqrt()
 }
+
+/// How far above the noise Newton left in the positions the error estimate may lie and still be
+/// that noise. The last correction samples the noise once (the estimate measured up to 2.1 times
+/// it on A02 at 1e-11). Noise in the poorly determined direction of a singular position is not
+/// removed by the constraints: through the accelerations it enters the velocities as
+/// `gamma / (beta h)` times itself and the next positions as `gamma / beta` (1.9) times, damped
+/// per step by the method's spectral radius `(1 + alpha) / (1 - alpha)` (0.54), which sums to
+/// about 4. Measured on A02 at 1e-12: with 4 the estimate reached 5.4 times the noise over a few
+/// steps and the run stopped at 0.7215 s; with 8 it runs at 1e-12 and 1e-13.
+const NOISE_MARGIN: f64 = 8.0;
+
+/// Accepted steps whose Newton did not stop at round-off after which its noise is forgotten: 8,
+/// as `bdf` keeps a settled Newton's noise for its 8 history nodes.
+const NOISE_MEMORY: usize = 8;
 
 /// The error estimate a step is sized for: `0.9^3`, the classical safety factor 0.9 on the step.
 const TARGET: f64 = 0.729;
@@ -299,6 +323,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         work: vec![0.0; n],
         zero_m: vec![0.0; m],
         factored_h: None,
+        noise: None,
         stats: DynamicStats { max_order_used: 2, ..Default::default() },
     };
     let t_end = out.t_end();
@@ -310,6 +335,9 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let mut lambda1 = vec![0.0; m];
     // The accelerations and multipliers of the step before, and its size (0: none yet).
     let (mut a_prev, mut mu_prev, mut h_prev) = (vec![0.0; n], vec![0.0; m], 0.0);
+    // The position noise of Newton's round-off stops: the largest `Hht::noise` of the attempts
+    // since `NOISE_MEMORY` accepted steps without one (`noise_memory` 0: none).
+    let (mut noise_amp, mut noise_memory) = (1.0f64, 0usize);
     let outcome = (|| -> Result<(), Error> {
         while s.t < t_end - 1e-12 * span.max(1e-300) {
             let h_min = min_step(s.stats.steps, s.t, h, span, settings)?;
@@ -376,7 +404,21 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             // slope would read the clamped estimate as a growing error coefficient and shrink
             // the step without end). Growing the step instead (as for an error `TARGET * ratio`)
             // measured a rejection every other step on A02 at 1e-12.
-            let factor = if err > TARGET && super::roundoff_ratio(&s.work, &s.q1, qscale) <= 1.0 {
+            //
+            // When Newton stops at round-off it leaves that much noise in the positions, and the
+            // estimate `(beta - 1/6) h^2 (a1 - a)` carries the noise of two steps' positions
+            // through their accelerations (`(beta - 1/6) / beta`, 0.6, times each), whatever the
+            // step. Near a singular position a settled Newton leaves `noise` times the floor. On
+            // A02 the estimate then stayed at the noise while the step fell to `6e-14` s and the
+            // run stopped at the first flat position (0.72 s): at 1e-11 `4e-11` to `1.5e-10` m,
+            // 0.6 to 2.1 times the last correction (`7.3e-11` m); at 1e-12 1.6 times the floor.
+            // An estimate up to `NOISE_MARGIN` times the largest recent noise is that noise.
+            if let Some(noise) = s.noise {
+                noise_amp = if noise_memory > 0 { noise_amp.max(noise) } else { noise };
+                noise_memory = NOISE_MEMORY;
+            }
+            let floor = if noise_memory > 0 { NOISE_MARGIN * noise_amp } else { 1.0 };
+            let factor = if err > TARGET && super::roundoff_ratio(&s.work, &s.q1, qscale) <= floor {
                 err = TARGET;
                 1.0
             } else {
@@ -417,6 +459,9 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             a_prev.copy_from_slice(&s.a);
             mu_prev.copy_from_slice(&s.mu);
             h_prev = h;
+            if s.noise.is_none() {
+                noise_memory = noise_memory.saturating_sub(1);
+            }
             std::mem::swap(&mut s.q, &mut s.q1);
             std::mem::swap(&mut s.v, &mut s.v1);
             std::mem::swap(&mut s.a, &mut s.a1);
