@@ -28,7 +28,7 @@ use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::model::spec::AnalysisKind;
 use linkwork::{Model, Overrides, Results};
 use references::{
-    andrews_digits, nfourbar_reference, pendulum_error, QuickReturn, ANDREWS_END_CONVERGED, QUICK_RETURN_CRANK_SPEED,
+    andrews_digits, nfourbar_error, pendulum_error, QuickReturn, ANDREWS_END_CONVERGED, QUICK_RETURN_CRANK_SPEED,
     SAMPLES,
 };
 use std::time::Instant;
@@ -78,14 +78,7 @@ fn cases() -> Vec<Case> {
             file: "iftomm_a02_nfourbar.yaml",
             // Not 1e-12: `abam` creeps at the flat position there (docs/integrators.md, `abam`).
             tolerances: &[1e-6, 1e-8, 1e-10],
-            error: Box::new(|r| {
-                let psi = nfourbar_reference(40, &r.time);
-                let (bx, by) = (r.column("B0_x").expect("B0_x"), r.column("B0_y").expect("B0_y"));
-                let e = (0..r.len())
-                    .map(|k| (bx[k] - psi[k][0].cos()).abs().max((by[k] - psi[k][0].sin()).abs()))
-                    .fold(0.0, f64::max);
-                (e, "m")
-            }),
+            error: Box::new(|r| (nfourbar_error(r, 40), "m")),
         },
     ]
 }

@@ -238,6 +238,15 @@ pub fn nfourbar_reference(n: usize, times: &[f64]) -> Vec<[f64; 2]> {
     out
 }
 
+/// Largest distance, m, of the N-four-bar's point B0 (`B0_x`, `B0_y`) from the `n`-bar
+/// reference [`nfourbar_reference`] over the output times.
+pub fn nfourbar_error(r: &Results, n: usize) -> f64 {
+    let psi = nfourbar_reference(n, &r.time);
+    let column = |name: &str| r.column(name).unwrap_or_else(|| panic!("no column {name}"));
+    let (bx, by) = (column("B0_x"), column("B0_y"));
+    (0..r.len()).map(|k| (bx[k] - psi[k][0].cos()).abs().max((by[k] - psi[k][0].sin()).abs())).fold(0.0, f64::max)
+}
+
 /// The test set's coordinates, in the order of its solution vector.
 pub const ANDREWS: [&str; 7] = ["beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon"];
 
