@@ -31,6 +31,10 @@ def test_bad_override_is_a_model_error():
     with pytest.raises(linkwork.ModelError) as info:
         model.run("dynamics_hht", integrator="rk4")
     assert info.value.problems[0][0] == "--integrator"
+    # A bool is an int to Python; True ran as rtol 1.0 before.
+    with pytest.raises(linkwork.ModelError) as info:
+        model.run("dynamics_hht", rtol=True)
+    assert info.value.problems == [("--rtol", "expected a number, found True (a bool)")]
 
 
 def test_reaction_in_the_body_frame_is_the_rotated_global_one():

@@ -112,6 +112,11 @@ class Model:
                     "`kinematics: {type: kinematic, drivers: [motor], t_end: 1, step: 0.01}`",
                 )
             analysis = self.analyses[0]
+        numbers = {"--rtol": rtol, "--atol": atol, "--t-end": t_end, "--step": step}
+        for option, value in numbers.items():
+            # A bool is an int to Python, and True would run as 1.0: refused, as a file refuses it.
+            if isinstance(value, bool):
+                raise model_error(option, f"expected a number, found {value} (a bool)")
         try:
             return Results(self._native.run(analysis, integrator, rtol, atol, t_end, step))
         except (SolverError, AssemblyError) as error:

@@ -304,7 +304,7 @@ impl Overrides {
             if given && !dynamic {
                 problems.push(crate::Problem::new(
                     name,
-                    format!("only a dynamic analysis has an integrator; '{}' is {:?}", a.name, a.kind),
+                    format!("only a dynamic analysis has an integrator; '{}' is {}", a.name, a.kind),
                 ));
             }
         }

@@ -205,6 +205,7 @@ analyses:
   dyn: {type: dynamic, integrator: hht, t_end: 1, step: 0.1, solver: {rtol: 0, atol: -1, alpha: 0.5, max_order: 3}}
   kin: {type: kinematic, integrator: bdf, t_end: 1, step: 0.1}
   abam: {type: dynamic, integrator: abam, t_end: 1, step: 0.1, solver: {alpha: -0.1, formulation: si2}}
+  bdf7: {type: dynamic, t_end: 1, step: 0.1, solver: {max_order: 7}}
 "#;
 
 /// The bad inputs the dynamics issue names (an unknown state name in a force expression, a
@@ -230,6 +231,8 @@ fn dynamics_problems_are_listed_with_their_paths() {
     has(&p, "analyses.kin.integrator", "only a dynamic analysis");
     has(&p, "analyses.abam.solver.alpha", "hht only");
     has(&p, "analyses.abam.solver.formulation", "bdf only");
+    // The integrator by its name in the file, not the engine's ("for Bdf" before).
+    has(&p, "analyses.bdf7.solver.max_order", "expected 1 to 6 for bdf, found 7");
 }
 
 /// Command-line overrides are checked like file values; the option is the path.
@@ -244,5 +247,10 @@ fn overrides_are_checked() {
     has(&p, "--t-end", "start");
     let kin = Model::load(example("fourbar.yaml")).unwrap();
     let e = kin.run_with("kinematics", &linkwork::Overrides { atol: Some(1e-3), ..Default::default() }).unwrap_err();
-    assert!(e.error.to_string().contains("--atol: only a dynamic analysis"), "{}", e.error);
+    // In the model file's words, not the engine's type names ("is Kinematic" before).
+    assert!(
+        e.error.to_string().contains("--atol: only a dynamic analysis has an integrator; 'kinematics' is kinematic"),
+        "{}",
+        e.error
+    );
 }

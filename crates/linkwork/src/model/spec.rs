@@ -686,6 +686,17 @@ pub enum IntegratorKind {
     Abam,
 }
 
+impl std::fmt::Display for IntegratorKind {
+    /// The name a model file uses (`bdf`, `hht`, `abam`), for messages.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            IntegratorKind::Bdf => "bdf",
+            IntegratorKind::Hht => "hht",
+            IntegratorKind::Abam => "abam",
+        })
+    }
+}
+
 /// Which equations `bdf` discretises.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
@@ -717,6 +728,19 @@ pub enum AnalysisKind {
     /// Linearisation about an equilibrium (or the initial state): natural frequencies, damping
     /// ratios and mode shapes.
     Modes,
+}
+
+impl std::fmt::Display for AnalysisKind {
+    /// The name a model file uses (`type: kinematic`, ...), for messages.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            AnalysisKind::Kinematic => "kinematic",
+            AnalysisKind::Dynamic => "dynamic",
+            AnalysisKind::Inverse => "inverse",
+            AnalysisKind::Static => "static",
+            AnalysisKind::Modes => "modes",
+        })
+    }
 }
 
 impl AnalysisKind {
