@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import linkwork
+import linkwork as linkwork_module
 from conftest import EXAMPLES
 
 
@@ -66,3 +67,37 @@ def test_cli_overrides_and_dynamic_summary(linkwork, tmp_path):
     kin = linkwork("run", EXAMPLES / "fourbar.yaml", "--integrator", "hht")
     assert kin.code == 2
     assert "only a dynamic analysis" in kin.stderr
+
+
+SWITCHING_TORQUE = """
+name: pendulum with a switching torque
+gravity: [0, -9.81]
+bodies:
+  bar: {mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {O: [-0.5, 0]}}
+joints:
+  O: {type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}
+forces:
+  flip: {type: torque, body: bar, torque: "(t-0.5)/abs(t-0.5)"}
+analyses:
+  dynamics: {type: dynamic, t_end: 1, step: 0.1}
+"""
+
+
+def test_a_nan_torque_is_a_non_finite_error(linkwork, tmp_path):
+    """0/0 at t = 0.5 s ran to the end with status ok and NaN in the results; now it stops there
+    naming the force, exits 3 and keeps the rows before it."""
+    path = tmp_path / "switch.yaml"
+    path.write_text(SWITCHING_TORQUE)
+    with pytest.raises(linkwork_module.NonFiniteError) as info:
+        linkwork_module.load(path).run("dynamics")
+    error = info.value
+    assert isinstance(error, linkwork_module.SolverError)
+    assert (error.element, error.expression, error.time) == ("forces.flip", "torque: (t-0.5)/abs(t-0.5)", 0.5)
+    assert np.isnan(error.value)
+    assert len(error.results) == 5 and np.isfinite(error.results["bar.alpha"]).all()
+    out = tmp_path / "out"
+    done = linkwork("run", path, "-o", out)
+    assert done.code == 3, done.output
+    assert "forces.flip is NaN at t = 0.5 s (torque: (t-0.5)/abs(t-0.5))" in done.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed" and summary["error_time"] == 0.5

@@ -29,6 +29,7 @@ from .errors import (
     InternalError,
     LinkworkError,
     ModelError,
+    NonFiniteError,
     SingularError,
     SolverError,
 )
@@ -46,6 +47,7 @@ __all__ = [
     "LinkworkError",
     "Model",
     "ModelError",
+    "NonFiniteError",
     "Results",
     "SingularError",
     "SolverError",

@@ -8,7 +8,8 @@
     ├── SolverError         time (s), joints, rows, results (the output computed before the failure)
     │   ├── SingularError       detail: a dead centre, lock-up or lost degree of freedom
     │   ├── ConvergenceError    row, residual, iterations, substep
-    │   └── IntegrationError    step, cause: a dynamic integrator could not continue
+    │   ├── IntegrationError    step, cause: a dynamic integrator could not continue
+    │   └── NonFiniteError      element, expression, value: an element gave NaN or infinity
     ├── FileError           path; also an OSError
     └── InternalError       the engine panicked: a bug, reported instead of crashing
 
@@ -26,6 +27,7 @@ from ._linkwork import (
     InternalError,
     LinkworkError,
     ModelError,
+    NonFiniteError,
     SingularError,
     SolverError,
 )
@@ -38,6 +40,7 @@ __all__ = [
     "InternalError",
     "LinkworkError",
     "ModelError",
+    "NonFiniteError",
     "SingularError",
     "SolverError",
     "model_error",

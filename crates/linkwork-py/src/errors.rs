@@ -7,7 +7,8 @@
 //! ├── SolverError         time, joints, rows, results
 //! │   ├── SingularError       detail
 //! │   ├── ConvergenceError    row, residual, iterations, substep
-//! │   └── IntegrationError    step, cause
+//! │   ├── IntegrationError    step, cause
+//! │   └── NonFiniteError      element, expression, value
 //! ├── FileError           path (also an OSError)
 //! └── InternalError       a panic inside the engine: a bug, reported instead of crashing
 //! ```
@@ -61,6 +62,12 @@ pyo3::create_exception!(
 );
 pyo3::create_exception!(
     linkwork,
+    NonFiniteError,
+    SolverError,
+    "An element evaluated to NaN or infinity at time `time`: `element` is its path in the model file (`forces.drag`), `expression` its expressions, `value` what it gave. No such number is written as a result."
+);
+pyo3::create_exception!(
+    linkwork,
     InternalError,
     LinkworkError,
     "The engine panicked: a bug in Linkwork. Please report it with the model that caused it."
@@ -79,6 +86,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SingularError", py.get_type::<SingularError>())?;
     m.add("ConvergenceError", py.get_type::<ConvergenceError>())?;
     m.add("IntegrationError", py.get_type::<IntegrationError>())?;
+    m.add("NonFiniteError", py.get_type::<NonFiniteError>())?;
     m.add("InternalError", py.get_type::<InternalError>())?;
     // Two bases, so that `except OSError` catches a missing model file as well: built with
     // `type(name, bases, namespace)`, as a `class` statement would.
@@ -190,6 +198,18 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
                 ("rows", rows.iter().map(|r| r.to_string()).collect::<Vec<_>>().into_pyobject(py)?.into_any()),
                 ("step", step.into_pyobject(py)?.into_any()),
                 ("cause", cause.into_pyobject(py)?.into_any()),
+                ("results", results()?.into_bound(py)),
+            ],
+        ),
+        Error::NonFinite { time, element, expression, value } => (
+            NonFiniteError::new_err(message),
+            vec![
+                ("time", time.into_pyobject(py)?.into_any()),
+                ("joints", joints.into_pyobject(py)?.into_any()),
+                ("rows", Vec::<String>::new().into_pyobject(py)?.into_any()),
+                ("element", element.into_pyobject(py)?.into_any()),
+                ("expression", expression.into_pyobject(py)?.into_any()),
+                ("value", value.into_pyobject(py)?.into_any()),
                 ("results", results()?.into_bound(py)),
             ],
         ),

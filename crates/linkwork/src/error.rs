@@ -120,6 +120,20 @@ pub enum Error {
         /// The fraction of the applied loads at which the last equilibrium was found.
         load_fraction: f64,
     },
+    /// An element of the model evaluated to a number that is not finite (NaN or infinite): the
+    /// analysis stops there rather than write it.
+    #[error("{element} is {value} at t = {time} s{}", expression_suffix(.expression))]
+    NonFinite {
+        /// Time of the evaluation, s.
+        time: f64,
+        /// The element, as its path in the model file (`forces.drag`), or what was computed
+        /// (`accelerations`) when no element is to blame.
+        element: String,
+        /// Its expressions, `field: source` (`torque: (t-0.3)/abs(t-0.3)`), or empty.
+        expression: String,
+        /// The value it gave.
+        value: f64,
+    },
     /// Reading or writing a file failed.
     #[error("{path}: {message}")]
     Io {
@@ -128,6 +142,15 @@ pub enum Error {
         /// What the operating system said.
         message: String,
     },
+}
+
+/// ` (expression)` after a non-finite value's element, or nothing.
+fn expression_suffix(expression: &str) -> String {
+    if expression.is_empty() {
+        String::new()
+    } else {
+        format!(" ({expression})")
+    }
 }
 
 impl Error {

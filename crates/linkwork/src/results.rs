@@ -191,7 +191,8 @@ impl Results {
             | Error::Convergence { time, .. }
             | Error::Equilibrium { time, .. }
             | Error::Assembly { time, .. }
-            | Error::Integration { time, .. } = e
+            | Error::Integration { time, .. }
+            | Error::NonFinite { time, .. } = e
             {
                 s.insert("error_time".into(), json!(time));
             }

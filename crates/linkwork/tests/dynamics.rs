@@ -4,6 +4,7 @@
 mod common;
 
 use common::{col, energy_drift};
+use linkwork::analysis::dynamic::IntegratorKind;
 
 /// The double pendulum's energy (about 15 J of motion) over 5 s at the default tolerances
 /// (1e-6): a per-step error of 1e-6 over some 600 to 1300 steps bounds the drift near 1e-2 J.
@@ -208,5 +209,46 @@ fn a_vanishing_step_stops_the_run() {
             assert!(failure.results.len() > 1 && last <= time, "{} outputs to {last}", failure.results.len());
         }
         other => panic!("expected an integration error, got {other}"),
+    }
+}
+
+/// A torque that is NaN at one instant, `(t - 0.5) / abs(t - 0.5)` (0/0 at t = 0.5 s, an output
+/// time), ran to the end with status ok and NaN in the accelerations and reactions there (the
+/// issue's case, at 0.3 s on its output grid). With every integrator the run now stops at 0.5 s
+/// with a `NonFinite` error naming the force and its expression; the results before it are
+/// kept and hold no NaN.
+#[test]
+fn a_nan_torque_stops_the_run_naming_it() {
+    let text = "
+name: pendulum with a switching torque
+gravity: [0, -9.81]
+bodies:
+  bar: {mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {O: [-0.5, 0]}}
+joints:
+  O: {type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}
+forces:
+  flip: {type: torque, body: bar, torque: \"(t-0.5)/abs(t-0.5)\"}
+analyses:
+  dynamics: {type: dynamic, t_end: 1, step: 0.1}
+";
+    let model = linkwork::Model::from_yaml(text).unwrap();
+    for integrator in [IntegratorKind::Bdf, IntegratorKind::Hht, IntegratorKind::Abam] {
+        let o = linkwork::Overrides { integrator: Some(integrator), ..Default::default() };
+        let failure = model.run_with("dynamics", &o).expect_err("NaN at t = 0.5 s");
+        let message = failure.error.to_string();
+        match &failure.error {
+            linkwork::Error::NonFinite { time, element, expression, value } => {
+                assert!((time - 0.5).abs() < 1e-12, "{integrator:?}: {message}");
+                assert_eq!(element, "forces.flip", "{integrator:?}");
+                assert_eq!(expression, "torque: (t-0.5)/abs(t-0.5)", "{integrator:?}");
+                assert!(value.is_nan(), "{integrator:?}: {value}");
+            }
+            other => panic!("{integrator:?}: expected a non-finite error, got {other}"),
+        }
+        let r = &failure.results;
+        assert_eq!(r.len(), 5, "{integrator:?}: outputs at 0 to 0.4 kept");
+        for (name, column) in r.names.iter().zip(&r.columns) {
+            assert!(column.iter().all(|x| x.is_finite()), "{integrator:?}: {name}");
+        }
     }
 }

@@ -30,6 +30,10 @@ pub trait ForceLaw: Debug + Send + Sync {
     /// `x => V`: potential energy of the conservative part of the force (springs), J. The work of
     /// the rest is counted as non-conservative.
     fn potential<S: Scalar>(&self, x: &[S]) -> S;
+    /// The expressions the force evaluates, as `(field, source)` (for messages); none by default.
+    fn expressions(&self) -> Vec<(&'static str, &str)> {
+        Vec::new()
+    }
 }
 
 /// An applied force or force element, object-safe (see [`ForceLaw`]).
@@ -44,6 +48,8 @@ pub trait Force: Debug + Send + Sync {
     fn potential(&self, x: &[f64]) -> f64;
     /// Potential energy over dual numbers: its `d` part is `dV/dx . dx`.
     fn potential_dual(&self, x: &[Dual]) -> Dual;
+    /// The expressions the force evaluates, as `(field, source)` (for messages).
+    fn expressions(&self) -> Vec<(&'static str, &str)>;
 }
 
 impl<T: ForceLaw> Force for T {
@@ -61,6 +67,9 @@ impl<T: ForceLaw> Force for T {
     }
     fn potential_dual(&self, x: &[Dual]) -> Dual {
         ForceLaw::potential(self, x)
+    }
+    fn expressions(&self) -> Vec<(&'static str, &str)> {
+        ForceLaw::expressions(self)
     }
 }
 

@@ -51,6 +51,9 @@ impl ForceLaw for PointLoad {
     fn potential<S: Scalar>(&self, _x: &[S]) -> S {
         S::constant(0.0)
     }
+    fn expressions(&self) -> Vec<(&'static str, &str)> {
+        [("fx", &self.fx), ("fy", &self.fy)].into_iter().filter_map(|(k, l)| Some((k, l.source()?))).collect()
+    }
 }
 
 /// A torque on a body.
@@ -77,6 +80,9 @@ impl ForceLaw for Torque {
         out.fill(S::constant(0.0));
         let zero = S::constant(0.0);
         self.body.add(out, [zero, zero, self.torque.value(x, v, t)]);
+    }
+    fn expressions(&self) -> Vec<(&'static str, &str)> {
+        self.torque.source().map(|s| ("torque", s)).into_iter().collect()
     }
     fn potential<S: Scalar>(&self, _x: &[S]) -> S {
         S::constant(0.0)

@@ -91,6 +91,14 @@ impl Load {
         }
     }
 
+    /// The source text of an expression (`None` for a constant).
+    pub(crate) fn source(&self) -> Option<&str> {
+        match self {
+            Load::Constant(_) => None,
+            Load::Expression(e) => Some(e.source()),
+        }
+    }
+
     /// The value from local `x`, `v` (after [`Load::localize`]).
     #[inline]
     pub(crate) fn value<S: Scalar>(&self, x: &[S], v: &[S], t: f64) -> S {

@@ -59,6 +59,28 @@ pub struct ForceElement {
     pub force: Box<dyn Force>,
 }
 
+impl ForceElement {
+    /// A non-finite entry of the element's generalised force at `(q, qdot, t)`, if it has one.
+    pub fn non_finite(&self, q: &[f64], qdot: &[f64], t: f64) -> Option<f64> {
+        let columns = self.force.columns();
+        let x: Vec<f64> = columns.iter().map(|&c| q[c]).collect();
+        let v: Vec<f64> = columns.iter().map(|&c| qdot[c]).collect();
+        let mut out = vec![0.0; columns.len()];
+        self.force.load(&x, &v, t, &mut out);
+        out.into_iter().find(|f| !f.is_finite())
+    }
+
+    /// Its expressions for a message, `field: source` joined by `; ` (empty when it has none).
+    pub fn expressions(&self) -> String {
+        self.force
+            .expressions()
+            .iter()
+            .map(|(field, source)| format!("{field}: {source}"))
+            .collect::<Vec<_>>()
+            .join("; ")
+    }
+}
+
 /// A named output quantity.
 #[derive(Debug)]
 pub struct Measure {
@@ -85,6 +107,14 @@ pub enum MeasureKind {
 }
 
 impl Measure {
+    /// Its expression's source for a message (empty for a point measure).
+    pub fn expression(&self) -> &str {
+        match &self.kind {
+            MeasureKind::Expression(e) => e.source(),
+            MeasureKind::Point { .. } => "",
+        }
+    }
+
     /// The value at `(q, qdot, qddot, t)`, each `(n)`.
     pub fn value(&self, q: &[f64], qdot: &[f64], qddot: &[f64], t: f64) -> f64 {
         match &self.kind {

@@ -29,6 +29,7 @@
 //! `M + Phi_q^T Phi_q / eps`.
 
 use crate::constraints::{Anchor, BodyIx, Config};
+use crate::error::Error;
 use crate::forces::{derivatives, potential_rate, DualWork};
 use crate::linalg::{FactorError, SparseLu};
 use crate::model::{ForceElement, Model};
@@ -252,6 +253,26 @@ impl<'m> Dae<'m> {
     }
 
     /// `(q, qdot, t) => Q`, `out: (n)`: gravity plus every active force.
+    /// Why a state's derived values are not finite: the first active force, then the first
+    /// measure, that evaluates to a non-finite number at `(q, qdot, qddot, t)`; else the
+    /// equations of motion, with `value`, the first non-finite number found.
+    pub fn non_finite(&self, q: &[f64], qdot: &[f64], qddot: &[f64], t: f64, value: f64) -> Error {
+        let error =
+            |element: String, expression: String, value: f64| Error::NonFinite { time: t, element, expression, value };
+        for f in &self.forces {
+            if let Some(v) = f.non_finite(q, qdot, t) {
+                return error(format!("forces.{}", f.name), f.expressions(), v);
+            }
+        }
+        for m in &self.model.measures {
+            let v = m.value(q, qdot, qddot, t);
+            if !v.is_finite() {
+                return error(format!("measures.{}", m.name), m.expression().to_string(), v);
+            }
+        }
+        error("the solution of the equations of motion".into(), String::new(), value)
+    }
+
     pub fn load(&mut self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) {
         let s = self.external_scale;
         for (o, g) in out.iter_mut().zip(&self.gravity) {

@@ -143,6 +143,11 @@ impl Output {
         for m in &dae.model.measures {
             self.row.push(m.value(q, qdot, qddot, t));
         }
+        // No non-finite number leaves as a result: the analysis stops at the first, naming the
+        // element that gave it.
+        if let Some(&bad) = [q, qdot, &self.sol[..], &self.row].iter().flat_map(|v| v.iter()).find(|x| !x.is_finite()) {
+            return Err(dae.non_finite(q, qdot, &self.sol[..n], t, bad));
+        }
         self.results.push(t, q, qdot, qddot, &self.row);
         self.next += 1;
         Ok(())
