@@ -226,3 +226,31 @@ def test_internal_error_exits_1(monkeypatch, tmp_path, capsys):
     assert cli.main(["run", str(EXAMPLES / "fourbar.yaml")]) == 1
     err = capsys.readouterr().err
     assert "internal error" in err and "please report it" in err
+
+
+RUNAWAY_DRIVER = """
+name: crank driven by 1/(t-1)
+bodies:
+  crank: {mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {O: [-0.5, 0]}}
+joints:
+  O: {type: revolute, body_i: crank, point_i: O, body_j: ground, point_j: [0, 0]}
+drivers:
+  motor: {type: angle, body: crank, function: "1/(t-1)"}
+analyses:
+  kinematics: {type: kinematic, drivers: [motor], t_end: 2, step: 0.01}
+"""
+
+
+def test_a_runaway_driver_exits_3_naming_it(linkwork, tmp_path):
+    """The driver 1/(t-1) hung the kinematic analysis, writing nothing; it now stops at the
+    output before t = 1 s, names the driver and its function, and keeps the rows before it."""
+    model = tmp_path / "runaway.yaml"
+    model.write_text(RUNAWAY_DRIVER)
+    out = tmp_path / "out"
+    done = linkwork("run", model, "-o", out)
+    assert done.code == 3, done.output
+    assert "drivers.motor is inf at t = 1 s (1/(t-1))" in done.stderr
+    header, rows = read_csv(out / "results.csv")
+    assert len(rows) == 100 and rows[-1][0] == pytest.approx(0.99)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed" and summary["error_time"] == 1.0

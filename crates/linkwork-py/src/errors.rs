@@ -8,7 +8,7 @@
 //! │   ├── SingularError       detail
 //! │   ├── ConvergenceError    row, residual, iterations, substep
 //! │   ├── IntegrationError    step, cause
-//! │   └── NonFiniteError      element, expression, value
+//! │   └── NonFiniteError      element, expression, value (NaN, infinity, or without bound)
 //! ├── FileError           path (also an OSError)
 //! └── InternalError       a panic inside the engine: a bug, reported instead of crashing
 //! ```
@@ -64,7 +64,7 @@ pyo3::create_exception!(
     linkwork,
     NonFiniteError,
     SolverError,
-    "An element evaluated to NaN or infinity at time `time`: `element` is its path in the model file (`forces.drag`), `expression` its expressions, `value` what it gave. No such number is written as a result."
+    "An element evaluated to NaN or infinity at time `time`, or a driver's motion grew without bound near it: `element` is its path in the model file (`forces.drag`, `drivers.motor`), `expression` its expressions, `value` what it gave (for a driver without bound, its rate). No such number is written as a result."
 );
 pyo3::create_exception!(
     linkwork,
@@ -210,6 +210,18 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
                 ("element", element.into_pyobject(py)?.into_any()),
                 ("expression", expression.into_pyobject(py)?.into_any()),
                 ("value", value.into_pyobject(py)?.into_any()),
+                ("results", results()?.into_bound(py)),
+            ],
+        ),
+        Error::Unbounded { time, element, expression, rate, .. } => (
+            NonFiniteError::new_err(message),
+            vec![
+                ("time", time.into_pyobject(py)?.into_any()),
+                ("joints", joints.into_pyobject(py)?.into_any()),
+                ("rows", Vec::<String>::new().into_pyobject(py)?.into_any()),
+                ("element", element.into_pyobject(py)?.into_any()),
+                ("expression", expression.into_pyobject(py)?.into_any()),
+                ("value", rate.into_pyobject(py)?.into_any()),
                 ("results", results()?.into_bound(py)),
             ],
         ),

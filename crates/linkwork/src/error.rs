@@ -134,6 +134,23 @@ pub enum Error {
         /// The value it gave.
         value: f64,
     },
+    /// A driver's motion grows without bound: the sub-steps that keep each body's rotation
+    /// under `max_rotation` reached a limit (`limit`) while the Jacobian stayed regular.
+    #[error(
+        "{element} grows without bound near t = {time} s ({expression}): its rate reached {rate:.3e}, and {limit}"
+    )]
+    Unbounded {
+        /// Time reached, s.
+        time: f64,
+        /// The driver, as its path in the model file (`drivers.motor`).
+        element: String,
+        /// Its function of time.
+        expression: String,
+        /// Its rate there (rad/s or m/s).
+        rate: f64,
+        /// The limit the sub-steps reached.
+        limit: String,
+    },
     /// Reading or writing a file failed.
     #[error("{path}: {message}")]
     Io {

@@ -192,7 +192,8 @@ impl Results {
             | Error::Equilibrium { time, .. }
             | Error::Assembly { time, .. }
             | Error::Integration { time, .. }
-            | Error::NonFinite { time, .. } = e
+            | Error::NonFinite { time, .. }
+            | Error::Unbounded { time, .. } = e
             {
                 s.insert("error_time".into(), json!(time));
             }
@@ -305,7 +306,7 @@ impl Overrides {
             if given && !dynamic {
                 problems.push(crate::Problem::new(
                     name,
-                    format!("only a dynamic analysis has an integrator; '{}' is {}", a.name, a.kind),
+                    format!("only a dynamic analysis has an integrator; '{}' is {}", a.name, a.kind.name()),
                 ));
             }
         }

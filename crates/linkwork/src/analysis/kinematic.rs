@@ -21,6 +21,18 @@ use crate::results::{Failure, Results};
 use crate::system::{Pattern, System};
 use faer::Mat;
 
+/// Smallest/largest singular value of the driven Jacobian below which a failure is blamed on a
+/// singular position (a lock-up or dead centre) rather than on a driver or on Newton: near a
+/// simple rank drop the smallest singular value falls in proportion to the distance from the
+/// singular position, so 1e-3 blames it within about a thousandth of the mechanism's scale.
+const SINGULAR_RATIO: f64 = 1e-3;
+
+/// Sub-steps between two output times beyond which the motion is too fast to follow: 100,000,
+/// a body turning up to 35,000 rad (5,600 turns, at the default `max_rotation`) between two
+/// outputs, which no output grid can show. Without it a driver `exp(40*t)` took 2.5e8
+/// sub-steps (430 s) to reach the `min_substep` floor.
+const MAX_SUBSTEPS_PER_OUTPUT: usize = 100_000;
+
 /// What the kinematic solver did.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct KinematicStats {
@@ -303,6 +315,7 @@ pub(crate) fn run_driven(
         for &target in &times[1..] {
             let span = target - s.t;
             dt = dt.min(span);
+            let mut substeps = 0usize;
             while s.t < target {
                 let mut step = dt.min(target - s.t);
                 if target - s.t - step <= 1e-12 * h {
@@ -311,6 +324,19 @@ pub(crate) fn run_driven(
                 let wmax = model.bodies.iter().map(|b| s.qdot[3 * b.index + 2].abs()).fold(0.0f64, f64::max);
                 if wmax * step > settings.max_rotation {
                     step = settings.max_rotation / wmax;
+                    // The same floor as for a failing Newton: below it the sub-steps would
+                    // creep (a driver `1/(t-1)` took 2.9 million of them to reach 0.999999 s, and
+                    // time stopped advancing before t = 1).
+                    // (An infinite rate gives a zero step.)
+                    if step < settings.min_substep * h {
+                        let limit = "the sub-steps that keep each body's turn under solver.max_rotation fell below solver.min_substep";
+                        return Err(too_fast(&mut s, model, &analysis.drivers, target, step, limit));
+                    }
+                }
+                substeps += 1;
+                if substeps > MAX_SUBSTEPS_PER_OUTPUT {
+                    let limit = format!("more than {MAX_SUBSTEPS_PER_OUTPUT} sub-steps, each turning a body by at most solver.max_rotation, between two output times");
+                    return Err(too_fast(&mut s, model, &analysis.drivers, target, step, &limit));
                 }
                 let t_new = if step == target - s.t { target } else { s.t + step };
                 for (k, p) in q_pred.iter_mut().enumerate() {
@@ -373,9 +399,28 @@ fn check_condition(s: &mut Solver<'_>, limit: f64) -> Result<(), Error> {
 
 /// The smallest sub-step failed: a singular position (no assembled position beyond `s.t`) or a
 /// plain convergence failure.
+/// Why the bodies turn too fast for a sub-step above the floor: a driver not finite now or at
+/// the next output time `target`; else a singular position (the driven Jacobian nearly loses
+/// rank, so the velocities it gives grow); else the fastest driver, whose motion grows without
+/// bound.
+fn too_fast(s: &mut Solver<'_>, model: &Model, drivers: &[usize], target: f64, step: f64, limit: &str) -> Error {
+    if let Some(e) = model.non_finite_driver(drivers, &[s.t, target]) {
+        return e;
+    }
+    let (ratio, rows) = s.diagnose();
+    let fastest = if ratio < SINGULAR_RATIO { None } else { model.fastest_driver(drivers, s.t, limit) };
+    fastest.unwrap_or_else(|| Error::Singular {
+        time: s.t,
+        rows,
+        detail: format!(
+            "the bodies turn too fast to follow ({limit}; last sub-step {step:.3e} s); smallest/largest singular value of the driven Jacobian {ratio:.3e}"
+        ),
+    })
+}
+
 fn give_up(s: &mut Solver<'_>, t_new: f64, step: f64, newton: Option<NewtonFailure>) -> Error {
     let (ratio, rows) = s.diagnose();
-    if ratio < 1e-3 {
+    if ratio < SINGULAR_RATIO {
         return Error::Singular {
             time: s.t,
             rows,

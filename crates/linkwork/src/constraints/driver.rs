@@ -73,6 +73,9 @@ impl Constraint for Driver {
     fn rows(&self) -> usize {
         1
     }
+    fn time_function(&self) -> Option<&TimeFunction> {
+        Some(&self.f)
+    }
     fn anchor(&self) -> Anchor {
         self.g.anchor()
     }

@@ -111,6 +111,10 @@ pub trait Constraint: Debug + Send + Sync {
     fn nu(&self, q: &Config<'_>, t: f64, out: &mut [f64]);
     /// `(q, qdot, t) => gamma`, `out: (rows)`.
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], t: f64, out: &mut [f64]);
+    /// The function of time a driver prescribes, for messages (`None` for a joint).
+    fn time_function(&self) -> Option<&crate::expr::TimeFunction> {
+        None
+    }
 }
 
 /// Where a joint's reaction is reported: on body `i`, about `point` (body i frame), with `j` the

@@ -927,7 +927,10 @@ impl Cx<'_> {
                 self.problem(format!("{spath}.max_order"), "hht has a fixed order (2); max_order is for bdf and abam");
                 ok = false;
             } else if k == 0 || k > bound {
-                self.problem(format!("{spath}.max_order"), format!("expected 1 to {bound} for {kind}, found {k}"));
+                self.problem(
+                    format!("{spath}.max_order"),
+                    format!("expected 1 to {bound} for {}, found {k}", kind.name()),
+                );
                 ok = false;
             }
         }

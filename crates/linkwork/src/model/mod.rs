@@ -59,6 +59,38 @@ pub struct ForceElement {
     pub force: Box<dyn Force>,
 }
 
+impl Model {
+    /// The first of the active `drivers` whose value, rate or acceleration is not finite at one
+    /// of `times`, as a [`Error::NonFinite`].
+    pub fn non_finite_driver(&self, drivers: &[usize], times: &[f64]) -> Option<Error> {
+        for &t in times {
+            for &k in drivers {
+                let d = &self.drivers[k];
+                let Some(f) = d.constraint.time_function() else { continue };
+                let (v, rate, acc) = f.eval(t);
+                if let Some(value) = [v, rate, acc].into_iter().find(|x| !x.is_finite()) {
+                    let (element, expression) = (format!("drivers.{}", d.name), f.source().to_string());
+                    return Some(Error::NonFinite { time: t, element, expression, value });
+                }
+            }
+        }
+        None
+    }
+
+    /// The active driver with the fastest rate at `t`, as an [`Error::Unbounded`] that reached
+    /// `limit`.
+    pub fn fastest_driver(&self, drivers: &[usize], t: f64, limit: &str) -> Option<Error> {
+        let rated = drivers.iter().filter_map(|&k| {
+            let d = &self.drivers[k];
+            let f = d.constraint.time_function()?;
+            Some((d, f, f.eval(t).1))
+        });
+        let (d, f, rate) = rated.max_by(|a, b| a.2.abs().total_cmp(&b.2.abs()))?;
+        let (element, expression) = (format!("drivers.{}", d.name), f.source().into());
+        Some(Error::Unbounded { time: t, element, expression, rate, limit: limit.into() })
+    }
+}
+
 impl ForceElement {
     /// A non-finite entry of the element's generalised force at `(q, qdot, t)`, if it has one.
     pub fn non_finite(&self, q: &[f64], qdot: &[f64], t: f64) -> Option<f64> {

@@ -686,14 +686,14 @@ pub enum IntegratorKind {
     Abam,
 }
 
-impl std::fmt::Display for IntegratorKind {
-    /// The name a model file uses (`bdf`, `hht`, `abam`), for messages.
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
+impl IntegratorKind {
+    /// Its name in the model file (`integrator: bdf`).
+    pub fn name(self) -> &'static str {
+        match self {
             IntegratorKind::Bdf => "bdf",
             IntegratorKind::Hht => "hht",
             IntegratorKind::Abam => "abam",
-        })
+        }
     }
 }
 
@@ -728,19 +728,6 @@ pub enum AnalysisKind {
     /// Linearisation about an equilibrium (or the initial state): natural frequencies, damping
     /// ratios and mode shapes.
     Modes,
-}
-
-impl std::fmt::Display for AnalysisKind {
-    /// The name a model file uses (`type: kinematic`, ...), for messages.
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            AnalysisKind::Kinematic => "kinematic",
-            AnalysisKind::Dynamic => "dynamic",
-            AnalysisKind::Inverse => "inverse",
-            AnalysisKind::Static => "static",
-            AnalysisKind::Modes => "modes",
-        })
-    }
 }
 
 impl AnalysisKind {
