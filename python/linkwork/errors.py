@@ -9,7 +9,7 @@
     │   ├── SingularError       detail: a dead centre, lock-up or lost degree of freedom
     │   ├── ConvergenceError    row, residual, iterations, substep
     │   ├── IntegrationError    step, cause: a dynamic integrator could not continue
-    │   └── NonFiniteError      element, expression, value: an element gave NaN or infinity
+    │   └── NonFiniteError      element, expression, value: an element gave NaN or infinity, or a driver ran away
     ├── FileError           path; also an OSError
     └── InternalError       the engine panicked: a bug, reported instead of crashing
 
