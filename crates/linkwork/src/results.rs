@@ -8,8 +8,9 @@ use crate::analysis::{Assembly, KinematicStats};
 use crate::error::Error;
 use crate::model::{Analysis, Model};
 use serde_json::{json, Map, Value};
-use std::io::Write;
-use std::path::Path;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
 
 /// The quantities written per body, in column order.
 pub const BODY_QUANTITIES: [&str; 9] = ["x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha"];
@@ -159,25 +160,28 @@ impl Results {
         self.names.iter().position(|n| n == name).map(|k| self.columns[k].as_slice())
     }
 
-    /// Write `results.csv`: a header, then one line per output time; numbers in the shortest
-    /// form that reads back to the same double.
+    /// Write `results.csv` at `path`: a header, then one line per output time; numbers in the
+    /// shortest form that reads back to the same double. Atomic ([`Staged`]).
     pub fn write_csv(&self, path: &Path) -> Result<(), Error> {
-        let io = |e: std::io::Error| Error::Io { path: path.display().to_string(), message: e.to_string() };
-        let file = std::fs::File::create(path).map_err(io)?;
-        let mut w = std::io::BufWriter::new(file);
-        write!(w, "time").map_err(io)?;
-        for n in &self.names {
-            write!(w, ",{n}").map_err(io)?;
-        }
-        writeln!(w).map_err(io)?;
-        for (r, t) in self.time.iter().enumerate() {
-            write!(w, "{t:?}").map_err(io)?;
-            for c in &self.columns {
-                write!(w, ",{:?}", c[r]).map_err(io)?;
+        self.stage_csv(path)?.commit()
+    }
+
+    fn stage_csv(&self, path: &Path) -> Result<Staged, Error> {
+        Staged::write(path, |w| {
+            write!(w, "time")?;
+            for n in &self.names {
+                write!(w, ",{n}")?;
             }
-            writeln!(w).map_err(io)?;
-        }
-        w.flush().map_err(io)
+            writeln!(w)?;
+            for (r, t) in self.time.iter().enumerate() {
+                write!(w, "{t:?}")?;
+                for c in &self.columns {
+                    write!(w, ",{:?}", c[r])?;
+                }
+                writeln!(w)?;
+            }
+            Ok(())
+        })
     }
 
     /// The summary as JSON, with `status` ("ok" or "failed") and the error if there is one.
@@ -201,44 +205,92 @@ impl Results {
         Value::Object(s)
     }
 
-    /// Write `modes.csv` of a modes analysis: one line per mode, `mode, frequency, damped_frequency,
-    /// damping_ratio` (Hz, Hz, 1; empty for a zero eigenvalue), then the shape's
-    /// `<body>.x, .y, .phi`.
+    /// Write `modes.csv` of a modes analysis at `path`: one line per mode, `mode, frequency,
+    /// damped_frequency, damping_ratio` (Hz, Hz, 1; empty for a zero eigenvalue), then the
+    /// shape's `<body>.x, .y, .phi`. Nothing for another analysis. Atomic ([`Staged`]).
     pub fn write_modes_csv(&self, path: &Path) -> Result<(), Error> {
-        let Some(Value::Array(modes)) = self.summary.get("modes") else { return Ok(()) };
-        let io = |e: std::io::Error| Error::Io { path: path.display().to_string(), message: e.to_string() };
-        let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
+        self.stage_modes_csv(path)?.map_or(Ok(()), Staged::commit)
+    }
+
+    fn stage_modes_csv(&self, path: &Path) -> Result<Option<Staged>, Error> {
+        let Some(Value::Array(modes)) = self.summary.get("modes") else { return Ok(None) };
         // The shape's coordinates in the order of the columns (bodies in file order).
         let shape = modes.first().and_then(|m| m["shape"].as_object());
         let coords: Vec<&String> = self.names.iter().filter(|n| shape.is_some_and(|s| s.contains_key(*n))).collect();
-        write!(w, "mode,frequency,damped_frequency,damping_ratio").map_err(io)?;
-        for c in &coords {
-            write!(w, ",{c}").map_err(io)?;
-        }
-        writeln!(w).map_err(io)?;
         let num = |v: &Value| v.as_f64().map(|x| format!("{x:?}")).unwrap_or_default();
-        for (k, m) in modes.iter().enumerate() {
-            write!(w, "{}", k + 1).map_err(io)?;
-            for key in ["frequency", "damped_frequency", "damping_ratio"] {
-                write!(w, ",{}", num(&m[key])).map_err(io)?;
-            }
+        Staged::write(path, |w| {
+            write!(w, "mode,frequency,damped_frequency,damping_ratio")?;
             for c in &coords {
-                write!(w, ",{}", num(&m["shape"][c.as_str()])).map_err(io)?;
+                write!(w, ",{c}")?;
             }
-            writeln!(w).map_err(io)?;
-        }
-        w.flush().map_err(io)
+            writeln!(w)?;
+            for (k, m) in modes.iter().enumerate() {
+                write!(w, "{}", k + 1)?;
+                for key in ["frequency", "damped_frequency", "damping_ratio"] {
+                    write!(w, ",{}", num(&m[key]))?;
+                }
+                for c in &coords {
+                    write!(w, ",{}", num(&m["shape"][c.as_str()]))?;
+                }
+                writeln!(w)?;
+            }
+            Ok(())
+        })
+        .map(Some)
     }
 
     /// Write `results.csv` and `summary.json` into `dir` (created if missing), and `modes.csv`
-    /// for a modes analysis.
+    /// for a modes analysis. Every file is written in full under a temporary name first, and
+    /// only then are they renamed over the old ones: a run that dies or fails to write leaves
+    /// the previous files, never a truncated one.
     pub fn write(&self, dir: &Path, error: Option<&Error>) -> Result<(), Error> {
         let io = |e: std::io::Error| Error::Io { path: dir.display().to_string(), message: e.to_string() };
         std::fs::create_dir_all(dir).map_err(io)?;
-        self.write_csv(&dir.join("results.csv"))?;
-        self.write_modes_csv(&dir.join("modes.csv"))?;
+        let csv = self.stage_csv(&dir.join("results.csv"))?;
+        let modes = self.stage_modes_csv(&dir.join("modes.csv"))?;
         let text = serde_json::to_string_pretty(&self.summary_json(error)).unwrap_or_default();
-        std::fs::write(dir.join("summary.json"), text + "\n").map_err(io)
+        let summary = Staged::write(&dir.join("summary.json"), |w| writeln!(w, "{text}"))?;
+        csv.commit()?;
+        modes.map_or(Ok(()), Staged::commit)?;
+        summary.commit()
+    }
+}
+
+/// A file written in full under a temporary name beside its destination (`.<name>.<pid>.tmp`,
+/// in the same directory so that the rename cannot cross file systems), then renamed over it by
+/// [`Staged::commit`]: a rename within a directory is atomic on POSIX file systems and on NTFS,
+/// so readers see the old file or the complete new one. Dropped without a commit, the temporary
+/// file is removed.
+struct Staged {
+    temp: PathBuf,
+    path: PathBuf,
+}
+
+impl Staged {
+    /// Write `body` to the temporary file of `path`, flushed and synced to disk.
+    fn write(path: &Path, body: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>) -> Result<Staged, Error> {
+        let io = |e: std::io::Error| Error::Io { path: path.display().to_string(), message: e.to_string() };
+        let name = path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+        let temp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+        let staged = Staged { temp, path: path.to_path_buf() };
+        let mut w = BufWriter::new(File::create(&staged.temp).map_err(io)?);
+        body(&mut w).map_err(io)?;
+        w.into_inner().map_err(|e| io(e.into_error()))?.sync_all().map_err(io)?;
+        Ok(staged)
+    }
+
+    /// Rename the temporary file over the destination.
+    fn commit(self) -> Result<(), Error> {
+        std::fs::rename(&self.temp, &self.path)
+            .map_err(|e| Error::Io { path: self.path.display().to_string(), message: e.to_string() })
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        // After a commit there is nothing left to remove; otherwise best effort: a temporary
+        // file that cannot be removed is left, named as such.
+        let _ = std::fs::remove_file(&self.temp);
     }
 }
 
@@ -380,5 +432,42 @@ impl Model {
         let warnings = crate::analysis::tolerance_warnings(&analysis, &q);
         results.summary.insert("warnings".into(), json!(warnings));
         outcome
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn results(value: f64) -> Results {
+        Results {
+            time: vec![0.0, 1.0],
+            names: vec!["a.x".into()],
+            columns: vec![vec![value, value]],
+            summary: Map::new(),
+        }
+    }
+
+    /// A write that fails part-way (here: `summary.json`'s temporary name is taken by a
+    /// directory) leaves the previous files whole and no temporary file behind.
+    #[test]
+    fn a_failed_write_leaves_the_previous_files() {
+        let dir = std::env::temp_dir().join(format!("linkwork-staged-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        results(1.0).write(&dir, None).unwrap();
+        let before = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+        assert_eq!(before, "time,a.x\n0.0,1.0\n1.0,1.0\n");
+        let blocker = dir.join(format!(".summary.json.{}.tmp", std::process::id()));
+        std::fs::create_dir(&blocker).unwrap();
+        let failed = results(2.0).write(&dir, None);
+        assert!(matches!(failed, Err(Error::Io { ref path, .. }) if path.ends_with("summary.json")), "{failed:?}");
+        assert_eq!(std::fs::read_to_string(dir.join("results.csv")).unwrap(), before);
+        assert!(std::fs::read_to_string(dir.join("summary.json")).unwrap().contains("\"status\": \"ok\""));
+        std::fs::remove_dir(&blocker).unwrap();
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(left.len(), 2, "only results.csv and summary.json: {left:?}");
+        results(2.0).write(&dir, None).unwrap();
+        assert_eq!(std::fs::read_to_string(dir.join("results.csv")).unwrap(), "time,a.x\n0.0,2.0\n1.0,2.0\n");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
