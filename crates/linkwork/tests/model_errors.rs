@@ -96,13 +96,34 @@ fn negative_mass_is_refused_once_the_body_reads() {
 }
 
 #[test]
+fn a_number_too_large_for_a_double_is_out_of_range() {
+    let p = problems(
+        "bodies:\n  a: {mass: 1e400, inertia: 1, position: [0, 0], angle: 0}\n  b: {mass: 1, inertia: 1, position: [0, -2.5e309], angle: 0}\n",
+    );
+    has(&p, "bodies.a.mass", "number 1e400 is out of range");
+    has(&p, "bodies.b.position[1]", "number -2.5e309 is out of range");
+    // A string that is a string stays one.
+    has(
+        &problems("bodies:\n  a: {mass: heavy, inertia: 1, position: [0, 0], angle: 0}\n"),
+        "bodies.a.mass",
+        "invalid type",
+    );
+}
+
+#[test]
 fn syntax_errors_and_wrong_shapes() {
     has(&problems("bodies: [1, 2"), "", "YAML syntax error");
     has(&problems("- 1\n- 2\n"), "", "expected a mapping");
     has(&problems("bodies: {}\nbogus: 1\n"), "bogus", "unknown section");
     has(&problems("joints: {}\n"), "bodies", "missing section");
     has(&problems("bodies: 3\n"), "bodies", "expected a mapping");
-    has(&problems("bodies:\n  a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n  a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n"), "", "duplicate");
+    // A duplicate key is pointed at on its own line (serde's message gives the first one's).
+    let twice = "bodies:\n  a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n  b: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n  a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n";
+    has(
+        &problems(twice),
+        "",
+        "YAML syntax error at line 4, column 3: bodies: duplicate entry with key \"a\" (the first at line 2)",
+    );
     has(
         &problems("bodies:\n  ground: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n"),
         "bodies.ground",

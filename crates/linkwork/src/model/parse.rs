@@ -40,9 +40,12 @@ pub fn parse_spec(text: &str) -> Result<ModelSpec, Vec<Problem>> {
 /// Parse as much of a model file as can be read; `Err` only when the text is not a YAML mapping.
 pub fn parse_partial(text: &str) -> Result<Parsed, Vec<Problem>> {
     let root: Value = serde_yaml_ng::from_str(text).map_err(|e| {
-        let msg = match e.location() {
-            Some(l) => format!("YAML syntax error at line {}, column {}: {e}", l.line(), l.column()),
-            None => format!("YAML syntax error: {e}"),
+        let msg = match (e.location(), duplicate(text, &e.to_string())) {
+            (_, Some((line, column, message))) => {
+                format!("YAML syntax error at line {line}, column {column}: {message}")
+            }
+            (Some(l), None) => format!("YAML syntax error at line {}, column {}: {e}", l.line(), l.column()),
+            (None, None) => format!("YAML syntax error: {e}"),
         };
         vec![Problem::new("", msg)]
     })?;
@@ -76,6 +79,28 @@ pub fn parse_partial(text: &str) -> Result<Parsed, Vec<Problem>> {
     let analyses = section("analyses", get("analyses"), &mut problems, &mut broken, entry::<AnalysisSpec>);
     let spec = ModelSpec { name, description, gravity, ground, bodies, joints, drivers, forces, measures, analyses };
     Ok(Parsed { spec, problems, broken })
+}
+
+/// A duplicate key's own line: the YAML parser's message (`<path>: duplicate entry with key "a"
+/// at line 2 column 3`) gives the line of the mapping's first entry, where the key is first
+/// written. The key is looked for again at the same column in the lines after it, as a block
+/// mapping writes it; `(line, column, message)` of the second occurrence, `None` when the message
+/// is not that or the key is not found so (a flow mapping `{a: 1, a: 2}`).
+fn duplicate(text: &str, message: &str) -> Option<(usize, usize, String)> {
+    let (head, rest) = message.split_once("duplicate entry with key \"")?;
+    let (key, place) = rest.split_once("\" at line ")?;
+    let (line, column) = place.split_once(" column ")?;
+    let line = line.trim().parse::<usize>().ok()?.checked_sub(1)?;
+    let column = column.trim().parse::<usize>().ok()?;
+    let at = column.checked_sub(1)?;
+    let written = |l: &str| {
+        let (indent, entry) = (l.get(..at)?, l.get(at..)?);
+        let keyed = entry.strip_prefix(key).or_else(|| entry.strip_prefix(&format!("\"{key}\"")))?;
+        (indent.trim_start_matches([' ', '-']).is_empty() && keyed.trim_start().starts_with(':')).then_some(())
+    };
+    let first = text.lines().enumerate().skip(line).find(|(_, l)| written(l).is_some())?.0;
+    let second = text.lines().enumerate().skip(first + 1).find(|(_, l)| written(l).is_some())?.0;
+    Some((second + 1, column, format!("{head}duplicate entry with key \"{key}\" (the first at line {})", first + 1)))
 }
 
 /// Deserialize one value, recording a problem (with the path inside the value) on failure.
@@ -215,7 +240,24 @@ fn located(path: &str, e: serde_path_to_error::Error<serde_yaml_ng::Error>) -> P
     } else {
         format!("{path}.{inner}")
     };
-    Problem::new(full, e.into_inner().to_string())
+    Problem::new(full, out_of_range(e.into_inner().to_string()))
+}
+
+/// The message for a number too large for a double. YAML reads `1e400` as a float, which
+/// overflows, and the parser then keeps it as the string "1e400": serde's message would say
+/// "invalid type: string", blaming the user's type rather than the size.
+fn out_of_range(message: String) -> String {
+    let number = message
+        .strip_prefix("invalid type: string \"")
+        .and_then(|rest| rest.split_once('"'))
+        .map(|(text, _)| text)
+        .filter(|text| text.starts_with(|c: char| c.is_ascii_digit() || "+-.".contains(c)))
+        .filter(|text| !text.to_ascii_lowercase().contains("inf"))
+        .filter(|text| text.parse::<f64>().is_ok_and(f64::is_infinite));
+    match number {
+        Some(text) => format!("number {text} is out of range: a double holds sizes up to 1.8e308"),
+        None => message,
+    }
 }
 
 /// A section that maps names to entries; each entry is read on its own by `read`.
