@@ -348,8 +348,8 @@ impl Overrides {
         if let Some(h) = step {
             a.step = h;
         }
-        if (a.t_end - a.t_start) / a.step > 1e7 {
-            problems.push(crate::Problem::new("--step", "more than 1e7 output points requested"));
+        if let Some(message) = crate::model::output_step_problem(a.t_start, a.t_end, a.step) {
+            problems.push(crate::Problem::new("--step", message));
         }
         let dynamic = a.kind == AnalysisKind::Dynamic;
         for (name, given) in

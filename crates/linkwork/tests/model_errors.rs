@@ -274,4 +274,17 @@ fn overrides_are_checked() {
         "{}",
         e.error
     );
+    // A step longer than the run gave only its two ends, silently; now it is refused, in the
+    // file and as an override.
+    let short = linkwork::Overrides { t_end: Some(0.005), ..Default::default() };
+    let e = kin.run_with("kinematics", &short).unwrap_err().error;
+    assert!(e.to_string().contains("--step: the output step (0.02 s) is longer than the analysis (0.005 s"), "{e}");
+}
+
+#[test]
+fn a_step_longer_than_the_run_is_refused() {
+    let text = std::fs::read_to_string(example("fourbar.yaml")).unwrap();
+    let analyses = text.find("\nanalyses:").expect("fourbar.yaml has an analyses section");
+    let long = format!("{}\nanalyses:\n  kin: {{type: kinematic, t_end: 0.3, step: 0.5}}\n", &text[..analyses]);
+    has(&problems(&long), "analyses.kin.step", "the output step (0.5 s) is longer than the analysis (0.3 s");
 }

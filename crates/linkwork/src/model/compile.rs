@@ -16,6 +16,23 @@ use indexmap::IndexMap;
 /// The most output points one analysis may ask for; more would exhaust memory rather than finish.
 const MAX_OUTPUT_POINTS: f64 = 1e7;
 
+/// What is wrong with output every `h` s (positive) from `t0` to `t1` (not before it), if
+/// anything: more than [`MAX_OUTPUT_POINTS`] points, or a step longer than a span that is not
+/// empty, which would silently give only the span's two ends.
+pub(crate) fn output_step_problem(t0: f64, t1: f64, h: f64) -> Option<String> {
+    let span = t1 - t0;
+    if span / h > MAX_OUTPUT_POINTS {
+        Some(format!("{} output points requested; at most {MAX_OUTPUT_POINTS:e} are allowed", (span / h).ceil()))
+    } else if span > 0.0 && h > span {
+        Some(format!(
+            "the output step ({h} s) is longer than the analysis ({span} s from t_start to t_end), which would give \
+             only its two ends; expected at most {span} s"
+        ))
+    } else {
+        None
+    }
+}
+
 /// Build the model, or list every problem found.
 pub fn compile(spec: &ModelSpec) -> Result<Model, Vec<Problem>> {
     compile_partial(spec, &[])
@@ -797,14 +814,8 @@ impl Cx<'_> {
                 self.problem(format!("{path}.t_end"), format!("t_end ({t1}) is before t_start ({t0})"));
                 continue;
             }
-            if (t1 - t0) / h > MAX_OUTPUT_POINTS {
-                self.problem(
-                    format!("{path}.step"),
-                    format!(
-                        "{} output points requested; at most {MAX_OUTPUT_POINTS:e} are allowed",
-                        ((t1 - t0) / h).ceil()
-                    ),
-                );
+            if let Some(message) = output_step_problem(t0, t1, h) {
+                self.problem(format!("{path}.step"), message);
                 continue;
             }
             if a.kind != AnalysisKind::Dynamic && a.integrator.is_some() {

@@ -5,6 +5,7 @@ mod compile;
 mod parse;
 pub mod spec;
 
+pub(crate) use compile::output_step_problem;
 pub use compile::{compile, compile_partial};
 pub use parse::{parse_partial, parse_spec, Parsed};
 
