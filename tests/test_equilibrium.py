@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import textwrap
 
 import numpy as np
 import pytest
@@ -117,7 +118,7 @@ analyses:
     assert mode["shape"]["block.x"] == 1.0
 
 
-def test_static_free_mechanism_is_a_model_error(linkwork, write_model) -> None:
+def test_static_free_mechanism_is_a_model_error(linkwork, write_model, tmp_path) -> None:
     model = write_model(
         """
         gravity: [0, 0]
@@ -138,9 +139,124 @@ def test_static_free_mechanism_is_a_model_error(linkwork, write_model) -> None:
     assert "an inverse analysis needs a fully driven model" in out.stderr
     out = linkwork("check", model)
     assert "a static analysis needs every degree of freedom held" in out.stdout
+    # A modes analysis about the equilibrium says it is one, not "a static analysis".
+    (tmp_path / "vib.yaml").write_text(model.read_text().replace("inv: {type: inverse, t_end: 1, step: 0.1}", "vib: {type: modes}"))
+    out = linkwork("run", tmp_path / "vib.yaml", "--analysis", "vib")
+    assert out.code == 2, out.output
+    assert "analyses.vib: a modes analysis needs every degree of freedom held" in out.stderr
+    assert "a static analysis" not in out.stderr
 
 
 def test_check_names_indeterminate_joints(linkwork) -> None:
     out = linkwork("check", EXAMPLES / "parallelogram.yaml")
     assert out.code == 0
     assert "indeterminate joints ground_1, coupler_1, ground_2, coupler_2, ground_3, coupler_3" in out.stdout
+
+
+# A compound pendulum: mass M (kg), inertia JC about its centre of mass (kg m^2), pivot L (m)
+# above the centre of mass in the body frame; RATE = sqrt(M g L / J_O), J_O = JC + M L^2, 1/s.
+M, JC, L, G = 4.0, 0.3, 0.5, 9.81
+RATE = float(np.sqrt(M * G * L / (JC + M * L * L)))
+
+
+def pendulum(angle: float, extra: str = "", analyses: str = "") -> str:
+    """The compound pendulum with its centre of mass placed at `angle` about the pivot (0, 0)."""
+    x, y = float(L * np.sin(angle)), float(-L * np.cos(angle))
+    return f"""
+        gravity: [0, -{G}]
+        bodies:
+          bob: {{mass: {M}, inertia: {JC}, position: [{x!r}, {y!r}], angle: {angle!r}, points: {{P: [0, {L}]}}{extra}}}
+        joints:
+          pivot: {{type: revolute, body_i: bob, point_i: P, body_j: ground, point_j: [0, 0]}}
+        analyses:
+          {analyses}
+        """
+
+
+def test_cli_horizontal_pendulum_hangs_down_and_swings(linkwork, write_model, tmp_path) -> None:
+    """Released level, where its rod carries no tension and the guess has no stiffness, gravity
+    still loads it: the static analysis hangs it straight down (closed form (0, -L), 1e-12 m) and
+    the modes analysis finds sqrt(M g L / J_O) / (2 pi) Hz (1e-9 relative: the geometric
+    stiffness's central difference). Both used to stop with "free to move"."""
+    model = write_model(pendulum(np.pi / 2, analyses="rest: {type: static}\n          swing: {type: modes}"))
+    out = linkwork("run", model, "--analysis", "rest", "--out", "rest")
+    assert out.code == 0, out.output
+    assert "stable: True (index 0)" in out.stdout
+    with open(tmp_path / "rest" / "results.csv") as f:
+        row = next(csv.DictReader(f))
+    assert abs(float(row["bob.x"])) < 1e-12 and abs(float(row["bob.y"]) + L) < 1e-12
+    summary = json.loads((tmp_path / "rest" / "summary.json").read_text())
+    assert summary["stable"] is True and summary["index"] == 0 and summary["statistics"]["descents"] == 1
+    out = linkwork("run", model, "--analysis", "swing", "--out", "swing")
+    assert out.code == 0, out.output
+    with open(tmp_path / "swing" / "modes.csv") as f:
+        (mode,) = list(csv.DictReader(f))
+    assert mode["kind"] == "vibration" and mode["growth_rate"] == ""
+    assert abs(float(mode["frequency"]) - RATE / (2 * np.pi)) < 1e-9 * RATE
+
+
+def test_cli_inverted_pendulum_modes_are_flagged_unstable(linkwork, write_model, tmp_path) -> None:
+    """Linearised where it stands upside down, the pendulum's one eigenvalue is +sqrt(M g L / J_O):
+    a divergence, printed and written as unstable with its growth rate (closed form, 1e-9), never
+    as a frequency with damping ratio -1."""
+    model = write_model(pendulum(np.pi, ", given: [x, y, phi]", "here: {type: modes, about: initial}"))
+    out = linkwork("run", model, "--out", "here")
+    assert out.code == 0, out.output
+    assert "UNSTABLE" in out.stdout and "mode 1: unstable, divergence" in out.stdout
+    assert "damping ratio" not in out.stdout and " Hz" not in out.stdout
+    summary = json.loads((tmp_path / "here" / "summary.json").read_text())
+    assert summary["stable"] is False
+    (mode,) = summary["modes"]
+    assert mode["kind"] == "divergence" and mode["frequency"] is None and mode["damping_ratio"] is None
+    assert abs(mode["growth_rate"] - RATE) < 1e-9 * RATE
+    with open(tmp_path / "here" / "modes.csv") as f:
+        (row,) = list(csv.DictReader(f))
+    assert row["kind"] == "divergence" and row["frequency"] == "" and row["damping_ratio"] == ""
+    assert abs(float(row["growth_rate"]) - RATE) < 1e-9 * RATE
+
+
+def test_cli_torque_beyond_the_weight_has_no_equilibrium(linkwork, write_model) -> None:
+    """A torque of 2 M g L turns the pendulum without end: the static analysis stops with exit 3
+    and says that no equilibrium exists, naming the coordinate that turns and no joint."""
+    torque = 2 * M * G * L
+    model = write_model(
+        pendulum(0.0, analyses="rest: {type: static}").replace(
+            "        analyses:", f"        forces:\n          twist: {{type: torque, body: bob, torque: {torque}}}\n        analyses:"
+        )
+    )
+    out = linkwork("run", model, "--out", "rest")
+    assert out.code == 3, out.output
+    assert "no stable static equilibrium found at t = 0" in out.stderr and "none exists" in out.stderr
+    assert "bob.phi" in out.stderr and "in joint(s)" not in out.stderr
+
+
+def test_no_equilibrium_is_an_equilibrium_error() -> None:
+    """From Python the same failure is an EquilibriumError (a ConvergenceError, a SolverError),
+    with the coordinates that move, no joints, `index` None (no equilibrium at all), and the
+    summary of the partial results flagged not stable."""
+    text = pendulum(0.0, analyses="rest: {type: static}").replace(
+        "        analyses:", f"        forces:\n          twist: {{type: torque, body: bob, torque: {2 * M * G * L}}}\n        analyses:"
+    )
+    model = linkwork.Model.from_yaml(textwrap.dedent(text))
+    with pytest.raises(linkwork.EquilibriumError) as caught:
+        model.run("rest")
+    error = caught.value
+    assert isinstance(error, linkwork.ConvergenceError)
+    assert error.index is None and "bob.phi" in error.coordinates and error.joints == []
+    assert error.time == 0.0 and "none exists" in error.cause
+    assert error.results.summary["stable"] is False
+
+
+def test_hanging_fourbar_example_rests_stable_and_vibrates() -> None:
+    """The example starts near its potential energy's maximum; the static analysis leaves it for
+    the minimum (checked against the energy along the closed-loop path in the Rust tests), and the
+    modes analysis about it finds one stable vibration."""
+    model = linkwork.load(EXAMPLES / "hanging_fourbar.yaml")
+    rest = model.run("rest")
+    assert rest.summary["stable"] is True and rest.summary["index"] == 0
+    assert rest.summary["statistics"]["descents"] == 1
+    # The minimum, 4.57694 rad modulo a turn (angles are unwrapped); the maximum is at 1.550 rad.
+    assert abs(np.remainder(rest["crank.phi"][0], 2 * np.pi) - 4.57694) < 1e-5
+    vibration = model.run("vibration")
+    (mode,) = vibration.modes
+    assert vibration.summary["stable"] is True and mode["kind"] == "vibration" and mode["frequency"] > 0

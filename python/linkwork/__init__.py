@@ -24,6 +24,7 @@ from . import _linkwork
 from .errors import (
     AssemblyError,
     ConvergenceError,
+    EquilibriumError,
     FileError,
     IntegrationError,
     InternalError,
@@ -41,6 +42,7 @@ __version__: str = _linkwork.__version__
 __all__ = [
     "AssemblyError",
     "ConvergenceError",
+    "EquilibriumError",
     "FileError",
     "IntegrationError",
     "InternalError",

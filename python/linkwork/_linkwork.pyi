@@ -67,6 +67,12 @@ class ConvergenceError(SolverError):
     iterations: int
     substep: float
 
+class EquilibriumError(ConvergenceError):
+    coordinates: list[str]
+    index: int | None
+    load_fraction: float
+    cause: str
+
 class FileError(LinkworkError, OSError):
     path: str
 

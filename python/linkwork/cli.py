@@ -156,17 +156,18 @@ def _print_summary(results: Results) -> None:
         )
     elif s.get("type") == "static":
         print(
-            f"  {stats.get('iterations', '?')} Newton iterations, {stats.get('load_steps', '?')} load steps; "
+            f"  {stats.get('iterations', '?')} Newton iterations, {stats.get('descents', '?')} descent(s), "
+            f"{stats.get('load_steps', '?')} load steps; "
             f"largest residuals: force {_num(stats.get('force_residual'))}, "
-            f"position {_num(stats.get('position_residual'))}; stable: {s.get('stable')}"
+            f"position {_num(stats.get('position_residual'))}; stable: {s.get('stable')} (index {s.get('index')})"
         )
     elif s.get("type") == "modes":
         about = s.get("about", "?")
         print(f"  {s.get('dof', '?')} degree(s) of freedom, linearised about the {about} state")
+        if s.get("stable") is False:
+            print(f"  UNSTABLE: the {about} state is not a stable equilibrium; its unstable modes come first")
         for k, mode in enumerate(results.modes, 1):
-            zeta = mode.get("damping_ratio")
-            damping = "" if zeta is None else f", damping ratio {zeta:.4g}"
-            print(f"  mode {k}: {mode['frequency']:.6g} Hz{damping}")
+            print(f"  mode {k}: {_describe_mode(mode)}")
     elif stats:
         print(
             f"  {stats.get('substeps', '?')} sub-steps ({stats.get('rejected_substeps', '?')} rejected), "
@@ -181,6 +182,24 @@ def _print_summary(results: Results) -> None:
         if redundant:
             print(f"  redundant rows (hold implicitly): {', '.join(redundant)}")
     _print_peaks(s)
+
+
+def _describe_mode(mode: dict[str, Any]) -> str:
+    """One mode in words: an unstable one by its growth rate, never as a frequency."""
+    kind = mode.get("kind")
+    rate = mode.get("growth_rate")
+    if kind == "divergence":
+        return f"unstable, divergence: grows as exp({rate:.6g} t) (growth rate {rate:.6g} 1/s)"
+    if kind == "flutter":
+        return (
+            f"unstable, growing oscillation at {mode['damped_frequency']:.6g} Hz "
+            f"(growth rate {rate:.6g} 1/s)"
+        )
+    if kind == "neutral":
+        return "neutral: no stiffness or damping along it (0 Hz)"
+    zeta = mode.get("damping_ratio")
+    damping = "" if zeta is None else f", damping ratio {zeta:.4g}"
+    return f"{mode['frequency']:.6g} Hz{damping}"
 
 
 def _print_peaks(s: dict[str, Any]) -> None:
@@ -211,6 +230,9 @@ def _print_failure(error: SolverError | AssemblyError) -> None:
     joints = getattr(error, "joints", None) or []
     if joints:
         where.append(f"in joint(s) {', '.join(joints)}")
+    coordinates = getattr(error, "coordinates", None) or []
+    if coordinates:
+        where.append(f"along {', '.join(coordinates)}")
     if where:
         what = "assembly failed" if isinstance(error, AssemblyError) else "the analysis failed"
         _err(f"  {what} {' '.join(where)}")

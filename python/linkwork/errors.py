@@ -8,6 +8,8 @@
     ├── SolverError         time (s), joints, rows, results (the output computed before the failure)
     │   ├── SingularError       detail: a dead centre, lock-up or lost degree of freedom
     │   ├── ConvergenceError    row, residual, iterations, substep
+    │   │   └── EquilibriumError    coordinates, index: no stable static equilibrium (stopped short: row,
+    │   │                           residual, iterations, load_fraction; none stable or none at all: cause)
     │   ├── IntegrationError    step, cause: a dynamic integrator could not continue
     │   └── NonFiniteError      element, expression, value: an element gave NaN or infinity, or a driver ran away
     ├── FileError           path; also an OSError
@@ -22,6 +24,7 @@ from __future__ import annotations
 from ._linkwork import (
     AssemblyError,
     ConvergenceError,
+    EquilibriumError,
     FileError,
     IntegrationError,
     InternalError,
@@ -35,6 +38,7 @@ from ._linkwork import (
 __all__ = [
     "AssemblyError",
     "ConvergenceError",
+    "EquilibriumError",
     "FileError",
     "IntegrationError",
     "InternalError",

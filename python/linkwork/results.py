@@ -67,10 +67,14 @@ class Results:
 
     @property
     def modes(self) -> list[dict[str, Any]]:
-        """The modes of a modes analysis, lowest frequency first (empty for other analyses): each a
-        dict with ``frequency`` (undamped natural frequency, Hz), ``damped_frequency`` (Hz),
-        ``damping_ratio`` (``None`` for a zero eigenvalue), ``eigenvalue`` (``[re, im]``, 1/s) and
-        ``shape`` (``{"<body>.x": ..., ...}``, the largest component 1)."""
+        """The modes of a modes analysis (empty for other analyses): the unstable ones first, fastest
+        growing first, then the others, lowest frequency first. Each a dict with ``kind``
+        (``"vibration"``, ``"decay"``, ``"neutral"``, or unstable: ``"divergence"``, ``"flutter"``),
+        ``frequency`` (undamped natural frequency, Hz; ``None`` for an unstable mode),
+        ``damped_frequency`` (Hz), ``damping_ratio`` (``None`` for a neutral or unstable mode),
+        ``growth_rate`` (``Re s``, 1/s, of an unstable mode: it grows as ``exp(rate t)``; ``None``
+        otherwise), ``eigenvalue`` (``[re, im]``, 1/s) and ``shape`` (``{"<body>.x": ...}``, the
+        largest component 1). ``summary["stable"]`` is false when any mode is unstable."""
         modes: list[dict[str, Any]] = self.summary.get("modes") or []
         return modes
 

@@ -7,6 +7,7 @@
 //! ├── SolverError         time, joints, rows, results
 //! │   ├── SingularError       detail
 //! │   ├── ConvergenceError    row, residual, iterations, substep
+//! │   │   └── EquilibriumError    coordinates, index; row, residual, iterations, load_fraction or cause
 //! │   ├── IntegrationError    step, cause
 //! │   └── NonFiniteError      element, expression, value (NaN, infinity, or without bound)
 //! ├── FileError           path (also an OSError)
@@ -17,7 +18,7 @@
 //! same thing. `results` is the output computed before the failure (`None` outside `run`).
 
 use crate::PyResults;
-use linkwork::Error;
+use linkwork::{Error, Unbalanced};
 use pyo3::exceptions::{PyException, PyOSError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
@@ -56,6 +57,12 @@ pyo3::create_exception!(
 );
 pyo3::create_exception!(
     linkwork,
+    EquilibriumError,
+    ConvergenceError,
+    "A static analysis (or a modes analysis about the equilibrium) found no stable equilibrium at time `time`. `coordinates` names the body coordinates involved. Either the solver stopped short of any equilibrium (`row`: the equation with the largest residual, `residual`, `iterations`, `load_fraction`: the fraction of the applied load reached), or it found none stable (`cause` says why; `index` is the number of unstable directions of the last equilibrium reached, `None` when the loads drive the mechanism without end and no equilibrium exists)."
+);
+pyo3::create_exception!(
+    linkwork,
     IntegrationError,
     SolverError,
     "A dynamic integrator could not continue (repeated Newton or error-test failures down to the smallest step). `step` is the step that last failed, `cause` what failed."
@@ -85,6 +92,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SolverError", py.get_type::<SolverError>())?;
     m.add("SingularError", py.get_type::<SingularError>())?;
     m.add("ConvergenceError", py.get_type::<ConvergenceError>())?;
+    m.add("EquilibriumError", py.get_type::<EquilibriumError>())?;
     m.add("IntegrationError", py.get_type::<IntegrationError>())?;
     m.add("NonFiniteError", py.get_type::<NonFiniteError>())?;
     m.add("InternalError", py.get_type::<InternalError>())?;
@@ -177,16 +185,37 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
                 ("results", results()?.into_bound(py)),
             ],
         ),
-        Error::Equilibrium { time, residual, row, iterations, load_fraction } => (
-            ConvergenceError::new_err(message),
+        Error::Equilibrium { time, residual, equation, iterations, load_fraction } => {
+            // A constraint row names its joint; a force balance names a body coordinate.
+            let (rows, coordinates, row) = match equation {
+                Unbalanced::Row(r) => (vec![r.to_string()], vec![], r.to_string()),
+                Unbalanced::Coordinate(c) => (vec![], vec![c.clone()], c.clone()),
+            };
+            (
+                EquilibriumError::new_err(message),
+                vec![
+                    ("time", time.into_pyobject(py)?.into_any()),
+                    ("joints", joints.into_pyobject(py)?.into_any()),
+                    ("rows", rows.into_pyobject(py)?.into_any()),
+                    ("coordinates", coordinates.into_pyobject(py)?.into_any()),
+                    ("index", py.None().into_bound(py)),
+                    ("row", row.into_pyobject(py)?.into_any()),
+                    ("residual", residual.into_pyobject(py)?.into_any()),
+                    ("iterations", iterations.into_pyobject(py)?.into_any()),
+                    ("load_fraction", load_fraction.into_pyobject(py)?.into_any()),
+                    ("results", results()?.into_bound(py)),
+                ],
+            )
+        }
+        Error::NoEquilibrium { time, coordinates, index, cause } => (
+            EquilibriumError::new_err(message),
             vec![
                 ("time", time.into_pyobject(py)?.into_any()),
                 ("joints", joints.into_pyobject(py)?.into_any()),
-                ("rows", vec![row.to_string()].into_pyobject(py)?.into_any()),
-                ("row", row.to_string().into_pyobject(py)?.into_any()),
-                ("residual", residual.into_pyobject(py)?.into_any()),
-                ("iterations", iterations.into_pyobject(py)?.into_any()),
-                ("load_fraction", load_fraction.into_pyobject(py)?.into_any()),
+                ("rows", Vec::<String>::new().into_pyobject(py)?.into_any()),
+                ("coordinates", coordinates.into_pyobject(py)?.into_any()),
+                ("index", index.into_pyobject(py)?.into_any()),
+                ("cause", cause.into_pyobject(py)?.into_any()),
                 ("results", results()?.into_bound(py)),
             ],
         ),

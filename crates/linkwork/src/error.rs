@@ -46,6 +46,26 @@ impl fmt::Display for RowName {
     }
 }
 
+/// The equation a static solver left unbalanced: a constraint row, or the force balance of one
+/// body coordinate (the loads along it that no reaction balances). A body is not a joint: only
+/// a constraint row names one.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub enum Unbalanced {
+    /// A constraint row of a joint or driver.
+    Row(RowName),
+    /// The force balance of a body coordinate, `<body>.x`, `.y` or `.phi`.
+    Coordinate(String),
+}
+
+impl fmt::Display for Unbalanced {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Unbalanced::Row(row) => write!(f, "{row}"),
+            Unbalanced::Coordinate(c) => write!(f, "the force balance of {c}"),
+        }
+    }
+}
+
 /// Everything that can go wrong, by kind.
 #[derive(Debug, Clone, thiserror::Error)]
 pub enum Error {
@@ -104,21 +124,35 @@ pub enum Error {
         /// The rows with the largest residual or involved in a singularity, if known.
         rows: Vec<RowName>,
     },
-    /// Static equilibrium was not found: Newton with a line search, then load stepping, stopped
-    /// short of the tolerance.
-    #[error("no static equilibrium found at t = {time:.6} s: residual {residual:.3e} (largest in {row}) after {iterations} Newton iterations, {:.1}% of the applied load reached", 100.0 * .load_fraction)]
+    /// Static equilibrium was not found: Newton with a line search, descents and load stepping
+    /// all stopped short of the tolerance.
+    #[error("no static equilibrium found at t = {time:.6} s: residual {residual:.3e} (largest in {equation}) after {iterations} Newton iterations, {:.1}% of the applied load reached", 100.0 * .load_fraction)]
     Equilibrium {
         /// Time of the equilibrium sought.
         time: f64,
         /// Largest residual (force over the load scale, or `|Phi|`) at the last iterate.
         residual: f64,
-        /// The equation with the largest residual: a constraint row, or a body coordinate's
-        /// force balance (`<body>.x`).
-        row: RowName,
+        /// The equation with the largest residual.
+        equation: Unbalanced,
         /// Newton iterations in all attempts.
         iterations: usize,
         /// The fraction of the applied loads at which the last equilibrium was found.
         load_fraction: f64,
+    },
+    /// No stable static equilibrium within reach of the guess: the loads drive the mechanism
+    /// along a path without end (no equilibrium exists there), or every equilibrium the solver
+    /// reached was unstable.
+    #[error("no stable static equilibrium found at t = {time:.6} s: {cause}")]
+    NoEquilibrium {
+        /// Time of the equilibrium sought.
+        time: f64,
+        /// The body coordinates that move along the path (`bob.phi`).
+        coordinates: Vec<String>,
+        /// The number of unstable directions of the last equilibrium reached; `None` when the
+        /// loads drove the mechanism without end.
+        index: Option<usize>,
+        /// What happened, with the numbers.
+        cause: String,
     },
     /// An element of the model evaluated to a number that is not finite (NaN or infinite): the
     /// analysis stops there rather than write it.
@@ -175,7 +209,8 @@ impl Error {
     pub fn elements(&self) -> Vec<String> {
         let rows: Vec<&RowName> = match self {
             Error::Singular { rows, .. } | Error::Integration { rows, .. } => rows.iter().collect(),
-            Error::Convergence { row, .. } | Error::Assembly { row, .. } | Error::Equilibrium { row, .. } => vec![row],
+            Error::Convergence { row, .. } | Error::Assembly { row, .. } => vec![row],
+            Error::Equilibrium { equation: Unbalanced::Row(row), .. } => vec![row],
             _ => vec![],
         };
         let mut out: Vec<String> = Vec::new();

@@ -22,6 +22,6 @@ pub mod model;
 pub mod results;
 pub mod system;
 
-pub use error::{Error, Problem, RowName};
+pub use error::{Error, Problem, RowName, Unbalanced};
 pub use model::Model;
 pub use results::{Failure, Overrides, Results};

@@ -194,6 +194,7 @@ impl Results {
             if let Error::Singular { time, .. }
             | Error::Convergence { time, .. }
             | Error::Equilibrium { time, .. }
+            | Error::NoEquilibrium { time, .. }
             | Error::Assembly { time, .. }
             | Error::Integration { time, .. }
             | Error::NonFinite { time, .. }
@@ -205,9 +206,11 @@ impl Results {
         Value::Object(s)
     }
 
-    /// Write `modes.csv` of a modes analysis at `path`: one line per mode, `mode, frequency,
-    /// damped_frequency, damping_ratio` (Hz, Hz, 1; empty for a zero eigenvalue), then the
-    /// shape's `<body>.x, .y, .phi`. Nothing for another analysis. Atomic ([`Staged`]).
+    /// Write `modes.csv` of a modes analysis at `path`: one line per mode, `mode, kind, frequency,
+    /// damped_frequency, damping_ratio, growth_rate` (-, Hz, Hz, 1, 1/s; empty where the mode has
+    /// none: no frequency or damping ratio for an unstable mode, no growth rate for a stable
+    /// one), then the shape's `<body>.x, .y, .phi`. Nothing for another analysis. Atomic
+    /// ([`Staged`]).
     pub fn write_modes_csv(&self, path: &Path) -> Result<(), Error> {
         self.stage_modes_csv(path)?.map_or(Ok(()), Staged::commit)
     }
@@ -219,14 +222,14 @@ impl Results {
         let coords: Vec<&String> = self.names.iter().filter(|n| shape.is_some_and(|s| s.contains_key(*n))).collect();
         let num = |v: &Value| v.as_f64().map(|x| format!("{x:?}")).unwrap_or_default();
         Staged::write(path, |w| {
-            write!(w, "mode,frequency,damped_frequency,damping_ratio")?;
+            write!(w, "mode,kind,frequency,damped_frequency,damping_ratio,growth_rate")?;
             for c in &coords {
                 write!(w, ",{c}")?;
             }
             writeln!(w)?;
             for (k, m) in modes.iter().enumerate() {
-                write!(w, "{}", k + 1)?;
-                for key in ["frequency", "damped_frequency", "damping_ratio"] {
+                write!(w, "{},{}", k + 1, m["kind"].as_str().unwrap_or_default())?;
+                for key in ["frequency", "damped_frequency", "damping_ratio", "growth_rate"] {
                     write!(w, ",{}", num(&m[key]))?;
                 }
                 for c in &coords {

@@ -17,9 +17,14 @@
 //! eigenvalues `s` of the first-order form `[0, I; -M_r^-1 K_r, -M_r^-1 C_r]`: a complex pair
 //! `s = -zeta omega_n +- i omega_n sqrt(1 - zeta^2)` is one mode, a real `s` a non-oscillating
 //! one. Shapes are `N v` in body coordinates, scaled so that the largest component is 1.
+//!
+//! An eigenvalue with a positive real part is no vibration: the motion grows as `e^{Re s t}`.
+//! Such a mode is reported as unstable ([`ModeKind::Divergence`] when `s` is real,
+//! [`ModeKind::Flutter`] when it oscillates) with its growth rate, and no natural frequency or
+//! damping ratio.
 
 use super::dynamic::{factor_error, Dae};
-use super::statics::{solve, Statics};
+use super::statics::{solve, Statics, ZERO_STIFFNESS};
 use super::{assemble, element_names, indeterminate_rows};
 use crate::error::Error;
 use crate::model::spec::LinearisePoint;
@@ -29,15 +34,36 @@ use faer::linalg::solvers::DenseSolveCore;
 use faer::Mat;
 use serde_json::{json, Map, Value};
 
+/// What a mode's motion does, from its eigenvalue `s`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ModeKind {
+    /// An oscillation that does not grow: `Im s > 0`, `Re s <= 0`.
+    Vibration,
+    /// A motion that dies away without oscillating (overdamped): `s` real and negative.
+    Decay,
+    /// No stiffness and no damping along it: `s = 0`, the mechanism drifts.
+    Neutral,
+    /// Unstable: the mechanism falls away without oscillating, `s` real and positive.
+    Divergence,
+    /// Unstable: an oscillation that grows, `Re s > 0`, `Im s > 0`.
+    Flutter,
+}
+
 /// One mode of the linearised mechanism.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Mode {
-    /// Undamped natural frequency `|s| / 2 pi`, Hz.
-    pub frequency: f64,
+    /// What the motion does.
+    pub kind: ModeKind,
+    /// Undamped natural frequency `|s| / 2 pi`, Hz (`None` for an unstable mode).
+    pub frequency: Option<f64>,
     /// Damped frequency `Im s / 2 pi`, Hz (0 for a non-oscillating mode).
     pub damped_frequency: f64,
-    /// Damping ratio `-Re s / |s|` (negative: the motion grows; `None` when `s = 0`).
+    /// Damping ratio `-Re s / |s|` (`None` for a neutral or an unstable mode).
     pub damping_ratio: Option<f64>,
+    /// Growth rate `Re s` of an unstable mode, 1/s: the motion grows as `e^{rate t}` (`None`
+    /// for a stable mode).
+    pub growth_rate: Option<f64>,
     /// The eigenvalue `s = [Re, Im]` (with `Im >= 0`), 1/s.
     pub eigenvalue: [f64; 2],
     /// The shape: each coordinate `<body>.x, .y, .phi`'s share, the largest 1 (the real part
@@ -74,7 +100,7 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
     let m = dae.m;
     let mut st = Statics::new(&mut dae, analysis.settings.tolerance, &assembly.q, t);
     let (q, qdot, lambda) = if equilibrium {
-        match solve(&mut st, &path, &assembly.q, t, true) {
+        match solve(&mut st, analysis, &assembly.q, t, true) {
             Ok(eq) => (eq.q, vec![0.0; n], eq.lambda),
             Err(e) => return Err(fail(results, e)),
         }
@@ -116,7 +142,14 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
         };
         return Err(fail(results, error));
     };
-    modes.sort_by(|a, b| a.frequency.total_cmp(&b.frequency));
+    // The unstable modes first, fastest growing first; then the others, lowest frequency first.
+    modes.sort_by(|a, b| match (a.growth_rate, b.growth_rate) {
+        (Some(x), Some(y)) => y.total_cmp(&x),
+        (Some(_), None) => std::cmp::Ordering::Less,
+        (None, Some(_)) => std::cmp::Ordering::Greater,
+        (None, None) => a.frequency.unwrap_or(0.0).total_cmp(&b.frequency.unwrap_or(0.0)),
+    });
+    let stable = modes.iter().all(|m| m.growth_rate.is_none());
     let zero = vec![0.0; n];
     let extra: Vec<f64> = model.measures.iter().map(|m| m.value(&q, &qdot, &zero, t)).collect();
     results.push(t, &q, &qdot, &zero, &extra);
@@ -127,6 +160,7 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
     s.insert("output_points".into(), json!(1));
     s.insert("dof".into(), json!(f));
     s.insert("about".into(), json!(analysis.about));
+    s.insert("stable".into(), json!(stable));
     s.insert("modes".into(), json!(modes));
     s.insert("indeterminate_joints".into(), json!(element_names(&st.dae.sys, &indeterminate_rows(jac.as_ref()))));
     Ok(results)
@@ -146,12 +180,13 @@ fn undamped_modes(mr: &Mat<f64>, kr: &Mat<f64>, basis: &Mat<f64>, names: &[Strin
     let (w2, u) = (eig.S().column_vector(), eig.U());
     // v = L^-T u: the modal coordinates, then N v the body coordinates.
     let v = linv.transpose() * u;
+    let zero = zero_rate((0..f).map(|k| w2[k].abs().sqrt()).fold(0.0, f64::max));
     let modes = (0..f)
         .map(|k| {
             let lam: f64 = w2[k];
             let eigenvalue = if lam >= 0.0 { [0.0, lam.sqrt()] } else { [(-lam).sqrt(), 0.0] };
             let shape: Vec<f64> = (0..basis.nrows()).map(|i| (0..f).map(|j| basis[(i, j)] * v[(j, k)]).sum()).collect();
-            mode(eigenvalue, &shape, &vec![0.0; shape.len()], names)
+            mode(eigenvalue, &shape, &vec![0.0; shape.len()], names, zero)
         })
         .collect();
     Some(modes)
@@ -176,6 +211,7 @@ fn state_space_modes(
     });
     let eig = a.eigen().ok()?;
     let (s, u) = (eig.S().column_vector(), eig.U());
+    let zero = zero_rate((0..2 * f).map(|k| s[k].re.hypot(s[k].im)).fold(0.0, f64::max));
     let mut modes = Vec::new();
     for k in 0..2 * f {
         let (re, im) = (s[k].re, s[k].im);
@@ -190,15 +226,33 @@ fn state_space_modes(
                     .fold((0.0, 0.0), |(a, b), j| (a + basis[(i, j)] * u[(j, k)].re, b + basis[(i, j)] * u[(j, k)].im))
             })
             .unzip();
-        modes.push(mode([re, im], &sr, &si, names));
+        modes.push(mode([re, im], &sr, &si, names, zero));
     }
     Some(modes)
 }
 
-/// A [`Mode`] from its eigenvalue and complex shape `re + i im` in body coordinates.
-fn mode(eigenvalue: [f64; 2], re: &[f64], im: &[f64], names: &[String]) -> Mode {
+/// The size below which a real part, or a whole eigenvalue, counts as zero, 1/s, given the
+/// largest `|s|`: the square root of statics' [`ZERO_STIFFNESS`] times it, because `s` is the
+/// square root of an eigenvalue of `M_r^-1 K_r`, and a stiffness counts as zero below
+/// `ZERO_STIFFNESS` of the largest (about `3e-5`: an error of `1e-10` in `K_r` moves a zero `s` by
+/// `1e-5` of the largest).
+fn zero_rate(largest: f64) -> f64 {
+    ZERO_STIFFNESS.sqrt() * largest
+}
+
+/// A [`Mode`] from its eigenvalue and complex shape `re + i im` in body coordinates; `zero`
+/// from [`zero_rate`].
+fn mode(eigenvalue: [f64; 2], re: &[f64], im: &[f64], names: &[String], zero: f64) -> Mode {
     let [sr, si] = eigenvalue;
     let omega = sr.hypot(si);
+    let kind = match () {
+        _ if omega <= zero => ModeKind::Neutral,
+        _ if sr > zero && si > 0.0 => ModeKind::Flutter,
+        _ if sr > zero => ModeKind::Divergence,
+        _ if si > 0.0 => ModeKind::Vibration,
+        _ => ModeKind::Decay,
+    };
+    let unstable = matches!(kind, ModeKind::Divergence | ModeKind::Flutter);
     // Turn the shape so that its largest component is real and positive, then scale it to 1.
     let big = (0..re.len()).max_by(|&a, &b| re[a].hypot(im[a]).total_cmp(&re[b].hypot(im[b]))).unwrap_or(0);
     let (br, bi) = (re[big], im[big]);
@@ -213,10 +267,18 @@ fn mode(eigenvalue: [f64; 2], re: &[f64], im: &[f64], names: &[String]) -> Mode 
             (names[i].clone(), json!(v))
         })
         .collect();
+    let tau = 2.0 * std::f64::consts::PI;
     Mode {
-        frequency: omega / (2.0 * std::f64::consts::PI),
-        damped_frequency: si / (2.0 * std::f64::consts::PI),
-        damping_ratio: (omega > 0.0).then(|| -sr / omega),
+        kind,
+        frequency: match kind {
+            ModeKind::Neutral => Some(0.0),
+            _ if unstable => None,
+            _ => Some(omega / tau),
+        },
+        damped_frequency: si / tau,
+        // `0 - sr`, not `-sr`: an undamped mode's ratio is 0, not -0.
+        damping_ratio: (matches!(kind, ModeKind::Vibration | ModeKind::Decay)).then(|| (0.0 - sr) / omega),
+        growth_rate: unstable.then_some(sr),
         eigenvalue,
         shape,
     }

@@ -1,4 +1,4 @@
-//! Static equilibrium, single or quasi-static.
+//! Static equilibrium, single or quasi-static: the stable one, a minimum of the potential energy.
 //!
 //! With the velocities zero, the equations of motion leave
 //!
@@ -19,15 +19,26 @@
 //! derivatives), relative error about `1e-10`, which changes Newton's rate, never the residual
 //! it converges to. Each Newton step is the minimum-norm solution of the linear system (SVD), so
 //! redundant rows and unloaded directions do not stop it; a backtracking line search on
-//! `|R_force / F|^2 + |Phi / 1 m|^2` (`F` the largest load) keeps it from overshooting. When Newton
-//! does not converge from the assembled guess, the applied loads (gravity, forces, torques; not
-//! the spring-dampers) are stepped up from zero, each step starting from the equilibrium of the
-//! previous.
+//! `|R_force / F|^2 + |Phi / 1 m|^2` (`F` the largest load) keeps it from overshooting.
 //!
-//! After convergence the tangent stiffness reduced to the free directions,
-//! `K_r = N^T K N` with `N` a basis of the null space of `Phi_q`, decides: singular means a
-//! degree of freedom that no load or spring holds (an error: the equilibrium is not determined),
-//! an eigenvalue below zero means an unstable equilibrium (reported as `stable: false`).
+//! Newton finds the stationary point of the potential nearest the guess, which may be a maximum
+//! or a saddle; from a guess where the mechanism has no stiffness (a pendulum held level) it
+//! finds nothing. The tangent stiffness reduced to the free directions, `K_r = N^T K N` with `N`
+//! an orthonormal basis of the null space of `Phi_q` (with the least-squares multipliers, the
+//! Hessian of the potential on the constraint manifold), decides what to do next:
+//!
+//! - an equilibrium with `K_r` positive definite is a minimum: the answer;
+//! - otherwise a **descent** marches downhill along the most negative curvature (or a flat
+//!   direction the loads act along, or the loads themselves), projecting each step back onto
+//!   `Phi = 0`, until the load along the path turns against it (the path's minimum); Newton
+//!   starts again from there. At most [`MAX_DESCENTS`] times;
+//! - an equilibrium with a zero eigenvalue is a degree of freedom nothing holds (a model error);
+//! - a descent that never turns is a load with no equilibrium (a torque larger than the weight
+//!   can hold): [`Error::NoEquilibrium`].
+//!
+//! Load stepping is the last resort when Newton and the descents do not converge: the applied
+//! loads (gravity, forces, torques; not the spring-dampers) are stepped up from zero, each step
+//! starting from the equilibrium of the previous.
 //!
 //! A quasi-static analysis (`t_end > t_start`) repeats this at each output time, starting from
 //! the previous equilibrium: the equilibrium of a mechanism driven slowly enough that inertia and
@@ -35,7 +46,7 @@
 
 use super::dynamic::{factor_error, Dae};
 use super::{assemble, element_names, indeterminate_rows, min_norm_solve, residual_floor, RANK_TOLERANCE};
-use crate::error::{Error, RowName};
+use crate::error::{Error, Unbalanced};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
 use faer::{Mat, MatMut, MatRef};
@@ -53,13 +64,42 @@ pub const FORCE_TOLERANCE: f64 = 1e-10;
 /// Smallest load increment of load stepping, as a fraction of the full load, before giving up.
 pub const MIN_LOAD_STEP: f64 = 1e-3;
 
+/// An eigenvalue of the reduced stiffness counts as zero below this fraction of the largest:
+/// `1e-9`, twenty-five times the relative error of the geometric stiffness's central difference
+/// (`~4e-11`), and far below any ratio of stiffnesses within one mechanism. Below `-1e-9` it is an
+/// unstable direction.
+pub const ZERO_STIFFNESS: f64 = 1e-9;
+
+/// Descents (each a march downhill, then Newton) per equilibrium before the solver gives up.
+/// Each ends lower in potential energy than it started, and a saddle needs one per unstable
+/// direction: 8 covers mechanisms with that many unstable directions at once, more than any
+/// test or example needs (one or two).
+pub const MAX_DESCENTS: usize = 8;
+
+/// First step of a descent: `0.01` rad of rotation, or 1% of the mechanism's size in
+/// translation (whichever coordinate moves most), so that a shallow well just beside the
+/// saddle being left is not stepped over.
+pub const DESCENT_FIRST_STEP: f64 = 1e-2;
+
+/// Largest step of a descent (the first doubles up to it): `0.25` rad or a quarter of the
+/// mechanism's size, inside the kinematic solver's `max_rotation` (0.35 rad), so that projecting
+/// the tangent step back onto the constraints stays on the assembly branch.
+pub const DESCENT_MAX_STEP: f64 = 0.25;
+
+/// Steps per descent: 200, that is 50 rad (eight turns of a crank, whose potential repeats every
+/// turn) or fifty times the mechanism's size at the largest step. A load that drives the
+/// mechanism that far downhill without the slope turning has no equilibrium along the way.
+pub const MAX_DESCENT_STEPS: usize = 200;
+
 /// What the static solver did, for `summary.json`.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct StaticStats {
     /// Newton iterations in all equilibria and load steps.
     pub iterations: usize,
-    /// Load steps taken where Newton did not converge directly (0: none needed).
+    /// Load steps taken where Newton and the descents did not converge (0: none needed).
     pub load_steps: usize,
+    /// Descents from a point that was not a stable equilibrium (0: Newton went straight to one).
+    pub descents: usize,
     /// Largest force residual `|Q - Phi_q^T lambda|` at a written equilibrium, N or N m.
     pub force_residual: f64,
     /// Largest constraint residual `|Phi|` at a written equilibrium, m or rad.
@@ -72,8 +112,85 @@ pub struct StaticStats {
 struct NotConverged {
     force: f64,
     position: f64,
-    row: RowName,
+    equation: Unbalanced,
     load_fraction: f64,
+}
+
+/// Where the search for a stable equilibrium stopped.
+enum Reached {
+    /// At an unstable equilibrium: its index and the coordinates of its most unstable direction.
+    Unstable(usize, Vec<String>),
+    /// Short of an equilibrium.
+    Short(NotConverged),
+}
+
+/// A descent that never turned: the loads drive the mechanism without end.
+struct Runaway {
+    /// Distance marched, rad (or mechanism sizes).
+    travel: f64,
+    /// The loads' work per unit of travel at the end, J per rad (or per mechanism size).
+    push: f64,
+    /// The coordinates that move.
+    coordinates: Vec<String>,
+}
+
+/// The reduced stiffness at a point, decomposed, with the load along each of its directions.
+struct Curvature {
+    /// (f) eigenvalues of the symmetric part of `K_r`, ascending, N m / rad or N / m.
+    values: Vec<f64>,
+    /// (n x f) their eigenvectors in body coordinates, `N u`, orthonormal.
+    vectors: Mat<f64>,
+    /// (f) the unbalanced load `Q - Phi_q^T lambda` along each eigenvector.
+    loads: Vec<f64>,
+}
+
+impl Curvature {
+    /// The size below which an eigenvalue counts as zero.
+    fn zero(&self) -> f64 {
+        ZERO_STIFFNESS * self.values.iter().fold(0.0f64, |a, s| a.max(s.abs()))
+    }
+
+    /// The index: how many directions are unstable (eigenvalues below zero).
+    fn index(&self) -> usize {
+        let zero = self.zero();
+        self.values.iter().filter(|&&s| s < -zero).count()
+    }
+
+    /// The direction without stiffness, if there is one (every one when all eigenvalues are zero).
+    fn flat(&self) -> Option<usize> {
+        let zero = self.zero();
+        (0..self.values.len())
+            .min_by(|&a, &b| self.values[a].abs().total_cmp(&self.values[b].abs()))
+            .filter(|&k| self.values[k].abs() <= zero)
+    }
+
+    /// Eigenvector `k` in body coordinates `(n)`, times `sign`.
+    fn vector(&self, k: usize, sign: f64) -> Vec<f64> {
+        (0..self.vectors.nrows()).map(|i| sign * self.vectors[(i, k)]).collect()
+    }
+
+    /// The direction `(n)` of a descent, signed so that the load does work along it: the most
+    /// negative curvature; else the flat direction the load acts along most (more than `tol`);
+    /// else the load itself (steepest descent on the manifold). `None` when no load above `tol`
+    /// acts along any free direction.
+    fn descent(&self, tol: f64) -> Option<Vec<f64>> {
+        let zero = self.zero();
+        let f = self.values.len();
+        let pick = if self.values[0] < -zero {
+            Some(0)
+        } else {
+            (0..f)
+                .filter(|&k| self.values[k] <= zero && self.loads[k].abs() > tol)
+                .max_by(|&a, &b| self.loads[a].abs().total_cmp(&self.loads[b].abs()))
+        };
+        if let Some(k) = pick {
+            return Some(self.vector(k, if self.loads[k] < 0.0 { -1.0 } else { 1.0 }));
+        }
+        if self.loads.iter().all(|l| l.abs() <= tol) {
+            return None;
+        }
+        Some((0..self.vectors.nrows()).map(|i| (0..f).map(|k| self.vectors[(i, k)] * self.loads[k]).sum()).collect())
+    }
 }
 
 /// Buffers of the static solver.
@@ -94,6 +211,8 @@ pub(crate) struct Statics<'a, 'm> {
     /// The largest load, for the force tolerance and the merit function.
     scale: f64,
     tolerance: f64,
+    /// The mechanism's size, m: the unit of a translation in a descent step.
+    size: f64,
     pub stats: StaticStats,
 }
 
@@ -102,6 +221,7 @@ impl<'a, 'm> Statics<'a, 'm> {
     pub fn new(dae: &'a mut Dae<'m>, tolerance: f64, q: &[f64], t: f64) -> Self {
         let (n, m) = (dae.n, dae.m);
         let scale = load_scale(dae, q, t);
+        let size = mechanism_size(dae.model);
         Statics {
             dae,
             n,
@@ -118,6 +238,7 @@ impl<'a, 'm> Statics<'a, 'm> {
             trial: vec![0.0; n + m],
             scale,
             tolerance,
+            size,
             stats: StaticStats { load_scale: scale, ..StaticStats::default() },
         }
     }
@@ -214,26 +335,87 @@ impl<'a, 'm> Statics<'a, 'm> {
             .enumerate()
             .fold((0, -1.0), |(bk, bv), (k, v)| if v > bv { (k, v) } else { (bk, bv) })
             .0;
-        let row = if worst >= n {
-            self.dae.sys.row_name(worst - n)
+        let equation = if worst >= n {
+            Unbalanced::Row(self.dae.sys.row_name(worst - n))
         } else {
-            let names = ["x", "y", "phi"];
-            RowName { element: self.dae.model.bodies[worst / 3].name.clone(), equation: names[worst % 3].into() }
+            Unbalanced::Coordinate(coordinate_name(self.dae.model, worst))
         };
-        Err(NotConverged { force: force / self.scale, position, row, load_fraction: 0.0 })
+        Err(NotConverged { force: force / self.scale, position, equation, load_fraction: self.dae.external_scale })
     }
 
-    /// The equilibrium at `t` from `x`: Newton at full load, and load stepping from zero load
-    /// when that fails.
-    fn equilibrium(&mut self, x: &mut [f64], t: f64, allow_stepping: bool) -> Result<(), NotConverged> {
-        let start = x.to_vec();
-        self.dae.external_scale = 1.0;
-        let direct = self.newton(x, t);
-        if direct.is_ok() || !allow_stepping {
-            return direct.map_err(|e| NotConverged { load_fraction: 1.0, ..e });
+    /// `(q, t) => (lambda (m), g (n))`: the least-squares multipliers of `Phi_q^T lambda = Q` and
+    /// the load they leave unbalanced, `g = Q - Phi_q^T lambda`, which lies in the null space of
+    /// `Phi_q` (minus the gradient of the potential on the constraints). Leaves the positions and
+    /// `self.jac` evaluated at `q`.
+    fn balance(&mut self, q: &[f64], t: f64) -> (Vec<f64>, Vec<f64>) {
+        self.dae.positions(q, t);
+        self.dae.load(q, &self.zero, t, &mut self.load);
+        self.dae.jacobian_dense(self.jac.as_mut());
+        let lambda = min_norm_solve(self.jac.transpose(), &self.load).unwrap_or_else(|| vec![0.0; self.m]);
+        self.jt.fill(0.0);
+        self.dae.add_jt(&lambda, &mut self.jt);
+        let g = self.load.iter().zip(&self.jt).map(|(l, r)| l - r).collect();
+        (lambda, g)
+    }
+
+    /// The reduced stiffness at `q (n)` with its least-squares multipliers, decomposed; `None`
+    /// without free directions or when the eigensolver fails (a non-finite entry).
+    fn curvature(&mut self, q: &[f64], t: f64) -> Option<Curvature> {
+        let (lambda, g) = self.balance(q, t);
+        let zero = vec![0.0; self.n];
+        let (k, _) = self.tangent(q, &zero, &lambda, t);
+        let (kr, basis) = self.reduced(k.as_ref(), q, t);
+        let f = kr.nrows();
+        if f == 0 {
+            return None;
         }
-        x.copy_from_slice(&start);
-        self.step_load(x, t)
+        let sym = Mat::from_fn(f, f, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]));
+        let eig = sym.self_adjoint_eigen(faer::Side::Lower).ok()?;
+        let s = eig.S().column_vector();
+        let vectors = &basis * eig.U();
+        let loads = (0..f).map(|k| (0..self.n).map(|i| vectors[(i, k)] * g[i]).sum()).collect();
+        Some(Curvature { values: (0..f).map(|k| s[k]).collect(), vectors, loads })
+    }
+
+    /// The size of a step along `d (n)` in descent units: the largest rotation (rad) or
+    /// translation over the mechanism's size.
+    fn step_size(&self, d: &[f64]) -> f64 {
+        d.iter().enumerate().fold(0.0f64, |a, (k, v)| a.max(if k % 3 == 2 { v.abs() } else { v.abs() / self.size }))
+    }
+
+    /// March downhill from `x = [q; lambda]` along `dir (n)`, a free direction the unbalanced
+    /// load does work along: steps of `h` descent units (from [`DESCENT_FIRST_STEP`], doubling up
+    /// to [`DESCENT_MAX_STEP`]), each projected back onto `Phi = 0` by assembly (least change),
+    /// the direction carried along by projecting it onto each new null space. Stops at the first
+    /// point where the load works against the direction (past the path's minimum of potential),
+    /// or where the projection fails (Newton takes over there); `x` is left at the last point
+    /// with its least-squares multipliers. Never more than [`MAX_DESCENT_STEPS`] steps.
+    fn descend(&mut self, x: &mut [f64], t: f64, mut dir: Vec<f64>) -> Result<(), Runaway> {
+        let n = self.n;
+        let (hold, zero) = (vec![false; 2 * n], vec![0.0; n]);
+        let (mut h, mut travel, mut push) = (DESCENT_FIRST_STEP, 0.0, 0.0);
+        for _ in 0..MAX_DESCENT_STEPS {
+            let size = self.step_size(&dir);
+            if size == 0.0 {
+                return Ok(());
+            }
+            let trial: Vec<f64> = x[..n].iter().zip(&dir).map(|(q, d)| q + h * d / size).collect();
+            let Ok(moved) = assemble(&mut self.dae.sys, &trial, &zero, &hold, t, self.tolerance) else { return Ok(()) };
+            travel += h;
+            let (lambda, g) = self.balance(&moved.q, t);
+            let basis = null_space(self.jac.as_ref());
+            let along: Vec<f64> = (0..basis.ncols()).map(|j| (0..n).map(|i| basis[(i, j)] * dir[i]).sum()).collect();
+            dir = (0..n).map(|i| (0..basis.ncols()).map(|j| basis[(i, j)] * along[j]).sum()).collect();
+            x[..n].copy_from_slice(&moved.q);
+            x[n..].copy_from_slice(&lambda);
+            let unit = self.step_size(&dir);
+            push = if unit > 0.0 { g.iter().zip(&dir).map(|(a, b)| a * b).sum::<f64>() / unit } else { 0.0 };
+            if push < 0.0 || unit == 0.0 {
+                return Ok(());
+            }
+            h = (2.0 * h).min(DESCENT_MAX_STEP);
+        }
+        Err(Runaway { travel, push, coordinates: coordinates_of(self.dae.model, &dir) })
     }
 
     /// Load stepping from `x`: the applied loads scaled from zero to full, each step from the
@@ -333,18 +515,30 @@ fn max_abs(v: &[f64]) -> f64 {
     v.iter().fold(0.0f64, |a, x| a.max(x.abs()))
 }
 
-/// The free directions' coordinates with the largest share of the null vector `v (n)`, as
-/// `body.x` names, for error messages.
-fn coordinates_of(model: &Model, v: &[f64]) -> Vec<String> {
-    let vmax = max_abs(v);
-    let names = ["x", "y", "phi"];
-    (0..v.len())
-        .filter(|&k| v[k].abs() >= 0.2 * vmax)
-        .map(|k| format!("{}.{}", model.bodies[k / 3].name, names[k % 3]))
-        .collect()
+/// The name `<body>.x`, `.y` or `.phi` of coordinate `k`.
+fn coordinate_name(model: &Model, k: usize) -> String {
+    format!("{}.{}", model.bodies[k / 3].name, ["x", "y", "phi"][k % 3])
 }
 
-/// The result of [`solve`]: the equilibrium, its multipliers and its stability.
+/// The coordinates with the largest share of the direction `v (n)`, as `body.x` names, for
+/// messages.
+fn coordinates_of(model: &Model, v: &[f64]) -> Vec<String> {
+    let vmax = max_abs(v);
+    (0..v.len()).filter(|&k| v[k].abs() >= 0.2 * vmax).map(|k| coordinate_name(model, k)).collect()
+}
+
+/// The mechanism's size, m: the largest distance from a body's centre of mass to one of its named
+/// points, or 1 m when no body names one.
+fn mechanism_size(model: &Model) -> f64 {
+    let size = model.bodies.iter().flat_map(|b| b.points.values()).fold(0.0f64, |a, p| a.max(p[0].hypot(p[1])));
+    if size > 0.0 {
+        size
+    } else {
+        1.0
+    }
+}
+
+/// The result of [`solve`]: a stable equilibrium and its multipliers.
 pub(crate) struct Equilibrium {
     pub q: Vec<f64>,
     pub lambda: Vec<f64>,
@@ -353,85 +547,99 @@ pub(crate) struct Equilibrium {
     pub min_stiffness: Option<f64>,
 }
 
-/// The equilibrium of `dae` at `t` from the initial guess `q0`, with the checks described in the
-/// module documentation.
+/// The stable equilibrium of `dae` at `t` from the initial guess `q0`, for `analysis`, by the
+/// method of the module documentation; `stepping` allows load stepping as the last resort.
 pub(crate) fn solve(
     st: &mut Statics<'_, '_>,
-    path: &str,
+    analysis: &Analysis,
     q0: &[f64],
     t: f64,
     stepping: bool,
 ) -> Result<Equilibrium, Error> {
-    let (n, m) = (st.n, st.m);
-    // Multipliers from the least-squares balance at the guess.
-    st.dae.positions(q0, t);
-    let (mut load, zero) = (vec![0.0; n], vec![0.0; n]);
-    st.dae.load(q0, &zero, t, &mut load);
-    st.dae.jacobian_dense(st.jac.as_mut());
-    let lambda0 = min_norm_solve(st.jac.transpose(), &load).unwrap_or_else(|| vec![0.0; m]);
+    let n = st.n;
+    let (lambda0, _) = st.balance(q0, t);
     let start: Vec<f64> = q0.iter().chain(&lambda0).copied().collect();
     let mut x = start.clone();
-    let steps_before = st.stats.load_steps;
-    let outcome = st.equilibrium(&mut x, t, stepping);
-    let (mut min_stiffness, mut free) = stability(st, &x, t);
-    // Newton finds the stationary point nearest the guess, which may be unstable (a load that
-    // turns a link over the top); load stepping from the unloaded mechanism follows the branch
-    // the loads bend it along. Prefer what it finds when it is stable.
-    if outcome.is_ok() && stepping && st.stats.load_steps == steps_before && min_stiffness.is_some_and(|s| s < 0.0) {
+    st.dae.external_scale = 1.0;
+    let mut outcome = st.newton(&mut x, t);
+    let tol = FORCE_TOLERANCE * st.scale;
+    let mut descents = 0;
+    let reached = loop {
+        let curvature = st.curvature(&x[..n], t);
+        let reached = match outcome {
+            Ok(()) => {
+                let Some(c) = &curvature else { return Ok(found(&x, n, None)) };
+                if let Some(k) = c.flat() {
+                    let coordinates = coordinates_of(st.dae.model, &c.vector(k, 1.0));
+                    return Err(free(analysis, t, &coordinates));
+                }
+                if c.index() == 0 {
+                    return Ok(found(&x, n, Some(c.values[0])));
+                }
+                Reached::Unstable(c.index(), coordinates_of(st.dae.model, &c.vector(0, 1.0)))
+            }
+            Err(e) => Reached::Short(e),
+        };
+        let Some(dir) = curvature.and_then(|c| c.descent(tol)).filter(|_| descents < MAX_DESCENTS) else {
+            break reached;
+        };
+        descents += 1;
+        st.stats.descents += 1;
+        if let Err(run) = st.descend(&mut x, t, dir) {
+            let cause = format!(
+                "none exists along the path the loads drive: they keep moving ({}) downhill, and after {:.1} rad of travel (a translation counts in units of the mechanism's size, {:.3} m) they still do {:.4} J per unit of travel with nothing to balance them",
+                run.coordinates.join(", "),
+                run.travel,
+                st.size,
+                run.push
+            );
+            return Err(Error::NoEquilibrium { time: t, coordinates: run.coordinates, index: None, cause });
+        }
+        outcome = st.newton(&mut x, t);
+    };
+    if stepping {
         let mut y = start;
         if st.step_load(&mut y, t).is_ok() {
-            let (s, f) = stability(st, &y, t);
-            if s.is_some_and(|s| s > 0.0) && f.is_none() {
-                (x, min_stiffness, free) = (y, s, f);
+            match st.curvature(&y[..n], t) {
+                None => return Ok(found(&y, n, None)),
+                Some(c) if c.flat().is_none() && c.index() == 0 => return Ok(found(&y, n, Some(c.values[0]))),
+                Some(_) => {}
             }
         }
     }
-    let (q, lambda) = x.split_at(n);
-    match (outcome, free) {
-        (Ok(()), None) => Ok(Equilibrium { q: q.to_vec(), lambda: lambda.to_vec(), min_stiffness }),
-        (outcome, Some(coords)) => Err(Error::Model(vec![crate::Problem::new(
-            path,
-            format!(
-                "a static analysis needs every degree of freedom held by a driver, a spring or a load that changes with position; at t = {t} s the mechanism is free to move ({}) with no stiffness against it{}: drive it, add a spring, or load it",
-                coords.join(", "),
-                if outcome.is_err() { ", so Newton found no equilibrium" } else { "" }
-            ),
-        )])),
-        (Err(e), None) => Err(Error::Equilibrium {
+    Err(match reached {
+        Reached::Unstable(index, coordinates) => {
+            let cause = format!(
+                "each equilibrium reached is unstable; after {descents} descent(s) the last has {index} unstable direction(s), along ({})",
+                coordinates.join(", ")
+            );
+            Error::NoEquilibrium { time: t, coordinates, index: Some(index), cause }
+        }
+        Reached::Short(e) => Error::Equilibrium {
             time: t,
             residual: e.force.max(e.position),
-            row: e.row,
+            equation: e.equation,
             iterations: st.stats.iterations,
             load_fraction: e.load_fraction,
-        }),
-    }
+        },
+    })
 }
 
-/// The smallest eigenvalue of the symmetric part of the reduced tangent stiffness at
-/// `x = [q; lambda]` (`None` without free directions), and the coordinates of a direction without
-/// stiffness if there is one.
-fn stability(st: &mut Statics<'_, '_>, x: &[f64], t: f64) -> (Option<f64>, Option<Vec<String>>) {
-    let n = st.n;
-    let (q, lambda) = x.split_at(n);
-    let zero = vec![0.0; n];
-    let (k, _) = st.tangent(q, &zero, lambda, t);
-    let (kr, basis) = st.reduced(k.as_ref(), q, t);
-    let f = kr.nrows();
-    if f == 0 {
-        return (None, None);
-    }
-    let sym = Mat::from_fn(f, f, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]));
-    let Ok(eig) = sym.self_adjoint_eigen(faer::Side::Lower) else { return (None, None) };
-    let s = eig.S().column_vector();
-    let largest = (0..f).map(|i| s[i].abs()).fold(0.0f64, f64::max);
-    // Zero relative to the largest eigenvalue; every eigenvalue zero is a free mechanism.
-    let smallest = (0..f).min_by(|&a, &b| s[a].abs().total_cmp(&s[b].abs())).unwrap_or(0);
-    let free = (largest == 0.0 || s[smallest].abs() <= 1e-9 * largest).then(|| {
-        let u = eig.U();
-        let v: Vec<f64> = (0..n).map(|i| (0..f).map(|j| basis[(i, j)] * u[(j, smallest)]).sum()).collect();
-        coordinates_of(st.dae.model, &v)
-    });
-    (Some(s[0]), free)
+/// The [`Equilibrium`] at `x = [q; lambda]`.
+fn found(x: &[f64], n: usize, min_stiffness: Option<f64>) -> Equilibrium {
+    Equilibrium { q: x[..n].to_vec(), lambda: x[n..].to_vec(), min_stiffness }
+}
+
+/// The model error of a degree of freedom that nothing holds at an equilibrium.
+fn free(analysis: &Analysis, t: f64, coordinates: &[String]) -> Error {
+    Error::Model(vec![crate::Problem::new(
+        format!("analyses.{}", analysis.name),
+        format!(
+            "a {} analysis needs every degree of freedom held by a driver, a spring or a load that changes with position; at t = {t} s the mechanism is free to move ({}) with nothing acting along it: drive it, add a spring, or load it",
+            analysis.kind.name(),
+            coordinates.join(", ")
+        ),
+    )])
 }
 
 /// Run a static (or quasi-static) analysis. On failure the equilibria found until then are
@@ -448,7 +656,6 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
     names.push("potential_energy".into());
     names.extend(model.measures.iter().map(|m| m.name.clone()));
     results.add_columns(names);
-    let path = format!("analyses.{}", analysis.name);
     let t0 = analysis.t_start;
     let mut times = vec![t0];
     let count = ((analysis.t_end - t0) / analysis.step + 1e-9).floor() as usize;
@@ -466,12 +673,11 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
     let mut react = Vec::new();
     let mut row = Vec::new();
     let mut q = assembly.q.clone();
-    let mut stable = true;
     let mut min_stiffness: Option<f64> = None;
     let mut indeterminate: Option<Vec<String>> = None;
     let mut error = None;
     for (k, &t) in times.iter().enumerate() {
-        match solve(&mut st, &path, &q, t, k == 0) {
+        match solve(&mut st, analysis, &q, t, k == 0) {
             Ok(eq) => {
                 q.copy_from_slice(&eq.q);
                 st.residual_at(&eq.q.iter().chain(&eq.lambda).copied().collect::<Vec<_>>(), t);
@@ -479,7 +685,6 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
                 st.stats.position_residual = st.stats.position_residual.max(max_abs(&st.residual[n..]));
                 if let Some(s) = eq.min_stiffness {
                     min_stiffness = Some(min_stiffness.map_or(s, |x: f64| x.min(s)));
-                    stable &= s > 0.0;
                 }
                 if indeterminate.is_none() {
                     st.dae.jacobian_dense(st.jac.as_mut());
@@ -499,10 +704,17 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
         }
     }
     let stats = st.stats.clone();
+    // Every equilibrium written is stable; a run that stopped for want of one says so, with the
+    // index of the unstable equilibrium it reached (none when the loads had no equilibrium).
+    let (stable, index) = match &error {
+        Some(Error::NoEquilibrium { index, .. }) => (false, *index),
+        _ => (true, Some(0)),
+    };
     let s = &mut results.summary;
     s.insert("output_points".into(), json!(results.time.len()));
     s.insert("statistics".into(), json!(stats));
     s.insert("stable".into(), json!(stable));
+    s.insert("index".into(), json!(index));
     s.insert("min_reduced_stiffness".into(), json!(min_stiffness));
     s.insert("indeterminate_joints".into(), json!(indeterminate.unwrap_or_default()));
     results.insert_reaction_summary(model, analysis);
