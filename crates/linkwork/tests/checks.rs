@@ -218,3 +218,43 @@ fn a_driver_without_bound_stops_the_kinematics_naming_it() {
         eprintln!("{function}: {message}; {} outputs, {}", r.len(), r.summary["statistics"]);
     }
 }
+
+/// A massless wheel turning freely on its axle: no mass resists that motion, so the equations of
+/// motion are singular. Before, `linkwork check` passed it and the dynamics stopped at t = 0 with
+/// "the solution of the equations of motion is NaN". Now both name the inertia field and the
+/// coordinate. A massless connecting rod, carried by the massive crank and slider, still runs.
+#[test]
+fn a_massless_free_motion_is_named_before_the_dynamics_run() {
+    let wheel = r#"
+gravity: [0, -9.81]
+bodies:
+  wheel: {mass: 1.0, inertia: 0.0, position: [0, 0], angle: 0}
+  bob: {mass: 1.0, inertia: 0.1, position: [1, 0], angle: 0, points: {P: [-1, 0]}}
+joints:
+  axle: {type: revolute, body_i: wheel, point_i: [0, 0], body_j: ground, point_j: [0, 0]}
+  pivot: {type: revolute, body_i: bob, point_i: P, body_j: ground, point_j: [0, 0]}
+analyses:
+  dyn: {type: dynamic, t_end: 0.5, step: 0.01}
+"#;
+    let model = Model::from_yaml(wheel).unwrap();
+    let warning = check(&model).unwrap().analyses["dyn"].warning.clone().unwrap_or_default();
+    assert!(warning.starts_with("bodies.wheel.inertia: wheel.phi can move with no mass or inertia"), "{warning}");
+    let e = model.run("dyn").unwrap_err().error;
+    let Error::Model(problems) = &e else { panic!("expected a model error, got {e}") };
+    assert_eq!(problems[0].path, "bodies.wheel.inertia", "{e}");
+    assert!(problems[0].message.contains("wheel.phi can move with no mass or inertia"), "{e}");
+
+    let text = std::fs::read_to_string(example("slider_crank.yaml")).unwrap();
+    let rod = "{mass: 2.0, inertia: 0.015,";
+    assert_eq!(text.matches(rod).count(), 1, "slider_crank.yaml's rod line");
+    let kin = "kinematics: {type: kinematic, drivers: [motor], t_end: 2.0, step: 0.01}";
+    assert_eq!(text.matches(kin).count(), 1, "slider_crank.yaml's analysis line");
+    let massless_rod = text
+        .replace(rod, "{mass: 0.0, inertia: 0.0,")
+        .replace(kin, "dyn: {type: dynamic, drivers: [], t_end: 0.2, step: 0.01}")
+        .replace("name: slider-crank", "name: slider-crank\ngravity: [0, -9.81]");
+    let model = Model::from_yaml(&massless_rod).unwrap();
+    assert_eq!(check(&model).unwrap().analyses["dyn"].warning, None);
+    let r = model.run("dyn").unwrap_or_else(|f| panic!("{}", f.error));
+    assert!(r.column("crank.phi").unwrap().iter().all(|x| x.is_finite()));
+}

@@ -124,6 +124,14 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
     })
 }
 
+/// The massless motion of a dynamic analysis ([`super::massless_motion`]) at its assembled `q`.
+fn massless(model: &Model, drivers: &[usize], q: &[f64], t: f64) -> Option<String> {
+    let mut sys = System::new(model, drivers);
+    let mut jac = Mat::<f64>::zeros(sys.m, model.n());
+    sys.jacobian_dense(&ConfigBuf::new(q).view(), t, jac.as_mut());
+    super::massless_motion(model, jac.as_ref()).map(|p| p.to_string())
+}
+
 /// Check the mechanism alone (given coordinates held) and with each analysis's drivers. Fails
 /// only when the mechanism alone cannot be assembled; an analysis that cannot is reported in its
 /// entry.
@@ -154,6 +162,7 @@ pub fn check(model: &Model) -> Result<CheckReport> {
                         AnalysisKind::Modes if system.dof == 0 => {
                             Some("a modes analysis needs a degree of freedom: the drivers leave none".to_string())
                         }
+                        AnalysisKind::Dynamic => massless(model, &a.drivers, &system.assembly.q, a.t_start),
                         _ => None,
                     };
                     AnalysisCheck { kind: a.kind, system: Some(system), error: None, warning }

@@ -157,3 +157,45 @@ pub(crate) fn element_names(sys: &crate::system::System<'_>, rows: &[usize]) -> 
     }
     names
 }
+
+/// The smallest eigenvalue of the mass reduced to the free motions, as a fraction of the largest,
+/// below which a motion has no mass: `1e-12`. Mass ratios within one mechanism are far above it,
+/// and the round-off of the null-space basis leaves a massless motion at `~eps` of the largest.
+const MASSLESS: f64 = 1e-12;
+
+/// A motion the joints allow at `q` (`jac`, the dense `Phi_q` there) that no mass or inertia
+/// resists: the mass matrix reduced to the null space of `Phi_q`, `N^T M N`, is singular, and so
+/// are the equations of motion (their accelerations are not determined). A massless body is
+/// fine where the joints carry it along (a massless connecting rod between massive ones); a
+/// massless wheel turning freely on its axle is not. `Some` problem at the mass or inertia field
+/// of the first body in that motion, naming its coordinates.
+pub(crate) fn massless_motion(model: &crate::model::Model, jac: MatRef<'_, f64>) -> Option<crate::Problem> {
+    let basis = statics::null_space(jac);
+    let f = basis.ncols();
+    if f == 0 {
+        return None;
+    }
+    let mass: Vec<f64> = model.bodies.iter().flat_map(|b| [b.mass, b.mass, b.inertia]).collect();
+    let reduced =
+        Mat::<f64>::from_fn(f, f, |i, j| (0..mass.len()).map(|k| basis[(k, i)] * mass[k] * basis[(k, j)]).sum());
+    let eig = reduced.self_adjoint_eigen(faer::Side::Lower).ok()?;
+    let s = eig.S().column_vector();
+    let largest = (0..f).fold(0.0f64, |a, k| a.max(s[k].abs()));
+    // Eigenvalues ascend: the first is the least massive motion.
+    if s[0] > MASSLESS * largest {
+        return None;
+    }
+    let motion: Vec<f64> = (0..mass.len()).map(|k| (0..f).map(|j| basis[(k, j)] * eig.U()[(j, 0)]).sum()).collect();
+    let coordinates = statics::coordinates_of(model, &motion);
+    let first = coordinates.first()?;
+    let (body, coordinate) = first.rsplit_once('.')?;
+    let field = if coordinate == "phi" { "inertia" } else { "mass" };
+    Some(crate::Problem::new(
+        format!("bodies.{body}.{field}"),
+        format!(
+            "{} can move with no mass or inertia to resist: the equations of motion are singular; give it {field} \
+             above zero, or a joint that carries it",
+            coordinates.join(", ")
+        ),
+    ))
+}

@@ -522,7 +522,7 @@ fn coordinate_name(model: &Model, k: usize) -> String {
 
 /// The coordinates with the largest share of the direction `v (n)`, as `body.x` names, for
 /// messages.
-fn coordinates_of(model: &Model, v: &[f64]) -> Vec<String> {
+pub(crate) fn coordinates_of(model: &Model, v: &[f64]) -> Vec<String> {
     let vmax = max_abs(v);
     (0..v.len()).filter(|&k| v[k].abs() >= 0.2 * vmax).map(|k| coordinate_name(model, k)).collect()
 }

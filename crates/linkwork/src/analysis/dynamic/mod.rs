@@ -260,6 +260,9 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     let (independent, redundant) = independent_rows(jac.as_ref());
     let redundant_rows: Vec<String> = redundant.iter().map(|&r| dae.sys.row_name(r).to_string()).collect();
     let indeterminate = crate::analysis::element_names(&dae.sys, &crate::analysis::indeterminate_rows(jac.as_ref()));
+    if let Some(problem) = crate::analysis::massless_motion(model, jac.as_ref()) {
+        return Err(fail(out.results, Error::Model(vec![problem])));
+    }
     let mut sol = vec![0.0; n + m];
     if let Err(e) = dae.accelerations(&assembly.q, &assembly.qdot, t0, &mut sol) {
         return Err(fail(out.results, factor_error(e, t0)));
