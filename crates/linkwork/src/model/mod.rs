@@ -93,14 +93,31 @@ impl Model {
 }
 
 impl ForceElement {
-    /// A non-finite entry of the element's generalised force at `(q, qdot, t)`, if it has one.
-    pub fn non_finite(&self, q: &[f64], qdot: &[f64], t: f64) -> Option<f64> {
+    /// The element's generalised force at `(q, qdot, t)`, on its columns.
+    fn generalised(&self, q: &[f64], qdot: &[f64], t: f64) -> Vec<f64> {
         let columns = self.force.columns();
         let x: Vec<f64> = columns.iter().map(|&c| q[c]).collect();
         let v: Vec<f64> = columns.iter().map(|&c| qdot[c]).collect();
         let mut out = vec![0.0; columns.len()];
         self.force.load(&x, &v, t, &mut out);
-        out.into_iter().find(|f| !f.is_finite())
+        out
+    }
+
+    /// A non-finite entry of the element's generalised force at `(q, qdot, t)`, if it has one.
+    pub fn non_finite(&self, q: &[f64], qdot: &[f64], t: f64) -> Option<f64> {
+        self.generalised(q, qdot, t).into_iter().find(|f| !f.is_finite())
+    }
+
+    /// How the element's generalised force at the positions `q`, at rest, changes from `t` to
+    /// `t + h`: `(largest change, that change relative to the larger force)`. Where the force has a
+    /// singularity in time (`1/(t - c)`) the change over a step of a few units of round-off of `t`
+    /// is of the order of the force itself; a smooth force changes by `~h` relative.
+    pub fn change_over(&self, q: &[f64], t: f64, h: f64) -> (f64, f64) {
+        let rest = vec![0.0; q.len()];
+        let (a, b) = (self.generalised(q, &rest, t), self.generalised(q, &rest, t + h));
+        let size = a.iter().chain(&b).fold(0.0f64, |m, x| m.max(x.abs()));
+        let change = a.iter().zip(&b).fold(0.0f64, |m, (x, y)| m.max((y - x).abs()));
+        (change, if size > 0.0 { change / size } else { 0.0 })
     }
 
     /// Its expressions for a message, `field: source` joined by `; ` (empty when it has none).

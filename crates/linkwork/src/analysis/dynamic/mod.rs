@@ -190,10 +190,34 @@ pub fn singular_rows(dae: &mut Dae<'_>, q: &[f64], t: f64) -> (f64, Vec<RowName>
     (ratio, rows)
 }
 
-/// The failure of an integrator whose step fell below `h_min` at `t`: names the rows with the
-/// largest position residual, or, where `Phi_q` has (nearly) lost rank, the rows of the
-/// singularity.
+/// A force that changes by more than this fraction of itself over the step at which an
+/// integrator fails, the mechanism held at rest, has a singularity in time there: 1%. That step
+/// is 16 units of round-off of `t` or of the span ([`min_step`]), over which a smooth force
+/// changes by `~1e-12` of itself even at a frequency of `1e2` rad/s, and `1/(t - c)` by its whole
+/// size.
+const SUDDEN_FORCE: f64 = 1e-2;
+
+/// The failure of an integrator whose step fell below `h_min` at `t`: names a force with a
+/// singularity in time there ([`Error::Unbounded`]), else, where `Phi_q` has (nearly) lost rank,
+/// the rows of the singularity, else the rows with the largest position residual.
 pub fn step_failure(dae: &mut Dae<'_>, q: &[f64], t: f64, h: f64, cause: &str) -> Error {
+    // A force with a singularity in time at the failure (a torque `1/(t - 0.503)`): the
+    // integrator cannot pass it, and it, not a joint, is the cause.
+    let sudden = dae
+        .forces
+        .iter()
+        .map(|f| (f, f.change_over(q, t, h)))
+        .filter(|(_, (change, relative))| change.is_finite() && *relative > SUDDEN_FORCE)
+        .max_by(|a, b| a.1 .1.total_cmp(&b.1 .1));
+    if let Some((f, (change, _))) = sudden {
+        return Error::Unbounded {
+            time: t,
+            element: format!("forces.{}", f.name),
+            expression: f.expressions(),
+            rate: change / h,
+            limit: format!("the integrator's step fell to {h:.3e} s ({cause})"),
+        };
+    }
     let (ratio, rows) = singular_rows(dae, q, t);
     if ratio < 1e-6 {
         return Error::Singular {
