@@ -212,6 +212,25 @@ fn a_vanishing_step_stops_the_run() {
     }
 }
 
+/// A bar pinned at one end under gravity, driven by the torque `name` of expression `torque`,
+/// N m, its dynamics to 1 s output every `step` s.
+fn pendulum_with_torque(name: &str, torque: &str, step: f64) -> linkwork::Model {
+    let text = format!(
+        "
+gravity: [0, -9.81]
+bodies:
+  bar: {{mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {{O: [-0.5, 0]}}}}
+joints:
+  O: {{type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}}
+forces:
+  {name}: {{type: torque, body: bar, torque: \"{torque}\"}}
+analyses:
+  dynamics: {{type: dynamic, t_end: 1, step: {step}}}
+"
+    );
+    linkwork::Model::from_yaml(&text).unwrap()
+}
+
 /// A torque that is NaN at one instant, `(t - 0.5) / abs(t - 0.5)` (0/0 at t = 0.5 s, an output
 /// time), ran to the end with status ok and NaN in the accelerations and reactions there (the
 /// issue's case, at 0.3 s on its output grid). With every integrator the run now stops at 0.5 s
@@ -219,19 +238,7 @@ fn a_vanishing_step_stops_the_run() {
 /// kept and hold no NaN.
 #[test]
 fn a_nan_torque_stops_the_run_naming_it() {
-    let text = "
-name: pendulum with a switching torque
-gravity: [0, -9.81]
-bodies:
-  bar: {mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {O: [-0.5, 0]}}
-joints:
-  O: {type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}
-forces:
-  flip: {type: torque, body: bar, torque: \"(t-0.5)/abs(t-0.5)\"}
-analyses:
-  dynamics: {type: dynamic, t_end: 1, step: 0.1}
-";
-    let model = linkwork::Model::from_yaml(text).unwrap();
+    let model = pendulum_with_torque("flip", "(t-0.5)/abs(t-0.5)", 0.1);
     for integrator in [IntegratorKind::Bdf, IntegratorKind::Hht, IntegratorKind::Abam] {
         let o = linkwork::Overrides { integrator: Some(integrator), ..Default::default() };
         let failure = model.run_with("dynamics", &o).expect_err("NaN at t = 0.5 s");
@@ -260,19 +267,7 @@ analyses:
 /// is finite) and ends: a known gap (docs/reliability.md).
 #[test]
 fn a_torque_with_a_pole_stops_the_run_naming_it() {
-    let text = "
-name: pendulum with a torque that has a pole
-gravity: [0, -9.81]
-bodies:
-  bar: {mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {O: [-0.5, 0]}}
-joints:
-  O: {type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}
-forces:
-  kick: {type: torque, body: bar, torque: \"1/(t-0.503)\"}
-analyses:
-  dynamics: {type: dynamic, t_end: 1, step: 0.01}
-";
-    let model = linkwork::Model::from_yaml(text).unwrap();
+    let model = pendulum_with_torque("kick", "1/(t-0.503)", 0.01);
     for integrator in [IntegratorKind::Bdf, IntegratorKind::Abam] {
         let o = linkwork::Overrides { integrator: Some(integrator), ..Default::default() };
         let failure = model.run_with("dynamics", &o).expect_err("a pole at t = 0.503 s");
