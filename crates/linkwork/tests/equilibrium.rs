@@ -524,6 +524,25 @@ fn hanging_fourbar_rests_at_the_energy_minimum_from_every_start() {
     }
 }
 
+/// `(m, J_c, l, g)` of the compound pendulum below: kg, kg m^2, m, m/s^2.
+const COMPOUND: (f64, f64, f64, f64) = (4.0, 0.3, 0.5, 9.81);
+
+/// The compound pendulum `COMPOUND` pinned to the ground at its point `P`, `l` above its centre
+/// of mass, with the body fields `placed` (position, angle, ...) and the `analyses` entries.
+fn compound_pendulum(placed: &str, analyses: &str) -> String {
+    let (m, jc, l, g) = COMPOUND;
+    format!(
+        "gravity: [0, -{g}]
+bodies:
+  bob: {{mass: {m}, inertia: {jc}, {placed}, points: {{P: [0, {l}]}}}}
+joints:
+  pivot: {{type: revolute, body_i: bob, point_i: P, body_j: ground, point_j: [0, 0]}}
+analyses:
+  {analyses}
+"
+    )
+}
+
 /// A compound pendulum (mass m, inertia `J_c` about its centre of mass, pivot at `l` from it)
 /// released horizontally: gravity loads it although the guess has no stiffness (the rod carries
 /// no tension). It hangs straight down, `(x, y) = (0, -l)`, and swings at
@@ -532,19 +551,10 @@ fn hanging_fourbar_rests_at_the_energy_minimum_from_every_start() {
 /// stiffness of `m g l`), frequency 1e-9 (the geometric stiffness's central difference).
 #[test]
 fn horizontal_pendulum_hangs_down_and_swings_at_the_closed_form() {
-    let (m, jc, l, g) = (4.0f64, 0.3f64, 0.5f64, 9.81f64);
-    let yaml = format!(
-        r#"
-gravity: [0, -{g}]
-bodies:
-  bob: {{mass: {m}, inertia: {jc}, position: [{l}, 0], angle: {}, points: {{P: [0, {l}]}}}}
-joints:
-  pivot: {{type: revolute, body_i: bob, point_i: P, body_j: ground, point_j: [0, 0]}}
-analyses:
-  rest: {{type: static}}
-  swing: {{type: modes}}
-"#,
-        std::f64::consts::FRAC_PI_2
+    let (m, jc, l, g) = COMPOUND;
+    let yaml = compound_pendulum(
+        &format!("position: [{l}, 0], angle: {}", std::f64::consts::FRAC_PI_2),
+        "rest: {type: static}\n  swing: {type: modes}",
     );
     let r = run(&yaml, "rest");
     let phi = col(&r, "bob.phi")[0];
@@ -564,19 +574,10 @@ analyses:
 /// unstable balance and the pendulum swings about the bottom. Tolerance 1e-9 as above.
 #[test]
 fn inverted_pendulum_modes_are_a_divergence() {
-    let (m, jc, l, g) = (4.0f64, 0.3f64, 0.5f64, 9.81f64);
-    let yaml = format!(
-        r#"
-gravity: [0, -{g}]
-bodies:
-  bob: {{mass: {m}, inertia: {jc}, position: [0, {l}], angle: {}, points: {{P: [0, {l}]}}, given: [x, y, phi]}}
-joints:
-  pivot: {{type: revolute, body_i: bob, point_i: P, body_j: ground, point_j: [0, 0]}}
-analyses:
-  here: {{type: modes, about: initial}}
-  settled: {{type: modes}}
-"#,
-        std::f64::consts::PI
+    let (m, jc, l, g) = COMPOUND;
+    let yaml = compound_pendulum(
+        &format!("position: [0, {l}], angle: {}, given: [x, y, phi]", std::f64::consts::PI),
+        "here: {type: modes, about: initial}\n  settled: {type: modes}",
     );
     let rate = (m * g * l / (jc + m * l * l)).sqrt();
     let r = run(&yaml, "here");
