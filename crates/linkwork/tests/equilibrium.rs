@@ -111,16 +111,11 @@ analyses:
 /// `(psi, beta, dpsi/dtheta, dbeta/dtheta)` of the four-bar of [`SPRING_FOURBAR`] at crank
 /// angle `theta`, on the assembly branch with B above the ground line.
 fn fourbar(theta: f64) -> (f64, f64, f64, f64) {
-    let (a, b, c, d) = (0.5f64, 1.0f64, 0.7f64, 1.0f64);
-    let (ax, ay) = (a * theta.cos(), a * theta.sin());
-    // B on the circles |B - A| = b and |B - C| = c.
-    let (dx, dy) = (d - ax, -ay);
-    let e = dx.hypot(dy);
-    let along = (b * b - c * c + e * e) / (2.0 * e);
-    let h = (b * b - along * along).sqrt();
-    let (ux, uy) = (dx / e, dy / e);
-    let (bx, by) = (ax + along * ux - h * uy, ay + along * uy + h * ux);
-    let (bx, by) = if by > 0.0 { (bx, by) } else { (ax + along * ux + h * uy, ay + along * uy - h * ux) };
+    let (a, b, c, d) = HANGING;
+    let ([ax, ay], [bx, by]) = match loop_closure(theta, 1.0) {
+        ([ax, ay], [bx, by]) if by > 0.0 => ([ax, ay], [bx, by]),
+        _ => loop_closure(theta, -1.0),
+    };
     let psi = (by).atan2(bx - d);
     let beta = (by - ay).atan2(bx - ax);
     let dpsi = a * (theta - beta).sin() / (c * (psi - beta).sin());
@@ -427,21 +422,28 @@ analyses:
     assert!((got - want).abs() < 1e-9 * want, "{got} vs {want}");
 }
 
-/// Lengths `(a, b, c, d)` of `examples/hanging_fourbar.yaml`: crank, coupler, rocker, ground.
+/// Lengths `(a, b, c, d)` of `examples/hanging_fourbar.yaml` and of [`SPRING_FOURBAR`]: crank,
+/// coupler, rocker, ground.
 const HANGING: (f64, f64, f64, f64) = (0.5, 1.0, 0.7, 1.0);
 
-/// The joints `A` (crank-coupler) and `B` (coupler-rocker) of the hanging four-bar at crank angle
-/// `theta`, on its assembly branch (B to the left of the line from A to the ground pivot C), by
-/// intersecting the circles `|B - A| = b` and `|B - C| = c`.
-fn hanging_joints(theta: f64) -> ([f64; 2], [f64; 2]) {
+/// The joints `A` (crank-coupler) and `B` (coupler-rocker) of a four-bar of lengths [`HANGING`]
+/// at crank angle `theta`, by intersecting the circles `|B - A| = b` and `|B - C| = c`; `side`
+/// 1 puts B to the left of the line from A to the ground pivot C, -1 to the right.
+fn loop_closure(theta: f64, side: f64) -> ([f64; 2], [f64; 2]) {
     let (a, b, c, d) = HANGING;
     let (ax, ay) = (a * theta.cos(), a * theta.sin());
     let (dx, dy) = (d - ax, -ay);
     let e = dx.hypot(dy);
     let along = (b * b - c * c + e * e) / (2.0 * e);
-    let h = (b * b - along * along).sqrt();
+    let h = side * (b * b - along * along).sqrt();
     let (ux, uy) = (dx / e, dy / e);
     ([ax, ay], [ax + along * ux - h * uy, ay + along * uy + h * ux])
+}
+
+/// The joints of the hanging four-bar at crank angle `theta`, on its assembly branch (B to the
+/// left of the line from A to C).
+fn hanging_joints(theta: f64) -> ([f64; 2], [f64; 2]) {
+    loop_closure(theta, 1.0)
 }
 
 /// The potential energy of the hanging four-bar at crank angle `theta`, J, written out by hand
