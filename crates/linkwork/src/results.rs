@@ -161,7 +161,8 @@ impl Results {
     }
 
     /// Write `results.csv` at `path`: a header, then one line per output time; numbers in the
-    /// shortest form that reads back to the same double. Atomic ([`Staged`]).
+    /// shortest form that reads back to the same double. Written whole, then renamed into place, as
+    /// [`Results::write`] does.
     pub fn write_csv(&self, path: &Path) -> Result<(), Error> {
         self.stage_csv(path)?.commit()
     }
@@ -209,8 +210,8 @@ impl Results {
     /// Write `modes.csv` of a modes analysis at `path`: one line per mode, `mode, kind, frequency,
     /// damped_frequency, damping_ratio, growth_rate` (-, Hz, Hz, 1, 1/s; empty where the mode has
     /// none: no frequency or damping ratio for an unstable mode, no growth rate for a stable
-    /// one), then the shape's `<body>.x, .y, .phi`. Nothing for another analysis. Atomic
-    /// ([`Staged`]).
+    /// one), then the shape's `<body>.x, .y, .phi`. Nothing for another analysis. Written whole,
+    /// then renamed into place, as [`Results::write`] does.
     pub fn write_modes_csv(&self, path: &Path) -> Result<(), Error> {
         self.stage_modes_csv(path)?.map_or(Ok(()), Staged::commit)
     }
