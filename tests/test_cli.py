@@ -254,3 +254,17 @@ def test_a_runaway_driver_exits_3_naming_it(linkwork, tmp_path):
     assert len(rows) == 100 and rows[-1][0] == pytest.approx(0.99)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed" and summary["error_time"] == 1.0
+
+
+def test_a_failure_time_reads_the_same_in_every_line(linkwork, tmp_path):
+    """A failure just after the start was printed as `t = 0.000000 s` in the error and
+    `t = 1.49e-10 s` in the line after it. Both lines now write the time alike (Python's `.9g`),
+    here for a driver that is NaN past 1e-9 s."""
+    model = tmp_path / "soon.yaml"
+    model.write_text(RUNAWAY_DRIVER.replace("1/(t-1)", "sqrt(1e-9-t)"))
+    done = linkwork("run", model, "-o", tmp_path / "out")
+    assert done.code == 3, done.output
+    times = re.findall(r"at t = (\S+) s", done.stderr)
+    assert len(times) == 2 and times[0] == times[1], done.stderr
+    assert 0 < float(times[0]) < 2e-9 and "e-" in times[0], done.stderr
+

@@ -226,7 +226,7 @@ def _print_failure(error: SolverError | AssemblyError) -> None:
     where = []
     time = getattr(error, "time", None)
     if time is not None:
-        where.append(f"at t = {time:.6g} s")
+        where.append(f"at t = {time:.9g} s")
     joints = getattr(error, "joints", None) or []
     if joints:
         where.append(f"in joint(s) {', '.join(joints)}")

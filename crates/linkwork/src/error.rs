@@ -73,7 +73,7 @@ pub enum Error {
     #[error("{}", format_problems(.0))]
     Model(Vec<Problem>),
     /// The initial guess could not be moved onto `Phi = 0`.
-    #[error("assembly at t = {time} s failed after {iterations} iterations: residual {residual:.3e} (largest in {row}); {hint}")]
+    #[error("assembly at t = {when} s failed after {iterations} iterations: residual {residual:.3e} (largest in {row}); {hint}", when = seconds(.time))]
     Assembly {
         /// Time at which the system was assembled (drivers are evaluated there).
         time: f64,
@@ -88,7 +88,7 @@ pub enum Error {
     },
     /// The constraint Jacobian lost rank during an analysis: a dead centre, lock-up or a lost
     /// degree of freedom.
-    #[error("singular position at t = {time:.6} s: {detail}; rows involved: {}", join(.rows))]
+    #[error("singular position at t = {when} s: {detail}; rows involved: {}", join(.rows), when = seconds(.time))]
     Singular {
         /// Time of the last configuration examined.
         time: f64,
@@ -98,7 +98,7 @@ pub enum Error {
         detail: String,
     },
     /// Newton's method on the positions did not converge, even with the smallest sub-step.
-    #[error("position solution did not converge at t = {time:.6} s: residual {residual:.3e} in {row} after {iterations} iterations with a sub-step of {substep:.3e} s")]
+    #[error("position solution did not converge at t = {when} s: residual {residual:.3e} in {row} after {iterations} iterations with a sub-step of {substep:.3e} s", when = seconds(.time))]
     Convergence {
         /// Time the solver was trying to reach.
         time: f64,
@@ -113,7 +113,7 @@ pub enum Error {
     },
     /// A dynamic integrator could not continue: the step size fell below its minimum after
     /// repeated Newton or error-test failures.
-    #[error("integration failed at t = {time:.6} s with a step of {step:.3e} s: {cause}{}", rows_suffix(.rows))]
+    #[error("integration failed at t = {when} s with a step of {step:.3e} s: {cause}{}", rows_suffix(.rows), when = seconds(.time))]
     Integration {
         /// Time reached (the last accepted step).
         time: f64,
@@ -126,7 +126,7 @@ pub enum Error {
     },
     /// Static equilibrium was not found: Newton with a line search, descents and load stepping
     /// all stopped short of the tolerance.
-    #[error("no static equilibrium found at t = {time:.6} s: residual {residual:.3e} (largest in {equation}) after {iterations} Newton iterations, {:.1}% of the applied load reached", 100.0 * .load_fraction)]
+    #[error("no static equilibrium found at t = {when} s: residual {residual:.3e} (largest in {equation}) after {iterations} Newton iterations, {:.1}% of the applied load reached", 100.0 * .load_fraction, when = seconds(.time))]
     Equilibrium {
         /// Time of the equilibrium sought.
         time: f64,
@@ -142,7 +142,7 @@ pub enum Error {
     /// No stable static equilibrium within reach of the guess: the loads drive the mechanism
     /// along a path without end (no equilibrium exists there), or every equilibrium the solver
     /// reached was unstable.
-    #[error("no stable static equilibrium found at t = {time:.6} s: {cause}")]
+    #[error("no stable static equilibrium found at t = {when} s: {cause}", when = seconds(.time))]
     NoEquilibrium {
         /// Time of the equilibrium sought.
         time: f64,
@@ -156,7 +156,7 @@ pub enum Error {
     },
     /// An element of the model evaluated to a number that is not finite (NaN or infinite): the
     /// analysis stops there rather than write it.
-    #[error("{element} is {value} at t = {time} s{}", expression_suffix(.expression))]
+    #[error("{element} is {value} at t = {when} s{}", expression_suffix(.expression), when = seconds(.time))]
     NonFinite {
         /// Time of the evaluation, s.
         time: f64,
@@ -171,7 +171,7 @@ pub enum Error {
     /// A driver's motion grows without bound: the sub-steps that keep each body's rotation
     /// under `max_rotation` reached a limit (`limit`) while the Jacobian stayed regular.
     #[error(
-        "{element} grows without bound near t = {time} s ({expression}): its rate reached {rate:.3e}, and {limit}"
+        "{element} grows without bound near t = {when} s ({expression}): its rate reached {rate:.3e}, and {limit}", when = seconds(.time)
     )]
     Unbounded {
         /// Time reached, s.
@@ -193,6 +193,34 @@ pub enum Error {
         /// What the operating system said.
         message: String,
     },
+}
+
+/// A time for a message, in seconds, the same way everywhere (and as `linkwork`'s command line
+/// prints it): up to 9 significant digits without trailing zeros, in exponent form below 1e-4 (a
+/// failure just after the start is `1.49e-10`, not `0.000000`); C's and Python's `%.9g`.
+pub fn seconds(t: &f64) -> String {
+    let t = *t;
+    if t == 0.0 || !t.is_finite() {
+        return format!("{t}");
+    }
+    // C's rule: the exponent of the value rounded to 9 significant digits chooses the form.
+    let text = format!("{t:.8e}");
+    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+    let exponent: i32 = exponent.parse().unwrap_or(0);
+    if !(-4..9).contains(&exponent) {
+        let sign = if exponent < 0 { '-' } else { '+' };
+        return format!("{}e{sign}{:02}", trim_zeros(mantissa), exponent.abs());
+    }
+    trim_zeros(&format!("{t:.*}", (8 - exponent) as usize)).to_string()
+}
+
+/// `text` without the trailing zeros of its fraction (and without a bare trailing point).
+fn trim_zeros(text: &str) -> &str {
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.')
+    } else {
+        text
+    }
 }
 
 /// ` (expression)` after a non-finite value's element, or nothing.
@@ -246,3 +274,29 @@ fn format_problems(problems: &[Problem]) -> String {
 
 /// Shorthand for results in this crate.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::seconds;
+
+    /// The same text as Python's `f"{t:.9g}"` (the values printed by CPython 3.11).
+    #[test]
+    fn seconds_reads_as_python_g9() {
+        let cases = [
+            (0.0, "0"),
+            (1.4901161193847656e-10, "1.49011612e-10"),
+            (0.30000000000000004, "0.3"),
+            (10.55, "10.55"),
+            (0.7214, "0.7214"),
+            (1e9, "1e+09"),
+            (123456789.0, "123456789"),
+            (0.0001, "0.0001"),
+            (9.999999999e-5, "0.0001"),
+            (2.5e-5, "2.5e-05"),
+            (-0.25, "-0.25"),
+        ];
+        for (t, text) in cases {
+            assert_eq!(seconds(&t), text, "{t:e}");
+        }
+    }
+}

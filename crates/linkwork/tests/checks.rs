@@ -219,6 +219,95 @@ fn a_driver_without_bound_stops_the_kinematics_naming_it() {
     }
 }
 
+/// A driver that is NaN where the run starts (`sqrt(t-1)` at 0) was ignored by the assembly (its
+/// residual test took the larger of 0 and NaN, so it reported a residual of 0), the t = 0 row was
+/// written with the driven angle 0, and the first sub-step failed as "position solution did not
+/// converge at t = 0.000000 s: residual NaN". A driver that turns NaN during the run
+/// (`sqrt(1-t)`, whose rate is infinite at 1 s and value NaN past it) was also blamed on Newton. Both now stop naming the driver, its
+/// expression and the time, written the same way as the command line writes it.
+#[test]
+fn a_nan_driver_is_named_not_blamed_on_newton() {
+    let at_start = crank_driven_by("sqrt(t-1)", 2.0).run("kinematics").expect_err("NaN at the start");
+    let message = at_start.error.to_string();
+    let Error::NonFinite { element, expression, time, value } = &at_start.error else {
+        panic!("expected the driver to be named, got {message}")
+    };
+    assert_eq!((element.as_str(), expression.as_str(), *time), ("drivers.motor", "sqrt(t-1)", 0.0), "{message}");
+    assert!(value.is_nan() && message == "drivers.motor is NaN at t = 0 s (sqrt(t-1))", "{message}");
+    assert!(at_start.results.is_empty(), "no row may be written from a NaN driver");
+
+    let later = crank_driven_by("sqrt(1-t)", 2.0).run("kinematics").expect_err("NaN past 1 s");
+    let message = later.error.to_string();
+    let Error::NonFinite { element, time, .. } = &later.error else { panic!("expected the driver, got {message}") };
+    assert_eq!(element, "drivers.motor", "{message}");
+    assert!((1.0..1.01).contains(time), "{message}");
+    assert!(message.starts_with("drivers.motor is ") && message.contains("(sqrt(1-t))"), "{message}");
+    let last = *later.results.time.last().unwrap();
+    assert!((0.99..1.0).contains(&last), "the outputs before 1 s (its rate is infinite there) are kept: {last}");
+}
+
+/// A driver whose rate is infinite at the start (`sqrt(t)` at 0) makes the velocity equations
+/// non-finite: it is named, not reported as conflicting velocities.
+#[test]
+fn an_infinite_driver_rate_at_the_start_is_named() {
+    let failure = crank_driven_by("sqrt(t)", 1.0).run("kinematics").expect_err("infinite rate at 0");
+    let message = failure.error.to_string();
+    assert!(message.starts_with("drivers.motor is inf at t = 0 s (sqrt(t))"), "{message}");
+}
+
+/// Two drivers of the crank's angle at different speeds (`2*t` and `3*t`) agree on the position
+/// at t = 0, so the positions assemble, but not on the velocity. It was reported as "the given
+/// velocities conflict" although no velocity was given. Now the message says the drivers ask for
+/// velocities that cannot all hold, and names both rows.
+#[test]
+fn conflicting_drivers_are_not_blamed_on_given_velocities() {
+    let text = std::fs::read_to_string(example("fourbar.yaml")).unwrap();
+    let patched = text
+        .replace(
+            "  motor: {type: angle, body: crank, function: \"2*t\"}",
+            "  motor: {type: angle, body: crank, function: \"2*t\"}\n  motor2: {type: angle, body: crank, function: \"3*t\"}",
+        )
+        .replace("drivers: [motor]", "drivers: [motor, motor2]");
+    assert!(patched.contains("motor2: {") && patched.contains("[motor, motor2]"), "the patch applied");
+    let failure = Model::from_yaml(&patched).unwrap().run("kinematics").expect_err("the drivers conflict");
+    let message = failure.error.to_string();
+    assert!(matches!(failure.error, Error::Assembly { .. }), "{message}");
+    assert!(!message.contains("given velocities"), "{message}");
+    assert!(message.contains("the joints and drivers ask for velocities that cannot all hold"), "{message}");
+    assert!(message.contains("motor.angle") && message.contains("motor2.angle"), "{message}");
+}
+
+/// A pendulum a million kilometres from the origin, its guess two units of round-off off the
+/// assembled position: the assembly tolerance (1e-12 m) is below the round-off of coordinates of
+/// 1e9 m (1.2e-7 m), so it was blamed on "conflicting constraints". The position solvers stop at
+/// the round-off floor of the mechanism's size instead, and say so in a warning.
+#[test]
+fn the_assembly_tolerance_scales_with_the_mechanism() {
+    let far = r#"
+bodies:
+  bar: {mass: 1, inertia: 0.1, position: [1000000000.5000003, 0], angle: 0, points: {O: [-0.5, 0]}}
+ground:
+  points: {O: [1000000000.0, 0]}
+joints:
+  O: {type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: O}
+drivers:
+  motor: {type: angle, body: bar, function: "t"}
+analyses:
+  kinematics: {type: kinematic, drivers: [motor], t_end: 1, step: 0.1}
+"#;
+    let model = Model::from_yaml(far).unwrap();
+    assert_ne!(model.q0()[0], 1e9 + 0.5, "the guess is off the assembled position");
+    let r = model.run("kinematics").unwrap_or_else(|f| panic!("{}", f.error));
+    let warnings = r.summary["warnings"].to_string();
+    assert!(warnings.contains("below what round-off allows"), "{warnings}");
+    // Independent check: the pin stays at the ground point to the round-off of 1e9 m.
+    let (x, y, phi) = (r.column("bar.x").unwrap(), r.column("bar.y").unwrap(), r.column("bar.phi").unwrap());
+    for k in 0..r.len() {
+        let (px, py) = (x[k] - 0.5 * phi[k].cos() - 1e9, y[k] - 0.5 * phi[k].sin());
+        assert!(px.abs() < 1e-5 && py.abs() < 1e-5, "pin off by ({px:e}, {py:e}) at {k}");
+    }
+}
+
 /// A massless wheel turning freely on its axle: no mass resists that motion, so the equations of
 /// motion are singular. Before, `linkwork check` passed it and the dynamics stopped at t = 0 with
 /// "the solution of the equations of motion is NaN". Now both name the inertia field and the

@@ -15,6 +15,10 @@ use faer::Mat;
 
 /// Newton iterations allowed from a rough guess.
 const MAX_ITERATIONS: usize = 60;
+/// Relative residual of the velocity equations (to `1 + max |qdot|`) above which they cannot
+/// hold: a least-squares solve of consistent equations leaves round-off, `~1e-15` times the
+/// condition of `Phi_q`; `1e-8` leaves room for conditions up to `1e7`.
+const VELOCITY_TOLERANCE: f64 = 1e-8;
 /// Step halvings tried by the line search before a full step is taken anyway.
 const MAX_HALVINGS: usize = 12;
 
@@ -51,6 +55,11 @@ pub fn assemble(
     let mut phi = vec![0.0; m];
     let mut jac = Mat::<f64>::zeros(m, n);
     sys.phi(&ConfigBuf::new(&q).view(), t, &mut phi);
+    // A driver that is NaN or infinite at `t` (`sqrt(t - 1)` at 0) is the cause, not the guess;
+    // and a NaN must not pass the tolerance test below (`max` skips NaN).
+    if let Some(e) = sys.non_finite(&phi, t) {
+        return Err(e);
+    }
     let mut iterations = 0;
     let norm2 = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
     let maxabs = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
@@ -94,6 +103,9 @@ pub fn assemble(
     sys.jacobian_dense(&config.view(), t, jac.as_mut());
     let mut nu = vec![0.0; m];
     sys.nu(&config.view(), t, &mut nu);
+    if let Some(e) = sys.non_finite(&nu, t) {
+        return Err(e);
+    }
     let mut qdot = qdot0.to_vec();
     let free_v: Vec<usize> = (0..n).filter(|&k| !given[n + k]).collect();
     let r: Vec<f64> = (0..m).map(|i| nu[i] - (0..n).map(|j| jac[(i, j)] * qdot[j]).sum::<f64>()).collect();
@@ -106,14 +118,23 @@ pub fn assemble(
     let vres: Vec<f64> = (0..m).map(|i| (0..n).map(|j| jac[(i, j)] * qdot[j]).sum::<f64>() - nu[i]).collect();
     let velocity_residual = maxabs(&vres);
     let scale = 1.0 + maxabs(&qdot);
-    if velocity_residual > 1e-8 * scale {
+    if velocity_residual > VELOCITY_TOLERANCE * scale {
         let (row, res) = sys.worst_row(&vres);
+        let rows: Vec<String> = (0..m)
+            .filter(|&i| vres[i].abs() > VELOCITY_TOLERANCE * scale)
+            .map(|i| sys.row_name(i).to_string())
+            .collect();
+        let cause = if free_v.len() < n {
+            "the given velocities conflict with the joints and drivers"
+        } else {
+            "the joints and drivers ask for velocities that cannot all hold (two drivers of one motion, or a driver of a motion the joints lock)"
+        };
         return Err(Error::Assembly {
             time: t,
             iterations,
             residual: res,
             row,
-            hint: "the given velocities conflict with the joints and drivers (velocity equations Phi_q qdot = nu cannot hold)".into(),
+            hint: format!("{cause}: the velocity equations Phi_q qdot = nu of {} disagree", rows.join(", ")),
         });
     }
     let change = q.iter().zip(q0).map(|(a, b)| a - b).collect();

@@ -364,7 +364,7 @@ pub(crate) fn run_driven(
                         s.factor_at(false, s.t)?;
                         dt = 0.5 * step;
                         if dt < settings.min_substep * h {
-                            return Err(give_up(&mut s, t_new, step, newton));
+                            return Err(give_up(&mut s, model, &analysis.drivers, t_new, step, newton));
                         }
                     }
                 }
@@ -397,8 +397,6 @@ fn check_condition(s: &mut Solver<'_>, limit: f64) -> Result<(), Error> {
     Ok(())
 }
 
-/// The smallest sub-step failed: a singular position (no assembled position beyond `s.t`) or a
-/// plain convergence failure.
 /// Why the bodies turn too fast for a sub-step above the floor: a driver not finite now or at
 /// the next output time `target`; else a singular position (the driven Jacobian nearly loses
 /// rank, so the velocities it gives grow); else the fastest driver, whose motion grows without
@@ -418,7 +416,19 @@ fn too_fast(s: &mut Solver<'_>, model: &Model, drivers: &[usize], target: f64, s
     })
 }
 
-fn give_up(s: &mut Solver<'_>, t_new: f64, step: f64, newton: Option<NewtonFailure>) -> Error {
+/// The smallest sub-step failed: a driver not finite at the time sought; else a singular position
+/// (no assembled position beyond `s.t`); else a plain convergence failure.
+fn give_up(
+    s: &mut Solver<'_>,
+    model: &Model,
+    drivers: &[usize],
+    t_new: f64,
+    step: f64,
+    newton: Option<NewtonFailure>,
+) -> Error {
+    if let Some(e) = model.non_finite_driver(drivers, &[t_new]) {
+        return e;
+    }
     let (ratio, rows) = s.diagnose();
     if ratio < SINGULAR_RATIO {
         return Error::Singular {

@@ -635,8 +635,9 @@ fn free(analysis: &Analysis, t: f64, coordinates: &[String]) -> Error {
     Error::Model(vec![crate::Problem::new(
         format!("analyses.{}", analysis.name),
         format!(
-            "a {} analysis needs every degree of freedom held by a driver, a spring or a load that changes with position; at t = {t} s the mechanism is free to move ({}) with nothing acting along it: drive it, add a spring, or load it",
+            "a {} analysis needs every degree of freedom held by a driver, a spring or a load that changes with position; at t = {} s the mechanism is free to move ({}) with nothing acting along it: drive it, add a spring, or load it",
             analysis.kind.name(),
+            crate::error::seconds(&t),
             coordinates.join(", ")
         ),
     )])

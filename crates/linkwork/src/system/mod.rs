@@ -3,7 +3,7 @@
 //! in its own order.
 
 use crate::constraints::{Config, Constraint};
-use crate::error::RowName;
+use crate::error::{Error, RowName};
 use crate::model::{Element, Model};
 use faer::MatMut;
 
@@ -11,6 +11,8 @@ use faer::MatMut;
 #[derive(Debug)]
 pub struct System<'m> {
     elements: Vec<&'m Element>,
+    /// How many of `elements` are joints (the rest are drivers).
+    joints: usize,
     /// (elements + 1) first row of each element; the last entry is `m`.
     offsets: Vec<usize>,
     /// Number of coordinates.
@@ -33,7 +35,7 @@ impl<'m> System<'m> {
             big = big.max(c.rows() * c.columns().len());
         }
         let m = offsets[elements.len()];
-        System { elements, offsets, n: model.n(), m, block: vec![0.0; big] }
+        System { elements, joints: model.joints.len(), offsets, n: model.n(), m, block: vec![0.0; big] }
     }
 
     fn constraints(&self) -> impl Iterator<Item = (&dyn Constraint, std::ops::Range<usize>)> + '_ {
@@ -106,11 +108,28 @@ impl<'m> System<'m> {
         }
     }
 
+    /// The index in `elements` of the element that owns row `row`.
+    fn element_of(&self, row: usize) -> usize {
+        self.offsets.partition_point(|&o| o <= row) - 1
+    }
+
     /// The joint (or driver) and equation of row `row`.
     pub fn row_name(&self, row: usize) -> RowName {
-        let k = self.offsets.partition_point(|&o| o <= row) - 1;
+        let k = self.element_of(row);
         let c = &self.elements[k].constraint;
         RowName { element: self.elements[k].name.clone(), equation: c.row_names()[row - self.offsets[k]].to_string() }
+    }
+
+    /// The element of the first row of `v (m)` (a value of `Phi`, `nu` or `gamma` at `t`) that is
+    /// not finite, as an [`Error::NonFinite`] naming its path in the model file (`drivers.motor`)
+    /// and its function of time.
+    pub fn non_finite(&self, v: &[f64], t: f64) -> Option<Error> {
+        let row = v.iter().position(|x| !x.is_finite())?;
+        let k = self.element_of(row);
+        let e = self.elements[k];
+        let section = if k < self.joints { "joints" } else { "drivers" };
+        let expression = e.constraint.time_function().map(|f| f.source().to_string()).unwrap_or_default();
+        Some(Error::NonFinite { time: t, element: format!("{section}.{}", e.name), expression, value: v[row] })
     }
 
     /// The row with the largest absolute value of `v (m)`, and that value.
