@@ -1155,7 +1155,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let (mut yo, mut ypo) = (vec![0.0; 2 * n], vec![0.0; 2 * n]);
     let outcome = (|| -> Result<(), Error> {
         while ad.x < t_end - 1e-12 * span.max(1e-300) {
-            let h_min = min_step(stats.steps, ad.x, h, span, settings)?;
+            let h_min = min_step(s.dae, &s.qa, stats.steps, ad.x, h, span, settings)?;
             if ad.x + h > t_end || t_end - (ad.x + h) < 1e-3 * h {
                 h = t_end - ad.x;
             }

@@ -493,7 +493,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let outcome = (|| -> Result<(), Error> {
         while s.ts[0] < t_end - 1e-12 * span.max(1e-300) {
             let t0 = s.ts[0];
-            let h_min = min_step(s.stats.steps, t0, h, span, settings)?;
+            let h_min = min_step(s.dae, &s.qs[0], s.stats.steps, t0, h, span, settings)?;
             if h < h_min {
                 // Accepted steps may shrink the step too (an error estimate that grows from step
                 // to step); stop here rather than creep towards zero.

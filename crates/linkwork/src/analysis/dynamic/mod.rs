@@ -48,21 +48,33 @@ pub const MAX_STEPS: usize = 5_000_000;
 
 /// The smallest step an integrator may take at `t` in a run of length `span`, s: 16 units of
 /// round-off of the time, below which `t + h` no longer differs from `t` in a useful way.
-/// Errors with [`MAX_STEPS`] when `steps` has used up the budget, naming the tolerances of
-/// `settings` that asked for so many steps.
-pub fn min_step(steps: usize, t: f64, h: f64, span: f64, settings: &IntegratorSettings) -> Result<f64, Error> {
+/// When `steps` has used up the budget ([`MAX_STEPS`]) the run stops, with the cause
+/// [`step_failure`] sees at `(q, t)` (a force or driver singular in time, a singular position),
+/// else naming the tolerances of `settings` that asked for so many steps.
+pub fn min_step(
+    dae: &mut Dae<'_>,
+    q: &[f64],
+    steps: usize,
+    t: f64,
+    h: f64,
+    span: f64,
+    settings: &IntegratorSettings,
+) -> Result<f64, Error> {
+    let h_min = 16.0 * f64::EPSILON * t.abs().max(span);
     if steps >= MAX_STEPS {
         let (rtol, atol) = (settings.rtol, settings.atol);
-        return Err(Error::Integration {
-            time: t,
-            step: h,
-            cause: format!(
-                "more than {MAX_STEPS} steps (the step budget) at rtol {rtol:e}, atol {atol:e}; loosen rtol/atol, or the model may be too stiff for this integrator"
-            ),
-            rows: vec![],
+        let cause = format!("more than {MAX_STEPS} steps (the step budget)");
+        return Err(match step_failure(dae, q, t, h.max(h_min), &cause) {
+            Error::Integration { time, step, rows, .. } => Error::Integration {
+                time,
+                step,
+                cause: format!("{cause} at rtol {rtol:e}, atol {atol:e}; loosen rtol/atol, or the model may be too stiff for this integrator"),
+                rows,
+            },
+            named => named,
         });
     }
-    Ok(16.0 * f64::EPSILON * t.abs().max(span))
+    Ok(h_min)
 }
 
 /// What an integrator did, for `summary.json`.
@@ -197,10 +209,19 @@ pub fn singular_rows(dae: &mut Dae<'_>, q: &[f64], t: f64) -> (f64, Vec<RowName>
 /// size.
 const SUDDEN_FORCE: f64 = 1e-2;
 
-/// The failure of an integrator whose step fell below `h_min` at `t`: names a force with a
-/// singularity in time there ([`Error::Unbounded`]), else, where `Phi_q` has (nearly) lost rank,
+/// The failure of an integrator whose step fell below `h_min` at `t`: names a force or driver
+/// that is not finite at `t + h` ([`Error::NonFinite`]), else a force with a singularity in time
+/// there ([`Error::Unbounded`]), else, where `Phi_q` has (nearly) lost rank,
 /// the rows of the singularity, else the rows with the largest position residual.
 pub fn step_failure(dae: &mut Dae<'_>, q: &[f64], t: f64, h: f64, cause: &str) -> Error {
+    // A force or driver that is NaN or infinite just past the failure (`sqrt(0.503 - t)`) is the
+    // cause: name it, its expression and the time (the mechanism held at rest, as below). The
+    // step that failed may be up to 4 times `h` (the last cut), hence the probes to `16 h`.
+    for probe in [1.0, 4.0, 16.0].map(|k| t + k * h) {
+        if let Some(e) = non_finite_element(dae, q, probe) {
+            return e;
+        }
+    }
     // A force with a singularity in time at the failure (a torque `1/(t - 0.503)`): the
     // integrator cannot pass it, and it, not a joint, is the cause.
     let sudden = dae
@@ -229,6 +250,26 @@ pub fn step_failure(dae: &mut Dae<'_>, q: &[f64], t: f64, h: f64, cause: &str) -
         };
     }
     Error::Integration { time: t, step: h, cause: cause.to_string(), rows }
+}
+
+/// The first force or driver of `dae` that is NaN or infinite at `(q, t)`, at rest.
+fn non_finite_element(dae: &mut Dae<'_>, q: &[f64], t: f64) -> Option<Error> {
+    let rest = vec![0.0; q.len()];
+    if let Some((f, value)) = dae.forces.iter().find_map(|f| Some((f, f.non_finite(q, &rest, t)?))) {
+        return Some(Error::NonFinite {
+            time: t,
+            element: format!("forces.{}", f.name),
+            expression: f.expressions(),
+            value,
+        });
+    }
+    let config = ConfigBuf::new(q);
+    let mut rows = vec![0.0; dae.m];
+    dae.sys.phi(&config.view(), t, &mut rows);
+    dae.sys.non_finite(&rows, t).or_else(|| {
+        dae.sys.nu(&config.view(), t, &mut rows);
+        dae.sys.non_finite(&rows, t)
+    })
 }
 
 /// Hermite interpolation on `[t0, t0 + h]` of positions from `(q, qdot, qddot)` at both ends
@@ -339,6 +380,7 @@ pub type Outcome = (DynamicStats, Result<(), Error>);
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Model;
 
     /// The quintic Hermite interpolant reproduces a quintic polynomial and its derivative
     /// exactly (to rounding), from values, first and second derivatives at both ends.
@@ -358,5 +400,33 @@ mod tests {
                 assert!((q[k] - qe[k]).abs() < 1e-14 && (v[k] - ve[k]).abs() < 1e-13, "{theta}: {q:?} {v:?}");
             }
         }
+    }
+
+    /// At the step budget the run said "loosen rtol/atol" whatever the cause. A slider-crank
+    /// driven into its lock-up (the rod at right angles to the guide, crank at `asin(0.6)`) is a
+    /// singular position: it is named as one. The same budget at a regular position (crank at
+    /// 0.3 rad) still gives the tolerances to loosen.
+    #[test]
+    fn the_step_budget_names_a_singular_position() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/slider_crank_lockup.yaml");
+        let model = Model::load(path).unwrap();
+        let mut dae = Dae::new(&model, &[0], &[]).unwrap();
+        let settings = IntegratorSettings::default();
+        let theta = 0.6f64.asin();
+        let (ax, ay) = (0.2 * theta.cos(), 0.2 * theta.sin());
+        let lockup = [0.5 * ax, 0.5 * ay, theta, ax, 0.06, -std::f64::consts::FRAC_PI_2, ax, 0.0, 0.0];
+        let e = min_step(&mut dae, &lockup, MAX_STEPS, theta, 1e-9, 2.0, &settings).unwrap_err();
+        let message = e.to_string();
+        assert!(matches!(e, Error::Singular { .. }), "{message}");
+        assert!(message.contains("more than 5000000 steps") && !message.contains("loosen"), "{message}");
+
+        let theta = 0.3f64;
+        let (ax, ay) = (0.2 * theta.cos(), 0.2 * theta.sin());
+        let beta = (-ay / 0.12).asin();
+        let (bx, rod) = (ax + 0.12 * beta.cos(), [ax + 0.06 * beta.cos(), 0.5 * ay, beta]);
+        let regular = [0.5 * ax, 0.5 * ay, theta, rod[0], rod[1], rod[2], bx, 0.0, 0.0];
+        let e = min_step(&mut dae, &regular, MAX_STEPS, theta, 1e-3, 2.0, &settings).unwrap_err();
+        assert!(matches!(e, Error::Integration { .. }) && e.to_string().contains("loosen rtol/atol"), "{e}");
+        assert_eq!(min_step(&mut dae, &regular, 10, theta, 1e-3, 2.0, &settings).unwrap(), 16.0 * f64::EPSILON * 2.0);
     }
 }
