@@ -36,6 +36,10 @@ def test_bad_override_is_a_model_error():
     with pytest.raises(linkwork.ModelError) as info:
         model.run("dynamics_hht", rtol=True)
     assert info.value.problems == [("--rtol", "expected a number, found True (a bool)")]
+    # Text was a TypeError from the bindings (found by tests/test_properties.py).
+    with pytest.raises(linkwork.ModelError) as info:
+        model.run("dynamics_hht", step="0.1")
+    assert info.value.problems == [("--step", "expected a number, found '0.1' (str)")]
 
 
 def test_reaction_in_the_body_frame_is_the_rotated_global_one():

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numbers
 import os
 from typing import Any
 
@@ -112,11 +113,13 @@ class Model:
                     "`kinematics: {type: kinematic, drivers: [motor], t_end: 1, step: 0.01}`",
                 )
             analysis = self.analyses[0]
-        numbers = {"--rtol": rtol, "--atol": atol, "--t-end": t_end, "--step": step}
-        for option, value in numbers.items():
+        options = {"--rtol": rtol, "--atol": atol, "--t-end": t_end, "--step": step}
+        for option, value in options.items():
             # A bool is an int to Python, and True would run as 1.0: refused, as a file refuses it.
             if isinstance(value, bool):
                 raise model_error(option, f"expected a number, found {value} (a bool)")
+            if value is not None and not isinstance(value, numbers.Real):
+                raise model_error(option, f"expected a number, found {value!r} ({type(value).__name__})")
         try:
             return Results(self._native.run(analysis, integrator, rtol, atol, t_end, step))
         except (SolverError, AssemblyError) as error:

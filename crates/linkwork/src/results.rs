@@ -82,20 +82,27 @@ impl Results {
     }
 
     /// Append an output point from `q`, `qdot`, `qddot` (each `(n)`) and the values of the
-    /// columns after the body quantities, `extra`.
-    pub(crate) fn push(&mut self, t: f64, q: &[f64], qdot: &[f64], qddot: &[f64], extra: &[f64]) {
-        self.time.push(t);
+    /// columns after the body quantities, `extra`; or, when one of them is not finite, append
+    /// nothing and name its column: no NaN or infinity leaves as a result, whatever the analysis
+    /// (each analysis first looks for the element to blame; this is the net under all of them).
+    pub(crate) fn push(&mut self, t: f64, q: &[f64], qdot: &[f64], qddot: &[f64], extra: &[f64]) -> Result<(), Error> {
         let bodies = q.len() / 3;
-        for b in 0..bodies {
-            let vals = [q, qdot, qddot].into_iter().flat_map(|v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]]);
-            for (k, v) in vals.enumerate() {
-                self.columns[9 * b + k].push(v);
-            }
-        }
         debug_assert_eq!(self.columns.len(), 9 * bodies + extra.len(), "one extra value per extra column");
-        for (c, &v) in self.columns[9 * bodies..].iter_mut().zip(extra) {
+        // In column order: each body's `x, y, phi, vx, vy, omega, ax, ay, alpha`, then `extra`.
+        let values = || {
+            (0..bodies)
+                .flat_map(|b| [q, qdot, qddot].into_iter().flat_map(move |v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]]))
+                .chain(extra.iter().copied())
+        };
+        if let Some((k, value)) = values().enumerate().find(|(_, v)| !v.is_finite()) {
+            let element = self.names[k].clone();
+            return Err(Error::NonFinite { time: t, element, expression: String::new(), value });
+        }
+        self.time.push(t);
+        for (c, v) in self.columns.iter_mut().zip(values()) {
             c.push(v);
         }
+        Ok(())
     }
 
     pub(crate) fn set_kinematic_stats(&mut self, stats: &KinematicStats, assembly: &Assembly) {
@@ -353,7 +360,10 @@ impl Overrides {
             a.step = h;
         }
         if let Some(message) = crate::model::output_step_problem(a.t_start, a.t_end, a.step) {
-            problems.push(crate::Problem::new("--step", message));
+            // The option that made the grid what it is: the step, else the end time the file's step
+            // no longer fits (the file's own grid was checked when it compiled).
+            let field = if step.is_some() || self.t_end.is_none() { "--step" } else { "--t-end" };
+            problems.push(crate::Problem::new(field, message));
         }
         let dynamic = a.kind == AnalysisKind::Dynamic;
         for (name, given) in

@@ -4,7 +4,7 @@
 mod common;
 
 use common::col;
-use linkwork::{Model, Results};
+use linkwork::{Error, Model, Results};
 
 fn run(yaml: &str, analysis: &str) -> Results {
     let model = Model::from_yaml(yaml).unwrap_or_else(|e| panic!("{e}"));
@@ -593,4 +593,29 @@ fn inverted_pendulum_modes_are_a_divergence() {
     let got = std::f64::consts::TAU * r.summary["modes"][0]["frequency"].as_f64().unwrap();
     assert!((got - rate).abs() < 1e-9 * rate, "{got} vs {rate}");
     assert_eq!(r.summary["modes"][0]["kind"], serde_json::json!("vibration"));
+}
+
+/// No non-finite number leaves a static or modes analysis. A weight past a double's range
+/// (`1.9e307 kg` under `9.81 m/s^2`, found by `tests/test_properties.py`) wrote NaN reactions
+/// and potential energy with `status: ok`; it is now a model error at the mass. A measure that
+/// is NaN at the equilibrium (`sqrt(-1 - bob.phi*bob.phi)`) stops the analysis naming its column,
+/// with no row written.
+#[test]
+fn a_non_finite_equilibrium_is_not_written() {
+    let heavy =
+        compound_pendulum("position: [0, -0.5], angle: 0", "rest: {type: static}").replace("mass: 4", "mass: 1.9e307");
+    assert!(heavy.contains("mass: 1.9e307"), "the patch applied");
+    let Err(problems) = Model::from_yaml(&heavy) else { panic!("a weight past 1.8e308 loaded") };
+    let text = problems.to_string();
+    assert!(text.contains("bodies.bob.mass: the weight m |g| = 1.9e307 kg x 9.81 m/s^2 is out of range"), "{text}");
+    let nan = compound_pendulum("position: [0, -0.5], angle: 0", "rest: {type: static}\n  swing: {type: modes}")
+        .replace("analyses:", "measures:\n  odd: \"sqrt(-1 - bob.phi*bob.phi)\"\nanalyses:");
+    assert!(nan.contains("odd:"), "the patch applied");
+    let model = Model::from_yaml(&nan).unwrap();
+    for analysis in ["rest", "swing"] {
+        let failure = model.run(analysis).unwrap_err();
+        let Error::NonFinite { element, time, .. } = &failure.error else { panic!("{analysis}: {}", failure.error) };
+        assert_eq!((element.as_str(), *time), ("odd", 0.0), "{analysis}");
+        assert!(failure.results.is_empty(), "{analysis}: a row was written");
+    }
 }

@@ -275,10 +275,17 @@ fn overrides_are_checked() {
         e.error
     );
     // A step longer than the run gave only its two ends, silently; now it is refused, in the
-    // file and as an override.
+    // file and as an override. The option blamed is the one given: the end time that the file's
+    // step no longer fits (it named `--step`, which the user had not passed).
     let short = linkwork::Overrides { t_end: Some(0.005), ..Default::default() };
     let e = kin.run_with("kinematics", &short).unwrap_err().error;
-    assert!(e.to_string().contains("--step: the output step (0.02 s) is longer than the analysis (0.005 s"), "{e}");
+    assert!(e.to_string().contains("--t-end: the output step (0.02 s) is longer than the analysis (0.005 s"), "{e}");
+    let long = linkwork::Overrides { t_end: Some(1e6), ..Default::default() };
+    let e = kin.run_with("kinematics", &long).unwrap_err().error;
+    assert!(e.to_string().contains("--t-end: 50000000 output points requested"), "{e}");
+    let both = linkwork::Overrides { t_end: Some(1.0), step: Some(1e-8), ..Default::default() };
+    let e = kin.run_with("kinematics", &both).unwrap_err().error;
+    assert!(e.to_string().contains("--step: 100000000 output points requested"), "{e}");
 }
 
 #[test]

@@ -309,7 +309,7 @@ pub(crate) fn run_driven(
         s.velocities();
         check_condition(&mut s, settings.singular_condition)?;
         extra_values(t0, &s.q, &s.qdot, &s.qddot, &mut extra)?;
-        results.push(t0, &s.q, &s.qdot, &s.qddot, &extra);
+        results.push(t0, &s.q, &s.qdot, &s.qddot, &extra)?;
         let mut dt = h;
         let mut q_pred = vec![0.0; n];
         for &target in &times[1..] {
@@ -371,7 +371,7 @@ pub(crate) fn run_driven(
             }
             check_condition(&mut s, settings.singular_condition)?;
             extra_values(target, &s.q, &s.qdot, &s.qddot, &mut extra)?;
-            results.push(target, &s.q, &s.qdot, &s.qddot, &extra);
+            results.push(target, &s.q, &s.qdot, &s.qddot, &extra)?;
         }
         Ok(())
     })();

@@ -152,7 +152,9 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
     let stable = modes.iter().all(|m| m.growth_rate.is_none());
     let zero = vec![0.0; n];
     let extra: Vec<f64> = model.measures.iter().map(|m| m.value(&q, &qdot, &zero, t)).collect();
-    results.push(t, &q, &qdot, &zero, &extra);
+    if let Err(e) = results.push(t, &q, &qdot, &zero, &extra) {
+        return Err(fail(results, e));
+    }
     st.dae.positions(&q, t);
     let mut jac = Mat::<f64>::zeros(st.dae.m, n);
     st.dae.jacobian_dense(jac.as_mut());

@@ -696,7 +696,10 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
                 row.extend_from_slice(&react);
                 row.push(st.dae.potential_energy(&eq.q));
                 row.extend(model.measures.iter().map(|me| me.value(&eq.q, &zero, &zero, t)));
-                results.push(t, &eq.q, &zero, &zero, &row);
+                if let Err(e) = results.push(t, &eq.q, &zero, &zero, &row) {
+                    error = Some(e);
+                    break;
+                }
             }
             Err(e) => {
                 error = Some(e);

@@ -85,6 +85,18 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec
         })
         .collect();
     let gravity = spec.gravity.and_then(|g| cx.vec2("gravity", g)).unwrap_or([0.0, 0.0]);
+    for b in &bodies {
+        // Each number is a double, but the weight is their product: past 1.8e308 it is
+        // infinite, and every reaction and potential energy with it.
+        let weight = b.mass * gravity[0].hypot(gravity[1]);
+        if !weight.is_finite() {
+            let g = gravity[0].hypot(gravity[1]);
+            cx.problem(
+                format!("bodies.{}.mass", b.name),
+                format!("the weight m |g| = {:e} kg x {g} m/s^2 is out of range: a double holds up to 1.8e308", b.mass),
+            );
+        }
+    }
     let analyses = cx.analyses();
     if cx.problems.is_empty() {
         let name = spec.name.clone().unwrap_or_else(|| "model".into());

@@ -148,7 +148,7 @@ impl Output {
         if let Some(&bad) = [q, qdot, &self.sol[..], &self.row].iter().flat_map(|v| v.iter()).find(|x| !x.is_finite()) {
             return Err(dae.non_finite(q, qdot, &self.sol[..n], t, bad));
         }
-        self.results.push(t, q, qdot, qddot, &self.row);
+        self.results.push(t, q, qdot, qddot, &self.row)?;
         self.next += 1;
         Ok(())
     }
