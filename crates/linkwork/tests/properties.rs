@@ -690,7 +690,9 @@ impl Balance {
 /// `singular_condition = 1e10`; their error is `cond eps ~ 1e-6` relative at that limit but
 /// below `1e-10` on the positions generated here away from it, so `1e-8` leaves two digits of
 /// margin on both sides, and a reaction that is wrong by more (the wrong sign, a missing term,
-/// an unbalanced least-squares solution) fails.
+/// an unbalanced least-squares solution) fails. Plus `1e-12` N (or N m) absolute: a body whose
+/// every term is round-off of zero (no gravity, springs at rest: terms of `1e-43` were seen)
+/// balances only to its own noise; the generator's loads are nine or more orders above it.
 #[test]
 fn inverse_reactions_balance_every_body() {
     property("inverse", |recipe, tally| {
@@ -765,7 +767,7 @@ fn inverse_reactions_balance_every_body() {
             for (k, (s, size)) in bal.sum.iter().zip(&bal.size).enumerate() {
                 let worst = s.iter().fold(0.0f64, |a, x| a.max(x.abs()));
                 prop_assert!(
-                    worst <= 1e-8 * size.max(f64::MIN_POSITIVE),
+                    worst <= 1e-8 * size + 1e-12,
                     "row {row} (t = {}): body b{k} unbalanced by {s:?} (terms of size {size:e})\n{text}",
                     r.time[row]
                 );
@@ -777,17 +779,20 @@ fn inverse_reactions_balance_every_body() {
 
 /// Property 3: free, undamped dynamics under gravity and springs keeps its total energy
 /// `sum (m v^2 + J omega^2) / 2 + V(q)` (computed here, `V` the generator's potential). Bound:
-/// `1000 rtol E` with `E` the energy exchanged in the run (the largest kinetic energy plus the
-/// range of `V`), plus round-off. The integrator bounds the local error per step by the
-/// tolerance; the global error is that times what the run adds up, measured at 11 to 580 times
-/// the tolerance over two seconds of the quick-return (docs/integrators.md), and an energy error
-/// is first order in the state's: a run of one second at 1000 times leaves the margin of the
-/// worst measured case.
+/// `1e4 rtol E` at `rtol = atol = 1e-7`, with `E` the energy exchanged in the run (the largest
+/// kinetic energy plus the range of `V`), plus round-off: `1e-3 E`. The integrator bounds the
+/// local error per step by the tolerance; the global error is that times what the run adds up,
+/// 11 to 580 times the tolerance over two seconds of the quick-return (docs/integrators.md), and
+/// an energy error is first order in the state's. The long run found a stiff closed loop (a
+/// spring of 186 N/m, a distance link and a slider) drifting by 1630 `rtol E` with `bdf` at
+/// `1e-6`, and by 90 at `1e-7` (the engine's own energy columns agree to 12 digits: integration
+/// error, not a wrong force); `1e4` is six times the worst seen. A wrong or missing force, or a
+/// reaction that does work, drifts by a sizeable part of `E`.
 #[test]
 fn free_dynamics_keeps_its_energy() {
     property("dynamics", |recipe, tally| {
         let m = build(recipe, false);
-        let rtol = 1e-6;
+        let rtol = 1e-7;
         let (text, outcome) = run(&m, "dynamic", &format!("rtol: {rtol:?}, atol: {rtol:?}"));
         let r = match &outcome {
             Ok(r) => {
@@ -817,7 +822,7 @@ fn free_dynamics_keeps_its_energy() {
         let (vmin, vmax) = energies.iter().fold((v0, v0), |(lo, hi), e| (lo.min(e.1), hi.max(e.1)));
         let exchanged = kmax + (vmax - vmin);
         // Round-off of the sums: a few units of the largest term.
-        let bound = 1000.0 * rtol * exchanged + 1e-12 * (k0.abs() + v0.abs() + 1.0);
+        let bound = 1e4 * rtol * exchanged + 1e-12 * (k0.abs() + v0.abs() + 1.0);
         for (row, (k, v)) in energies.iter().enumerate() {
             let drift = (k + v - k0 - v0).abs();
             prop_assert!(
