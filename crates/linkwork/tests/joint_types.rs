@@ -142,3 +142,28 @@ analyses:
     let x = |t: HyperDual| c::<HyperDual>(0.5) + t * c(0.1);
     check_coordinate(&r, "follower", "y", move |t| x(t) * angle(t).tan() + c::<HyperDual>(0.2) / angle(t).cos(), TOL);
 }
+
+/// A translational joint's relative angle takes whole turns from the file's guess: a slider
+/// written a turn and a bit from its guide (`angle: 6.35`, the guide at 0, axes parallel) is the
+/// same position as one at 0.067 rad, so assembly turns it back by 0.067, not by a turn and a
+/// bit, and keeps its angle near 2 pi (found by the property tests, `tests/properties.rs`).
+#[test]
+fn translational_angle_takes_whole_turns_from_the_guess() {
+    let text = "bodies:
+  guide: {mass: 1, inertia: 1, position: [0, 0], angle: 0}
+  slider: {mass: 1, inertia: 1, position: [0.5, 0.01], angle: 6.35}
+joints:
+  pin: {type: revolute, body_i: guide, point_i: [0, 0], body_j: ground, point_j: [0, 0]}
+  slide: {type: translational, body_i: guide, point_i: [0, 0], axis_i: [1, 0], body_j: slider, point_j: [0, 0], axis_j: [1, 0]}
+drivers:
+  turn: {type: angle, body: guide, function: \"0.5*t\"}
+  push: {type: distance, body_i: ground, point_i: [0, 0], body_j: slider, point_j: [0, 0], function: \"0.5 + 0.1*t\"}
+analyses:
+  k: {type: kinematic, t_end: 1, step: 0.5}
+";
+    let r = run(text);
+    let (phi, time) = (r.column("slider.phi").unwrap(), r.column("time").unwrap());
+    for (p, t) in phi.iter().zip(time) {
+        assert!((p - 2.0 * std::f64::consts::PI - 0.5 * t).abs() < TOL, "slider.phi {p} at t = {t}");
+    }
+}

@@ -14,7 +14,9 @@
 //!         [ 0 ]
 //! ```
 //! `c` comes from the axes, not from an initial configuration: the joint forces `A_i v'_i` and
-//! `A_j v'_j` to point the same way. Haug (1989) section 3.3.2; Nikravesh (2018) section 7.1.
+//! `A_j v'_j` to point the same way. The axes fix it modulo a turn only; [`Translational::near`]
+//! takes the whole turns from the starting relative angle, so that a body written a turn away
+//! (`phi = 2 pi + 0.1` against the axes' `0.1`) stays on its branch. Haug (1989) section 3.3.2; Nikravesh (2018) section 7.1.
 
 use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Pair, Projection};
 
@@ -35,6 +37,15 @@ impl Translational {
         let c = v_j[1].atan2(v_j[0]) - v_i[1].atan2(v_i[0]);
         let line = Projection { i, w: perp(unit(v_i)), s_p, j, s_q };
         Translational { pair: Pair::new(i, j), line, c }
+    }
+
+    /// The joint with its angle constant `c` moved by whole turns to the nearest of `relative`
+    /// (the starting `phi_i - phi_j`): the axes fix the angle modulo a turn, and a body written a
+    /// turn away from them is the same position, to be kept on its branch, not turned back.
+    pub fn near(mut self, relative: f64) -> Translational {
+        let turn = 2.0 * std::f64::consts::PI;
+        self.c += turn * ((relative - self.c) / turn).round();
+        self
     }
 }
 
@@ -84,6 +95,23 @@ mod tests {
         check_fd_random(&g, 2, 2);
         let h = Translational::new(BodyIx(Some(0)), [0.5, -2.0], [0.3, -0.4], BodyIx::GROUND, [0.7, 0.1], [1.0, 0.0]);
         check_fd_random(&h, 2, 3);
+    }
+
+    /// The angle constant takes whole turns from the starting relative angle: parallel axes give
+    /// `c = 0`, and near `phi_i - phi_j = -2 pi - 0.1` it becomes `-2 pi` (the angle row is
+    /// `-0.1` there, not `-2 pi - 0.1`); half a turn away or less it stays.
+    #[test]
+    fn angle_takes_whole_turns_from_the_start() {
+        let turn = 2.0 * std::f64::consts::PI;
+        let joint =
+            || Translational::new(BodyIx(Some(0)), [0.0, 0.0], [1.0, 0.0], BodyIx(Some(3)), [0.0, 0.0], [2.0, 0.0]);
+        assert_eq!(joint().c, 0.0);
+        assert_eq!(joint().near(-turn - 0.1).c, -turn);
+        assert_eq!(joint().near(2.0 * turn + 3.0).c, 2.0 * turn);
+        assert_eq!(joint().near(3.0).c, 0.0);
+        let mut phi = [1.0; 2];
+        joint().near(-turn - 0.1).phi_at(&[0.0, 0.0, 0.0, 0.0, 0.0, turn + 0.1], 0.0, &mut phi);
+        assert!((phi[1] + 0.1).abs() < 1e-14, "{phi:?}");
     }
 
     /// Hand-derived: a guide (body i) with centre at the origin, angle 0, axis (2, 0) through its

@@ -388,7 +388,8 @@ impl Cx<'_> {
                 let ok = self.distinct(path, body_i, body_j);
                 let ((i, sp), (j, sq), vi, vj) = (a?, b?, vi?, vj?);
                 ok.then_some(())?;
-                Box::new(Translational::new(i, sp, vi, j, sq, vj))
+                let relative = i.coords(&self.q0)[2] - j.coords(&self.q0)[2];
+                Box::new(Translational::new(i, sp, vi, j, sq, vj).near(relative))
             }
             J::PointOnLine(PointOnLineJoint { body_i, point_i, axis_i, body_j, point_j }) => {
                 let (i, sp, vi, j, sq) = self.line_and_point(path, body_i, point_i, axis_i, body_j, point_j)?;
