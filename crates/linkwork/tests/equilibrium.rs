@@ -619,3 +619,44 @@ fn a_non_finite_equilibrium_is_not_written() {
         assert!(failure.results.is_empty(), "{analysis}: a row was written");
     }
 }
+
+/// A parallelogram four-bar (cranks 1 m, ground and coupler 2 m) under gravity, its crank
+/// driven through the flat position `theta = 0` so that at t = 0.1 s it is `d` rad past it. The
+/// driven Jacobian's smallest singular value is about `d` of the largest. At `d = 1e-8` the
+/// reactions balance every body (tests/properties.rs checks the balance on random mechanisms).
+/// At `d = 5e-10` and `2e-9` the condition estimate (`1e10`, `2.5e9`) is still inside the
+/// kinematics' `singular_condition` (1e10) while the least-squares solve drops the direction as
+/// rank-deficient (below 1e-9): the reactions left `1e4` N of `1.8e4` unbalanced and the analysis
+/// ended ok. It is now a `Singular` error at 0.1 s naming the joints, with the t = 0 row kept.
+#[test]
+fn reactions_that_cannot_balance_the_loads_are_not_written() {
+    let parallelogram = |d: &str| {
+        format!(
+            "gravity: [0, -9.81]
+bodies:
+  crank_1: {{mass: 1, inertia: 0.083, position: [0.4975, -0.05], angle: -0.1, points: {{O: [-0.5, 0], P: [0.5, 0]}}}}
+  crank_2: {{mass: 1, inertia: 0.083, position: [2.4975, -0.05], angle: -0.1, points: {{O: [-0.5, 0], P: [0.5, 0]}}}}
+  coupler: {{mass: 2, inertia: 0.667, position: [1.995, -0.0998], angle: 0.0, points: {{P1: [-1, 0], P2: [1, 0]}}}}
+joints:
+  ground_1: {{type: revolute, body_i: crank_1, point_i: O, body_j: ground, point_j: [0, 0]}}
+  coupler_1: {{type: revolute, body_i: crank_1, point_i: P, body_j: coupler, point_j: P1}}
+  ground_2: {{type: revolute, body_i: crank_2, point_i: O, body_j: ground, point_j: [2, 0]}}
+  coupler_2: {{type: revolute, body_i: crank_2, point_i: P, body_j: coupler, point_j: P2}}
+drivers:
+  motor: {{type: angle, body: crank_1, function: \"-0.1 + t + {d}\"}}
+analyses:
+  inv: {{type: inverse, drivers: [motor], t_end: 0.1, step: 0.1}}
+"
+        )
+    };
+    let r = run(&parallelogram("1e-8"), "inv");
+    assert_eq!(r.len(), 2);
+    for d in ["5e-10", "2e-9"] {
+        let failure = Model::from_yaml(&parallelogram(d)).unwrap().run("inv").unwrap_err();
+        let Error::Singular { time, rows, detail } = &failure.error else { panic!("{d}: {}", failure.error) };
+        assert_eq!(*time, 0.1, "{d}");
+        assert!(rows.iter().any(|r| r.element == "coupler_2"), "{d}: {}", failure.error);
+        assert!(detail.contains("do not balance"), "{d}: {detail}");
+        assert_eq!(failure.results.len(), 1, "{d}: the t = 0 row is kept, the unbalanced one not written");
+    }
+}
