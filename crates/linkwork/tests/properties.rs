@@ -780,7 +780,9 @@ fn inverse_reactions_balance_every_body() {
 /// Property 3: free, undamped dynamics under gravity and springs keeps its total energy
 /// `sum (m v^2 + J omega^2) / 2 + V(q)` (computed here, `V` the generator's potential). Bound:
 /// `1e4 rtol E` at `rtol = atol = 1e-7`, with `E` the energy exchanged in the run (the largest
-/// kinetic energy plus the range of `V`), plus round-off: `1e-3 E`. The integrator bounds the
+/// kinetic energy plus the range of `V`), plus the round-off of the sums, `1e-12` of the
+/// energies' size (what passes a mechanism that barely moves, whose `E` is itself round-off: the
+/// tally's classes above `1e4` are such runs). The integrator bounds the
 /// local error per step by the tolerance; the global error is that times what the run adds up,
 /// 11 to 580 times the tolerance over two seconds of the quick-return (docs/integrators.md), and
 /// an energy error is first order in the state's. The long run found a stiff closed loop (a
