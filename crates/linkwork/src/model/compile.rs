@@ -976,6 +976,7 @@ impl Cx<'_> {
             alpha,
             formulation,
             fixed_step: None,
+            max_steps: d.max_steps,
         })
     }
 
