@@ -22,12 +22,13 @@ mkdir -p corpus/model artifacts/model
 cp ../examples/*.yaml corpus/model/
 host=$(rustc -vV | sed -n 's/^host: //p')
 log=artifacts/model/fuzz.log
-# -timeout=1: an input that runs longer than 1 s counts as a hang (every example runs in at most
-# 30 ms through the target). -max_len=8192: libFuzzer would otherwise grow inputs to the
+# -timeout=5: an input that runs longer counts as a hang. Every example runs in at most 30 ms
+# through the target; the slowest legitimate input is 4 analyses (the target's cap) each spending
+# the kinematic sub-step bound on a driver's pole, about 0.4 s apiece. -max_len=8192: libFuzzer would otherwise grow inputs to the
 # largest seed, the 22 KB N-four-bar, whose size only slows parsing and mutation; every other
 # example fits. -rss_limit_mb=2048: libFuzzer's default, written out; an execution takes ~45 MB.
 status=0
-"target/$host/release/model" corpus/model -dict=linkwork.dict -max_total_time="$seconds" -timeout=1 \
+"target/$host/release/model" corpus/model -dict=linkwork.dict -max_total_time="$seconds" -timeout=5 \
     -max_len=8192 -rss_limit_mb=2048 -artifact_prefix=artifacts/model/ -print_final_stats=1 "$@" \
     >"$log" 2>&1 || status=$?
 grep -E '^#[0-9]+[[:space:]]+(INITED|DONE)|^stat::' "$log" || true
