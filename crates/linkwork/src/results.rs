@@ -385,6 +385,7 @@ impl Overrides {
                 a.integrator.atol = analysis.integrator.atol;
                 a.integrator.initial_step = analysis.integrator.initial_step;
                 a.integrator.max_step = analysis.integrator.max_step;
+                a.integrator.max_steps = analysis.integrator.max_steps;
             }
         }
         if let Some(r) = rtol {

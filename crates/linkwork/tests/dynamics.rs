@@ -306,3 +306,25 @@ fn a_torque_with_a_pole_stops_the_run_naming_it() {
         assert_eq!(r.len(), 51, "{integrator:?}: outputs at 0 to 0.5 kept");
     }
 }
+
+/// A pendulum under a gravity of 9.2e18 m/s^2 (a mutated example, found by the fuzzer, `fuzz/`)
+/// swings at 3e9 rad/s: 0.03 s of it takes more steps than the budget, and spending the default
+/// budget of 5 million took two minutes. A caller that lowers it (`IntegratorSettings::
+/// max_steps`) has the budget's error after that many steps, with every integrator.
+#[test]
+fn a_lowered_step_budget_stops_the_run_at_it() {
+    let text = "gravity: [9223372036854775807, -9.81]\n\
+                bodies:\n  P1: {mass: 1, inertia: 0, position: [-1, 0], angle: 3.141592653589793, points: {pivot: [-1, 0]}}\n\
+                joints:\n  pivot: {type: revolute, body_i: P1, point_i: pivot, body_j: ground, point_j: [0, 0]}\n\
+                analyses:\n  dynamics: {type: dynamic, t_end: 0.03, step: 0.01}\n";
+    let mut model = linkwork::Model::from_yaml(text).unwrap();
+    model.analyses["dynamics"].integrator.max_steps = 1000;
+    for integrator in [IntegratorKind::Bdf, IntegratorKind::Hht, IntegratorKind::Abam] {
+        let o = linkwork::Overrides { integrator: Some(integrator), ..Default::default() };
+        let failure = model.run_with("dynamics", &o).expect_err("3e9 rad/s for 0.03 s");
+        let message = failure.error.to_string();
+        eprintln!("{integrator:?}: {message}");
+        assert!(matches!(failure.error, linkwork::Error::Integration { .. }), "{integrator:?}: {message}");
+        assert!(message.contains("more than 1000 steps (the step budget)"), "{integrator:?}: {message}");
+    }
+}

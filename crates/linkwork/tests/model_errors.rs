@@ -295,3 +295,20 @@ fn a_step_longer_than_the_run_is_refused() {
     let long = format!("{}\nanalyses:\n  kin: {{type: kinematic, t_end: 0.3, step: 0.5}}\n", &text[..analyses]);
     has(&problems(&long), "analyses.kin.step", "the output step (0.5 s) is longer than the analysis (0.3 s");
 }
+
+/// A named ground point in a file with no `ground:` section is an unknown point, as it is when the
+/// section lists others. Found by the fuzzer (`fuzz/`): the joint and the spring that named one
+/// were dropped without a word, the rest compiled, and the dynamic analysis indexed the forces it
+/// had selected by name past the end of the compiled ones, a panic.
+#[test]
+fn a_ground_point_without_a_ground_section_is_unknown() {
+    let text = "bodies:\n  a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n\
+                joints:\n  O: {type: revolute, body_i: a, point_i: [0, 0], body_j: ground, point_j: O}\n\
+                forces:\n  \
+                  drive: {type: torque, body: a, torque: 1}\n  \
+                  spring: {type: spring_damper, body_i: a, point_i: [1, 0], body_j: ground, point_j: C, stiffness: 1}\n\
+                analyses:\n  dynamics: {type: dynamic, t_end: 0.1, step: 0.01}\n";
+    let list = problems(text);
+    has(&list, "joints.O.point_j", "unknown point 'O' of body 'ground' (it has no named points)");
+    has(&list, "forces.spring.point_j", "unknown point 'C' of body 'ground' (it has no named points)");
+}

@@ -319,8 +319,10 @@ impl Cx<'_> {
         match p {
             PointRef::Coords(v) => self.vec2(path, *v),
             PointRef::Name(n) => {
+                // A file with no `ground:` section has a ground with no named points.
+                let no_points = IndexMap::new();
                 let points = if body == "ground" {
-                    self.spec.ground.as_ref().map(|g| &g.points)
+                    Some(self.spec.ground.as_ref().map_or(&no_points, |g| &g.points))
                 } else {
                     self.spec.bodies.get(body).map(|b| &b.points)
                 };
@@ -987,6 +989,7 @@ impl Cx<'_> {
             alpha,
             formulation,
             fixed_step: None,
+            max_steps: d.max_steps,
         })
     }
 

@@ -48,9 +48,9 @@ pub const MAX_STEPS: usize = 5_000_000;
 
 /// The smallest step an integrator may take at `t` in a run of length `span`, s: 16 units of
 /// round-off of the time, below which `t + h` no longer differs from `t` in a useful way.
-/// When `steps` has used up the budget ([`MAX_STEPS`]) the run stops, with the cause
-/// [`step_failure`] sees at `(q, t)` (a force or driver singular in time, a singular position),
-/// else naming the tolerances of `settings` that asked for so many steps.
+/// When `steps` has used up the budget (`settings.max_steps`, by default [`MAX_STEPS`]) the run
+/// stops, with the cause [`step_failure`] sees at `(q, t)` (a force or driver singular in time, a
+/// singular position), else naming the tolerances of `settings` that asked for so many steps.
 pub fn min_step(
     dae: &mut Dae<'_>,
     q: &[f64],
@@ -61,9 +61,9 @@ pub fn min_step(
     settings: &IntegratorSettings,
 ) -> Result<f64, Error> {
     let h_min = 16.0 * f64::EPSILON * t.abs().max(span);
-    if steps >= MAX_STEPS {
-        let (rtol, atol) = (settings.rtol, settings.atol);
-        let cause = format!("more than {MAX_STEPS} steps (the step budget)");
+    if steps >= settings.max_steps {
+        let (rtol, atol, budget) = (settings.rtol, settings.atol, settings.max_steps);
+        let cause = format!("more than {budget} steps (the step budget)");
         return Err(match step_failure(dae, q, t, h.max(h_min), &cause) {
             Error::Integration { time, step, rows, .. } => Error::Integration {
                 time,

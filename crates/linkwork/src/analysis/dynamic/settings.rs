@@ -39,6 +39,11 @@ pub struct IntegratorSettings {
     /// the tests; not a model-file setting (a constant step gives no control of the error).
     #[serde(skip)]
     pub(crate) fixed_step: Option<f64>,
+    /// The step budget: the most steps the run may take before it stops with an error. Default
+    /// [`super::MAX_STEPS`], minutes of CPU at most. Not a model-file setting: a caller that must
+    /// have an answer sooner lowers it (the fuzz target, `fuzz/`, to keep an execution short).
+    #[serde(skip)]
+    pub max_steps: usize,
 }
 
 impl Default for IntegratorSettings {
@@ -53,6 +58,7 @@ impl Default for IntegratorSettings {
             alpha: -0.3,
             formulation: Formulation::Si2,
             fixed_step: None,
+            max_steps: super::MAX_STEPS,
         }
     }
 }
