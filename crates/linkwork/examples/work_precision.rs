@@ -10,7 +10,7 @@
 //!     # every dynamic analysis of every example at rtol = atol = 1e-4 .. 1e-13: does it reach its end?
 //! cargo run --release -p linkwork --example work_precision -- one FILE INTEGRATOR TOL
 //!     # one run of a file's `dynamics` (for a profiler: `valgrind --tool=callgrind` counts its
-//!     # instructions whatever else the machine runs)
+//!     # instructions whatever else the machine runs); an N-four-bar's (N = 40) B0 error too
 //! ```
 //!
 //! Prints a Markdown table: the error (largest over the output times of the positions named
@@ -172,6 +172,10 @@ fn one(file: &str, integrator: &str, tol: f64) {
         }
     };
     println!("{file} {integrator} {tol:e}: {time:.3} s, {}", r.summary["statistics"]);
+    if file.contains("nfourbar") {
+        println!("B0 error to t = {}: {:.3e} m", r.time.last().unwrap_or(&0.0), nfourbar_error(&r, 40));
+    }
+    println!("warnings: {}", r.summary["warnings"]);
 }
 
 fn main() {

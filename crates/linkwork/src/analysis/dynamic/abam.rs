@@ -30,9 +30,10 @@
 //! refactoring `B` at the iterate when it contracts slower than `SLOW_RATE` or has not converged
 //! in `REFACTOR_AFTER` iterations. It has converged when the estimated distance to the solution
 //! (`rate / (1 - rate)` times the correction) is below `NEWTON_TOL` in the weighted norm, or the
-//! correction or the residual is round-off ([`super::roundoff_ratio`] at the positions' scale);
-//! `v_D` is corrected the same way. `B` is factored once per accepted step and when Newton is
-//! slow (221 factorizations in 108 steps on the N = 40 N-four-bar) instead of at every iterate.
+//! correction or the residual is within `NEWTON_ROUNDOFF` of round-off
+//! ([`super::roundoff_ratio`] at the positions' scale); `v_D` is corrected the same way. `B` is
+//! factored once per accepted step and when Newton is slow (221 factorizations in 108 steps on
+//! the N = 40 N-four-bar) instead of at every iterate.
 //!
 //! **Integrator.** Shampine and Gordon's STEP: Adams PECE in modified divided differences
 //! (arrays `phi`, `psi`, `alpha`, `beta`, `sig`, `g`), with local extrapolation, error estimates
@@ -97,6 +98,16 @@ const NEWTON_SLOW: usize = 3;
 /// `atol + rtol |q|`) is below this; Newton's quadratic convergence leaves the remaining error
 /// far smaller still, so the dependent coordinates add no noise to the Adams differences.
 const NEWTON_TOL: f64 = 1e-4;
+/// Newton for the dependent positions and velocities stops at a residual or correction of this
+/// fraction of [`super::roundoff_ratio`]'s round-off (its `ROUNDOFF_UNITS`, 1000 units of `eps`
+/// at the positions' scale): 10 units. Near a flat position (the Jacobian losing rank) `B` is
+/// nearly singular, Newton converges linearly, and stopping at 1000 units left `q_D` up to
+/// `|B^-1|` times that residual off (240 times `9e-12` m on A02 at `t = 0.7203 s`): the
+/// accelerations changed by `2e-6 .. 7e-6` m/s^2 between evaluations, and the error test on that
+/// noise crept at the first flat position at `rtol = 1e-12` and stopped at `10.55 s` at `1e-11`.
+/// With 100 units `1e-11` runs but ends `2.0e-6` m off; with 10, `1.5e-7` m
+/// (docs/integrators.md).
+const NEWTON_ROUNDOFF: f64 = 0.01;
 /// Newton contracting more slowly than this per iteration with the factors of `B` from the
 /// accepted state refactors `B` at the iterate.
 const SLOW_RATE: f64 = 0.25;
@@ -459,7 +470,7 @@ impl Split<'_, '_> {
                 }
                 // A residual that is round-off at the positions' scale is the solution: near a
                 // singular position B amplifies it into corrections that are noise.
-                if since > 0 && roundoff_ratio(&self.rhs, &self.zeros, scale) <= 1.0 {
+                if since > 0 && roundoff_ratio(&self.rhs, &self.zeros, scale) <= NEWTON_ROUNDOFF {
                     break;
                 }
                 self.solve();
@@ -474,7 +485,7 @@ impl Split<'_, '_> {
                 let left = if since == 1 { size } else { size * rate / (1.0 - rate).max(f64::MIN_POSITIVE) };
                 // Converged when that is far below the tolerance, or the correction is
                 // round-off: no tolerance asks Newton for less than the positions' rounding.
-                if (rate < 1.0 && left <= NEWTON_TOL) || roundoff_ratio(&self.rhs, &self.qd, scale) <= 1.0 {
+                if (rate < 1.0 && left <= NEWTON_TOL) || roundoff_ratio(&self.rhs, &self.qd, scale) <= NEWTON_ROUNDOFF {
                     break;
                 }
                 previous = size;
@@ -508,7 +519,7 @@ impl Split<'_, '_> {
                 if !size.is_finite() {
                     return Ok(Eval::Failed { residual });
                 }
-                if size <= NEWTON_TOL || roundoff_ratio(&self.rhs, &self.qd, vscale) <= 1.0 {
+                if size <= NEWTON_TOL || roundoff_ratio(&self.rhs, &self.qd, vscale) <= NEWTON_ROUNDOFF {
                     break;
                 }
                 let rate = size / previous;
