@@ -42,6 +42,9 @@ analyses:
 # Any value a user may write where a number is expected: numbers of every size and sign, the
 # non-finite ones, bools, text and nothing.
 anything = st.one_of(
+    # The hostile values by name: at the CI budget (60 examples) the float strategy alone drew no
+    # NaN.
+    st.sampled_from([math.nan, math.inf, -math.inf, 0.0, -1.0, True, False, "", "1", None]),
     st.floats(allow_nan=True, allow_infinity=True),
     st.integers(min_value=-(10**30), max_value=10**30),
     st.booleans(),
@@ -97,7 +100,10 @@ def test_a_bad_number_is_refused_naming_its_field(field, value):
     except linkwork.ModelError as error:
         # The field, or the analysis a usable number makes impossible (a massless bar has nothing
         # for gravity to load: `analyses.rest` names the free coordinates).
-        named = ("bodies.bar", "joints.O", "YAML", "analyses.rest")
+        # Text with a control character makes the file itself invalid YAML, which the reader
+        # names by its position.
+        number = isinstance(value, (int, float)) and not isinstance(value, bool)
+        named = ("bodies.bar", "analyses.rest") if number else ("bodies.bar", "YAML syntax error")
         assert any(n in str(error) for n in named), str(error)
         return
     except linkwork.LinkworkError:
@@ -121,7 +127,7 @@ def test_a_bad_override_is_refused_naming_it(option, value):
     try:
         r = model.run(name, **{option: value}, **({} if option == "t_end" else {"t_end": 0.05}))
     except linkwork.ModelError as error:
-        assert f"--{option.replace('_', '-')}" in str(error) or "t_end" in str(error), str(error)
+        assert f"--{option.replace('_', '-')}" in str(error), str(error)
         return
     except linkwork.SolverError:
         assert isinstance(value, (int, float)) and not isinstance(value, bool)
@@ -172,7 +178,8 @@ def test_the_strategies_reach_the_hostile_values(value):
     found = []
 
     @given(anything)
-    @settings(max_examples=500, derandomize=True, database=None)
+    # The `ci` profile's budget: what each property test draws in CI.
+    @settings(max_examples=60, derandomize=True, database=None)
     def collect(v):
         found.append(v)
 
@@ -180,5 +187,7 @@ def test_the_strategies_reach_the_hostile_values(value):
     same = [v for v in found if type(v) is type(value)]
     if isinstance(value, float) and math.isnan(value):
         assert any(math.isnan(v) for v in same)
+    elif isinstance(value, float):
+        assert any(math.isinf(v) for v in same)
     else:
         assert same

@@ -14,7 +14,7 @@
 //! - no input hangs it: libFuzzer's `-timeout` (5 s in `fuzz/run.sh`, for at most
 //!   [`MAX_ANALYSES`] analyses) reports an input that runs longer as a failure.
 //!
-//! Byte-level mutation alone rarely keeps a model valid: after ten minutes of it 15 of the 3,126
+//! Byte-level mutation alone rarely keeps a model valid: after twelve minutes of it 15 of the 3,126
 //! inputs of the corpus compiled (the seeds), the rest covering the reader's error paths. So
 //! three mutations in four are structural ([`mutate`]): the text is read as a YAML tree, one node
 //! changes (a number scaled or replaced by an edge value, a name swapped for another of the file,
@@ -53,7 +53,7 @@ const MAX_ANALYSES: usize = 4;
 
 /// Most moving bodies a model may have to be analysed (a larger one is only read and compiled).
 /// The check's rank test and assembly are dense, `O((3 bodies)^3)` per Newton step: the IFToMM
-/// N-four-bar example (81 bodies) takes 0.6 s an execution and its mutants pass the 1 s timeout,
+/// N-four-bar example (81 bodies) takes 0.6 s an execution (its mutants passed a 1 s timeout),
 /// its 21-body version (`examples/nfourbar.py 10`) 36 ms. Every other example has at most 7.
 const MAX_BODIES: usize = 24;
 

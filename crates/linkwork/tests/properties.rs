@@ -687,10 +687,13 @@ impl Balance {
 /// force laws. Bound: `1e-8` of the sum of the terms' sizes (force magnitudes, moments and
 /// force times lever arm, in N and N m over the body's size, plus `m |a|` and `J |alpha|`). The
 /// multipliers are a least-squares solve of a Jacobian whose condition the kinematics keeps below
-/// `singular_condition = 1e10`; their error is `cond eps ~ 1e-6` relative at that limit but
-/// below `1e-10` on the positions generated here away from it, so `1e-8` leaves two digits of
-/// margin on both sides, and a reaction that is wrong by more (the wrong sign, a missing term,
-/// an unbalanced least-squares solution) fails. Plus `1e-12` N (or N m) absolute: a body whose
+/// `singular_condition = 1e10`; their error is about `cond eps` relative: up to `2e-6` at that
+/// limit (where the engine's own check, `BALANCE_TOLERANCE = 1e-5`, stops the run), `2e-8` at a
+/// condition of `1e8`. `1e-8` therefore asks more than the engine promises next to a singular
+/// position: it holds for the seeded cases and for the 10,000 of the long run (docs/
+/// reliability.md), whose rows that close to a singular position stop `Singular`, and a
+/// reaction that is wrong by more (the wrong sign, a missing term, an unbalanced least-squares
+/// solution) fails. Plus `1e-12` N (or N m) absolute: a body whose
 /// every term is round-off of zero (no gravity, springs at rest: terms of `1e-43` were seen)
 /// balances only to its own noise; the generator's loads are nine or more orders above it.
 #[test]
@@ -934,9 +937,10 @@ fn project(m: &Mechanism, mut q: Config3) -> Option<Config3> {
 /// `V(q+) + V(q-) - 2 V(q)` over the points `q+-` projected from `q +- eps d`, `eps = 1e-3`, is
 /// not negative. Bound: `-1e-11 (1 + sum |V terms|)`: `V` rounds to `~1e-16` of its terms and
 /// the projections stop `1e-13` off the manifold, where `V` changes by `|grad V| 1e-13`; the
-/// first-order terms cancel between `q+` and `q-`. A stiffness of `1e-5` N m or more along the
-/// direction gives `eps^2 k = 1e-11`, at the bound: an unstable direction of any size a model
-/// can have is caught.
+/// first-order terms cancel between `q+` and `q-`. An unstable direction whose negative
+/// stiffness `k` gives `eps^2 |k| = 1e-6 |k|` above the bound is caught: `|k|` above
+/// `1e-5 (1 + sum |V terms|)` (N m or N/m), for the generated masses and springs (terms of 1 to
+/// 1000 J) a stiffness from `1e-5` to `1e-2`, far below their springs' and gravity's.
 #[test]
 fn static_equilibria_are_minima() {
     property("statics", |recipe, tally| {
@@ -984,7 +988,13 @@ fn static_equilibria_are_minima() {
                 "along coordinate {c}: V(q+) + V(q-) - 2 V(q) = {second:e} < 0 at the equilibrium {q:?}\n{text}"
             );
         }
-        tally.add(if lowest > 0.0 { "ok, a strict minimum" } else { "ok, flat within the bound" });
+        tally.add(if lowest == f64::INFINITY {
+            "ok, no direction checked"
+        } else if lowest > 0.0 {
+            "ok, a strict minimum"
+        } else {
+            "ok, flat within the bound"
+        });
         Ok(())
     });
 }

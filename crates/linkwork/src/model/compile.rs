@@ -85,12 +85,14 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec
         })
         .collect();
     let gravity = spec.gravity.and_then(|g| cx.vec2("gravity", g)).unwrap_or([0.0, 0.0]);
-    for b in &bodies {
-        // Each number is a double, but the weight is their product: past 1.8e308 it is
-        // infinite, and every reaction and potential energy with it.
-        let weight = b.mass * gravity[0].hypot(gravity[1]);
-        if !weight.is_finite() {
-            let g = gravity[0].hypot(gravity[1]);
+    // Each number is a double, but the weight is their product: past 1.8e308 it is infinite,
+    // and every reaction and potential energy with it.
+    let g = gravity[0].hypot(gravity[1]);
+    if !g.is_finite() {
+        cx.problem("gravity", format!("its size |g| = {g} is out of range: a double holds up to 1.8e308"));
+    }
+    for b in bodies.iter().filter(|_| g.is_finite()) {
+        if !(b.mass * g).is_finite() {
             cx.problem(
                 format!("bodies.{}.mass", b.name),
                 format!("the weight m |g| = {:e} kg x {g} m/s^2 is out of range: a double holds up to 1.8e308", b.mass),
