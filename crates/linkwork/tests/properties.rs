@@ -612,16 +612,7 @@ fn driven_kinematics_keeps_the_constraints() {
         let (text, outcome) = run(&m, "kinematic", &format!("tolerance: {tolerance:?}"));
         // A dead centre, a lock-up or an assembly that the drivers make impossible is a typed
         // error, and the rows before it must hold.
-        let r = match &outcome {
-            Ok(r) => {
-                tally.add("ok");
-                r
-            }
-            Err((e, r)) => {
-                tally.add(kind(e));
-                r
-            }
-        };
+        let r = tallied(&outcome, tally);
         let mut phi = Vec::new();
         for row in 0..r.len() {
             let q = positions(&m, r, row);
@@ -649,6 +640,21 @@ impl Tally {
     }
     fn print(&self, name: &str) {
         eprintln!("{name}: {:?}", self.0.lock().expect("tally"));
+    }
+}
+
+/// The rows of a run, the ones kept before a failure included, with its outcome tallied (`ok`,
+/// or the error's kind).
+fn tallied<'a>(outcome: &'a Result<Results, (Error, Results)>, tally: &Tally) -> &'a Results {
+    match outcome {
+        Ok(r) => {
+            tally.add("ok");
+            r
+        }
+        Err((e, r)) => {
+            tally.add(kind(e));
+            r
+        }
     }
 }
 
@@ -705,16 +711,7 @@ fn inverse_reactions_balance_every_body() {
             return Ok(());
         }
         let (text, outcome) = run(&m, "inverse", "");
-        let r = match &outcome {
-            Ok(r) => {
-                tally.add("ok");
-                r
-            }
-            Err((e, r)) => {
-                tally.add(kind(e));
-                r
-            }
-        };
+        let r = tallied(&outcome, tally);
         for row in 0..r.len() {
             let q = positions(&m, r, row);
             let mut bal = Balance::new(m.bodies.len());
@@ -799,16 +796,7 @@ fn free_dynamics_keeps_its_energy() {
         let m = build(recipe, false);
         let rtol = 1e-7;
         let (text, outcome) = run(&m, "dynamic", &format!("rtol: {rtol:?}, atol: {rtol:?}"));
-        let r = match &outcome {
-            Ok(r) => {
-                tally.add("ok");
-                r
-            }
-            Err((e, r)) => {
-                tally.add(kind(e));
-                r
-            }
-        };
+        let r = tallied(&outcome, tally);
         let energies: Vec<(f64, f64)> = (0..r.len())
             .map(|row| {
                 let q = positions(&m, r, row);
