@@ -143,12 +143,12 @@ impl Output {
         for m in &dae.model.measures {
             self.row.push(m.value(q, qdot, qddot, t));
         }
-        // No non-finite number leaves as a result: the analysis stops at the first, naming the
-        // element that gave it.
-        if let Some(&bad) = [q, qdot, &self.sol[..], &self.row].iter().flat_map(|v| v.iter()).find(|x| !x.is_finite()) {
-            return Err(dae.non_finite(q, qdot, &self.sol[..n], t, bad));
-        }
-        self.results.push(t, q, qdot, qddot, &self.row)?;
+        // No non-finite number leaves as a result: the row's own check finds the first, and the
+        // analysis stops naming the element that gave it rather than the column.
+        self.results.push(t, q, qdot, qddot, &self.row).map_err(|e| match e {
+            Error::NonFinite { value, .. } => dae.non_finite(q, qdot, qddot, t, value),
+            other => other,
+        })?;
         self.next += 1;
         Ok(())
     }
