@@ -90,9 +90,8 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec
     let g = gravity[0].hypot(gravity[1]);
     if !g.is_finite() {
         cx.problem("gravity", format!("its size |g| = {g} is out of range: a double holds up to 1.8e308"));
-    }
-    for b in bodies.iter().filter(|_| g.is_finite()) {
-        if !(b.mass * g).is_finite() {
+    } else {
+        for b in bodies.iter().filter(|b| !(b.mass * g).is_finite()) {
             cx.problem(
                 format!("bodies.{}.mass", b.name),
                 format!("the weight m |g| = {:e} kg x {g} m/s^2 is out of range: a double holds up to 1.8e308", b.mass),
