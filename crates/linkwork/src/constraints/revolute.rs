@@ -39,10 +39,10 @@ impl Constraint for Revolute {
         self.pair.columns()
     }
     fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        let p = Frame::of(self.pair.i, q).point(self.s_p);
-        let r = Frame::of(self.pair.j, q).point(self.s_q);
-        out[0] = p[0] - r[0];
-        out[1] = p[1] - r[1];
+        let (fi, fj) = (Frame::of(self.pair.i, q), Frame::of(self.pair.j, q));
+        let (a, b) = (fi.rotate(self.s_p), fj.rotate(self.s_q));
+        out[0] = (fi.x - fj.x) + (a[0] - b[0]);
+        out[1] = (fi.y - fj.y) + (a[1] - b[1]);
     }
     fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let bi = Frame::of(self.pair.i, q).rotate_d(self.s_p);
@@ -76,6 +76,54 @@ mod tests {
         check_fd_random(&j, 2, 1);
         let g = Revolute::new(BodyIx(Some(3)), [0.75, 0.0], BodyIx::GROUND, [0.5, -2.0]);
         check_fd_random(&g, 2, 2);
+    }
+
+    /// `Phi` far from the origin (bodies 1e4 m out) carries the round-off of the offsets, not of
+    /// the positions: near a singular position Newton multiplies it by `|B^-1|` (docs/integrators.md,
+    /// `abam`). Reference: the same expression with the rotations' cosines and sines as computed,
+    /// its products exact (`mul_add`) and its sum in double-double (Knuth's two-sum), so accurate to
+    /// `~eps^2` of its terms. Bound: 8 units of round-off of the offsets (about 1 m), where
+    /// summing `r + A s'` first errs by up to half a unit of `1e4` (`9e-13`).
+    #[test]
+    fn phi_far_from_the_origin_has_the_round_off_of_the_offsets() {
+        use crate::constraints::testing::Lcg;
+        use crate::constraints::ConfigBuf;
+        let two_sum = |(hi, lo): (f64, f64), x: f64| {
+            let s = hi + x;
+            let v = s - hi;
+            (s, lo + ((hi - (s - v)) + (x - v)))
+        };
+        let mut rng = Lcg::new(7);
+        let mut worst = 0.0f64;
+        for _ in 0..200 {
+            let (sp, sq) =
+                ([rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)], [rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)]);
+            let j = Revolute::new(BodyIx(Some(0)), sp, BodyIx(Some(3)), sq);
+            let mut q = rng.vec(6, -1.0, 1.0);
+            q[0] += 1e4;
+            q[1] -= 1e4;
+            q[3] += 1e4;
+            q[4] -= 1e4;
+            let mut phi = [0.0; 2];
+            j.phi_at(&q, 0.0, &mut phi);
+            let buf = ConfigBuf::new(&q);
+            let config = buf.view();
+            let ([ci, si], [cj, sj]) = (config.rot[0], config.rot[1]);
+            for (k, out) in phi.iter().enumerate() {
+                let terms = if k == 0 {
+                    [(1.0, q[0]), (ci, sp[0]), (-si, sp[1]), (-1.0, q[3]), (-cj, sq[0]), (sj, sq[1])]
+                } else {
+                    [(1.0, q[1]), (si, sp[0]), (ci, sp[1]), (-1.0, q[4]), (-sj, sq[0]), (-cj, sq[1])]
+                };
+                let mut acc = (0.0, 0.0);
+                for (a, b) in terms {
+                    let p = a * b;
+                    acc = two_sum(two_sum(acc, p), a.mul_add(b, -p));
+                }
+                worst = worst.max((out - (acc.0 + acc.1)).abs());
+            }
+        }
+        assert!(worst <= 8.0 * f64::EPSILON, "{worst:e}");
     }
 
     /// Hand-derived case: a crank of half-length 0.75 at angle pi/2, pinned at its end (0.75, 0)
