@@ -444,7 +444,11 @@ impl Model {
             .flat_map(|b| ["x", "y", "phi"].map(|c| results.column(&format!("{}.{c}", b.name))?.first().copied()))
             .collect::<Option<Vec<f64>>>()
             .unwrap_or_else(|| self.q0());
-        let warnings = crate::analysis::tolerance_warnings(&analysis, &q);
+        // The analysis's own warnings (a dynamic run's) follow the tolerances'.
+        let mut warnings = crate::analysis::tolerance_warnings(&analysis, &q);
+        if let Some(Value::Array(own)) = results.summary.get("warnings") {
+            warnings.extend(own.iter().filter_map(|w| w.as_str().map(String::from)));
+        }
         results.summary.insert("warnings".into(), json!(warnings));
         outcome
     }

@@ -70,10 +70,19 @@
 //! belongs to the old coordinates) is discarded and the method restarts at order 1 with at most
 //! the initial step. `partitions` counts the choices that set up the coordinates: the first and
 //! each change.
+//!
+//! **Crossing singular positions.** Where `Phi_q` loses rank for every choice of `B` (A02's flat
+//! chain) the constraints fix `q_D` only to `|B^-1|` times the round-off of `Phi`, and the
+//! accelerations vary across that band as `1 / sigma_min(B)^2`: an error estimate there is noise
+//! that no step resolves, and steps that approach shrink without end. A failed estimate within
+//! `NOISE_MARGIN` (8) times a sample of that noise (`Split::noise_dominates`) hands the state, from
+//! the last accepted step, to the index-3 `bdf` for `CROSSING_STEPS` (16) recent steps
+//! ([`super::bdf::run_until`], writing the output times); the method then restarts there with a
+//! new partition. `crossings` counts the hand-overs, and the summary warns.
 
 use super::{
-    factor_error, hermite5, min_step, roundoff_ratio, step_bounds, step_failure, Dae, DynamicStats, IntegratorSettings,
-    Outcome, Output, Start,
+    factor_error, hermite5, min_step, roundoff_ratio, step_bounds, step_failure, Dae, DynamicStats, IntegratorKind,
+    IntegratorSettings, Outcome, Output, Start,
 };
 use crate::analysis::RANK_TOLERANCE;
 use crate::error::Error;
@@ -123,6 +132,20 @@ const GSTR: [f64; MAX_ORDER + 2] =
     [0.0, 0.5, 0.0833, 0.0417, 0.0264, 0.0188, 0.0143, 0.0114, 0.00936, 0.00789, 0.00679, 0.00592, 0.00524, 0.00468];
 /// Half the tolerance, STEP's `p5eps`: the step-size rules aim at half the error the test allows.
 const HALF_TOL: f64 = 0.5;
+/// A failed error estimate within this many times the noise sampled at the same point
+/// ([`Split::noise_dominates`]) is that noise: a single sample of a random quantity may fall a
+/// few times below its spread (on A02 at `1e-13`, approaching a flat position, the first noisy
+/// estimates were 1.5 to 3.5 times the sample), while an estimate of truncation error stands
+/// orders of magnitude above it (the sample is `1e-16` relative away from singular positions).
+const NOISE_MARGIN: f64 = 8.0;
+/// `bdf` takes over for this many of `abam`'s recent steps (the largest of the last few) when
+/// the error estimate is noise: long enough to carry the state past the singular position
+/// (on A02 at `1e-12` the estimate is noise from `6e-4` s before a flat position, and the recent
+/// steps there are `3e-3` s), short enough that `abam` soon resumes.
+const CROSSING_STEPS: f64 = 16.0;
+/// Decay per accepted step of the recent step size (the largest recent step): about the last 20
+/// steps count.
+const RECENT_DECAY: f64 = 0.9;
 
 /// How an evaluation at `(t, y)` ended.
 #[derive(Debug, Clone, Copy)]
@@ -232,6 +255,8 @@ struct Split<'a, 'm> {
     partition_work: usize,
     /// Numeric factorizations of `B`.
     block_factorizations: usize,
+    /// The values of `Phi_q`'s entries that `B`'s current factors were made from.
+    factored: Vec<f64>,
     /// (r) right-hand side and solution; (r) the dependent positions of a Newton iterate.
     rhs: Vec<f64>,
     qd: Vec<f64>,
@@ -318,6 +343,8 @@ impl Split<'_, '_> {
     /// Factor `B = Phi_q[rows, dep]` at the last [`Dae::positions`]; false when singular.
     fn factor(&mut self) -> bool {
         let (_, jac) = self.dae.jacobian_entries();
+        self.factored.clear();
+        self.factored.extend_from_slice(jac);
         self.block_factorizations += 1;
         self.block.as_mut().is_none_or(|b| b.factor(jac))
     }
@@ -410,6 +437,91 @@ impl Split<'_, '_> {
             s = self.dep.iter().zip(&self.rhs).fold(s, |a, (&c, d)| a.max((d / self.wv[c]).abs()));
         }
         s
+    }
+
+    /// Whether the error estimate `d` (the difference of `y'` at the prediction from its
+    /// extrapolation) of the last evaluation, at `t`, is round-off noise: at most
+    /// [`NOISE_MARGIN`] times the change of `y'` that one more Newton correction of the dependent
+    /// positions makes (fresh factors of `B` at the evaluation's positions, `v_D` and the
+    /// accelerations solved again there).
+    ///
+    /// Near a singular position (`Phi_q` losing rank, as A02's flat chain, where every choice of
+    /// `B` is singular) the constraints fix `q_D` only to the round-off of `Phi` times
+    /// `|B^-1|`, and the accelerations vary across that band as `1 / sigma_min(B)^2`: at
+    /// `t = 2.68716 s` on A02 Newton, run to its fixed point from six starts, stalls with
+    /// corrections of `1e-11` m and accelerations `2e-2` m/s^2 apart. One more correction moves
+    /// `q_D` within that band; the change it makes is a sample of the noise. The last evaluation's
+    /// state, the factors of `B` and the positions are restored, so that the steps that follow are
+    /// those without the sample.
+    fn noise_dominates(&mut self, t: f64, d: &[f64]) -> bool {
+        if self.dep.is_empty() || !t.is_finite() {
+            return false;
+        }
+        let p = self.ind.len();
+        let (q0, v0, s0, factored) = (self.q.clone(), self.v.clone(), self.sol.clone(), self.factored.clone());
+        self.dae.positions(&self.q, t);
+        for (b, &row) in self.rhs.iter_mut().zip(&self.rows) {
+            *b = -self.dae.phi[row];
+        }
+        let mut ok = self.factor();
+        if ok {
+            self.solve();
+            for (&c, dc) in self.dep.iter().zip(&self.rhs) {
+                self.q[c] += dc;
+            }
+            self.dae.positions(&self.q, t);
+            ok = self.factor();
+        }
+        if ok {
+            // Phi_q v = nu with the fresh factors: two corrections reach round-off (the first
+            // from velocities that met the constraints at a point round-off away).
+            self.dae.nu(&self.q, t, &mut self.nu);
+            for _ in 0..2 {
+                self.dae.jv(&self.v, &mut self.phiv);
+                for (b, &row) in self.rhs.iter_mut().zip(&self.rows) {
+                    *b = self.nu[row] - self.phiv[row];
+                }
+                self.solve();
+                for (&c, dc) in self.dep.iter().zip(&self.rhs) {
+                    self.v[c] += dc;
+                }
+            }
+            ok = self.dae.accelerations(&self.q, &self.v, t, &mut self.sol).is_ok();
+        }
+        let mut sample = vec![0.0; 2 * p];
+        for (j, &c) in self.ind.iter().enumerate() {
+            sample[p + j] = self.sol[c] - s0[c];
+        }
+        ok = ok && sample.iter().all(|x| x.is_finite());
+        self.q.copy_from_slice(&q0);
+        self.v.copy_from_slice(&v0);
+        self.sol.copy_from_slice(&s0);
+        if let Some(b) = self.block.as_mut() {
+            b.factor(&factored);
+        }
+        self.factored = factored;
+        self.dae.positions(&self.q, t);
+        ok && self.norm(d) <= NOISE_MARGIN * self.norm(&sample)
+    }
+
+    /// Resume at `(t, q, v)`, reached by another method: the accelerations and multipliers
+    /// there, and that state as the accepted one (with no step before it).
+    fn resume(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), Error> {
+        let n = q.len();
+        self.dae.accelerations(q, v, t, &mut self.sol).map_err(|e| factor_error(e, t))?;
+        self.ta = t;
+        self.qa.copy_from_slice(q);
+        self.va.copy_from_slice(v);
+        self.aa.copy_from_slice(&self.sol[..n]);
+        self.la.copy_from_slice(&self.sol[n..]);
+        self.tp = t;
+        self.qp.copy_from_slice(q);
+        self.vp.copy_from_slice(v);
+        self.ap.copy_from_slice(&self.sol[..n]);
+        self.q.copy_from_slice(q);
+        self.v.copy_from_slice(v);
+        self.t_last = f64::NAN;
+        Ok(())
     }
 
     /// Add the correction in `rhs` to the dependent positions (`positions`) or velocities, copy
@@ -1130,6 +1242,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         block: None,
         partition_work: 0,
         block_factorizations: 0,
+        factored: vec![],
         rhs: vec![],
         qd: vec![],
         phiv: vec![0.0; m],
@@ -1158,6 +1271,8 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let t_end = out.t_end();
     let span = t_end - t;
     let mut h = h_start;
+    // The largest recent accepted step, decaying by RECENT_DECAY a step.
+    let mut h_recent = h_start;
     // Partition at the start and (y, y') there.
     s.choose();
     stats.partitions += 1;
@@ -1177,13 +1292,44 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             let t1 = ad.x;
             let mut eval = s.evaluate(t1, &ad.p, Some(&mut ad.yp))?;
             let mut err = f64::NAN;
+            let mut noise = false;
             if let Eval::Done { .. } = eval {
                 err = ad.error_test(h, &mut |x| s.norm(x));
                 if err <= 1.0 {
                     // (p, y'(p)) => corrected yc => y'(yc).
                     ad.correct(h);
                     eval = s.evaluate(t1, &ad.yc, Some(&mut ad.yp))?;
+                } else {
+                    noise = s.noise_dominates(t1, &ad.d);
                 }
+            }
+            if noise {
+                // The estimate is the noise of a singular position, which no step of this method
+                // can resolve: the index-3 `bdf`, which imposes Phi = 0 on every coordinate at
+                // once, takes the state across it, then the method restarts.
+                ad.reject(h);
+                stats.crossings += 1;
+                stats.first_crossing.get_or_insert(s.ta);
+                let stop = (s.ta + CROSSING_STEPS * h_recent).min(t_end);
+                let across = IntegratorSettings {
+                    kind: IntegratorKind::Bdf,
+                    max_order: None,
+                    max_steps: settings.max_steps.saturating_sub(stats.steps),
+                    ..*settings
+                };
+                let begin_at =
+                    Start { t: s.ta, q: s.qa.clone(), qdot: s.va.clone(), qddot: s.aa.clone(), lambda: s.la.clone() };
+                let (crossed, reached) = super::bdf::run_until(s.dae, out, &across, begin_at, stop);
+                stats.absorb(&crossed);
+                let (t, q, v) = reached?;
+                s.resume(t, &q, &v)?;
+                chosen_at = stats.steps;
+                if s.choose() {
+                    stats.partitions += 1;
+                }
+                begin(&s, &mut ad);
+                h = h_start.min(h_recent);
+                continue;
             }
             let iterations = match eval {
                 Eval::Done { iterations } if err <= 1.0 => iterations,
@@ -1219,6 +1365,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             };
             // Accept: differences, order and next step; the state; work; output times.
             let h_used = h;
+            h_recent = h_used.max(RECENT_DECAY * h_recent);
             h = ad.accept(h, &mut |x| s.norm(x)).min(h_max);
             let singular = !s.commit(ad.x);
             stats.accept(h_used);
@@ -1265,7 +1412,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         }
         Ok(())
     })();
-    stats.newton_iterations = s.newton_iterations;
+    stats.newton_iterations += s.newton_iterations;
     (stats, outcome)
 }
 

@@ -443,8 +443,25 @@ impl Bdf<'_, '_> {
 
 /// Integrate from `start` to the output's end time.
 pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, start: Start) -> Outcome {
+    let stop = out.t_end();
+    let (stats, outcome) = run_until(dae, out, settings, start, stop);
+    (stats, outcome.map(|_| ()))
+}
+
+/// Where a run stopped: the time, positions and velocities reached.
+pub type Reached = (f64, Vec<f64>, Vec<f64>);
+
+/// Integrate from `start` to `stop` (at most the output's end time), writing the output times
+/// on the way.
+pub fn run_until(
+    dae: &mut Dae<'_>,
+    out: &mut Output,
+    settings: &IntegratorSettings,
+    start: Start,
+    stop: f64,
+) -> (DynamicStats, Result<Reached, Error>) {
     let (n, m) = (dae.n, dae.m);
-    let (h_max, h0) = step_bounds(settings, &start, out.t_end() - start.t);
+    let (h_max, h0) = step_bounds(settings, &start, stop - start.t);
     let Start { t, q, qdot, qddot, lambda } = start;
     let k_max = settings.order_limit().clamp(1, IntegratorSettings::order_bound(IntegratorKind::Bdf));
     let mut s = Bdf {
@@ -476,7 +493,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         settled_amp: 1.0,
         stats: DynamicStats::default(),
     };
-    let t_end = out.t_end();
+    let t_end = stop.min(out.t_end());
     let span = t_end - t;
     let mut h = match settings.fixed_step {
         Some(fixed) => settings.initial_step.unwrap_or(fixed).min(fixed),
@@ -646,7 +663,8 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         }
         Ok(())
     })();
-    (s.stats, outcome)
+    let reached = outcome.map(|()| (s.ts[0], s.qs[0].clone(), s.vs[0].clone()));
+    (s.stats, reached)
 }
 
 #[cfg(test)]

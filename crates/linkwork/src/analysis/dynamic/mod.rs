@@ -100,6 +100,11 @@ pub struct DynamicStats {
     pub max_order_used: usize,
     /// Independent coordinates used by `abam`: the first choice and each change of it.
     pub partitions: usize,
+    /// Stretches `abam` handed to `bdf` across a singular position, where its error estimate is
+    /// the round-off noise of the accelerations (see `abam`).
+    pub crossings: usize,
+    /// Start of the first such stretch, s.
+    pub first_crossing: Option<f64>,
 }
 
 impl DynamicStats {
@@ -111,6 +116,20 @@ impl DynamicStats {
         }
         self.smallest_step = self.smallest_step.min(h);
         self.largest_step = self.largest_step.max(h);
+    }
+
+    /// Add the steps and iterations of a stretch integrated by another method.
+    pub fn absorb(&mut self, other: &DynamicStats) {
+        if other.steps > 0 {
+            self.smallest_step =
+                if self.steps == 0 { other.smallest_step } else { self.smallest_step.min(other.smallest_step) };
+            self.largest_step = self.largest_step.max(other.largest_step);
+        }
+        self.steps += other.steps;
+        self.rejected_steps += other.rejected_steps;
+        self.newton_failures += other.newton_failures;
+        self.newton_iterations += other.newton_iterations;
+        self.max_order_used = self.max_order_used.max(other.max_order_used);
     }
 }
 
@@ -367,6 +386,15 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         "residuals".into(),
         json!({"max_position": out.max_position_residual, "max_velocity": out.max_velocity_residual}),
     );
+    if let Some(t) = stats.first_crossing {
+        s.insert(
+            "warnings".into(),
+            json!([format!(
+                "abam: near {} singular positions (Phi_q losing rank; the first at t = {t:.6} s) the error estimate at rtol {:e} was the round-off noise of the accelerations; bdf took the state across each",
+                stats.crossings, settings.rtol
+            )]),
+        );
+    }
     results.insert_reaction_summary(model, analysis);
     match error {
         None => Ok(results),
