@@ -22,6 +22,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod abam;
+mod adams;
 pub mod bdf;
 mod dae;
 pub mod hht;
