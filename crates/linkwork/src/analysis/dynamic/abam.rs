@@ -77,8 +77,8 @@
 
 use super::adams::{Adams, MAX_ORDER};
 use super::{
-    factor_error, hermite5, min_step, roundoff_ratio, step_bounds, step_failure, Dae, DynamicStats, IntegratorKind,
-    IntegratorSettings, Outcome, Output, Start,
+    factor_error, hermite5, roundoff_ratio, step_failure, Dae, DynamicStats, IntegratorKind, IntegratorSettings,
+    Outcome, Output, Span, Start,
 };
 use crate::analysis::RANK_TOLERANCE;
 use crate::error::Error;
@@ -849,7 +849,8 @@ fn begin(s: &Split<'_, '_>, ad: &mut Adams) {
 /// Integrate from `start` to the output's end time.
 pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, start: Start) -> Outcome {
     let (n, m) = (dae.n, dae.m);
-    let (h_max, h_start) = step_bounds(settings, &start, out.t_end() - start.t);
+    let run = Span::new(settings, &start, out.t_end());
+    let (t_end, h_max, h_start) = (run.t_end, run.h_max, run.h_start);
     let Start { t, q, qdot, qddot, lambda } = start;
     let mut stats = DynamicStats::default();
     let mut s = Split {
@@ -890,8 +891,6 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         newton_iterations: 0,
     };
     let mut ad = Adams::new(settings.order_limit().clamp(1, MAX_ORDER));
-    let t_end = out.t_end();
-    let span = t_end - t;
     let mut h = h_start;
     // The largest recent accepted step, decaying by RECENT_DECAY a step.
     let mut h_recent = h_start;
@@ -902,11 +901,11 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let mut chosen_at = 0;
     let (mut yo, mut ypo) = (vec![0.0; 2 * n], vec![0.0; 2 * n]);
     let outcome = (|| -> Result<(), Error> {
-        while ad.x < t_end - 1e-12 * span.max(1e-300) {
-            let h_min = min_step(s.dae, &s.qa, stats.steps, ad.x, h, span, settings)?;
-            if ad.x + h > t_end || t_end - (ad.x + h) < 1e-3 * h {
-                h = t_end - ad.x;
-            }
+        while run.before_end(ad.x) {
+            // Adams' accepted steps shrink the step only by a bounded factor; the error test
+            // decides below the smallest step.
+            let h_min = run.smallest_step(s.dae, &s.qa, stats.steps, ad.x, h, settings, false)?;
+            h = run.fit(ad.x, h);
             // (y, phi, h) => prediction p at x + h => y'(p).
             s.weights();
             ad.coefficients(h);

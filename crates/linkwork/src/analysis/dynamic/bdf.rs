@@ -68,8 +68,7 @@
 //! last step (DASSL's DDATRP), for positions and velocities.
 
 use super::{
-    min_step, step_bounds, step_failure, Dae, DynamicStats, Formulation, IntegratorKind, IntegratorSettings, Outcome,
-    Output, Start,
+    step_failure, Dae, DynamicStats, Formulation, IntegratorKind, IntegratorSettings, Outcome, Output, Span, Start,
 };
 use crate::error::Error;
 
@@ -461,7 +460,7 @@ pub fn run_until(
     stop: f64,
 ) -> (DynamicStats, Result<Reached, Error>) {
     let (n, m) = (dae.n, dae.m);
-    let (h_max, h0) = step_bounds(settings, &start, stop - start.t);
+    let run = Span::new(settings, &start, stop.min(out.t_end()));
     let Start { t, q, qdot, qddot, lambda } = start;
     let k_max = settings.order_limit().clamp(1, IntegratorSettings::order_bound(IntegratorKind::Bdf));
     let mut s = Bdf {
@@ -493,11 +492,9 @@ pub fn run_until(
         settled_amp: 1.0,
         stats: DynamicStats::default(),
     };
-    let t_end = stop.min(out.t_end());
-    let span = t_end - t;
     let mut h = match settings.fixed_step {
         Some(fixed) => settings.initial_step.unwrap_or(fixed).min(fixed),
-        None => h0,
+        None => run.h_start,
     };
     let (mut qo, mut vo) = (vec![0.0; n], vec![0.0; n]);
     let mut k = 1;
@@ -508,18 +505,10 @@ pub fn run_until(
     let mut recent_index3 = 0usize;
     let mut recent_settled = 0usize;
     let outcome = (|| -> Result<(), Error> {
-        while s.ts[0] < t_end - 1e-12 * span.max(1e-300) {
+        while run.before_end(s.ts[0]) {
             let t0 = s.ts[0];
-            let h_min = min_step(s.dae, &s.qs[0], s.stats.steps, t0, h, span, settings)?;
-            if h < h_min {
-                // Accepted steps may shrink the step too (an error estimate that grows from step
-                // to step); stop here rather than creep towards zero.
-                let cause = "the error estimate has driven the step below the smallest step";
-                return Err(step_failure(s.dae, &s.qs[0], t0, h, cause));
-            }
-            if t0 + h > t_end || t_end - (t0 + h) < 1e-3 * h {
-                h = t_end - t0;
-            }
+            let h_min = run.smallest_step(s.dae, &s.qs[0], s.stats.steps, t0, h, settings, true)?;
+            h = run.fit(t0, h);
             let t1 = t0 + h;
             // Order k needs k + 1 nodes for its predictor (the first step uses the start's
             // derivatives instead).
@@ -659,7 +648,7 @@ pub fn run_until(
                     h *= r.clamp(0.5, 0.9);
                 }
             }
-            h = h.min(h_max);
+            h = h.min(run.h_max);
         }
         Ok(())
     })();

@@ -32,9 +32,7 @@
 //! energy), within `[h / 5, 2 h]` and the maximum step. Output by quintic Hermite interpolation
 //! ([`super::hermite5`]) of each accepted step.
 
-use super::{
-    hermite5, min_step, step_bounds, step_failure, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Start,
-};
+use super::{hermite5, step_failure, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Span, Start};
 use crate::error::Error;
 
 /// Newton iterations per attempt. Four: from the extrapolated predictor a converging iteration
@@ -343,7 +341,7 @@ impl Controller {
 pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, start: Start) -> Outcome {
     let (n, m) = (dae.n, dae.m);
     let alpha = settings.alpha;
-    let (h_max, h0) = step_bounds(settings, &start, out.t_end() - start.t);
+    let run = Span::new(settings, &start, out.t_end());
     let Start { t, q, qdot, qddot, lambda } = start;
     // F_0 = Phi_q^T lambda_0 - Q_0 = -M qddot_0 at a consistent start.
     let f: Vec<f64> = qddot.iter().zip(&dae.mass).map(|(a, mass)| -mass * a).collect();
@@ -375,10 +373,8 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         noise: None,
         stats: DynamicStats { max_order_used: 2, ..Default::default() },
     };
-    let t_end = out.t_end();
-    let span = t_end - t;
     let fixed_step = settings.fixed_step;
-    let mut h = fixed_step.unwrap_or(h0);
+    let mut h = fixed_step.unwrap_or(run.h_start);
     let (mut qo, mut vo) = (vec![0.0; n], vec![0.0; n]);
     let mut controller = Controller::default();
     let mut lambda1 = vec![0.0; m];
@@ -388,17 +384,9 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     // since `NOISE_MEMORY` accepted steps without one (`noise_memory` 0: none).
     let (mut noise_amp, mut noise_memory) = (1.0f64, 0usize);
     let outcome = (|| -> Result<(), Error> {
-        while s.t < t_end - 1e-12 * span.max(1e-300) {
-            let h_min = min_step(s.dae, &s.q, s.stats.steps, s.t, h, span, settings)?;
-            if h < h_min {
-                // Accepted steps may shrink the step too (an error estimate that grows from step
-                // to step); stop here rather than creep towards zero.
-                let cause = "the error estimate has driven the step below the smallest step";
-                return Err(step_failure(s.dae, &s.q, s.t, h, cause));
-            }
-            if s.t + h > t_end || t_end - (s.t + h) < 1e-3 * h {
-                h = t_end - s.t;
-            }
+        while run.before_end(s.t) {
+            let h_min = run.smallest_step(s.dae, &s.q, s.stats.steps, s.t, h, settings, true)?;
+            h = run.fit(s.t, h);
             // Predictor: qddot and mu extrapolated linearly from the last two steps (constant on
             // the first step): the starting error O(h^2) rather than O(h), so that Newton's
             // tighter test costs fewer iterations (measured: 12,100 -> 9,500 on the quick-return
@@ -524,7 +512,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             std::mem::swap(&mut s.a, &mut s.a1);
             std::mem::swap(&mut s.mu, &mut s.mu1);
             s.t = t1;
-            h = fixed_step.unwrap_or((h * factor).min(h_max));
+            h = fixed_step.unwrap_or((h * factor).min(run.h_max));
         }
         Ok(())
     })();

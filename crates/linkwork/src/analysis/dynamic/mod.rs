@@ -202,6 +202,64 @@ pub fn step_bounds(settings: &IntegratorSettings, start: &Start, span: f64) -> (
     (h_max, h0.min(h_max))
 }
 
+/// A run's span of time and the bounds of its steps, as every integrator uses them.
+#[derive(Debug, Clone, Copy)]
+pub struct Span {
+    /// End time, s.
+    pub t_end: f64,
+    /// Length of the run, s.
+    length: f64,
+    /// Largest and first step, s ([`step_bounds`]).
+    pub h_max: f64,
+    pub h_start: f64,
+}
+
+impl Span {
+    /// The run from `start` to `t_end` under `settings`.
+    pub fn new(settings: &IntegratorSettings, start: &Start, t_end: f64) -> Span {
+        let (h_max, h_start) = step_bounds(settings, start, t_end - start.t);
+        Span { t_end, length: t_end - start.t, h_max, h_start }
+    }
+
+    /// Whether `t` is short of the end by more than `1e-12` of the run, the rounding of a sum of
+    /// steps.
+    pub fn before_end(&self, t: f64) -> bool {
+        t < self.t_end - 1e-12 * self.length.max(1e-300)
+    }
+
+    /// The step `h` from `t`, made to end at the end time when it would pass it or fall short of
+    /// it by less than `1e-3` of itself (a sliver of a last step would be all round-off).
+    pub fn fit(&self, t: f64, h: f64) -> f64 {
+        if t + h > self.t_end || self.t_end - (t + h) < 1e-3 * h {
+            self.t_end - t
+        } else {
+            h
+        }
+    }
+
+    /// The smallest step at `t` ([`min_step`] over this run), or the error that stops the run:
+    /// the step budget spent, or (`shrunk`: for methods whose accepted steps can shrink the step
+    /// too, as an error estimate that grows from step to step) `h` already below the smallest.
+    #[allow(clippy::too_many_arguments)]
+    pub fn smallest_step(
+        &self,
+        dae: &mut Dae<'_>,
+        q: &[f64],
+        steps: usize,
+        t: f64,
+        h: f64,
+        settings: &IntegratorSettings,
+        shrunk: bool,
+    ) -> Result<f64, Error> {
+        let h_min = min_step(dae, q, steps, t, h, self.length, settings)?;
+        if shrunk && h < h_min {
+            // Stop here rather than creep towards zero.
+            return Err(step_failure(dae, q, t, h, "the error estimate has driven the step below the smallest step"));
+        }
+        Ok(h_min)
+    }
+}
+
 /// The rows of the smallest singular value of `Phi_q` at `(q, t)` (those with at least a fifth
 /// of the largest component of its left singular vector), and the ratio of the smallest to the
 /// largest singular value: the evidence of a singular position.
