@@ -386,6 +386,9 @@ fn nfourbar_a02_abam_crosses_the_flat_positions_at_1e_11_to_1e_13() {
     for (tol, bound) in [(1e-11, 2e-6), (1e-12, 2e-6), (1e-13, 2e-5)] {
         let r = model.run_with("dynamics", &tight("abam", tol)).unwrap_or_else(|f| panic!("{tol:e}: {}", f.error));
         assert!((r.time[r.len() - 1] - 20.0).abs() < 1e-9, "{tol:e}: ran to {}", r.time[r.len() - 1]);
+        // Every output time once, in order, across the hand-overs to bdf and back.
+        assert_eq!(r.len(), 2001, "{tol:e}: output rows");
+        assert!(r.time.windows(2).all(|w| w[1] > w[0]), "{tol:e}: output times out of order");
         let error = nfourbar_error(&r, 40);
         assert!(error < bound, "{tol:e}: B0 {error:e}");
         if tol < 1e-11 {

@@ -301,7 +301,10 @@ impl Separation {
     pub fn of(i: BodyIx, s_p: [f64; 2], j: BodyIx, s_q: [f64; 2], q: &Config<'_>) -> Separation {
         let (fi, fj) = (Frame::of(i, q), Frame::of(j, q));
         let (a_p, a_q) = (fi.rotate(s_p), fj.rotate(s_q));
-        let d = [fj.x + a_q[0] - fi.x - a_p[0], fj.y + a_q[1] - fi.y - a_p[1]];
+        // The origins' difference, then the offsets': the round-off is the offsets' (metres), not
+        // the positions' (far from the origin, much larger), and Newton near a singular position
+        // multiplies it by |B^-1| (docs/integrators.md, `abam`).
+        let d = [(fj.x - fi.x) + (a_q[0] - a_p[0]), (fj.y - fi.y) + (a_q[1] - a_p[1])];
         Separation { d, a_p, a_q, phi: [fi.phi, fj.phi] }
     }
     /// `g = df/dd => (f_{q_i}, f_{q_j})`: the `1 x 3` Jacobian blocks of a scalar `f(d)`.

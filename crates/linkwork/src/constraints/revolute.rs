@@ -8,7 +8,7 @@
 //! ```
 //! with `B = dA/dphi`. Haug (1989) section 3.3.1; Nikravesh (2018) section 7.1.
 
-use super::{Anchor, BodyIx, Config, Constraint, Frame, Pair};
+use super::{Anchor, BodyIx, Config, Constraint, Frame, Pair, Separation};
 
 /// A revolute joint between body i (point `P`) and body j (point `Q`).
 #[derive(Debug, Clone)]
@@ -39,10 +39,10 @@ impl Constraint for Revolute {
         self.pair.columns()
     }
     fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        let (fi, fj) = (Frame::of(self.pair.i, q), Frame::of(self.pair.j, q));
-        let (a, b) = (fi.rotate(self.s_p), fj.rotate(self.s_q));
-        out[0] = (fi.x - fj.x) + (a[0] - b[0]);
-        out[1] = (fi.y - fj.y) + (a[1] - b[1]);
+        // Phi = -d, d = r_Q - r_P summed as the origins' difference plus the offsets'.
+        let d = Separation::of(self.pair.i, self.s_p, self.pair.j, self.s_q, q).d;
+        out[0] = -d[0];
+        out[1] = -d[1];
     }
     fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let bi = Frame::of(self.pair.i, q).rotate_d(self.s_p);

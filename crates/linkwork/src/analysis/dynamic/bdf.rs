@@ -443,7 +443,7 @@ impl Bdf<'_, '_> {
 /// Integrate from `start` to the output's end time.
 pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, start: Start) -> Outcome {
     let stop = out.t_end();
-    let (stats, outcome) = run_until(dae, out, settings, start, stop);
+    let (stats, outcome) = run_until(dae, out, settings, start, stop, 0);
     (stats, outcome.map(|_| ()))
 }
 
@@ -451,16 +451,18 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
 pub type Reached = (f64, Vec<f64>, Vec<f64>);
 
 /// Integrate from `start` to `stop` (at most the output's end time), writing the output times
-/// on the way.
+/// on the way, after `taken` steps of the method that hands the run over (counted in the step
+/// budget).
 pub fn run_until(
     dae: &mut Dae<'_>,
     out: &mut Output,
     settings: &IntegratorSettings,
     start: Start,
     stop: f64,
+    taken: usize,
 ) -> (DynamicStats, Result<Reached, Error>) {
     let (n, m) = (dae.n, dae.m);
-    let run = Span::new(settings, &start, stop.min(out.t_end()));
+    let run = Span::new(settings, &start, stop.min(out.t_end()), taken);
     let Start { t, q, qdot, qddot, lambda } = start;
     let k_max = settings.order_limit().clamp(1, IntegratorSettings::order_bound(IntegratorKind::Bdf));
     let mut s = Bdf {

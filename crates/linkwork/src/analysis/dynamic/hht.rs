@@ -341,7 +341,7 @@ impl Controller {
 pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, start: Start) -> Outcome {
     let (n, m) = (dae.n, dae.m);
     let alpha = settings.alpha;
-    let run = Span::new(settings, &start, out.t_end());
+    let run = Span::new(settings, &start, out.t_end(), 0);
     let Start { t, q, qdot, qddot, lambda } = start;
     // F_0 = Phi_q^T lambda_0 - Q_0 = -M qddot_0 at a consistent start.
     let f: Vec<f64> = qddot.iter().zip(&dae.mass).map(|(a, mass)| -mass * a).collect();

@@ -212,13 +212,16 @@ pub struct Span {
     /// Largest and first step, s ([`step_bounds`]).
     pub h_max: f64,
     pub h_start: f64,
+    /// Steps taken before this run (by the method that handed it over), counted in the budget.
+    taken: usize,
 }
 
 impl Span {
-    /// The run from `start` to `t_end` under `settings`.
-    pub fn new(settings: &IntegratorSettings, start: &Start, t_end: f64) -> Span {
+    /// The run from `start` to `t_end` under `settings`, after `taken` steps of another run
+    /// (0 for a whole analysis).
+    pub fn new(settings: &IntegratorSettings, start: &Start, t_end: f64, taken: usize) -> Span {
         let (h_max, h_start) = step_bounds(settings, start, t_end - start.t);
-        Span { t_end, length: t_end - start.t, h_max, h_start }
+        Span { t_end, length: t_end - start.t, h_max, h_start, taken }
     }
 
     /// Whether `t` is short of the end by more than `1e-12` of the run, the rounding of a sum of
@@ -251,7 +254,7 @@ impl Span {
         settings: &IntegratorSettings,
         shrunk: bool,
     ) -> Result<f64, Error> {
-        let h_min = min_step(dae, q, steps, t, h, self.length, settings)?;
+        let h_min = min_step(dae, q, self.taken + steps, t, h, self.length, settings)?;
         if shrunk && h < h_min {
             // Stop here rather than creep towards zero.
             return Err(step_failure(dae, q, t, h, "the error estimate has driven the step below the smallest step"));
@@ -449,8 +452,8 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         s.insert(
             "warnings".into(),
             json!([format!(
-                "abam: near {} singular positions (Phi_q losing rank; the first at t = {t:.6} s) the error estimate at rtol {:e} was the round-off noise of the accelerations; bdf took the state across each",
-                stats.crossings, settings.rtol
+                "abam: near singular positions (Phi_q losing rank; the first at t = {t:.6} s) the error estimate at rtol {:e} was the round-off noise of the accelerations; bdf took the state across, in {} stretches",
+                settings.rtol, stats.crossings
             )]),
         );
     }
