@@ -399,4 +399,10 @@ fn nfourbar_a02_abam_crosses_the_flat_positions_at_1e_11_to_1e_13() {
             assert!(warned, "{tol:e}: {warnings:?}");
         }
     }
+    // The budget counts abam's steps and bdf's together (the first crossing comes before step
+    // 400 at 1e-12): it named the remainder bdf was given, "more than 141 steps".
+    model.analyses["dynamics"].integrator.max_steps = 400;
+    let f = model.run_with("dynamics", &tight("abam", 1e-12)).expect_err("a budget of 400 steps");
+    assert!(f.error.to_string().contains("more than 400 steps"), "{}", f.error);
+    assert!(f.results.summary["statistics"]["crossings"].as_u64().unwrap_or(0) > 0, "no crossing before the budget");
 }
