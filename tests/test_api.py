@@ -56,6 +56,15 @@ def test_results_columns_follow_the_contract(model_a, results_a):
     assert "time" in results_a and "crank.theta" not in results_a
 
 
+def test_iterating_results_gives_the_column_names(results_a: linkwork.Results) -> None:
+    """`list(results)` raised `KeyError: 'no column 0'` (Python fell back on `__getitem__(0)`);
+    it gives the header of results.csv, so that every name it gives is a column."""
+    assert list(results_a) == ["time", *results_a.columns]
+    table = {name: results_a[name] for name in results_a}
+    assert table["time"] is results_a.time
+    np.testing.assert_array_equal(table["rocker.phi"], results_a["rocker.phi"])
+
+
 def test_results_values_are_the_engines(results_a):
     # The crank angle is the driver's function exactly: 6.1506 + 2 pi t.
     np.testing.assert_allclose(results_a["crank.phi"], 6.1506 + 2 * math.pi * results_a.time, rtol=0, atol=1e-12)
