@@ -18,6 +18,14 @@ ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
 
 
+def patch(text: str, old: str, new: str) -> str:
+    """`text` with `old` replaced by `new`; fails unless `old` occurs exactly once, so that a test
+    whose file changed under it fails instead of running the file unchanged."""
+    count = text.count(old)
+    assert count == 1, f"{old!r} occurs {count} times in the text to patch, not once"
+    return text.replace(old, new)
+
+
 @dataclass
 class Outcome:
     """What a run of the command line did."""

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import EXAMPLES, ROOT, run_process
+from conftest import EXAMPLES, ROOT, patch, run_process
 
 QUANTITIES = ["x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha"]
 
@@ -261,7 +261,7 @@ def test_a_failure_time_reads_the_same_in_every_line(linkwork, tmp_path):
     `t = 1.49e-10 s` in the line after it. Both lines now write the time alike (Python's `.9g`),
     here for a driver that is NaN past 1e-9 s."""
     model = tmp_path / "soon.yaml"
-    model.write_text(RUNAWAY_DRIVER.replace("1/(t-1)", "sqrt(1e-9-t)"))
+    model.write_text(patch(RUNAWAY_DRIVER, 'function: "1/(t-1)"', 'function: "sqrt(1e-9-t)"'))
     done = linkwork("run", model, "-o", tmp_path / "out")
     assert done.code == 3, done.output
     times = re.findall(r"at t = (\S+) s", done.stderr)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import linkwork
-from conftest import EXAMPLES
+from conftest import EXAMPLES, patch
 
 # (mass, inertia) of each body, as in the model files.
 BODIES = {
@@ -140,7 +140,7 @@ def test_static_free_mechanism_is_a_model_error(linkwork, write_model, tmp_path)
     out = linkwork("check", model)
     assert "a static analysis needs every degree of freedom held" in out.stdout
     # A modes analysis about the equilibrium says it is one, not "a static analysis".
-    (tmp_path / "vib.yaml").write_text(model.read_text().replace("inv: {type: inverse, t_end: 1, step: 0.1}", "vib: {type: modes}"))
+    (tmp_path / "vib.yaml").write_text(patch(model.read_text(), "inv: {type: inverse, t_end: 1, step: 0.1}", "vib: {type: modes}"))
     out = linkwork("run", tmp_path / "vib.yaml", "--analysis", "vib")
     assert out.code == 2, out.output
     assert "analyses.vib: a modes analysis needs every degree of freedom held" in out.stderr
@@ -171,6 +171,13 @@ def pendulum(angle: float, extra: str = "", analyses: str = "") -> str:
         analyses:
           {analyses}
         """
+
+
+def twisted_pendulum() -> str:
+    """The pendulum with a static analysis under a torque of 2 M g L, more than its weight can
+    hold: it turns without end, and no equilibrium exists."""
+    twist = f"        forces:\n          twist: {{type: torque, body: bob, torque: {2 * M * G * L}}}\n"
+    return patch(pendulum(0.0, analyses="rest: {type: static}"), "        analyses:", f"{twist}        analyses:")
 
 
 def test_cli_horizontal_pendulum_hangs_down_and_swings(linkwork, write_model, tmp_path) -> None:
@@ -218,12 +225,7 @@ def test_cli_inverted_pendulum_modes_are_flagged_unstable(linkwork, write_model,
 def test_cli_torque_beyond_the_weight_has_no_equilibrium(linkwork, write_model) -> None:
     """A torque of 2 M g L turns the pendulum without end: the static analysis stops with exit 3
     and says that no equilibrium exists, naming the coordinate that turns and no joint."""
-    torque = 2 * M * G * L
-    model = write_model(
-        pendulum(0.0, analyses="rest: {type: static}").replace(
-            "        analyses:", f"        forces:\n          twist: {{type: torque, body: bob, torque: {torque}}}\n        analyses:"
-        )
-    )
+    model = write_model(twisted_pendulum())
     out = linkwork("run", model, "--out", "rest")
     assert out.code == 3, out.output
     assert "no stable static equilibrium found at t = 0" in out.stderr and "none exists" in out.stderr
@@ -234,10 +236,7 @@ def test_no_equilibrium_is_an_equilibrium_error() -> None:
     """From Python the same failure is an EquilibriumError (a ConvergenceError, a SolverError),
     with the coordinates that move, no joints, `index` None (no equilibrium at all), and the
     summary of the partial results flagged not stable."""
-    text = pendulum(0.0, analyses="rest: {type: static}").replace(
-        "        analyses:", f"        forces:\n          twist: {{type: torque, body: bob, torque: {2 * M * G * L}}}\n        analyses:"
-    )
-    model = linkwork.Model.from_yaml(textwrap.dedent(text))
+    model = linkwork.Model.from_yaml(textwrap.dedent(twisted_pendulum()))
     with pytest.raises(linkwork.EquilibriumError) as caught:
         model.run("rest")
     error = caught.value
