@@ -9,6 +9,7 @@ import sys
 import textwrap
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Protocol
 
 import pytest
 
@@ -39,6 +40,18 @@ class Outcome:
         return self.stdout + self.stderr
 
 
+class RunLinkwork(Protocol):
+    """The `linkwork` fixture: `linkwork ARGS`, run the way the test's parameter says."""
+
+    def __call__(self, *args: str | Path) -> Outcome: ...
+
+
+class WriteModel(Protocol):
+    """The `write_model` fixture: write a model file and return its path."""
+
+    def __call__(self, text: str, name: str = "model.yaml") -> Path: ...
+
+
 def linkwork_command() -> list[str]:
     """The installed `linkwork` console script, else `python -m linkwork`."""
     script = Path(sys.executable).with_name("linkwork")
@@ -57,7 +70,12 @@ def run_process(args: list[str], cwd: Path) -> Outcome:
 
 
 @pytest.fixture(params=["process", "main"])
-def linkwork(request: pytest.FixtureRequest, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys):
+def linkwork(
+    request: pytest.FixtureRequest,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> RunLinkwork:
     """Run `linkwork ARGS` with `tmp_path` as the working folder, as a child process or through
     `linkwork.cli.main([...])`; the test runs once each way."""
 
@@ -75,7 +93,7 @@ def linkwork(request: pytest.FixtureRequest, tmp_path: Path, monkeypatch: pytest
 
 
 @pytest.fixture
-def write_model(tmp_path: Path):
+def write_model(tmp_path: Path) -> WriteModel:
     """Write a model file (dedented) into `tmp_path` and return its path."""
 
     def write(text: str, name: str = "model.yaml") -> Path:

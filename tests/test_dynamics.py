@@ -3,16 +3,17 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import linkwork
 import linkwork as linkwork_module
-from conftest import EXAMPLES
+from conftest import EXAMPLES, RunLinkwork
 
 
-def test_overrides_change_the_run():
+def test_overrides_change_the_run() -> None:
     model = linkwork.load(EXAMPLES / "double_pendulum.yaml")
     results = model.run("dynamics_hht", t_end=0.5, step=0.1, rtol=1e-7)
     assert len(results) == 6
@@ -29,7 +30,7 @@ def test_overrides_change_the_run():
     assert model.run("dynamics_hht", t_end=0.2, step=0.1).summary["statistics"]["partitions"] == 0
 
 
-def test_bad_override_is_a_model_error():
+def test_bad_override_is_a_model_error() -> None:
     model = linkwork.load(EXAMPLES / "double_pendulum.yaml")
     with pytest.raises(linkwork.ModelError) as info:
         model.run("dynamics_hht", rtol=0.0)
@@ -43,11 +44,11 @@ def test_bad_override_is_a_model_error():
     assert info.value.problems == [("--rtol", "expected a number, found True (a bool)")]
     # Text was a TypeError from the bindings (found by tests/test_properties.py).
     with pytest.raises(linkwork.ModelError) as info:
-        model.run("dynamics_hht", step="0.1")
+        model.run("dynamics_hht", step="0.1")  # type: ignore[arg-type]  # the wrong type is the test
     assert info.value.problems == [("--step", "expected a number, found '0.1' (str)")]
 
 
-def test_reaction_in_the_body_frame_is_the_rotated_global_one():
+def test_reaction_in_the_body_frame_is_the_rotated_global_one() -> None:
     results = linkwork.load(EXAMPLES / "double_pendulum.yaml").run("dynamics_hht", t_end=0.5)
     fx, fy, torque = results.reaction("E")
     bx, by, btorque = results.reaction("E", frame="body")
@@ -60,7 +61,7 @@ def test_reaction_in_the_body_frame_is_the_rotated_global_one():
         results.reaction("E", frame="local")
 
 
-def test_cli_overrides_and_dynamic_summary(linkwork, tmp_path):
+def test_cli_overrides_and_dynamic_summary(linkwork: RunLinkwork, tmp_path: Path) -> None:
     out = tmp_path / "dp"
     done = linkwork(
         "run", EXAMPLES / "double_pendulum.yaml", "-a", "dynamics_hht", "--t-end", "0.3", "--rtol", "1e-5", "-o", out
@@ -92,7 +93,7 @@ analyses:
 """
 
 
-def test_a_nan_torque_is_a_non_finite_error(linkwork, tmp_path):
+def test_a_nan_torque_is_a_non_finite_error(linkwork: RunLinkwork, tmp_path: Path) -> None:
     """0/0 at t = 0.5 s ran to the end with status ok and NaN in the results; now it stops there
     naming the force, exits 3 and keeps the rows before it."""
     path = tmp_path / "switch.yaml"
