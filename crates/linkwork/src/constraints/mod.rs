@@ -27,7 +27,7 @@ pub use expression::{GeneralConstraint, Var, MAX_SLOTS};
 pub use gear::{GearKind, GearPair};
 pub use point_line::PointOnLine;
 pub use revolute::Revolute;
-pub use rolling::{RackPinion, RollingDisc};
+pub use rolling::{RackPinion, Rolling, RollingDisc};
 pub use translational::Translational;
 
 use std::fmt::Debug;
