@@ -9,6 +9,7 @@ import sys
 import textwrap
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Protocol
 
 import pytest
 
@@ -16,6 +17,14 @@ from linkwork import cli
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
+
+
+def patch(text: str, old: str, new: str) -> str:
+    """`text` with `old` replaced by `new`; fails unless `old` occurs exactly once, so that a test
+    whose file changed under it fails instead of running the file unchanged."""
+    count = text.count(old)
+    assert count == 1, f"{old!r} occurs {count} times in the text to patch, not once"
+    return text.replace(old, new)
 
 
 @dataclass
@@ -29,6 +38,18 @@ class Outcome:
     @property
     def output(self) -> str:
         return self.stdout + self.stderr
+
+
+class RunLinkwork(Protocol):
+    """The `linkwork` fixture: `linkwork ARGS`, run the way the test's parameter says."""
+
+    def __call__(self, *args: str | Path) -> Outcome: ...
+
+
+class WriteModel(Protocol):
+    """The `write_model` fixture: write a model file and return its path."""
+
+    def __call__(self, text: str, name: str = "model.yaml") -> Path: ...
 
 
 def linkwork_command() -> list[str]:
@@ -49,7 +70,12 @@ def run_process(args: list[str], cwd: Path) -> Outcome:
 
 
 @pytest.fixture(params=["process", "main"])
-def linkwork(request: pytest.FixtureRequest, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys):
+def linkwork(
+    request: pytest.FixtureRequest,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> RunLinkwork:
     """Run `linkwork ARGS` with `tmp_path` as the working folder, as a child process or through
     `linkwork.cli.main([...])`; the test runs once each way."""
 
@@ -67,7 +93,7 @@ def linkwork(request: pytest.FixtureRequest, tmp_path: Path, monkeypatch: pytest
 
 
 @pytest.fixture
-def write_model(tmp_path: Path):
+def write_model(tmp_path: Path) -> WriteModel:
     """Write a model file (dedented) into `tmp_path` and return its path."""
 
     def write(text: str, name: str = "model.yaml") -> Path:

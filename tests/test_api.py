@@ -6,6 +6,7 @@ import csv
 import json
 import math
 import pickle
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -26,7 +27,7 @@ def results_a(model_a: linkwork.Model) -> linkwork.Results:
     return model_a.run()
 
 
-def test_model_names(model_a):
+def test_model_names(model_a: linkwork.Model) -> None:
     assert model_a.name == "quick-return mechanism (model A, two sliders)"
     assert model_a.bodies == ["crank", "rocker", "slider_b", "link", "slider_d"]
     assert model_a.joints == ["O", "A", "B", "B_slot", "C", "D", "D_guide"]
@@ -35,14 +36,14 @@ def test_model_names(model_a):
     assert "quick_return_a.yaml" in repr(model_a)
 
 
-def test_model_is_made_by_load_or_from_yaml():
+def test_model_is_made_by_load_or_from_yaml() -> None:
     with pytest.raises(TypeError, match="linkwork.load"):
         linkwork.Model()
     text = (EXAMPLES / "fourbar.yaml").read_text()
     assert linkwork.from_yaml(text).bodies == linkwork.Model.from_yaml(text).bodies == ["crank", "coupler", "rocker"]
 
 
-def test_results_columns_follow_the_contract(model_a, results_a):
+def test_results_columns_follow_the_contract(model_a: linkwork.Model, results_a: linkwork.Results) -> None:
     expected = [f"{b}.{q}" for b in model_a.bodies for q in QUANTITIES]
     assert results_a.columns == expected
     assert results_a.values.shape == (41, len(expected))
@@ -56,7 +57,16 @@ def test_results_columns_follow_the_contract(model_a, results_a):
     assert "time" in results_a and "crank.theta" not in results_a
 
 
-def test_results_values_are_the_engines(results_a):
+def test_iterating_results_gives_the_column_names(results_a: linkwork.Results) -> None:
+    """`list(results)` raised `KeyError: 'no column 0'` (Python fell back on `__getitem__(0)`);
+    it gives the header of results.csv, so that every name it gives is a column."""
+    assert list(results_a) == ["time", *results_a.columns]
+    table = {name: results_a[name] for name in results_a}
+    assert table["time"] is results_a.time
+    np.testing.assert_array_equal(table["rocker.phi"], results_a["rocker.phi"])
+
+
+def test_results_values_are_the_engines(results_a: linkwork.Results) -> None:
     # The crank angle is the driver's function exactly: 6.1506 + 2 pi t.
     np.testing.assert_allclose(results_a["crank.phi"], 6.1506 + 2 * math.pi * results_a.time, rtol=0, atol=1e-12)
     np.testing.assert_allclose(results_a["crank.omega"], 2 * math.pi, rtol=0, atol=1e-12)
@@ -66,19 +76,19 @@ def test_results_values_are_the_engines(results_a):
     np.testing.assert_allclose(results_a["slider_d.y"], 2.0, rtol=0, atol=1e-11)
 
 
-def test_results_are_read_only(results_a):
+def test_results_are_read_only(results_a: linkwork.Results) -> None:
     with pytest.raises(ValueError, match="read-only"):
         results_a["rocker.phi"][0] = 0.0
     with pytest.raises(ValueError, match="read-only"):
         results_a.time[0] = 1.0
 
 
-def test_unknown_column(results_a):
+def test_unknown_column(results_a: linkwork.Results) -> None:
     with pytest.raises(KeyError, match="no column 'rocker.theta'; the columns are time, crank.x"):
         results_a["rocker.theta"]
 
 
-def test_summary(results_a):
+def test_summary(results_a: linkwork.Results) -> None:
     summary = results_a.summary
     assert summary["status"] == "ok"
     assert summary["analysis"] == "kinematics"
@@ -88,7 +98,7 @@ def test_summary(results_a):
     assert "41 points" in repr(results_a)
 
 
-def test_to_pandas(results_a):
+def test_to_pandas(results_a: linkwork.Results) -> None:
     pd = pytest.importorskip("pandas")
     frame = results_a.to_pandas()
     assert isinstance(frame, pd.DataFrame)
@@ -103,7 +113,7 @@ def test_to_pandas(results_a):
     assert list(frame.reset_index().columns) == ["time", *results_a.columns]
 
 
-def test_write_matches_the_arrays(results_a, tmp_path):
+def test_write_matches_the_arrays(results_a: linkwork.Results, tmp_path: Path) -> None:
     results_a.write(tmp_path / "a")
     with (tmp_path / "a" / "results.csv").open(newline="") as f:
         rows = list(csv.reader(f))
@@ -116,7 +126,7 @@ def test_write_matches_the_arrays(results_a, tmp_path):
     assert summary == results_a.summary
 
 
-def test_models_a_and_b_agree():
+def test_models_a_and_b_agree() -> None:
     """Model A (5 bodies, two sliders) and model B (3 bodies, pin-in-slot joints) describe the
     same crank, rocker and link motion with different equations. Tolerance 1e-10 (relative above
     magnitude 1): each is solved to |Phi| <= 1e-12 and the Jacobian amplifies that by at most ~300
@@ -136,7 +146,7 @@ def test_models_a_and_b_agree():
     assert np.ptp(a["rocker.phi"]) > 0.5
 
 
-def test_check(model_a):
+def test_check(model_a: linkwork.Model) -> None:
     report = model_a.check()
     assert report["bodies"] == model_a.bodies
     assert report["coordinates"] == 15
@@ -153,20 +163,20 @@ def test_check(model_a):
     assert (driven["equations"], driven["dof"]) == (15, 0)
 
 
-def test_schema():
+def test_schema() -> None:
     schema = linkwork.schema()
     assert schema["type"] == "object"
     assert {"bodies", "joints", "drivers", "analyses"} <= set(schema["properties"])
 
 
-def test_version():
+def test_version() -> None:
     assert isinstance(linkwork.__version__, str) and linkwork.__version__.count(".") == 2
 
 
 # --- exceptions ----------------------------------------------------------------------------------
 
 
-def test_exception_tree():
+def test_exception_tree() -> None:
     assert issubclass(linkwork.ModelError, linkwork.LinkworkError)
     assert issubclass(linkwork.AssemblyError, linkwork.LinkworkError)
     assert issubclass(linkwork.SolverError, linkwork.LinkworkError)
@@ -180,7 +190,7 @@ def test_exception_tree():
     assert linkwork.errors.SingularError is linkwork.SingularError
 
 
-def test_model_error_lists_problems():
+def test_model_error_lists_problems() -> None:
     text = """
 bodies:
   crank: {mass: 1, inertia: 1, position: [0, 0], angle: 0}
@@ -197,7 +207,7 @@ joints:
     assert "joints.B.body_j: unknown body 'rokcer'" in str(caught.value)
 
 
-def test_missing_file_is_a_file_error(tmp_path):
+def test_missing_file_is_a_file_error(tmp_path: Path) -> None:
     missing = tmp_path / "missing.yaml"
     with pytest.raises(linkwork.FileError) as caught:
         linkwork.load(missing)
@@ -206,13 +216,13 @@ def test_missing_file_is_a_file_error(tmp_path):
         linkwork.load(missing)
 
 
-def test_run_unknown_analysis(model_a):
+def test_run_unknown_analysis(model_a: linkwork.Model) -> None:
     with pytest.raises(linkwork.ModelError, match="no analysis named 'nope'") as caught:
         model_a.run("nope")
     assert caught.value.problems[0][0] == "analyses.nope"
 
 
-def test_run_without_analyses():
+def test_run_without_analyses() -> None:
     text = (EXAMPLES / "fourbar.yaml").read_text().split("analyses:")[0]
     model = linkwork.from_yaml(text)
     assert model.analyses == []
@@ -221,7 +231,7 @@ def test_run_without_analyses():
     assert caught.value.problems[0][0] == "analyses"
 
 
-def test_singular_error_carries_partial_results():
+def test_singular_error_carries_partial_results() -> None:
     model = linkwork.load(EXAMPLES / "slider_crank_lockup.yaml")
     with pytest.raises(linkwork.SingularError) as caught:
         model.run()
@@ -241,7 +251,7 @@ def test_singular_error_carries_partial_results():
     np.testing.assert_allclose(partial["crank.phi"], partial.time, rtol=0, atol=1e-12)
 
 
-def test_assembly_error():
+def test_assembly_error() -> None:
     """A link too short to close the loop: the guess cannot be assembled."""
     text = """
 bodies:
@@ -266,7 +276,7 @@ analyses:
         model.check()
 
 
-def test_exceptions_pickle():
+def test_exceptions_pickle() -> None:
     with pytest.raises(linkwork.ModelError) as caught:
         linkwork.from_yaml("bodies: {}\n")
     again = pickle.loads(pickle.dumps(caught.value))
@@ -274,7 +284,7 @@ def test_exceptions_pickle():
     assert again.problems == caught.value.problems
 
 
-def test_a_panic_becomes_internal_error():
+def test_a_panic_becomes_internal_error() -> None:
     """A panic in the engine is a bug, but it must reach Python as an ordinary exception, never as
     pyo3's PanicException (a BaseException) or a crash."""
     with pytest.raises(linkwork.InternalError, match="internal error in the Linkwork engine .*deliberate panic"):

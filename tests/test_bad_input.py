@@ -4,8 +4,11 @@ pointing into the file. Each file is small and differs from a good slider-crank 
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import pytest
+
+from conftest import RunLinkwork, WriteModel, patch
 
 # A centred slider-crank that runs; each case below breaks one thing in it.
 GOOD = """\
@@ -26,8 +29,7 @@ analyses:
 
 
 def broken(old: str, new: str) -> str:
-    assert GOOD.count(old) == 1, old
-    return GOOD.replace(old, new)
+    return patch(GOOD, old, new)
 
 
 # (id, model text, path, words the message must contain)
@@ -108,7 +110,7 @@ CASES = [
 
 
 @pytest.mark.parametrize(("text", "path", "words"), [c[1:] for c in CASES], ids=[c[0] for c in CASES])
-def test_one_problem(linkwork, write_model, text, path, words):
+def test_one_problem(linkwork: RunLinkwork, write_model: WriteModel, text: str, path: str, words: str) -> None:
     done = linkwork("run", write_model(text))
     assert done.code == 2, done.output
     assert "Traceback" not in done.output
@@ -116,12 +118,12 @@ def test_one_problem(linkwork, write_model, text, path, words):
     assert any(line.startswith(f"{path}: ") and words in line for line in lines), done.stderr
 
 
-def test_the_good_model_runs(linkwork, write_model):
+def test_the_good_model_runs(linkwork: RunLinkwork, write_model: WriteModel) -> None:
     """The cases above fail because of what they change, not because of the rest."""
     assert linkwork("run", write_model(GOOD)).code == 0
 
 
-def test_not_fully_driven_says_how_many_drivers_are_missing(linkwork, write_model):
+def test_not_fully_driven_says_how_many_drivers_are_missing(linkwork: RunLinkwork, write_model: WriteModel) -> None:
     text = broken("drivers: [motor]", "drivers: []")
     done = linkwork("run", write_model(text))
     assert done.code == 2
@@ -162,7 +164,7 @@ SEVERAL_PROBLEMS = [
 
 
 @pytest.mark.parametrize("command", ["run", "check"])
-def test_every_problem_is_listed(linkwork, write_model, command):
+def test_every_problem_is_listed(linkwork: RunLinkwork, write_model: WriteModel, command: str) -> None:
     done = linkwork(command, write_model(SEVERAL))
     assert done.code == 2, done.output
     lines = done.stderr.splitlines()
@@ -174,7 +176,7 @@ def test_every_problem_is_listed(linkwork, write_model, command):
     assert len(problems) == len(SEVERAL_PROBLEMS), done.stderr
 
 
-def test_unknown_body_message(linkwork, write_model):
+def test_unknown_body_message(linkwork: RunLinkwork, write_model: WriteModel) -> None:
     """The message the brief quotes, word for word."""
     text = broken("body_j: rod, point_j: A", "body_j: rokcer, point_j: A")
     done = linkwork("check", write_model(text))
@@ -191,7 +193,7 @@ def test_unknown_body_message(linkwork, write_model):
     ],
     ids=["syntax", "not a mapping", "empty"],
 )
-def test_files_that_are_not_models(linkwork, write_model, text, words):
+def test_files_that_are_not_models(linkwork: RunLinkwork, write_model: WriteModel, text: str, words: str) -> None:
     done = linkwork("run", write_model(text))
     assert done.code == 2, done.output
     assert words in done.stderr

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import EXAMPLES, ROOT, run_process
+from conftest import EXAMPLES, ROOT, RunLinkwork, patch, run_process
 
 QUANTITIES = ["x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha"]
 
@@ -20,7 +20,7 @@ def read_csv(path: Path) -> tuple[list[str], list[list[float]]]:
     return rows[0], [[float(v) for v in row] for row in rows[1:]]
 
 
-def test_run_writes_results_and_summary(linkwork, tmp_path):
+def test_run_writes_results_and_summary(linkwork: RunLinkwork, tmp_path: Path) -> None:
     done = linkwork("run", EXAMPLES / "quick_return_a.yaml")
     assert done.code == 0, done.output
     out = tmp_path / "out" / "quick_return_a"
@@ -40,14 +40,14 @@ def test_run_writes_results_and_summary(linkwork, tmp_path):
     assert done.stderr == ""
 
 
-def test_run_with_analysis_and_out(linkwork, tmp_path):
+def test_run_with_analysis_and_out(linkwork: RunLinkwork, tmp_path: Path) -> None:
     done = linkwork("run", EXAMPLES / "fourbar.yaml", "--analysis", "kinematics", "--out", tmp_path / "here")
     assert done.code == 0, done.output
     assert (tmp_path / "here" / "results.csv").is_file()
     assert json.loads((tmp_path / "here" / "summary.json").read_text())["status"] == "ok"
 
 
-def test_a_tolerance_below_round_off_is_a_warning_not_a_failure(linkwork, tmp_path):
+def test_a_tolerance_below_round_off_is_a_warning_not_a_failure(linkwork: RunLinkwork, tmp_path: Path) -> None:
     done = linkwork(
         "run",
         EXAMPLES / "iftomm_a01_pendulum.yaml",
@@ -67,14 +67,14 @@ def test_a_tolerance_below_round_off_is_a_warning_not_a_failure(linkwork, tmp_pa
     assert "warning: solver.rtol 1e-17 is below what round-off allows" in done.stdout
 
 
-def test_unknown_analysis_is_a_model_error(linkwork):
+def test_unknown_analysis_is_a_model_error(linkwork: RunLinkwork) -> None:
     done = linkwork("run", EXAMPLES / "fourbar.yaml", "--analysis", "dynamics")
     assert done.code == 2
     assert "analyses.dynamics: no analysis named 'dynamics'" in done.stderr
     assert "kinematics" in done.stderr  # the ones there are
 
 
-def test_missing_model_file_exits_2_without_traceback(linkwork, tmp_path):
+def test_missing_model_file_exits_2_without_traceback(linkwork: RunLinkwork, tmp_path: Path) -> None:
     for command in ["run", "check"]:
         done = linkwork(command, tmp_path / "nowhere.yaml")
         assert done.code == 2, done.output
@@ -83,13 +83,13 @@ def test_missing_model_file_exits_2_without_traceback(linkwork, tmp_path):
         assert "Traceback" not in done.output
 
 
-def test_folder_instead_of_model_file_exits_2(linkwork, tmp_path):
+def test_folder_instead_of_model_file_exits_2(linkwork: RunLinkwork, tmp_path: Path) -> None:
     done = linkwork("run", tmp_path)
     assert done.code == 2
     assert "Traceback" not in done.output
 
 
-def test_unwritable_output_folder_exits_2(linkwork, tmp_path):
+def test_unwritable_output_folder_exits_2(linkwork: RunLinkwork, tmp_path: Path) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
     done = linkwork("run", EXAMPLES / "fourbar.yaml", "--out", blocker / "out")
@@ -97,13 +97,13 @@ def test_unwritable_output_folder_exits_2(linkwork, tmp_path):
     assert "Traceback" not in done.output
 
 
-def test_usage_errors_exit_2(linkwork):
+def test_usage_errors_exit_2(linkwork: RunLinkwork) -> None:
     assert linkwork().code == 2
     assert linkwork("fly", "model.yaml").code == 2
     assert linkwork("run").code == 2
 
 
-def test_version(linkwork):
+def test_version(linkwork: RunLinkwork) -> None:
     import linkwork as package
 
     done = linkwork("--version")
@@ -111,14 +111,14 @@ def test_version(linkwork):
     assert package.__version__ in done.output
 
 
-def test_schema(linkwork):
+def test_schema(linkwork: RunLinkwork) -> None:
     done = linkwork("schema")
     assert done.code == 0
     schema = json.loads(done.stdout)
     assert {"bodies", "joints", "drivers", "analyses"} <= set(schema["properties"])
 
 
-def test_lock_up_exits_3_and_keeps_partial_results(linkwork, tmp_path):
+def test_lock_up_exits_3_and_keeps_partial_results(linkwork: RunLinkwork, tmp_path: Path) -> None:
     """The slider-crank whose rod is shorter than its crank locks up at theta = asin(0.6) =
     0.6435 rad = t (see the example's comment)."""
     done = linkwork("run", EXAMPLES / "slider_crank_lockup.yaml")
@@ -144,7 +144,7 @@ def test_lock_up_exits_3_and_keeps_partial_results(linkwork, tmp_path):
     assert str(len(rows)) in done.stderr and "partial results" in done.stderr
 
 
-def test_check_text(linkwork):
+def test_check_text(linkwork: RunLinkwork) -> None:
     done = linkwork("check", EXAMPLES / "quick_return_a.yaml")
     assert done.code == 0, done.output
     text = done.stdout
@@ -165,7 +165,7 @@ def test_check_text(linkwork):
     assert re.search(r"equations\s+15\b", analysis)
 
 
-def test_check_names_redundant_rows_by_joint_and_equation(linkwork):
+def test_check_names_redundant_rows_by_joint_and_equation(linkwork: RunLinkwork) -> None:
     done = linkwork("check", EXAMPLES / "parallelogram.yaml")
     assert done.code == 0, done.output
     assert re.search(r"redundant rows\s+1", done.stdout)
@@ -174,7 +174,7 @@ def test_check_names_redundant_rows_by_joint_and_equation(linkwork):
     assert re.search(r"degrees of freedom\s+1\b", done.stdout)
 
 
-def test_check_json(linkwork):
+def test_check_json(linkwork: RunLinkwork) -> None:
     done = linkwork("check", EXAMPLES / "parallelogram.yaml", "--json")
     assert done.code == 0, done.output
     report = json.loads(done.stdout)
@@ -185,7 +185,7 @@ def test_check_json(linkwork):
     assert report["analyses"]["kinematics"]["dof"] == 0
 
 
-def test_readme_quick_start(tmp_path):
+def test_readme_quick_start(tmp_path: Path) -> None:
     """The README's quick start is exactly two commands: the first installs and runs the
     quick-return example (its `linkwork` part is run here, from a folder holding the examples),
     the second installs and runs every test (the command `.ci/run` runs)."""
@@ -205,7 +205,7 @@ def test_readme_quick_start(tmp_path):
     assert (tmp_path / "out" / "quick_return_a" / "summary.json").is_file()
 
 
-def test_readme_python_snippet(tmp_path, monkeypatch, capsys):
+def test_readme_python_snippet(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
     readme = (ROOT / "README.md").read_text()
     (snippet,) = re.findall(r"```python\n(.*?)```", readme, flags=re.S)
     (tmp_path / "examples").symlink_to(EXAMPLES)
@@ -215,13 +215,13 @@ def test_readme_python_snippet(tmp_path, monkeypatch, capsys):
     assert (tmp_path / "out" / "quick_return_a" / "results.csv").is_file()
 
 
-def test_internal_error_exits_1(monkeypatch, tmp_path, capsys):
-    from linkwork import _linkwork, cli
+def test_internal_error_exits_1(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from linkwork import Model, _linkwork, cli
 
-    def explode(path):
+    def explode(path: str) -> None:
         _linkwork._panic_for_tests()
 
-    monkeypatch.setattr(cli.Model, "load", staticmethod(explode))
+    monkeypatch.setattr(Model, "load", staticmethod(explode))
     monkeypatch.chdir(tmp_path)
     assert cli.main(["run", str(EXAMPLES / "fourbar.yaml")]) == 1
     err = capsys.readouterr().err
@@ -241,7 +241,7 @@ analyses:
 """
 
 
-def test_a_runaway_driver_exits_3_naming_it(linkwork, tmp_path):
+def test_a_runaway_driver_exits_3_naming_it(linkwork: RunLinkwork, tmp_path: Path) -> None:
     """The driver 1/(t-1) hung the kinematic analysis, writing nothing; it now stops at the
     output before t = 1 s, names the driver and its function, and keeps the rows before it."""
     model = tmp_path / "runaway.yaml"
@@ -256,12 +256,12 @@ def test_a_runaway_driver_exits_3_naming_it(linkwork, tmp_path):
     assert summary["status"] == "failed" and summary["error_time"] == 1.0
 
 
-def test_a_failure_time_reads_the_same_in_every_line(linkwork, tmp_path):
+def test_a_failure_time_reads_the_same_in_every_line(linkwork: RunLinkwork, tmp_path: Path) -> None:
     """A failure just after the start was printed as `t = 0.000000 s` in the error and
     `t = 1.49e-10 s` in the line after it. Both lines now write the time alike (Python's `.9g`),
     here for a driver that is NaN past 1e-9 s."""
     model = tmp_path / "soon.yaml"
-    model.write_text(RUNAWAY_DRIVER.replace("1/(t-1)", "sqrt(1e-9-t)"))
+    model.write_text(patch(RUNAWAY_DRIVER, 'function: "1/(t-1)"', 'function: "sqrt(1e-9-t)"'))
     done = linkwork("run", model, "-o", tmp_path / "out")
     assert done.code == 3, done.output
     times = re.findall(r"at t = (\S+) s", done.stderr)

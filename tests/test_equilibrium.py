@@ -5,15 +5,16 @@ from __future__ import annotations
 import csv
 import json
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import linkwork
-from conftest import EXAMPLES
+from conftest import EXAMPLES, RunLinkwork, WriteModel, patch
 
 # (mass, inertia) of each body, as in the model files.
-BODIES = {
+BODIES: dict[str, dict[str, tuple[float, float]]] = {
     "a": {"crank": (1000, 2000), "rocker": (100, 100), "slider_b": (5, 0.05), "link": (30, 10), "slider_d": (20, 1.5)},
     "b": {"crank": (1000, 2000), "rocker": (100, 100), "link": (30, 10)},
 }
@@ -53,7 +54,7 @@ def test_quick_return_models_share_the_motion_not_the_torque() -> None:
     assert np.abs(difference - sliders).max() < 1e-8 * np.abs(a["crank_drive.effort"]).max() * 2 * np.pi
 
 
-def test_cli_inverse_writes_reactions_and_crank_torque(linkwork, tmp_path) -> None:
+def test_cli_inverse_writes_reactions_and_crank_torque(linkwork: RunLinkwork, tmp_path: Path) -> None:
     out = linkwork("run", EXAMPLES / "quick_return_a.yaml", "--analysis", "inverse", "--out", "inv")
     assert out.code == 0, out.output
     assert "peak crank_drive.effort" in out.stdout
@@ -68,7 +69,7 @@ def test_cli_inverse_writes_reactions_and_crank_torque(linkwork, tmp_path) -> No
     assert set(summary["peaks"]) >= {"crank_drive.effort", "O.force", "O.torque"}
 
 
-def test_cli_static_and_modes(linkwork, write_model, tmp_path) -> None:
+def test_cli_static_and_modes(linkwork: RunLinkwork, write_model: WriteModel, tmp_path: Path) -> None:
     model = write_model(
         """
         gravity: [0, -9.81]
@@ -118,7 +119,7 @@ analyses:
     assert mode["shape"]["block.x"] == 1.0
 
 
-def test_static_free_mechanism_is_a_model_error(linkwork, write_model, tmp_path) -> None:
+def test_static_free_mechanism_is_a_model_error(linkwork: RunLinkwork, write_model: WriteModel, tmp_path: Path) -> None:
     model = write_model(
         """
         gravity: [0, 0]
@@ -140,14 +141,14 @@ def test_static_free_mechanism_is_a_model_error(linkwork, write_model, tmp_path)
     out = linkwork("check", model)
     assert "a static analysis needs every degree of freedom held" in out.stdout
     # A modes analysis about the equilibrium says it is one, not "a static analysis".
-    (tmp_path / "vib.yaml").write_text(model.read_text().replace("inv: {type: inverse, t_end: 1, step: 0.1}", "vib: {type: modes}"))
+    (tmp_path / "vib.yaml").write_text(patch(model.read_text(), "inv: {type: inverse, t_end: 1, step: 0.1}", "vib: {type: modes}"))
     out = linkwork("run", tmp_path / "vib.yaml", "--analysis", "vib")
     assert out.code == 2, out.output
     assert "analyses.vib: a modes analysis needs every degree of freedom held" in out.stderr
     assert "a static analysis" not in out.stderr
 
 
-def test_check_names_indeterminate_joints(linkwork) -> None:
+def test_check_names_indeterminate_joints(linkwork: RunLinkwork) -> None:
     out = linkwork("check", EXAMPLES / "parallelogram.yaml")
     assert out.code == 0
     assert "indeterminate joints ground_1, coupler_1, ground_2, coupler_2, ground_3, coupler_3" in out.stdout
@@ -173,7 +174,14 @@ def pendulum(angle: float, extra: str = "", analyses: str = "") -> str:
         """
 
 
-def test_cli_horizontal_pendulum_hangs_down_and_swings(linkwork, write_model, tmp_path) -> None:
+def twisted_pendulum() -> str:
+    """The pendulum with a static analysis under a torque of 2 M g L, more than its weight can
+    hold: it turns without end, and no equilibrium exists."""
+    twist = f"        forces:\n          twist: {{type: torque, body: bob, torque: {2 * M * G * L}}}\n"
+    return patch(pendulum(0.0, analyses="rest: {type: static}"), "        analyses:", f"{twist}        analyses:")
+
+
+def test_cli_horizontal_pendulum_hangs_down_and_swings(linkwork: RunLinkwork, write_model: WriteModel, tmp_path: Path) -> None:
     """Released level, where its rod carries no tension and the guess has no stiffness, gravity
     still loads it: the static analysis hangs it straight down (closed form (0, -L), 1e-12 m) and
     the modes analysis finds sqrt(M g L / J_O) / (2 pi) Hz (1e-9 relative: the geometric
@@ -195,7 +203,7 @@ def test_cli_horizontal_pendulum_hangs_down_and_swings(linkwork, write_model, tm
     assert abs(float(mode["frequency"]) - RATE / (2 * np.pi)) < 1e-9 * RATE
 
 
-def test_cli_inverted_pendulum_modes_are_flagged_unstable(linkwork, write_model, tmp_path) -> None:
+def test_cli_inverted_pendulum_modes_are_flagged_unstable(linkwork: RunLinkwork, write_model: WriteModel, tmp_path: Path) -> None:
     """Linearised where it stands upside down, the pendulum's one eigenvalue is +sqrt(M g L / J_O):
     a divergence, printed and written as unstable with its growth rate (closed form, 1e-9), never
     as a frequency with damping ratio -1."""
@@ -215,15 +223,10 @@ def test_cli_inverted_pendulum_modes_are_flagged_unstable(linkwork, write_model,
     assert abs(float(row["growth_rate"]) - RATE) < 1e-9 * RATE
 
 
-def test_cli_torque_beyond_the_weight_has_no_equilibrium(linkwork, write_model) -> None:
+def test_cli_torque_beyond_the_weight_has_no_equilibrium(linkwork: RunLinkwork, write_model: WriteModel) -> None:
     """A torque of 2 M g L turns the pendulum without end: the static analysis stops with exit 3
     and says that no equilibrium exists, naming the coordinate that turns and no joint."""
-    torque = 2 * M * G * L
-    model = write_model(
-        pendulum(0.0, analyses="rest: {type: static}").replace(
-            "        analyses:", f"        forces:\n          twist: {{type: torque, body: bob, torque: {torque}}}\n        analyses:"
-        )
-    )
+    model = write_model(twisted_pendulum())
     out = linkwork("run", model, "--out", "rest")
     assert out.code == 3, out.output
     assert "no stable static equilibrium found at t = 0" in out.stderr and "none exists" in out.stderr
@@ -234,10 +237,7 @@ def test_no_equilibrium_is_an_equilibrium_error() -> None:
     """From Python the same failure is an EquilibriumError (a ConvergenceError, a SolverError),
     with the coordinates that move, no joints, `index` None (no equilibrium at all), and the
     summary of the partial results flagged not stable."""
-    text = pendulum(0.0, analyses="rest: {type: static}").replace(
-        "        analyses:", f"        forces:\n          twist: {{type: torque, body: bob, torque: {2 * M * G * L}}}\n        analyses:"
-    )
-    model = linkwork.Model.from_yaml(textwrap.dedent(text))
+    model = linkwork.Model.from_yaml(textwrap.dedent(twisted_pendulum()))
     with pytest.raises(linkwork.EquilibriumError) as caught:
         model.run("rest")
     error = caught.value

@@ -1,11 +1,36 @@
-"""Native half of the linkwork package (PyO3). Use the `linkwork` package, not this module."""
+"""Native half of the linkwork package (PyO3). Use the `linkwork` package, not this module.
 
-from typing import Any
+The types of what `crates/linkwork-py/src/` exports; `python -m mypy.stubtest linkwork._linkwork`
+checks them against the built module (`.ci/run`).
+"""
+
+from typing import Any, final
 
 import numpy as np
+import numpy.typing as npt
+
+__all__ = [
+    "AssemblyError",
+    "ConvergenceError",
+    "EquilibriumError",
+    "FileError",
+    "IntegrationError",
+    "InternalError",
+    "LinkworkError",
+    "ModelError",
+    "NonFiniteError",
+    "PyModel",
+    "PyResults",
+    "SingularError",
+    "SolverError",
+    "__version__",
+    "_panic_for_tests",
+    "schema",
+]
 
 __version__: str
 
+@final
 class PyModel:
     @staticmethod
     def load(path: str) -> PyModel: ...
@@ -22,15 +47,24 @@ class PyModel:
     @property
     def analyses(self) -> list[str]: ...
     def check(self) -> dict[str, Any]: ...
-    def run(self, analysis: str) -> PyResults: ...
+    def run(
+        self,
+        analysis: str,
+        integrator: str | None = None,
+        rtol: float | None = None,
+        atol: float | None = None,
+        t_end: float | None = None,
+        step: float | None = None,
+    ) -> PyResults: ...
 
+@final
 class PyResults:
     @property
     def names(self) -> list[str]: ...
     @property
-    def time(self) -> np.ndarray: ...
+    def time(self) -> npt.NDArray[np.float64]: ...
     @property
-    def values(self) -> np.ndarray: ...
+    def values(self) -> npt.NDArray[np.float64]: ...
     @property
     def summary(self) -> dict[str, Any]: ...
     @property
@@ -38,6 +72,10 @@ class PyResults:
     def write(self, directory: str) -> None: ...
 
 def schema() -> str: ...
+def _panic_for_tests() -> None: ...
+
+# The exceptions. Their attributes are set on each instance when the engine raises it; `results`
+# is a `PyResults` there, which `linkwork.Model.run` replaces with a `linkwork.Results`.
 
 class LinkworkError(Exception): ...
 
@@ -45,6 +83,7 @@ class ModelError(LinkworkError):
     problems: list[tuple[str, str]]
 
 class AssemblyError(LinkworkError):
+    time: float
     joints: list[str]
     row: str
     residual: float
@@ -72,6 +111,15 @@ class EquilibriumError(ConvergenceError):
     index: int | None
     load_fraction: float
     cause: str
+
+class IntegrationError(SolverError):
+    step: float
+    cause: str
+
+class NonFiniteError(SolverError):
+    element: str
+    expression: str
+    value: float
 
 class FileError(LinkworkError, OSError):
     path: str

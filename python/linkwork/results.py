@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -23,7 +24,7 @@ class Results:
     ``position_residual`` and ``velocity_residual``; an inverse analysis the reactions, efforts,
     ``kinetic_energy``, ``potential_energy``, ``driver_power`` and ``applied_power``; a static
     analysis the reactions, efforts and ``potential_energy``; measures come last, by name.
-    ``results["time"]`` is the output times. A modes analysis has one row (the state it
+    ``results["time"]`` is the output times; iterating gives the names, ``"time"`` first. A modes analysis has one row (the state it
     linearised about) and its modes in :attr:`modes`.
     """
 
@@ -89,6 +90,10 @@ class Results:
 
     def __contains__(self, name: object) -> bool:
         return name == "time" or name in self._index
+
+    def __iter__(self) -> Iterator[str]:
+        """The column names, ``"time"`` first and then :attr:`columns`: the header of ``results.csv``."""
+        return iter(["time", *self._columns])
 
     def __len__(self) -> int:
         """Number of output points."""

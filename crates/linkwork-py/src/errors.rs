@@ -22,6 +22,7 @@ use linkwork::{Error, Unbalanced};
 use pyo3::exceptions::{PyException, PyOSError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
+use pyo3::BoundObject;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 pyo3::create_exception!(linkwork, LinkworkError, PyException, "Base class of every Linkwork error.");
@@ -136,54 +137,63 @@ pub fn to_pyerr(py: Python<'_>, error: Error, partial: Option<PyResults>) -> PyE
     }
 }
 
+/// The attributes an exception carries, in the order they are set.
+struct Attributes<'py> {
+    py: Python<'py>,
+    list: Vec<(&'static str, Bound<'py, PyAny>)>,
+}
+
+impl<'py> Attributes<'py> {
+    fn new(py: Python<'py>) -> Self {
+        Attributes { py, list: Vec::new() }
+    }
+
+    /// Add `name = value`.
+    fn with(mut self, name: &'static str, value: impl IntoPyObject<'py>) -> PyResult<Self> {
+        let value = value.into_pyobject(self.py).map_err(Into::into)?.into_bound().into_any();
+        self.list.push((name, value));
+        Ok(self)
+    }
+
+    /// Where Newton's method stopped: the equation with the largest residual (`row`), that
+    /// `residual`, and the `iterations` spent.
+    fn newton(self, row: String, residual: f64, iterations: usize) -> PyResult<Self> {
+        self.with("row", row)?.with("residual", residual)?.with("iterations", iterations)
+    }
+}
+
 fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<PyErr> {
     let message = error.to_string();
-    let joints = error.elements();
-    let results = || -> PyResult<Py<PyAny>> {
-        Ok(match partial {
-            Some(r) => Py::new(py, r)?.into_any(),
-            None => py.None(),
-        })
+    let results = match partial {
+        Some(r) => Py::new(py, r)?.into_any(),
+        None => py.None(),
     };
-    let (err, attributes): (PyErr, Vec<(&str, Bound<'_, PyAny>)>) = match error {
+    let names = |rows: &[linkwork::RowName]| rows.iter().map(|r| r.to_string()).collect::<Vec<_>>();
+    // What every failure of a run carries: when, and in which joints and rows.
+    let failure = |time: f64, rows: Vec<String>| {
+        Attributes::new(py).with("time", time)?.with("joints", error.elements())?.with("rows", rows)
+    };
+    let (err, attributes) = match error {
         Error::Model(problems) => {
             let list: Vec<(String, String)> = problems.iter().map(|p| (p.path.clone(), p.message.clone())).collect();
-            (ModelError::new_err(message), vec![("problems", list.into_pyobject(py)?.into_any())])
+            (ModelError::new_err(message), Attributes::new(py).with("problems", list)?)
         }
         Error::Assembly { time, iterations, residual, row, hint } => (
             AssemblyError::new_err(message),
-            vec![
-                ("time", time.into_pyobject(py)?.into_any()),
-                ("joints", joints.into_pyobject(py)?.into_any()),
-                ("row", row.to_string().into_pyobject(py)?.into_any()),
-                ("residual", residual.into_pyobject(py)?.into_any()),
-                ("iterations", iterations.into_pyobject(py)?.into_any()),
-                ("hint", hint.into_pyobject(py)?.into_any()),
-                ("results", results()?.into_bound(py)),
-            ],
+            Attributes::new(py)
+                .with("time", time)?
+                .with("joints", error.elements())?
+                .newton(row.to_string(), *residual, *iterations)?
+                .with("hint", hint)?,
         ),
-        Error::Singular { time, rows, detail } => (
-            SingularError::new_err(message),
-            vec![
-                ("time", time.into_pyobject(py)?.into_any()),
-                ("joints", joints.into_pyobject(py)?.into_any()),
-                ("rows", rows.iter().map(|r| r.to_string()).collect::<Vec<_>>().into_pyobject(py)?.into_any()),
-                ("detail", detail.into_pyobject(py)?.into_any()),
-                ("results", results()?.into_bound(py)),
-            ],
-        ),
+        Error::Singular { time, rows, detail } => {
+            (SingularError::new_err(message), failure(*time, names(rows))?.with("detail", detail)?)
+        }
         Error::Convergence { time, residual, row, iterations, substep } => (
             ConvergenceError::new_err(message),
-            vec![
-                ("time", time.into_pyobject(py)?.into_any()),
-                ("joints", joints.into_pyobject(py)?.into_any()),
-                ("rows", vec![row.to_string()].into_pyobject(py)?.into_any()),
-                ("row", row.to_string().into_pyobject(py)?.into_any()),
-                ("residual", residual.into_pyobject(py)?.into_any()),
-                ("iterations", iterations.into_pyobject(py)?.into_any()),
-                ("substep", substep.into_pyobject(py)?.into_any()),
-                ("results", results()?.into_bound(py)),
-            ],
+            failure(*time, vec![row.to_string()])?
+                .newton(row.to_string(), *residual, *iterations)?
+                .with("substep", substep)?,
         ),
         Error::Equilibrium { time, residual, equation, iterations, load_fraction } => {
             // A constraint row names its joint; a force balance names a body coordinate.
@@ -193,75 +203,39 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
             };
             (
                 EquilibriumError::new_err(message),
-                vec![
-                    ("time", time.into_pyobject(py)?.into_any()),
-                    ("joints", joints.into_pyobject(py)?.into_any()),
-                    ("rows", rows.into_pyobject(py)?.into_any()),
-                    ("coordinates", coordinates.into_pyobject(py)?.into_any()),
-                    ("index", py.None().into_bound(py)),
-                    ("row", row.into_pyobject(py)?.into_any()),
-                    ("residual", residual.into_pyobject(py)?.into_any()),
-                    ("iterations", iterations.into_pyobject(py)?.into_any()),
-                    ("load_fraction", load_fraction.into_pyobject(py)?.into_any()),
-                    ("results", results()?.into_bound(py)),
-                ],
+                failure(*time, rows)?
+                    .with("coordinates", coordinates)?
+                    .with("index", py.None())?
+                    .newton(row, *residual, *iterations)?
+                    .with("load_fraction", load_fraction)?,
             )
         }
         Error::NoEquilibrium { time, coordinates, index, cause } => (
             EquilibriumError::new_err(message),
-            vec![
-                ("time", time.into_pyobject(py)?.into_any()),
-                ("joints", joints.into_pyobject(py)?.into_any()),
-                ("rows", Vec::<String>::new().into_pyobject(py)?.into_any()),
-                ("coordinates", coordinates.into_pyobject(py)?.into_any()),
-                ("index", index.into_pyobject(py)?.into_any()),
-                ("cause", cause.into_pyobject(py)?.into_any()),
-                ("results", results()?.into_bound(py)),
-            ],
+            failure(*time, vec![])?.with("coordinates", coordinates)?.with("index", index)?.with("cause", cause)?,
         ),
-        Error::Integration { time, step, cause, rows } => (
-            IntegrationError::new_err(message),
-            vec![
-                ("time", time.into_pyobject(py)?.into_any()),
-                ("joints", joints.into_pyobject(py)?.into_any()),
-                ("rows", rows.iter().map(|r| r.to_string()).collect::<Vec<_>>().into_pyobject(py)?.into_any()),
-                ("step", step.into_pyobject(py)?.into_any()),
-                ("cause", cause.into_pyobject(py)?.into_any()),
-                ("results", results()?.into_bound(py)),
-            ],
-        ),
-        Error::NonFinite { time, element, expression, value } => (
+        Error::Integration { time, step, cause, rows } => {
+            (IntegrationError::new_err(message), failure(*time, names(rows))?.with("step", step)?.with("cause", cause)?)
+        }
+        // A driver without bound gives its rate as the value.
+        Error::NonFinite { time, element, expression, value }
+        | Error::Unbounded { time, element, expression, rate: value, .. } => (
             NonFiniteError::new_err(message),
-            vec![
-                ("time", time.into_pyobject(py)?.into_any()),
-                ("joints", joints.into_pyobject(py)?.into_any()),
-                ("rows", Vec::<String>::new().into_pyobject(py)?.into_any()),
-                ("element", element.into_pyobject(py)?.into_any()),
-                ("expression", expression.into_pyobject(py)?.into_any()),
-                ("value", value.into_pyobject(py)?.into_any()),
-                ("results", results()?.into_bound(py)),
-            ],
-        ),
-        Error::Unbounded { time, element, expression, rate, .. } => (
-            NonFiniteError::new_err(message),
-            vec![
-                ("time", time.into_pyobject(py)?.into_any()),
-                ("joints", joints.into_pyobject(py)?.into_any()),
-                ("rows", Vec::<String>::new().into_pyobject(py)?.into_any()),
-                ("element", element.into_pyobject(py)?.into_any()),
-                ("expression", expression.into_pyobject(py)?.into_any()),
-                ("value", rate.into_pyobject(py)?.into_any()),
-                ("results", results()?.into_bound(py)),
-            ],
+            failure(*time, vec![])?.with("element", element)?.with("expression", expression)?.with("value", value)?,
         ),
         Error::Io { path, .. } => {
             let class = py.import("linkwork._linkwork")?.getattr(FILE_ERROR)?;
             let err = PyErr::from_value(class.call1((message,))?);
-            (err, vec![("path", path.into_pyobject(py)?.into_any())])
+            (err, Attributes::new(py).with("path", path)?)
         }
     };
+    // Every error but a model's or a file's stops a run, and carries its results until then.
+    let attributes = match error {
+        Error::Model(_) | Error::Io { .. } => attributes,
+        _ => attributes.with("results", results)?,
+    };
     let value = err.value(py);
-    for (name, v) in attributes {
+    for (name, v) in attributes.list {
         value.setattr(name, v)?;
     }
     Ok(err)

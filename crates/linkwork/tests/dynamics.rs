@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{col, energy_drift};
+use common::{col, energy_drift, patch};
 use linkwork::analysis::dynamic::IntegratorKind;
 
 /// The double pendulum's energy (about 15 J of motion) over 5 s at the default tolerances
@@ -14,14 +14,19 @@ use linkwork::analysis::dynamic::IntegratorKind;
 #[test]
 fn double_pendulum_energy() {
     for (integrator, formulation, bound) in [("bdf", "index3", 4e-2), ("bdf", "si2", 2e-3), ("hht", "", 6e-2)] {
-        let text = std::fs::read_to_string(common::example("double_pendulum.yaml")).unwrap();
         let settings =
             if formulation.is_empty() { String::new() } else { format!(", solver: {{formulation: {formulation}}}") };
-        let text = text.replace(
+        let text = patch(
+            &common::example_text("double_pendulum.yaml"),
             "dynamics: {type: dynamic, t_end: 5, step: 0.01}",
             &format!("dynamics: {{type: dynamic, integrator: {integrator}, t_end: 5, step: 0.01{settings}}}"),
         );
         let r = linkwork::Model::from_yaml(&text).unwrap().run("dynamics").unwrap_or_else(|f| panic!("{}", f.error));
+        // The run is the one patched in, not the file's default integrator and formulation.
+        assert_eq!(r.summary["integrator"]["kind"], integrator);
+        if !formulation.is_empty() {
+            assert_eq!(r.summary["integrator"]["formulation"], formulation);
+        }
         let drift = energy_drift(&r);
         eprintln!("{integrator} {formulation}: drift {drift:e} J, {}", r.summary["statistics"]);
         assert!(drift < bound, "{integrator} {formulation}: drift {drift}");
@@ -32,9 +37,10 @@ fn double_pendulum_energy() {
 /// a rotational spring on the rocker and a follower force on the coupler; one variant drives the
 /// crank so that a driver effort appears, and one flips the first joint to ground-first.
 fn loaded_fourbar(driven: bool) -> String {
-    let base = std::fs::read_to_string(common::example("fourbar.yaml")).unwrap();
+    let base = common::example_text("fourbar.yaml");
     let base = base.split("drivers:").next().unwrap().to_string();
-    let base = base.replace(
+    let base = patch(
+        &base,
         "  O4: {type: revolute, body_i: rocker, point_i: O4, body_j: ground, point_j: O4}",
         "  O4: {type: revolute, body_i: ground, point_i: O4, body_j: rocker, point_j: O4}",
     );
@@ -196,9 +202,11 @@ fn error_follows_the_tolerance() {
 /// limit, the step near 1e-84 s).
 #[test]
 fn a_vanishing_step_stops_the_run() {
-    let text = std::fs::read_to_string(common::example("andrews.yaml")).unwrap();
-    let text = text
-        .replace("solver: {rtol: 1e-8, atol: 1e-8}", "integrator: hht\n    solver: {rtol: 1e-9, atol: 1e-9, alpha: 0}");
+    let text = patch(
+        &common::example_text("andrews.yaml"),
+        "solver: {rtol: 1e-8, atol: 1e-8}",
+        "integrator: hht\n    solver: {rtol: 1e-9, atol: 1e-9, alpha: 0}",
+    );
     let model = linkwork::Model::from_yaml(&text).unwrap();
     let failure = model.run("dynamics").expect_err("the undamped run cannot finish");
     match failure.error {

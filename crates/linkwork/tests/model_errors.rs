@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::example;
+use common::{example, example_text, patch};
 use linkwork::{Error, Model};
 
 fn problems(text: &str) -> Vec<String> {
@@ -80,7 +80,7 @@ analyses:
     let p = problems(text);
     has(&p, "analyses.dyn.forces[1]", "unknown force 'motr'; the model's forces are: motor, push");
     assert_eq!(p.len(), 1, "{p:#?}");
-    let none = text.replace("forces: [push, motr, motor]", "forces: []");
+    let none = patch(text, "forces: [push, motr, motor]", "forces: []");
     assert!(Model::from_yaml(&none).is_ok(), "an empty list is valid");
     let no_forces = text.split("forces:\n").next().unwrap().to_string()
         + "analyses:\n  dyn: {type: dynamic, forces: [motor], t_end: 1, step: 0.1}\n";
@@ -143,7 +143,7 @@ fn no_input_panics() {
     let files = ["quick_return_a.yaml", "quick_return_b.yaml", "fourbar.yaml", "parallelogram.yaml"];
     let mut tried = 0;
     for f in files {
-        let text = std::fs::read_to_string(example(f)).unwrap();
+        let text = example_text(f);
         for cut in (0..text.len()).step_by(11) {
             if text.is_char_boundary(cut) {
                 let _ = Model::from_yaml(&text[..cut]);
@@ -176,7 +176,7 @@ fn bad_points_name_their_field() {
         ("{x: 1}", "joints.C.point_j", "a point: [x, y]"),
     ];
     for (point, path, words) in cases {
-        has(&problems(&base.replace("POINT", point)), path, words);
+        has(&problems(&patch(base, "POINT", point)), path, words);
     }
 }
 
@@ -290,7 +290,7 @@ fn overrides_are_checked() {
 
 #[test]
 fn a_step_longer_than_the_run_is_refused() {
-    let text = std::fs::read_to_string(example("fourbar.yaml")).unwrap();
+    let text = example_text("fourbar.yaml");
     let analyses = text.find("\nanalyses:").expect("fourbar.yaml has an analyses section");
     let long = format!("{}\nanalyses:\n  kin: {{type: kinematic, t_end: 0.3, step: 0.5}}\n", &text[..analyses]);
     has(&problems(&long), "analyses.kin.step", "the output step (0.5 s) is longer than the analysis (0.3 s");

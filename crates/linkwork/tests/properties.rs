@@ -532,8 +532,8 @@ fn yaml(m: &Mechanism, kind: &str, settings: &str) -> String {
         }
     }
     if s.ends_with("forces:\n") {
-        s.push_str("  {}\n");
-        s = s.replace("forces:\n  {}\n", "forces: {}\n");
+        s.truncate(s.len() - 1);
+        s.push_str(" {}\n");
     }
     let drivers = if driven { "" } else { "drivers: [], " };
     let times = if kind == "static" { String::new() } else { format!("t_end: {T_END:?}, step: {STEP:?}, ") };

@@ -3,19 +3,9 @@
 
 mod common;
 
-use common::col;
+use common::{col, example_text, patch};
 use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::Model;
-
-/// `text` with `from` replaced by `to`; panics when `from` is not there (the patch must apply).
-fn patch(text: &str, from: &str, to: &str) -> String {
-    assert!(text.contains(from), "patch target {from:?} not found");
-    text.replace(from, to)
-}
-
-fn example_text(name: &str) -> String {
-    std::fs::read_to_string(common::example(name)).expect("example")
-}
 
 fn warnings(r: &linkwork::Results) -> Vec<String> {
     r.summary["warnings"].as_array().expect("warnings").iter().map(|w| w.as_str().unwrap().to_string()).collect()

@@ -56,11 +56,8 @@ impl Absolute {
 }
 
 impl Constraint for Absolute {
-    fn rows(&self) -> usize {
-        1
-    }
     fn anchor(&self) -> Anchor {
-        Anchor { i: self.pair.i, j: BodyIx::GROUND, point: self.point }
+        self.pair.anchor(self.point)
     }
     fn row_names(&self) -> &[&'static str] {
         match self.kind {
@@ -88,9 +85,6 @@ impl Constraint for Absolute {
             None => [0.0, 0.0, 1.0],
         };
         self.pair.scatter(row, [0.0; 3], out);
-    }
-    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        out[0] = 0.0;
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = match self.axis() {

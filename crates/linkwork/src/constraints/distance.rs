@@ -29,9 +29,6 @@ impl Distance {
 }
 
 impl Constraint for Distance {
-    fn rows(&self) -> usize {
-        1
-    }
     fn anchor(&self) -> Anchor {
         self.points.anchor()
     }
@@ -49,9 +46,6 @@ impl Constraint for Distance {
         let d = self.points.separation(q);
         let (bi, bj) = d.chain([2.0 * d.d[0], 2.0 * d.d[1]]);
         self.points.pair.scatter(bi, bj, out);
-    }
-    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        out[0] = 0.0;
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         let sep = self.points.separation(q);

@@ -70,9 +70,6 @@ impl Driver {
 }
 
 impl Constraint for Driver {
-    fn rows(&self) -> usize {
-        1
-    }
     fn time_function(&self) -> Option<&TimeFunction> {
         Some(&self.f)
     }
@@ -108,11 +105,8 @@ struct RelativeAngle {
 }
 
 impl Constraint for RelativeAngle {
-    fn rows(&self) -> usize {
-        1
-    }
     fn anchor(&self) -> Anchor {
-        Anchor { i: self.pair.i, j: self.pair.j, point: [0.0, 0.0] }
+        self.pair.anchor([0.0, 0.0])
     }
     fn row_names(&self) -> &[&'static str] {
         &["relative_angle"]
@@ -126,9 +120,6 @@ impl Constraint for RelativeAngle {
     fn jacobian(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
         self.pair.scatter([0.0, 0.0, 1.0], [0.0, 0.0, -1.0], out);
     }
-    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        out[0] = 0.0;
-    }
     fn gamma(&self, _q: &Config<'_>, _qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = 0.0;
     }
@@ -139,9 +130,6 @@ impl Constraint for RelativeAngle {
 struct Length(PointPair);
 
 impl Constraint for Length {
-    fn rows(&self) -> usize {
-        1
-    }
     fn anchor(&self) -> Anchor {
         self.0.anchor()
     }
@@ -160,9 +148,6 @@ impl Constraint for Length {
         let len = dot(sep.d, sep.d).sqrt();
         let (bi, bj) = sep.chain([sep.d[0] / len, sep.d[1] / len]);
         self.0.pair.scatter(bi, bj, out);
-    }
-    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        out[0] = 0.0;
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         let sep = self.0.separation(q);

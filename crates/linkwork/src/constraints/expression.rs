@@ -108,9 +108,6 @@ impl GeneralConstraint {
 }
 
 impl Constraint for GeneralConstraint {
-    fn rows(&self) -> usize {
-        1
-    }
     fn anchor(&self) -> Anchor {
         Anchor {
             i: self.columns.first().map_or(BodyIx::GROUND, |&c| BodyIx(Some(c - c % 3))),

@@ -102,11 +102,8 @@ impl GearPair {
 }
 
 impl Constraint for GearPair {
-    fn rows(&self) -> usize {
-        1
-    }
     fn anchor(&self) -> Anchor {
-        Anchor { i: self.pair.i, j: self.pair.j, point: self.s_i }
+        self.pair.anchor(self.s_i)
     }
     fn row_names(&self) -> &[&'static str] {
         &["rolling"]
@@ -128,9 +125,6 @@ impl Constraint for GearPair {
         let bi = [-k * ti[0], -k * ti[1], self.r_i - k * ti[2]];
         let bj = [-k * tj[0], -k * tj[1], self.r_j - k * tj[2]];
         self.pair.scatter(bi, bj, out);
-    }
-    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        out[0] = 0.0;
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         let sep = self.separation(q);

@@ -27,7 +27,7 @@ pub use expression::{GeneralConstraint, Var, MAX_SLOTS};
 pub use gear::{GearKind, GearPair};
 pub use point_line::PointOnLine;
 pub use revolute::Revolute;
-pub use rolling::{RackPinion, RollingDisc};
+pub use rolling::{RackPinion, Rolling, RollingDisc};
 pub use translational::Translational;
 
 use std::fmt::Debug;
@@ -94,8 +94,10 @@ impl ConfigBuf {
 /// Implementations are immutable after construction and allocate nothing in these methods, which
 /// the analysis loops call at every iteration.
 pub trait Constraint: Debug + Send + Sync {
-    /// Number of equations this constraint adds.
-    fn rows(&self) -> usize;
+    /// Number of equations this constraint adds: one per row name.
+    fn rows(&self) -> usize {
+        self.row_names().len()
+    }
     /// The first body (whose reaction is reported), the second, and the point of the first body
     /// (its frame; the global frame when it is ground) about which the reaction moment is taken.
     fn anchor(&self) -> Anchor;
@@ -107,8 +109,11 @@ pub trait Constraint: Debug + Send + Sync {
     fn phi(&self, q: &Config<'_>, t: f64, out: &mut [f64]);
     /// `(q, t) => Phi_q` restricted to `columns()`, `out: (rows x columns().len())`, row-major.
     fn jacobian(&self, q: &Config<'_>, t: f64, out: &mut [f64]);
-    /// `(q, t) => nu = -Phi_t`, `out: (rows)`.
-    fn nu(&self, q: &Config<'_>, t: f64, out: &mut [f64]);
+    /// `(q, t) => nu = -Phi_t`, `out: (rows)`. Zero unless the rows depend on time explicitly
+    /// (drivers, general constraints in `t`).
+    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
+        out[..self.rows()].fill(0.0);
+    }
     /// `(q, qdot, t) => gamma`, `out: (rows)`.
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], t: f64, out: &mut [f64]);
     /// The function of time a driver prescribes, for messages (`None` for a joint).
@@ -223,6 +228,10 @@ impl Pair {
     pub fn columns(&self) -> &[usize] {
         &self.columns
     }
+    /// The joint's reaction reported on body i about `point` (body i frame).
+    pub fn anchor(&self, point: [f64; 2]) -> Anchor {
+        Anchor { i: self.i, j: self.j, point }
+    }
     /// Write one Jacobian row from the blocks of body i and body j into `out` (the row's slice).
     #[inline]
     pub fn scatter(&self, row_i: [f64; 3], row_j: [f64; 3], out: &mut [f64]) {
@@ -283,7 +292,7 @@ pub(crate) struct PointPair {
 
 impl PointPair {
     pub fn anchor(&self) -> Anchor {
-        Anchor { i: self.pair.i, j: self.pair.j, point: self.s_p }
+        self.pair.anchor(self.s_p)
     }
     pub fn new(i: BodyIx, s_p: [f64; 2], j: BodyIx, s_q: [f64; 2]) -> PointPair {
         PointPair { pair: Pair::new(i, j), s_p, s_q }

@@ -34,11 +34,8 @@ impl PointOnLine {
 }
 
 impl Constraint for PointOnLine {
-    fn rows(&self) -> usize {
-        1
-    }
     fn anchor(&self) -> Anchor {
-        Anchor { i: self.pair.i, j: self.pair.j, point: self.line.s_p }
+        self.pair.anchor(self.line.s_p)
     }
     fn row_names(&self) -> &[&'static str] {
         &["line"]
@@ -52,9 +49,6 @@ impl Constraint for PointOnLine {
     fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let (bi, bj) = self.line.blocks(q);
         self.pair.scatter(bi, bj, out);
-    }
-    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        out[0] = 0.0;
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = self.line.gamma(q, qdot);

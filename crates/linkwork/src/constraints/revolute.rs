@@ -26,11 +26,8 @@ impl Revolute {
 }
 
 impl Constraint for Revolute {
-    fn rows(&self) -> usize {
-        2
-    }
     fn anchor(&self) -> Anchor {
-        Anchor { i: self.pair.i, j: self.pair.j, point: self.s_p }
+        self.pair.anchor(self.s_p)
     }
     fn row_names(&self) -> &[&'static str] {
         &["x", "y"]
@@ -50,9 +47,6 @@ impl Constraint for Revolute {
         let w = self.pair.width();
         self.pair.scatter([1.0, 0.0, bi[0]], [-1.0, 0.0, -bj[0]], &mut out[..w]);
         self.pair.scatter([0.0, 1.0, bi[1]], [0.0, -1.0, -bj[1]], &mut out[w..2 * w]);
-    }
-    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        out[..2].fill(0.0);
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         let wi = self.pair.i.coords(qdot)[2];

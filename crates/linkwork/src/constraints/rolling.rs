@@ -61,101 +61,33 @@ impl RollingRow {
     }
 }
 
-/// `(disc, s'_C, radius, line body, s'_L, v'_L, q0) => (n . d - side rho, the rolling row)`.
-fn rows(
-    disc: BodyIx,
-    s_c: [f64; 2],
-    radius: f64,
-    line_body: BodyIx,
-    s_l: [f64; 2],
-    v_l: [f64; 2],
-    q0: &[f64],
-) -> (Projection, f64, RollingRow) {
-    let q0 = ConfigBuf::new(q0);
-    let q0 = &q0.view();
-    let u = unit(v_l);
-    let normal = Projection { i: line_body, w: perp(u), s_p: s_l, j: disc, s_q: s_c };
-    let side = if normal.value(q0) < 0.0 { -1.0 } else { 1.0 };
-    let mut rolling = RollingRow {
-        along: Projection { i: line_body, w: u, s_p: s_l, j: disc, s_q: s_c },
-        lever: side * radius,
-        c: 0.0,
-    };
-    rolling.c = rolling.value(q0);
-    (normal, side * radius, rolling)
-}
-
-/// A pinion rolling on a rack's pitch line without slip: the rolling row only.
+/// A disc rolling without slip on a line of another body. `CONTACT`: whether the disc also stays
+/// on the line (the contact row, then the rolling row); a rack and pinion leaves the centre
+/// distance to other joints and has the rolling row only.
 #[derive(Debug, Clone)]
-pub struct RackPinion {
-    pair: Pair,
-    /// The pinion's centre, its frame.
-    s_c: [f64; 2],
-    rolling: RollingRow,
-}
-
-impl RackPinion {
-    /// `s_c`, `radius`: the pinion's centre in its frame and its pitch radius (m); `s_l`, `v_l`: a
-    /// point of the rack's pitch line and its direction in the rack's frame (non-zero). `q0`: the
-    /// initial configuration, which fixes `c` and the side of the line the pinion is on.
-    pub fn new(
-        pinion: BodyIx,
-        s_c: [f64; 2],
-        radius: f64,
-        rack: BodyIx,
-        s_l: [f64; 2],
-        v_l: [f64; 2],
-        q0: &[f64],
-    ) -> RackPinion {
-        let (_, _, rolling) = rows(pinion, s_c, radius, rack, s_l, v_l, q0);
-        RackPinion { pair: Pair::new(pinion, rack), s_c, rolling }
-    }
-}
-
-impl Constraint for RackPinion {
-    fn rows(&self) -> usize {
-        1
-    }
-    fn anchor(&self) -> Anchor {
-        Anchor { i: self.pair.i, j: self.pair.j, point: self.s_c }
-    }
-    fn row_names(&self) -> &[&'static str] {
-        &["rolling"]
-    }
-    fn columns(&self) -> &[usize] {
-        self.pair.columns()
-    }
-    fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        out[0] = self.rolling.value(q);
-    }
-    fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        let (disc, line) = self.rolling.blocks(q);
-        self.pair.scatter(disc, line, out);
-    }
-    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        out[0] = 0.0;
-    }
-    fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
-        out[0] = self.rolling.along.gamma(q, qdot);
-    }
-}
-
-/// A disc rolling without slip on a line of another body, in contact with it: two rows.
-#[derive(Debug, Clone)]
-pub struct RollingDisc {
+pub struct Rolling<const CONTACT: bool> {
+    /// The disc (or pinion) and the line body (or rack).
     pair: Pair,
     /// The disc's centre, its frame.
     s_c: [f64; 2],
+    /// `n . d`, with `i` the line body and `j` the disc.
     normal: Projection,
     /// `side * rho`.
     lever: f64,
     rolling: RollingRow,
 }
 
-impl RollingDisc {
-    /// `s_c`, `radius`: the disc's centre in its frame and its radius (m); `s_l`, `v_l`: a point of
-    /// the line and its direction in the line body's frame (non-zero). `q0`: the initial
-    /// configuration, which fixes `c` and the side of the line the disc is on.
+/// A pinion rolling on a rack's pitch line without slip: the rolling row only.
+pub type RackPinion = Rolling<false>;
+
+/// A disc rolling without slip on a line of another body, in contact with it: two rows.
+pub type RollingDisc = Rolling<true>;
+
+impl<const CONTACT: bool> Rolling<CONTACT> {
+    /// `s_c`, `radius`: the disc's (pinion's) centre in its frame and its radius (pitch radius)
+    /// (m); `s_l`, `v_l`: a point of the line (the rack's pitch line) and its direction in the line
+    /// body's frame (non-zero). `q0`: the initial configuration, which fixes `c` and the side of
+    /// the line the disc is on.
     pub fn new(
         disc: BodyIx,
         s_c: [f64; 2],
@@ -164,42 +96,57 @@ impl RollingDisc {
         s_l: [f64; 2],
         v_l: [f64; 2],
         q0: &[f64],
-    ) -> RollingDisc {
-        let (normal, lever, rolling) = rows(disc, s_c, radius, line_body, s_l, v_l, q0);
-        RollingDisc { pair: Pair::new(disc, line_body), s_c, normal, lever, rolling }
+    ) -> Rolling<CONTACT> {
+        let q0 = ConfigBuf::new(q0);
+        let q0 = &q0.view();
+        let u = unit(v_l);
+        let normal = Projection { i: line_body, w: perp(u), s_p: s_l, j: disc, s_q: s_c };
+        let side = if normal.value(q0) < 0.0 { -1.0 } else { 1.0 };
+        let mut rolling = RollingRow {
+            along: Projection { i: line_body, w: u, s_p: s_l, j: disc, s_q: s_c },
+            lever: side * radius,
+            c: 0.0,
+        };
+        rolling.c = rolling.value(q0);
+        Rolling { pair: Pair::new(disc, line_body), s_c, normal, lever: side * radius, rolling }
     }
 }
 
-impl Constraint for RollingDisc {
-    fn rows(&self) -> usize {
-        2
-    }
+impl<const CONTACT: bool> Constraint for Rolling<CONTACT> {
     fn anchor(&self) -> Anchor {
-        Anchor { i: self.pair.i, j: self.pair.j, point: self.s_c }
+        self.pair.anchor(self.s_c)
     }
     fn row_names(&self) -> &[&'static str] {
-        &["contact", "rolling"]
+        if CONTACT {
+            &["contact", "rolling"]
+        } else {
+            &["rolling"]
+        }
     }
     fn columns(&self) -> &[usize] {
         self.pair.columns()
     }
     fn phi(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        out[0] = self.normal.value(q) - self.lever;
-        out[1] = self.rolling.value(q);
+        if CONTACT {
+            out[0] = self.normal.value(q) - self.lever;
+        }
+        out[usize::from(CONTACT)] = self.rolling.value(q);
     }
     fn jacobian(&self, q: &Config<'_>, _t: f64, out: &mut [f64]) {
         let w = self.pair.width();
-        let (line, disc) = self.normal.blocks(q);
-        self.pair.scatter(disc, line, &mut out[..w]);
+        if CONTACT {
+            let (line, disc) = self.normal.blocks(q);
+            self.pair.scatter(disc, line, &mut out[..w]);
+        }
+        let k = usize::from(CONTACT) * w;
         let (disc, line) = self.rolling.blocks(q);
-        self.pair.scatter(disc, line, &mut out[w..2 * w]);
-    }
-    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        out[..2].fill(0.0);
+        self.pair.scatter(disc, line, &mut out[k..k + w]);
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
-        out[0] = self.normal.gamma(q, qdot);
-        out[1] = self.rolling.along.gamma(q, qdot);
+        if CONTACT {
+            out[0] = self.normal.gamma(q, qdot);
+        }
+        out[usize::from(CONTACT)] = self.rolling.along.gamma(q, qdot);
     }
 }
 

@@ -50,11 +50,8 @@ impl Translational {
 }
 
 impl Constraint for Translational {
-    fn rows(&self) -> usize {
-        2
-    }
     fn anchor(&self) -> Anchor {
-        Anchor { i: self.pair.i, j: self.pair.j, point: self.line.s_p }
+        self.pair.anchor(self.line.s_p)
     }
     fn row_names(&self) -> &[&'static str] {
         &["line", "angle"]
@@ -71,9 +68,6 @@ impl Constraint for Translational {
         let (bi, bj) = self.line.blocks(q);
         self.pair.scatter(bi, bj, &mut out[..w]);
         self.pair.scatter([0.0, 0.0, 1.0], [0.0, 0.0, -1.0], &mut out[w..2 * w]);
-    }
-    fn nu(&self, _q: &Config<'_>, _t: f64, out: &mut [f64]) {
-        out[..2].fill(0.0);
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = self.line.gamma(q, qdot);

@@ -615,67 +615,71 @@ fn check_err(src: &str, offset: usize, message_part: &str) {
     assert!(e.message.contains(message_part), "{src}: message {:?} does not contain {message_part:?}", e.message);
 }
 
-#[test]
-fn error_unexpected_character() {
-    check_err("2 # 3", 2, "unexpected character '#'");
-    check_err("t × 2", 2, "unexpected character '×'");
-    check_err("x; y", 1, "unexpected character ';'");
-    check_err("crank.x = 1", 8, "unexpected character '='");
-}
-
-#[test]
-fn error_unbalanced_parentheses() {
-    check_err("(1 + 2", 0, "unbalanced parentheses: '(' is never closed");
-    check_err("2 * ((x)", 4, "never closed");
-    check_err("1 + 2)", 5, "')' has no matching '('");
-    check_err("sin(x", 3, "never closed");
-    check_err("atan2(x, y", 5, "never closed");
-    check_err("(1 2)", 3, "expected ')' or an operator, found number '2'");
-    check_err("sin(x y)", 6, "expected ',' or ')' in the arguments of 'sin'");
-}
-
-#[test]
-fn error_missing_operand() {
-    check_err("1 +", 3, "missing operand");
-    check_err("1 + * 2", 4, "found '*'");
-    check_err("2 ^", 3, "found end of input");
-    check_err("2 **", 4, "missing operand");
-    check_err("-", 1, "missing operand");
-    check_err("()", 1, "found ')'");
-    check_err("atan2(1, )", 9, "missing operand");
-    check_err("* 2", 0, "missing operand");
-}
-
-#[test]
-fn error_trailing_input() {
-    check_err("1 2", 2, "unexpected number '2' after a complete expression");
-    check_err("2t", 1, "unexpected name 't' after a complete expression");
-    check_err("2 (y)", 2, "unexpected '('");
+/// Malformed expressions: the source, the byte offset the error points at, and words its
+/// message must contain.
+const ERRORS: &[(&str, usize, &str)] = &[
+    // unexpected characters
+    ("2 # 3", 2, "unexpected character '#'"),
+    ("t × 2", 2, "unexpected character '×'"),
+    ("x; y", 1, "unexpected character ';'"),
+    ("crank.x = 1", 8, "unexpected character '='"),
+    // unbalanced parentheses
+    ("(1 + 2", 0, "unbalanced parentheses: '(' is never closed"),
+    ("2 * ((x)", 4, "never closed"),
+    ("1 + 2)", 5, "')' has no matching '('"),
+    ("sin(x", 3, "never closed"),
+    ("atan2(x, y", 5, "never closed"),
+    ("(1 2)", 3, "expected ')' or an operator, found number '2'"),
+    ("sin(x y)", 6, "expected ',' or ')' in the arguments of 'sin'"),
+    // a missing operand
+    ("1 +", 3, "missing operand"),
+    ("1 + * 2", 4, "found '*'"),
+    ("2 ^", 3, "found end of input"),
+    ("2 **", 4, "missing operand"),
+    ("-", 1, "missing operand"),
+    ("()", 1, "found ')'"),
+    ("atan2(1, )", 9, "missing operand"),
+    ("* 2", 0, "missing operand"),
+    // input after a complete expression
+    ("1 2", 2, "unexpected number '2' after a complete expression"),
+    ("2t", 1, "unexpected name 't' after a complete expression"),
+    ("2 (y)", 2, "unexpected '('"),
     // a name directly followed by '(' is a function call
-    check_err("x (y)", 0, "unknown function 'x'");
-    check_err("1.5.3", 3, "unexpected number '.3'");
-    check_err("1, 2", 1, "unexpected ','");
-    check_err("(1, 2)", 2, "expected ')' or an operator, found ','");
-    check_err("min((1, 2), 3)", 6, "expected ')' or an operator, found ','");
-    check_err("min(1 + 2 3)", 10, "expected ',' or ')' in the arguments of 'min'");
-}
+    ("x (y)", 0, "unknown function 'x'"),
+    ("1.5.3", 3, "unexpected number '.3'"),
+    ("1, 2", 1, "unexpected ','"),
+    ("(1, 2)", 2, "expected ')' or an operator, found ','"),
+    ("min((1, 2), 3)", 6, "expected ')' or an operator, found ','"),
+    ("min(1 + 2 3)", 10, "expected ',' or ')' in the arguments of 'min'"),
+    // unknown functions
+    ("foo(1)", 0, "unknown function 'foo'"),
+    ("2*crank.x(1)", 2, "unknown function 'crank.x'"),
+    ("ln(2)", 0, "unknown function 'ln'"),
+    ("1 + pi(2)", 4, "unknown function 'pi'"),
+    ("sin + 1", 0, "function 'sin' needs its arguments in parentheses"),
+    // the wrong number of arguments
+    ("atan2(1)", 0, "function 'atan2' takes 2 arguments, found 1"),
+    ("x + sin(1, 2)", 4, "function 'sin' takes 1 argument, found 2"),
+    ("sin()", 0, "takes 1 argument, found 0"),
+    ("pow(2)", 0, "takes 2 arguments, found 1"),
+    ("min(1, 2, 3)", 0, "takes 2 arguments, found 3"),
+    // an empty expression
+    ("", 0, "empty expression"),
+    ("   \n", 0, "empty expression"),
+    // malformed names and numbers
+    ("1e", 0, "malformed number"),
+    ("2 + 1e+x", 4, "exponent has no digits"),
+    ("1e999", 0, "out of range"),
+    ("crank.", 6, "expected a letter or '_' after '.'"),
+    ("crank.1", 6, "expected a letter or '_' after '.'"),
+    ("a.b.c", 3, "only one '.'"),
+];
 
 #[test]
-fn error_unknown_function() {
-    check_err("foo(1)", 0, "unknown function 'foo'");
-    check_err("2*crank.x(1)", 2, "unknown function 'crank.x'");
-    check_err("ln(2)", 0, "unknown function 'ln'");
-    check_err("1 + pi(2)", 4, "unknown function 'pi'");
-    check_err("sin + 1", 0, "function 'sin' needs its arguments in parentheses");
-}
-
-#[test]
-fn error_wrong_argument_count() {
-    check_err("atan2(1)", 0, "function 'atan2' takes 2 arguments, found 1");
-    check_err("x + sin(1, 2)", 4, "function 'sin' takes 1 argument, found 2");
-    check_err("sin()", 0, "takes 1 argument, found 0");
-    check_err("pow(2)", 0, "takes 2 arguments, found 1");
-    check_err("min(1, 2, 3)", 0, "takes 2 arguments, found 3");
+fn errors_point_at_the_mistake_and_name_it() {
+    for &(src, offset, words) in ERRORS {
+        check_err(src, offset, words);
+    }
 }
 
 #[test]
@@ -688,22 +692,6 @@ fn error_unknown_name() {
     let e = Expr::parse("1 + q", &mut |_| Err(String::new())).unwrap_err();
     assert_eq!(e.to_string(), "unknown name 'q' at column 5");
     assert_eq!(e, ExprError::new("unknown name 'q'", 4));
-}
-
-#[test]
-fn error_empty_expression() {
-    check_err("", 0, "empty expression");
-    check_err("   \n", 0, "empty expression");
-}
-
-#[test]
-fn error_malformed_names_and_numbers() {
-    check_err("1e", 0, "malformed number");
-    check_err("2 + 1e+x", 4, "exponent has no digits");
-    check_err("1e999", 0, "out of range");
-    check_err("crank.", 6, "expected a letter or '_' after '.'");
-    check_err("crank.1", 6, "expected a letter or '_' after '.'");
-    check_err("a.b.c", 3, "only one '.'");
 }
 
 #[test]

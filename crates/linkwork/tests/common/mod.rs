@@ -15,6 +15,19 @@ pub fn example(name: &str) -> String {
     format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The text of an example's model file.
+pub fn example_text(name: &str) -> String {
+    std::fs::read_to_string(example(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// `text` with `from` replaced by `to`; panics unless `from` occurs exactly once, so that a test
+/// whose model text changed under it fails instead of running the text unchanged.
+pub fn patch(text: &str, from: &str, to: &str) -> String {
+    let count = text.matches(from).count();
+    assert_eq!(count, 1, "{from:?} occurs {count} times in the text to patch, not once");
+    text.replacen(from, to, 1)
+}
+
 /// Load and run an example's analysis; panics with the engine's message on failure.
 pub fn run(name: &str, analysis: &str) -> (Model, Results) {
     let model = Model::load(example(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
