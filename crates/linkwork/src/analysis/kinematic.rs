@@ -18,7 +18,7 @@ use crate::error::{Error, Problem, RowName};
 use crate::linalg::{FactorError, SparseLu};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
-use crate::system::{Pattern, System};
+use crate::system::System;
 use faer::Mat;
 
 /// Smallest/largest singular value of the driven Jacobian below which a failure is blamed on a
@@ -111,7 +111,7 @@ impl Solver<'_> {
         // `rot_trial` always matches `trial` here: Newton evaluates the residual first.
         let q = if q_is_trial { Config::new(&self.trial, &self.rot_trial) } else { Config::new(&self.q, &self.rot_q) };
         let (pattern, values) = self.lu.pattern_and_values();
-        pattern.fill(&mut self.sys, &q, t, values);
+        self.sys.fill_jacobian(pattern, &q, t, values);
         self.stats.factorizations += 1;
         self.lu.factor().map_err(|e| self.factor_error(e))
     }
@@ -258,7 +258,7 @@ pub(crate) fn run_driven(
         return Err(fail(results, Error::Model(vec![problem])));
     }
     let redundant_rows: Vec<RowName> = redundant.iter().map(|&r| sys.row_name(r)).collect();
-    let pattern = Pattern::new(&sys, &rows);
+    let pattern = sys.pattern(&rows);
     let lu = match SparseLu::new(pattern) {
         Ok(lu) => lu,
         Err(_) => {

@@ -86,8 +86,8 @@ use super::{
 };
 use crate::analysis::RANK_TOLERANCE;
 use crate::error::Error;
+use crate::linalg::Pattern;
 use crate::linalg::SparseLu;
-use crate::system::Pattern;
 
 /// Highest order of the Adams formulas: 12, as DE/STEP. Beyond it the coefficient arrays below
 /// end, and higher orders gain nothing in double precision.
