@@ -310,7 +310,7 @@ impl Drop for Staged {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Overrides {
     /// The integrator of a dynamic analysis.
-    pub integrator: Option<crate::analysis::dynamic::IntegratorKind>,
+    pub integrator: Option<crate::model::spec::IntegratorKind>,
     /// Relative tolerance of a dynamic analysis.
     pub rtol: Option<f64>,
     /// Absolute tolerance of a dynamic analysis.
@@ -379,8 +379,8 @@ impl Overrides {
         if let Some(k) = self.integrator {
             if k != a.integrator.kind {
                 // Settings that belong to the file's integrator do not carry over.
-                let d = crate::analysis::IntegratorSettings::default();
-                a.integrator = crate::analysis::IntegratorSettings { kind: k, ..d };
+                let d = crate::model::IntegratorSettings::default();
+                a.integrator = crate::model::IntegratorSettings { kind: k, ..d };
                 a.integrator.rtol = analysis.integrator.rtol;
                 a.integrator.atol = analysis.integrator.atol;
                 a.integrator.initial_step = analysis.integrator.initial_step;

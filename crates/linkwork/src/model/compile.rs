@@ -2,8 +2,7 @@
 //! resolve names to indices and build each joint's constraint.
 
 use super::spec::*;
-use super::{Analysis, Body, Element, ForceElement, Measure, MeasureKind, Model};
-use crate::analysis::{IntegratorSettings, SolverSettings};
+use super::{Analysis, Body, Element, ForceElement, IntegratorSettings, Measure, MeasureKind, Model, SolverSettings};
 use crate::constraints::{
     Absolute, AbsoluteKind, BodyIx, Constraint, Distance, Driver, DriverKind, Frame, GearKind, GearPair,
     GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc, Translational, Var,
