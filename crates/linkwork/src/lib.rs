@@ -22,6 +22,7 @@ pub mod model;
 pub mod results;
 pub mod system;
 
+pub use analysis::Overrides;
 pub use error::{Error, Problem, RowName, Unbalanced};
 pub use model::Model;
-pub use results::{Failure, Overrides, Results};
+pub use results::{Failure, Results};

@@ -20,6 +20,7 @@ use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
 use crate::system::System;
 use faer::Mat;
+use serde_json::json;
 
 /// Smallest/largest singular value of the driven Jacobian below which a failure is blamed on a
 /// singular position (a lock-up or dead centre) rather than on a driver or on Newton: near a
@@ -376,11 +377,24 @@ pub(crate) fn run_driven(
         Ok(())
     })();
     s.stats.output_points = results.len();
-    results.set_kinematic_stats(&s.stats, &assembly);
+    insert_summary(&mut results, &s.stats, &assembly);
     match outcome {
         Ok(()) => Ok(results),
         Err(e) => Err(fail(results, e)),
     }
+}
+
+/// Add the solver's statistics and the assembly at the start to the summary of `results`.
+fn insert_summary(results: &mut Results, stats: &KinematicStats, assembly: &Assembly) {
+    let points = results.len();
+    let summary = &mut results.summary;
+    summary.insert("output_points".into(), json!(points));
+    summary.insert("dof".into(), json!(0));
+    summary.insert("statistics".into(), json!(stats));
+    summary.insert(
+        "assembly".into(),
+        json!({"iterations": assembly.iterations, "residual": assembly.residual, "velocity_residual": assembly.velocity_residual}),
+    );
 }
 
 fn check_condition(s: &mut Solver<'_>, limit: f64) -> Result<(), Error> {

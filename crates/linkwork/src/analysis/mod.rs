@@ -8,6 +8,7 @@ pub mod dynamic;
 mod inverse;
 mod kinematic;
 mod modes;
+mod run;
 mod statics;
 
 pub use assembly::{assemble, Assembly};
@@ -16,6 +17,7 @@ pub(crate) use inverse::reaction_columns;
 pub use inverse::run_inverse;
 pub use kinematic::{run_kinematic, KinematicStats};
 pub use modes::run_modes;
+pub use run::Overrides;
 pub use statics::run_static;
 
 use faer::{Mat, MatRef};

@@ -7,7 +7,7 @@ mod parse;
 mod settings;
 pub mod spec;
 
-pub(crate) use compile::output_step_problem;
+pub(crate) use compile::revise;
 pub use compile::{compile, compile_partial};
 pub use parse::{parse_partial, parse_spec, Parsed};
 pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
