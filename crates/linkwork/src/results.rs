@@ -203,7 +203,8 @@ impl Results {
             | Error::Assembly { time, .. }
             | Error::Integration { time, .. }
             | Error::NonFinite { time, .. }
-            | Error::Unbounded { time, .. } = e
+            | Error::Unbounded { time, .. }
+            | Error::OutOfMemory { time, .. } = e
             {
                 s.insert("error_time".into(), json!(time));
             }

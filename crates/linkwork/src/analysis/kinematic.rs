@@ -101,9 +101,7 @@ impl Solver<'_> {
                     "no equation determines coordinate {column} (the driven Jacobian is structurally singular)"
                 ),
             },
-            FactorError::OutOfMemory => {
-                Error::Io { path: String::new(), message: "out of memory while factorizing".into() }
-            }
+            FactorError::OutOfMemory => Error::OutOfMemory { time: self.t, what: "while factorizing".into() },
         }
     }
 
@@ -263,10 +261,8 @@ pub(crate) fn run_driven(
     let lu = match SparseLu::new(pattern) {
         Ok(lu) => lu,
         Err(_) => {
-            return Err(fail(
-                results,
-                Error::Io { path: String::new(), message: "out of memory in the symbolic factorization".into() },
-            ))
+            let error = Error::OutOfMemory { time: t0, what: "in the symbolic factorization".into() };
+            return Err(fail(results, error));
         }
     };
     let m = sys.m;

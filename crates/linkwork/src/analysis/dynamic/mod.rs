@@ -403,8 +403,21 @@ pub type Outcome = (DynamicStats, Result<(), Error>);
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::FactorError;
     use crate::model::MAX_STEPS;
     use crate::Model;
+
+    /// Memory running out in a factorization is its own error, with its time, and the summary
+    /// says when (it was a file error with no path, so Python raised `FileError`).
+    #[test]
+    fn out_of_memory_is_its_own_error() {
+        let e = factor_error(FactorError::OutOfMemory, 0.25);
+        assert!(matches!(e, Error::OutOfMemory { time, .. } if time == 0.25), "{e:?}");
+        assert_eq!(e.to_string(), "out of memory while factorizing at t = 0.25 s");
+        let model = Model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/fourbar.yaml")).unwrap();
+        let summary = Results::of_model(&model).summary_json(Some(&e));
+        assert_eq!(summary["error_time"], 0.25);
+    }
 
     /// The quintic Hermite interpolant reproduces a quintic polynomial and its derivative
     /// exactly (to rounding), from values, first and second derivatives at both ends.
