@@ -66,6 +66,17 @@ struct NewtonFailure {
     iterations: usize,
 }
 
+/// How the attempt at a sub-step ended.
+enum Attempt {
+    /// Newton converged near the predictor: the sub-step is accepted.
+    Converged,
+    /// Newton converged farther from the predictor than half the predicted motion: a jump to
+    /// the other assembly branch.
+    BranchJump,
+    /// Newton did not converge.
+    Failed(NewtonFailure),
+}
+
 /// State and buffers of one kinematic analysis.
 struct Solver<'m> {
     sys: System<'m>,
@@ -132,7 +143,8 @@ impl Solver<'_> {
     /// The Jacobian is refactorized at the iterate when the observed contraction `rho` would need
     /// more than three further chord steps to reach the tolerance (`r rho^3 > tol`): a chord step
     /// costs a residual and a solve, a refactorization several solves.
-    fn newton(&mut self, t: f64) -> Result<Result<(), NewtonFailure>, Error> {
+    /// Ends [`Attempt::Converged`] or [`Attempt::Failed`]; the caller tells a branch jump.
+    fn newton(&mut self, t: f64) -> Result<Attempt, Error> {
         let mut previous = f64::INFINITY;
         for it in 0..=self.max_iterations {
             Config::rotations(&self.trial, &mut self.rot_trial);
@@ -142,10 +154,10 @@ impl Solver<'_> {
             let tolerance = self.tolerance.max(residual_floor(&self.trial));
             if r <= tolerance {
                 self.stats.max_residual = self.stats.max_residual.max(r);
-                return Ok(Ok(()));
+                return Ok(Attempt::Converged);
             }
             if it == self.max_iterations || !r.is_finite() || r > 1e3 * previous.min(1e300) {
-                return Ok(Err(NewtonFailure { residual: r, row: self.rows[row], iterations: it }));
+                return Ok(Attempt::Failed(NewtonFailure { residual: r, row: self.rows[row], iterations: it }));
             }
             let rho = r / previous;
             if r * rho * rho * rho > tolerance {
@@ -341,13 +353,17 @@ pub(crate) fn run_driven(
                 }
                 s.trial.copy_from_slice(&q_pred);
                 let motion = max_abs_diff(&q_pred, &s.q);
-                let failure = match s.newton(t_new)? {
-                    Ok(()) if max_abs_diff(&s.trial, &q_pred) <= 0.5 * motion + 100.0 * settings.tolerance => None,
-                    Ok(()) => Some(None),
-                    Err(f) => Some(Some(f)),
+                let attempt = match s.newton(t_new)? {
+                    Attempt::Converged
+                        if max_abs_diff(&s.trial, &q_pred) <= 0.5 * motion + 100.0 * settings.tolerance =>
+                    {
+                        Attempt::Converged
+                    }
+                    Attempt::Converged => Attempt::BranchJump,
+                    failed => failed,
                 };
-                match failure {
-                    None => {
+                match attempt {
+                    Attempt::Converged => {
                         std::mem::swap(&mut s.q, &mut s.trial);
                         std::mem::swap(&mut s.rot_q, &mut s.rot_trial);
                         s.t = t_new;
@@ -356,12 +372,12 @@ pub(crate) fn run_driven(
                         s.stats.substeps += 1;
                         dt = (2.0 * step).min(h);
                     }
-                    Some(newton) => {
+                    rejected => {
                         s.stats.rejected_substeps += 1;
                         s.factor_at(false, s.t)?;
                         dt = 0.5 * step;
                         if dt < settings.min_substep * h {
-                            return Err(give_up(&mut s, model, &analysis.drivers, t_new, step, newton));
+                            return Err(give_up(&mut s, model, &analysis.drivers, t_new, step, rejected));
                         }
                     }
                 }
@@ -426,16 +442,9 @@ fn too_fast(s: &mut Solver<'_>, model: &Model, drivers: &[usize], target: f64, s
     })
 }
 
-/// The smallest sub-step failed: a driver not finite at the time sought; else a singular position
-/// (no assembled position beyond `s.t`); else a plain convergence failure.
-fn give_up(
-    s: &mut Solver<'_>,
-    model: &Model,
-    drivers: &[usize],
-    t_new: f64,
-    step: f64,
-    newton: Option<NewtonFailure>,
-) -> Error {
+/// The smallest sub-step failed (`rejected`, how): a driver not finite at the time sought; else a
+/// singular position (no assembled position beyond `s.t`); else a plain convergence failure.
+fn give_up(s: &mut Solver<'_>, model: &Model, drivers: &[usize], t_new: f64, step: f64, rejected: Attempt) -> Error {
     if let Some(e) = model.non_finite_driver(drivers, &[t_new]) {
         return e;
     }
@@ -449,15 +458,16 @@ fn give_up(
             ),
         };
     }
-    match newton {
-        Some(f) => Error::Convergence {
+    match rejected {
+        Attempt::Failed(f) => Error::Convergence {
             time: t_new,
             residual: f.residual,
             row: s.sys.row_name(f.row),
             iterations: f.iterations,
             substep: step,
         },
-        None => Error::Convergence {
+        // A branch jump, every time down to the smallest sub-step.
+        Attempt::BranchJump | Attempt::Converged => Error::Convergence {
             time: t_new,
             residual: 0.0,
             row: rows.into_iter().next().unwrap_or(RowName { element: "?".into(), equation: "?".into() }),
