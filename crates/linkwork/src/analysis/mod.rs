@@ -1,6 +1,7 @@
-//! Analyses: assembly of an initial guess, checks (degrees of freedom, redundant rows), and
-//! kinematic analysis. Each reads a compiled [`crate::model::Model`] and writes
-//! [`crate::results::Results`].
+//! Analyses: the run entry point ([`crate::Model::run`], with the run's [`Overrides`]) and its
+//! dispatch; assembly of an initial guess, checks (degrees of freedom, redundant rows), and the
+//! kinematic, inverse, static, modes and dynamic analyses. Each reads a compiled
+//! [`crate::model::Model`] and writes [`crate::results::Results`].
 
 mod assembly;
 mod check;
