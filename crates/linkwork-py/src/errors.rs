@@ -9,7 +9,8 @@
 //! │   ├── ConvergenceError    row, residual, iterations, substep
 //! │   │   └── EquilibriumError    coordinates, index; row, residual, iterations, load_fraction or cause
 //! │   ├── IntegrationError    step, cause
-//! │   └── NonFiniteError      element, expression, value (NaN, infinity, or without bound)
+//! │   ├── NonFiniteError      element, expression, value (NaN, infinity, or without bound)
+//! │   └── OutOfMemoryError    (also a MemoryError) memory ran out in a factorization
 //! ├── FileError           path (also an OSError)
 //! └── InternalError       a panic inside the engine: a bug, reported instead of crashing
 //! ```
@@ -19,7 +20,7 @@
 
 use crate::PyResults;
 use linkwork::{Error, Unbalanced};
-use pyo3::exceptions::{PyException, PyOSError};
+use pyo3::exceptions::{PyException, PyMemoryError, PyOSError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 use pyo3::BoundObject;
@@ -84,6 +85,9 @@ pyo3::create_exception!(
 /// Name of the exception that is both a `LinkworkError` and an `OSError`.
 const FILE_ERROR: &str = "FileError";
 
+/// Name of the exception that is both a `SolverError` and a `MemoryError`.
+const OUT_OF_MEMORY_ERROR: &str = "OutOfMemoryError";
+
 /// Add the exception classes to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
@@ -97,14 +101,26 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("IntegrationError", py.get_type::<IntegrationError>())?;
     m.add("NonFiniteError", py.get_type::<NonFiniteError>())?;
     m.add("InternalError", py.get_type::<InternalError>())?;
-    // Two bases, so that `except OSError` catches a missing model file as well: built with
-    // `type(name, bases, namespace)`, as a `class` statement would.
-    let namespace = PyDict::new(py);
-    namespace.set_item("__module__", "linkwork")?;
-    namespace.set_item("__doc__", "A file could not be read or written. `path` names it.")?;
-    let bases = PyTuple::new(py, [py.get_type::<LinkworkError>(), py.get_type::<PyOSError>()])?;
-    let file_error = py.get_type::<PyType>().call1((FILE_ERROR, bases, namespace))?;
-    m.add(FILE_ERROR, file_error)
+    // Two bases, so that `except OSError` catches a missing model file as well, and `except
+    // MemoryError` memory running out in an analysis: built with `type(name, bases, namespace)`,
+    // as a `class` statement would.
+    let two_bases = |name: &str, doc: &str, bases: [Bound<'_, PyType>; 2]| -> PyResult<()> {
+        let namespace = PyDict::new(py);
+        namespace.set_item("__module__", "linkwork")?;
+        namespace.set_item("__doc__", doc)?;
+        let class = py.get_type::<PyType>().call1((name, PyTuple::new(py, bases)?, namespace))?;
+        m.add(name, class)
+    };
+    two_bases(
+        FILE_ERROR,
+        "A file could not be read or written. `path` names it.",
+        [py.get_type::<LinkworkError>(), py.get_type::<PyOSError>()],
+    )?;
+    two_bases(
+        OUT_OF_MEMORY_ERROR,
+        "Memory ran out in a sparse factorization at time `time`: the model is too large for this machine. `results` holds the output computed before it.",
+        [py.get_type::<SolverError>(), py.get_type::<PyMemoryError>()],
+    )
 }
 
 /// Run `f`, turning a panic into `InternalError` so that it never reaches Python as a
@@ -223,6 +239,18 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
             NonFiniteError::new_err(message),
             failure(*time, vec![])?.with("element", element)?.with("expression", expression)?.with("value", value)?,
         ),
+        Error::OutOfMemory { time, .. } => {
+            let class = py.import("linkwork._linkwork")?.getattr(OUT_OF_MEMORY_ERROR)?;
+            (
+                PyErr::from_value(class.call1((message,))?),
+                vec![
+                    ("time", time.into_pyobject(py)?.into_any()),
+                    ("joints", joints.into_pyobject(py)?.into_any()),
+                    ("rows", Vec::<String>::new().into_pyobject(py)?.into_any()),
+                    ("results", results()?.into_bound(py)),
+                ],
+            )
+        }
         Error::Io { path, .. } => {
             let class = py.import("linkwork._linkwork")?.getattr(FILE_ERROR)?;
             let err = PyErr::from_value(class.call1((message,))?);

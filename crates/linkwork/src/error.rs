@@ -185,6 +185,14 @@ pub enum Error {
         /// The limit the sub-steps reached.
         limit: String,
     },
+    /// Memory ran out in a sparse factorization: the model is too large for this machine.
+    #[error("out of memory {what} at t = {when} s", when = seconds(.time))]
+    OutOfMemory {
+        /// Time of the factorization, s.
+        time: f64,
+        /// Which factorization (`while factorizing`, `in the symbolic factorization`).
+        what: String,
+    },
     /// Reading or writing a file failed.
     #[error("{path}: {message}")]
     Io {

@@ -1,9 +1,29 @@
 //! Linkwork: a planar multibody kinematics and dynamics engine.
 //!
-//! Data flows one way: a model file ([`model::spec`]) is read and validated with every problem
-//! located ([`model::parse_spec`]), compiled into an immutable [`Model`] (indices, constraints),
-//! and an analysis ([`analysis`]) stacks the active constraints into a [`system::System`], solves
-//! with sparse factorizations ([`linalg`]) and writes [`Results`].
+//! Data flows one way, and the imports follow it: each module imports only the ones above it
+//! here ([`error`] from anywhere), save that an analysis writes its [`Results`], and `results`
+//! imports nothing of `analysis`.
+//!
+//! ```text
+//! expr                      expressions of time and state, differentiated exactly
+//!  -> constraints, forces   joint and driver rows (Phi, Phi_q, nu, gamma); force laws
+//!  -> model                 a file's schema (spec), read with every problem located (parse),
+//!                           compiled into an immutable Model (compile) whose analyses carry
+//!                           the compiled solver: section (settings)
+//!  -> system                an analysis' joints and active drivers stacked into one system
+//!  -> analysis              the run entry point (Model::run, Overrides) and every analysis:
+//!                           assembly, checks, kinematic, inverse, static, modes, dynamic
+//!  -> results               columnar time series and their files
+//!
+//! linalg                    sparse patterns and LU, knowing no mechanics, below system
+//! ```
+//!
+//! A model file ([`model::spec`]) is read and validated with every problem located
+//! ([`model::parse_spec`]) and compiled into a [`Model`] (indices, constraints, and
+//! [`model::SolverSettings`] and [`model::IntegratorSettings`] per analysis). [`Model::run`]
+//! ([`analysis`]) checks the run's [`Overrides`] as the file's own fields, stacks the active
+//! constraints into a [`system::System`], solves with sparse factorizations ([`linalg`]) and
+//! writes [`Results`].
 //!
 //! ```no_run
 //! let model = linkwork::Model::load("examples/quick_return_a.yaml")?;
@@ -22,6 +42,7 @@ pub mod model;
 pub mod results;
 pub mod system;
 
+pub use analysis::Overrides;
 pub use error::{Error, Problem, RowName, Unbalanced};
 pub use model::Model;
-pub use results::{Failure, Overrides, Results};
+pub use results::{Failure, Results};

@@ -4,7 +4,6 @@
 //! `<driver>.effort`, the energies and constraint residuals; then one column per measure) and
 //! `summary.json` (model sizes, degrees of freedom, solver statistics, status).
 
-use crate::analysis::{Assembly, KinematicStats};
 use crate::error::Error;
 use crate::model::{Analysis, Model};
 use serde_json::{json, Map, Value};
@@ -40,20 +39,28 @@ pub struct Failure {
 impl Results {
     /// Empty results with the columns of `model` for `analysis`.
     pub fn new(model: &Model, analysis: &Analysis) -> Results {
-        let names: Vec<String> =
-            model.bodies.iter().flat_map(|b| BODY_QUANTITIES.iter().map(move |q| format!("{}.{q}", b.name))).collect();
-        let mut summary = Map::new();
-        summary.insert("model".into(), json!(model.name));
+        let mut results = Results::of_model(model);
+        let summary = &mut results.summary;
         summary.insert("analysis".into(), json!(analysis.name));
         summary.insert("type".into(), json!(analysis.kind));
-        summary.insert("bodies".into(), json!(model.bodies.len()));
-        summary.insert("coordinates".into(), json!(model.n()));
-        summary.insert("joints".into(), json!(model.joints.iter().map(|j| &j.name).collect::<Vec<_>>()));
         summary.insert(
             "active_drivers".into(),
             json!(analysis.drivers.iter().map(|&d| &model.drivers[d].name).collect::<Vec<_>>()),
         );
         summary.insert("settings".into(), json!(analysis.settings));
+        results
+    }
+
+    /// Empty results with the columns of `model` and the model's part of the summary (its name,
+    /// bodies, coordinates and joints): what a run that names no analysis of it leaves.
+    pub fn of_model(model: &Model) -> Results {
+        let names: Vec<String> =
+            model.bodies.iter().flat_map(|b| BODY_QUANTITIES.iter().map(move |q| format!("{}.{q}", b.name))).collect();
+        let mut summary = Map::new();
+        summary.insert("model".into(), json!(model.name));
+        summary.insert("bodies".into(), json!(model.bodies.len()));
+        summary.insert("coordinates".into(), json!(model.n()));
+        summary.insert("joints".into(), json!(model.joints.iter().map(|j| &j.name).collect::<Vec<_>>()));
         Results { time: Vec::new(), columns: vec![Vec::new(); names.len()], names, summary }
     }
 
@@ -103,16 +110,6 @@ impl Results {
             c.push(v);
         }
         Ok(())
-    }
-
-    pub(crate) fn set_kinematic_stats(&mut self, stats: &KinematicStats, assembly: &Assembly) {
-        self.summary.insert("output_points".into(), json!(self.time.len()));
-        self.summary.insert("dof".into(), json!(0));
-        self.summary.insert("statistics".into(), json!(stats));
-        self.summary.insert(
-            "assembly".into(),
-            json!({"iterations": assembly.iterations, "residual": assembly.residual, "velocity_residual": assembly.velocity_residual}),
-        );
     }
 
     /// Add to the summary of an analysis with reactions: `reaction_bodies` (the body each joint's
@@ -206,7 +203,8 @@ impl Results {
             | Error::Assembly { time, .. }
             | Error::Integration { time, .. }
             | Error::NonFinite { time, .. }
-            | Error::Unbounded { time, .. } = e
+            | Error::Unbounded { time, .. }
+            | Error::OutOfMemory { time, .. } = e
             {
                 s.insert("error_time".into(), json!(time));
             }
@@ -302,155 +300,6 @@ impl Drop for Staged {
         // After a commit there is nothing left to remove; otherwise best effort: a temporary
         // file that cannot be removed is left, named as such.
         let _ = std::fs::remove_file(&self.temp);
-    }
-}
-
-/// Changes to an analysis for one run (the command line's `--integrator`, `--rtol`, `--atol`,
-/// `--t-end` and `--step`); `None` keeps the file's value.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Overrides {
-    /// The integrator of a dynamic analysis.
-    pub integrator: Option<crate::analysis::dynamic::IntegratorKind>,
-    /// Relative tolerance of a dynamic analysis.
-    pub rtol: Option<f64>,
-    /// Absolute tolerance of a dynamic analysis.
-    pub atol: Option<f64>,
-    /// End time, s.
-    pub t_end: Option<f64>,
-    /// Output step, s.
-    pub step: Option<f64>,
-}
-
-impl Overrides {
-    /// `analysis` with these changes, or every problem (paths are the option names).
-    fn apply(&self, analysis: &Analysis) -> Result<Analysis, Error> {
-        use crate::model::spec::AnalysisKind;
-        let mut a = analysis.clone();
-        let mut problems = Vec::new();
-        let mut positive = |name: &str, v: Option<f64>| -> Option<f64> {
-            let v = v?;
-            if v.is_finite() && v > 0.0 {
-                Some(v)
-            } else {
-                problems.push(crate::Problem::new(name, format!("expected a positive number, found {v}")));
-                None
-            }
-        };
-        let rtol = positive("--rtol", self.rtol);
-        let atol = positive("--atol", self.atol);
-        let step = positive("--step", self.step);
-        if let Some(t) = self.t_end {
-            if !t.is_finite() || t < a.t_start {
-                problems.push(crate::Problem::new(
-                    "--t-end",
-                    format!("expected a time at or after the analysis' start ({} s), found {t}", a.t_start),
-                ));
-            } else {
-                a.t_end = t;
-            }
-        }
-        if a.kind == AnalysisKind::Modes {
-            for (name, given) in [("--t-end", self.t_end.is_some()), ("--step", step.is_some())] {
-                if given {
-                    problems.push(crate::Problem::new(name, "a modes analysis is at one time (its t_start)"));
-                }
-            }
-        }
-        if let Some(h) = step {
-            a.step = h;
-        }
-        if let Some(message) = crate::model::output_step_problem(a.t_start, a.t_end, a.step) {
-            // The option that made the grid what it is: the step, else the end time the file's step
-            // no longer fits (the file's own grid was checked when it compiled).
-            let field = if step.is_some() || self.t_end.is_none() { "--step" } else { "--t-end" };
-            problems.push(crate::Problem::new(field, message));
-        }
-        let dynamic = a.kind == AnalysisKind::Dynamic;
-        for (name, given) in
-            [("--integrator", self.integrator.is_some()), ("--rtol", rtol.is_some()), ("--atol", atol.is_some())]
-        {
-            if given && !dynamic {
-                problems.push(crate::Problem::new(
-                    name,
-                    format!("only a dynamic analysis has an integrator; '{}' is {}", a.name, a.kind.name()),
-                ));
-            }
-        }
-        if let Some(k) = self.integrator {
-            if k != a.integrator.kind {
-                // Settings that belong to the file's integrator do not carry over.
-                let d = crate::analysis::IntegratorSettings::default();
-                a.integrator = crate::analysis::IntegratorSettings { kind: k, ..d };
-                a.integrator.rtol = analysis.integrator.rtol;
-                a.integrator.atol = analysis.integrator.atol;
-                a.integrator.initial_step = analysis.integrator.initial_step;
-                a.integrator.max_step = analysis.integrator.max_step;
-                a.integrator.max_steps = analysis.integrator.max_steps;
-            }
-        }
-        if let Some(r) = rtol {
-            a.integrator.rtol = r;
-        }
-        if let Some(t) = atol {
-            a.integrator.atol = t;
-        }
-        if problems.is_empty() {
-            Ok(a)
-        } else {
-            Err(Error::Model(problems))
-        }
-    }
-}
-
-impl Model {
-    /// Run the analysis called `name`.
-    pub fn run(&self, name: &str) -> Result<Results, Box<Failure>> {
-        self.run_with(name, &Overrides::default())
-    }
-
-    /// Run the analysis called `name` with `overrides` applied.
-    pub fn run_with(&self, name: &str, overrides: &Overrides) -> Result<Results, Box<Failure>> {
-        let analysis = self.analysis(name).and_then(|a| overrides.apply(a)).map_err(|error| {
-            let empty = Analysis {
-                name: name.into(),
-                kind: crate::model::spec::AnalysisKind::Kinematic,
-                drivers: vec![],
-                forces: vec![],
-                t_start: 0.0,
-                t_end: 0.0,
-                step: 1.0,
-                settings: Default::default(),
-                integrator: Default::default(),
-                about: Default::default(),
-            };
-            Box::new(Failure { error, results: Results::new(self, &empty) })
-        })?;
-        use crate::model::spec::AnalysisKind as K;
-        let mut outcome = match analysis.kind {
-            K::Kinematic => crate::analysis::run_kinematic(self, &analysis),
-            K::Dynamic => crate::analysis::dynamic::run_dynamic(self, &analysis),
-            K::Inverse => crate::analysis::run_inverse(self, &analysis),
-            K::Static => crate::analysis::run_static(self, &analysis),
-            K::Modes => crate::analysis::run_modes(self, &analysis),
-        };
-        let results = match &mut outcome {
-            Ok(r) => r,
-            Err(f) => &mut f.results,
-        };
-        // The first output's positions (the assembled start), else the file's guess.
-        let q = self
-            .bodies
-            .iter()
-            .flat_map(|b| ["x", "y", "phi"].map(|c| results.column(&format!("{}.{c}", b.name))?.first().copied()))
-            .collect::<Option<Vec<f64>>>()
-            .unwrap_or_else(|| self.q0());
-        // The analysis's own warnings (a dynamic run's) follow the tolerances'.
-        let mut warnings = crate::analysis::tolerance_warnings(&analysis, &q);
-        if let Some(Value::Array(own)) = results.summary.get("warnings") {
-            warnings.extend(own.iter().filter_map(|w| w.as_str().map(String::from)));
-        }
-        results.summary.insert("warnings".into(), json!(warnings));
-        outcome
     }
 }
 

@@ -108,7 +108,7 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
         vec![false; 2 * n]
     };
     let assembly =
-        assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t, super::SolverSettings::default().tolerance)?;
+        assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t, crate::model::SolverSettings::default().tolerance)?;
     let mut jac = Mat::<f64>::zeros(sys.m, n);
     sys.jacobian_dense(&ConfigBuf::new(&assembly.q).view(), t, jac.as_mut());
     let (keep, drop) = independent_rows(jac.as_ref());

@@ -18,8 +18,9 @@ use crate::error::{Error, Problem, RowName};
 use crate::linalg::{FactorError, SparseLu};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
-use crate::system::{Pattern, System};
+use crate::system::System;
 use faer::Mat;
+use serde_json::json;
 
 /// Smallest/largest singular value of the driven Jacobian below which a failure is blamed on a
 /// singular position (a lock-up or dead centre) rather than on a driver or on Newton: near a
@@ -65,6 +66,17 @@ struct NewtonFailure {
     iterations: usize,
 }
 
+/// How the attempt at a sub-step ended.
+enum Attempt {
+    /// Newton converged near the predictor: the sub-step is accepted.
+    Converged,
+    /// Newton converged farther from the predictor than half the predicted motion: a jump to
+    /// the other assembly branch.
+    BranchJump,
+    /// Newton did not converge.
+    Failed(NewtonFailure),
+}
+
 /// State and buffers of one kinematic analysis.
 struct Solver<'m> {
     sys: System<'m>,
@@ -100,9 +112,7 @@ impl Solver<'_> {
                     "no equation determines coordinate {column} (the driven Jacobian is structurally singular)"
                 ),
             },
-            FactorError::OutOfMemory => {
-                Error::Io { path: String::new(), message: "out of memory while factorizing".into() }
-            }
+            FactorError::OutOfMemory => Error::OutOfMemory { time: self.t, what: "while factorizing".into() },
         }
     }
 
@@ -111,7 +121,7 @@ impl Solver<'_> {
         // `rot_trial` always matches `trial` here: Newton evaluates the residual first.
         let q = if q_is_trial { Config::new(&self.trial, &self.rot_trial) } else { Config::new(&self.q, &self.rot_q) };
         let (pattern, values) = self.lu.pattern_and_values();
-        pattern.fill(&mut self.sys, &q, t, values);
+        self.sys.fill_jacobian(pattern, &q, t, values);
         self.stats.factorizations += 1;
         self.lu.factor().map_err(|e| self.factor_error(e))
     }
@@ -133,7 +143,8 @@ impl Solver<'_> {
     /// The Jacobian is refactorized at the iterate when the observed contraction `rho` would need
     /// more than three further chord steps to reach the tolerance (`r rho^3 > tol`): a chord step
     /// costs a residual and a solve, a refactorization several solves.
-    fn newton(&mut self, t: f64) -> Result<Result<(), NewtonFailure>, Error> {
+    /// Ends [`Attempt::Converged`] or [`Attempt::Failed`]; the caller tells a branch jump.
+    fn newton(&mut self, t: f64) -> Result<Attempt, Error> {
         let mut previous = f64::INFINITY;
         for it in 0..=self.max_iterations {
             Config::rotations(&self.trial, &mut self.rot_trial);
@@ -143,10 +154,10 @@ impl Solver<'_> {
             let tolerance = self.tolerance.max(residual_floor(&self.trial));
             if r <= tolerance {
                 self.stats.max_residual = self.stats.max_residual.max(r);
-                return Ok(Ok(()));
+                return Ok(Attempt::Converged);
             }
             if it == self.max_iterations || !r.is_finite() || r > 1e3 * previous.min(1e300) {
-                return Ok(Err(NewtonFailure { residual: r, row: self.rows[row], iterations: it }));
+                return Ok(Attempt::Failed(NewtonFailure { residual: r, row: self.rows[row], iterations: it }));
             }
             let rho = r / previous;
             if r * rho * rho * rho > tolerance {
@@ -258,14 +269,12 @@ pub(crate) fn run_driven(
         return Err(fail(results, Error::Model(vec![problem])));
     }
     let redundant_rows: Vec<RowName> = redundant.iter().map(|&r| sys.row_name(r)).collect();
-    let pattern = Pattern::new(&sys, &rows);
+    let pattern = sys.pattern(&rows);
     let lu = match SparseLu::new(pattern) {
         Ok(lu) => lu,
         Err(_) => {
-            return Err(fail(
-                results,
-                Error::Io { path: String::new(), message: "out of memory in the symbolic factorization".into() },
-            ))
+            let error = Error::OutOfMemory { time: t0, what: "in the symbolic factorization".into() };
+            return Err(fail(results, error));
         }
     };
     let m = sys.m;
@@ -344,13 +353,17 @@ pub(crate) fn run_driven(
                 }
                 s.trial.copy_from_slice(&q_pred);
                 let motion = max_abs_diff(&q_pred, &s.q);
-                let failure = match s.newton(t_new)? {
-                    Ok(()) if max_abs_diff(&s.trial, &q_pred) <= 0.5 * motion + 100.0 * settings.tolerance => None,
-                    Ok(()) => Some(None),
-                    Err(f) => Some(Some(f)),
+                let attempt = match s.newton(t_new)? {
+                    Attempt::Converged
+                        if max_abs_diff(&s.trial, &q_pred) <= 0.5 * motion + 100.0 * settings.tolerance =>
+                    {
+                        Attempt::Converged
+                    }
+                    Attempt::Converged => Attempt::BranchJump,
+                    failed => failed,
                 };
-                match failure {
-                    None => {
+                match attempt {
+                    Attempt::Converged => {
                         std::mem::swap(&mut s.q, &mut s.trial);
                         std::mem::swap(&mut s.rot_q, &mut s.rot_trial);
                         s.t = t_new;
@@ -359,12 +372,12 @@ pub(crate) fn run_driven(
                         s.stats.substeps += 1;
                         dt = (2.0 * step).min(h);
                     }
-                    Some(newton) => {
+                    rejected => {
                         s.stats.rejected_substeps += 1;
                         s.factor_at(false, s.t)?;
                         dt = 0.5 * step;
                         if dt < settings.min_substep * h {
-                            return Err(give_up(&mut s, model, &analysis.drivers, t_new, step, newton));
+                            return Err(give_up(&mut s, model, &analysis.drivers, t_new, step, rejected));
                         }
                     }
                 }
@@ -376,11 +389,24 @@ pub(crate) fn run_driven(
         Ok(())
     })();
     s.stats.output_points = results.len();
-    results.set_kinematic_stats(&s.stats, &assembly);
+    insert_summary(&mut results, &s.stats, &assembly);
     match outcome {
         Ok(()) => Ok(results),
         Err(e) => Err(fail(results, e)),
     }
+}
+
+/// Add the solver's statistics and the assembly at the start to the summary of `results`.
+fn insert_summary(results: &mut Results, stats: &KinematicStats, assembly: &Assembly) {
+    let points = results.len();
+    let summary = &mut results.summary;
+    summary.insert("output_points".into(), json!(points));
+    summary.insert("dof".into(), json!(0));
+    summary.insert("statistics".into(), json!(stats));
+    summary.insert(
+        "assembly".into(),
+        json!({"iterations": assembly.iterations, "residual": assembly.residual, "velocity_residual": assembly.velocity_residual}),
+    );
 }
 
 fn check_condition(s: &mut Solver<'_>, limit: f64) -> Result<(), Error> {
@@ -416,16 +442,9 @@ fn too_fast(s: &mut Solver<'_>, model: &Model, drivers: &[usize], target: f64, s
     })
 }
 
-/// The smallest sub-step failed: a driver not finite at the time sought; else a singular position
-/// (no assembled position beyond `s.t`); else a plain convergence failure.
-fn give_up(
-    s: &mut Solver<'_>,
-    model: &Model,
-    drivers: &[usize],
-    t_new: f64,
-    step: f64,
-    newton: Option<NewtonFailure>,
-) -> Error {
+/// The smallest sub-step failed (`rejected`, how): a driver not finite at the time sought; else a
+/// singular position (no assembled position beyond `s.t`); else a plain convergence failure.
+fn give_up(s: &mut Solver<'_>, model: &Model, drivers: &[usize], t_new: f64, step: f64, rejected: Attempt) -> Error {
     if let Some(e) = model.non_finite_driver(drivers, &[t_new]) {
         return e;
     }
@@ -439,15 +458,16 @@ fn give_up(
             ),
         };
     }
-    match newton {
-        Some(f) => Error::Convergence {
+    match rejected {
+        Attempt::Failed(f) => Error::Convergence {
             time: t_new,
             residual: f.residual,
             row: s.sys.row_name(f.row),
             iterations: f.iterations,
             substep: step,
         },
-        None => Error::Convergence {
+        // A branch jump, every time down to the smallest sub-step.
+        Attempt::BranchJump | Attempt::Converged => Error::Convergence {
             time: t_new,
             residual: 0.0,
             row: rows.into_iter().next().unwrap_or(RowName { element: "?".into(), equation: "?".into() }),

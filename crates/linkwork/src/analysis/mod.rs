@@ -1,6 +1,7 @@
-//! Analyses: assembly of an initial guess, checks (degrees of freedom, redundant rows), and
-//! kinematic analysis. Each reads a compiled [`crate::model::Model`] and writes
-//! [`crate::results::Results`].
+//! Analyses: the run entry point ([`crate::Model::run`], with the run's [`Overrides`]) and its
+//! dispatch; assembly of an initial guess, checks (degrees of freedom, redundant rows), and the
+//! kinematic, inverse, static, modes and dynamic analyses. Each reads a compiled
+//! [`crate::model::Model`] and writes [`crate::results::Results`].
 
 mod assembly;
 mod check;
@@ -8,55 +9,19 @@ pub mod dynamic;
 mod inverse;
 mod kinematic;
 mod modes;
+mod run;
 mod statics;
 
 pub use assembly::{assemble, Assembly};
 pub use check::{check, independent_rows, AnalysisCheck, CheckReport, SystemCheck};
-pub use dynamic::IntegratorSettings;
 pub(crate) use inverse::reaction_columns;
 pub use inverse::run_inverse;
 pub use kinematic::{run_kinematic, KinematicStats};
 pub use modes::run_modes;
+pub use run::Overrides;
 pub use statics::run_static;
 
 use faer::{Mat, MatRef};
-
-/// Settings of the position solver, with the reason for each default.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct SolverSettings {
-    /// Newton has converged when the max-norm of `Phi` is below this, m or rad. Default `1e-12`:
-    /// about 1000 ulps of a metre-sized mechanism, so that positions are good to about ten digits
-    /// after the Jacobian's amplification, and still reachable in double precision.
-    pub tolerance: f64,
-    /// Newton iterations per attempt before a sub-step is halved. Default 12: from a
-    /// second-order predictor Newton needs 2 to 4; more means the step left the branch.
-    pub max_iterations: usize,
-    /// Largest rotation of any body within one sub-step, rad. Default 0.35: the predictor's error
-    /// is then about `0.35^3 / 6 ~ 7e-3` rad, well inside Newton's region of convergence, so the
-    /// solution cannot jump to the other assembly branch; 0.2 cost 40% more time on the
-    /// quick-return benchmark with the same results (`docs/performance.md`).
-    pub max_rotation: f64,
-    /// Smallest sub-step, as a fraction of the output step, before the analysis gives up.
-    /// Default `1e-8` (27 halvings): a mechanism that needs more is at a singular position, and
-    /// stopping this close to it makes the singular value that proves it small (`~sqrt(1e-8)`).
-    pub min_substep: f64,
-    /// 1-norm condition estimate of the driven Jacobian above which a position counts as
-    /// singular. Default `1e10`: velocities and accelerations would lose more than ten of
-    /// sixteen digits.
-    pub singular_condition: f64,
-}
-
-impl Default for SolverSettings {
-    fn default() -> Self {
-        SolverSettings {
-            tolerance: 1e-12,
-            max_iterations: 12,
-            max_rotation: 0.35,
-            min_substep: 1e-8,
-            singular_condition: 1e10,
-        }
-    }
-}
 
 /// Units of round-off in a constraint residual: each row of `Phi` adds a few products of
 /// coordinates, rotations and point offsets, each rounded to half a unit of the largest; 64

@@ -1,15 +1,64 @@
-//! Sparse LU for the square systems of kinematics: symbolic factorization once per analysis
-//! (faer's COLAMD ordering and elimination structure), numeric factorization per Jacobian, and a
-//! 1-norm condition estimate from the factors (Hager 1984, Higham 1988) to detect singular
-//! positions.
+//! Sparse linear algebra, knowing no mechanics: compressed-column patterns built from lists of
+//! entries ([`Pattern`]), and sparse LU for square systems: symbolic factorization once per
+//! analysis (faer's COLAMD ordering and elimination structure), numeric factorization per
+//! matrix, and a 1-norm condition estimate from the factors (Hager 1984, Higham 1988) to detect
+//! singular positions.
 
-use crate::system::Pattern;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::factor::PartialPivLuParams;
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, NumericLu, SymbolicLu};
 use faer::sparse::linalg::LuError;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Spec};
+
+/// A compressed-column pattern (each column's rows ascending, each entry once), fixed for an
+/// analysis, and the position in the value array of each entry it was built from.
+#[derive(Debug, Clone)]
+pub struct Pattern {
+    /// (columns + 1) column pointers.
+    pub col_ptr: Vec<usize>,
+    /// (nnz) row index of each value.
+    pub row_idx: Vec<usize>,
+    /// (entries) value position of each entry given to [`Pattern::new`], in the order given;
+    /// `usize::MAX` for an entry left out. Empty for a pattern given by its arrays.
+    pub map: Vec<usize>,
+    /// Number of rows.
+    pub nrows: usize,
+}
+
+impl Pattern {
+    /// The pattern of `entries` in `nrows` rows and `ncols` columns: each entry is `(row, column)`,
+    /// in any order, or `None` for one left out; repeated entries share one value (a caller
+    /// that fills the values adds them up).
+    pub fn new(nrows: usize, ncols: usize, entries: impl IntoIterator<Item = Option<(usize, usize)>>) -> Pattern {
+        // (column, row, entry) of every entry kept, sorted into compressed-column order.
+        let mut kept: Vec<(usize, usize, usize)> = Vec::new();
+        let mut count = 0;
+        for (k, entry) in entries.into_iter().enumerate() {
+            count = k + 1;
+            if let Some((row, col)) = entry {
+                kept.push((col, row, k));
+            }
+        }
+        kept.sort_unstable();
+        let mut col_ptr = vec![0; ncols + 1];
+        let mut row_idx = Vec::with_capacity(kept.len());
+        let mut map = vec![usize::MAX; count];
+        let mut last = None;
+        for &(col, row, k) in &kept {
+            if last != Some((col, row)) {
+                row_idx.push(row);
+                col_ptr[col + 1] += 1;
+                last = Some((col, row));
+            }
+            map[k] = row_idx.len() - 1;
+        }
+        for c in 0..ncols {
+            col_ptr[c + 1] += col_ptr[c];
+        }
+        Pattern { col_ptr, row_idx, map, nrows }
+    }
+}
 
 /// Why a factorization failed.
 #[derive(Debug, Clone, PartialEq)]
@@ -180,6 +229,18 @@ mod tests {
         assert!(b.iter().all(|x| (x - 1.0).abs() < 1e-15), "{b:?}");
         let k = a.condition_estimate();
         assert!((k - 2.5).abs() < 1e-12, "condition {k}");
+    }
+
+    /// Entries in any order, repeated or left out: each column's rows ascend, a repeat shares its
+    /// first's value, and a left-out entry has none.
+    #[test]
+    fn pattern_from_entries() {
+        let entries = [Some((2, 0)), Some((0, 1)), None, Some((0, 0)), Some((2, 0)), Some((1, 1))];
+        let p = Pattern::new(3, 2, entries);
+        assert_eq!(p.col_ptr, [0, 2, 4]);
+        assert_eq!(p.row_idx, [0, 2, 0, 1]);
+        assert_eq!(p.map, [1, 2, usize::MAX, 0, 1, 3]);
+        assert_eq!(p.nrows, 3);
     }
 
     /// A numerically singular matrix is flagged, whether faer refuses it or factors it.

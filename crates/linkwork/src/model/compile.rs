@@ -2,8 +2,7 @@
 //! resolve names to indices and build each joint's constraint.
 
 use super::spec::*;
-use super::{Analysis, Body, Element, ForceElement, Measure, MeasureKind, Model};
-use crate::analysis::{IntegratorSettings, SolverSettings};
+use super::{Analysis, Body, Element, ForceElement, IntegratorSettings, Measure, MeasureKind, Model, SolverSettings};
 use crate::constraints::{
     Absolute, AbsoluteKind, BodyIx, Constraint, Distance, Driver, DriverKind, Frame, GearKind, GearPair,
     GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc, Translational, Var,
@@ -19,7 +18,7 @@ const MAX_OUTPUT_POINTS: f64 = 1e7;
 /// What is wrong with output every `h` s (positive) from `t0` to `t1` (not before it), if
 /// anything: more than [`MAX_OUTPUT_POINTS`] points, or a step longer than a span that is not
 /// empty, which would silently give only the span's two ends.
-pub(crate) fn output_step_problem(t0: f64, t1: f64, h: f64) -> Option<String> {
+fn output_step_problem(t0: f64, t1: f64, h: f64) -> Option<String> {
     let span = t1 - t0;
     if span / h > MAX_OUTPUT_POINTS {
         Some(format!("{} output points requested; at most {MAX_OUTPUT_POINTS:e} are allowed", (span / h).ceil()))
@@ -184,22 +183,11 @@ impl Cx<'_> {
     }
 
     fn finite(&mut self, path: &str, v: f64) -> Option<f64> {
-        if v.is_finite() {
-            Some(v)
-        } else {
-            self.problem(path, format!("expected a finite number, found {v}"));
-            None
-        }
+        finite(&mut self.problems, path, v)
     }
 
     fn positive(&mut self, path: &str, v: f64) -> Option<f64> {
-        let v = self.finite(path, v)?;
-        if v > 0.0 {
-            Some(v)
-        } else {
-            self.problem(path, format!("expected a positive number, found {v}"));
-            None
-        }
+        positive(&mut self.problems, path, v)
     }
 
     fn vec2(&mut self, path: &str, v: [f64; 2]) -> Option<[f64; 2]> {
@@ -819,29 +807,12 @@ impl Cx<'_> {
             let drivers = self.selection(&path, "drivers", "driver", &driver_names, a.drivers.as_deref());
             let force_names: Vec<&str> = spec.forces.keys().map(String::as_str).collect();
             let forces = self.selection(&path, "forces", "force", &force_names, a.forces.as_deref());
-            let t0 = self.finite(&format!("{path}.t_start"), a.t_start);
-            let span = self.span(&path, a, t0);
-            let settings = self.settings(&format!("{path}.solver"), &a.solver);
-            let integrator = self.integrator(&path, a);
-            let (Some(t0), Some((t1, h)), Some(settings), Some(integrator)) = (t0, span, settings, integrator) else {
-                continue;
-            };
-            if t1 < t0 {
-                self.problem(format!("{path}.t_end"), format!("t_end ({t1}) is before t_start ({t0})"));
-                continue;
-            }
-            if let Some(message) = output_step_problem(t0, t1, h) {
-                self.problem(format!("{path}.step"), message);
-                continue;
-            }
-            if a.kind != AnalysisKind::Dynamic && a.integrator.is_some() {
-                self.problem(format!("{path}.integrator"), "only a dynamic analysis has an integrator");
-                continue;
-            }
+            let timing = timing(&mut self.problems, name, a, &Fallback::file());
             if a.kind != AnalysisKind::Modes && a.about.is_some() {
                 self.problem(format!("{path}.about"), "only a modes analysis has a point to linearise about");
                 continue;
             }
+            let Some(Timing { t_start, t_end, step, settings, integrator }) = timing else { continue };
             out.insert(
                 name.clone(),
                 Analysis {
@@ -849,9 +820,9 @@ impl Cx<'_> {
                     kind: a.kind,
                     drivers,
                     forces,
-                    t_start: t0,
-                    t_end: t1,
-                    step: h,
+                    t_start,
+                    t_end,
+                    step,
                     settings,
                     integrator,
                     about: a.about.unwrap_or_default(),
@@ -859,42 +830,6 @@ impl Cx<'_> {
             );
         }
         out
-    }
-
-    /// `(t_end, step)` of an analysis: both required, except that `static` defaults to one
-    /// equilibrium at `t_start` and `modes` is at `t_start` and takes neither.
-    fn span(&mut self, path: &str, a: &AnalysisSpec, t0: Option<f64>) -> Option<(f64, f64)> {
-        let kind = a.kind;
-        if kind == AnalysisKind::Modes {
-            for (field, given) in [("t_end", a.t_end.is_some()), ("step", a.step.is_some())] {
-                if given {
-                    self.problem(
-                        format!("{path}.{field}"),
-                        "a modes analysis is at one time (t_start); remove t_end and step",
-                    );
-                }
-            }
-            return if a.t_end.is_some() || a.step.is_some() { None } else { Some((t0?, 1.0)) };
-        }
-        let t1 = match a.t_end {
-            Some(t) => self.finite(&format!("{path}.t_end"), t),
-            None if kind == AnalysisKind::Static && a.step.is_none() => return Some((t0?, 1.0)),
-            None => {
-                self.problem(
-                    format!("{path}.t_end"),
-                    format!("required: the end time of the {} analysis, s", kind.name()),
-                );
-                None
-            }
-        };
-        let h = match a.step {
-            Some(h) => self.positive(&format!("{path}.step"), h),
-            None => {
-                self.problem(format!("{path}.step"), "required: the output step, s");
-                None
-            }
-        };
-        Some((t1?, h?))
     }
 
     /// The indices into `known` (the model's `section`: drivers or forces) of the names an
@@ -926,102 +861,327 @@ impl Cx<'_> {
             })
             .collect()
     }
+}
 
-    /// The integrator and its settings; each given tolerance and step must be positive.
-    fn integrator(&mut self, path: &str, a: &AnalysisSpec) -> Option<IntegratorSettings> {
-        let s = &a.solver;
+/// The analysis `base` of a compiled model with the fields `changes` gives: an entry of the model
+/// file's `analyses:` of `base`'s type and start, whose `t_end`, `step`, `integrator` and `solver`
+/// are read (its `drivers`, `forces` and `about` are not). Checked as the file's own entries
+/// are, each problem at its path in the file (`analyses.<name>.t_end`). Another integrator
+/// returns the settings that belong to `base`'s (`max_order`, `alpha`, `formulation`) to their
+/// defaults; the tolerances, steps and step budget carry over.
+pub(crate) fn revise(base: &Analysis, changes: &AnalysisSpec) -> Result<Analysis, Vec<Problem>> {
+    debug_assert!(changes.kind == base.kind && changes.t_start == base.t_start, "a change of type or start");
+    let mut integrator = base.integrator;
+    if let Some(kind) = changes.integrator.filter(|&k| k != base.integrator.kind) {
         let d = IntegratorSettings::default();
-        let kind = a.integrator.unwrap_or(d.kind);
-        let spath = format!("{path}.solver");
-        let mut ok = true;
-        let mut pos = |cx: &mut Self, field: &str, v: Option<f64>| -> Option<f64> {
-            let v = v?;
-            let r = cx.positive(&format!("{spath}.{field}"), v);
-            ok &= r.is_some();
-            r
-        };
-        let rtol = pos(self, "rtol", s.rtol).unwrap_or(d.rtol);
-        let atol = pos(self, "atol", s.atol).unwrap_or(d.atol);
-        let initial_step = pos(self, "initial_step", s.initial_step);
-        let max_step = pos(self, "max_step", s.max_step);
-        if rtol < 1e-14 && ok {
-            self.problem(format!("{spath}.rtol"), format!("expected at least 1e-14 (double precision), found {rtol}"));
-            ok = false;
-        }
-        let bound = IntegratorSettings::order_bound(kind);
-        if let Some(k) = s.max_order {
-            if kind == IntegratorKind::Hht {
-                self.problem(format!("{spath}.max_order"), "hht has a fixed order (2); max_order is for bdf and abam");
-                ok = false;
-            } else if k == 0 || k > bound {
-                self.problem(
-                    format!("{spath}.max_order"),
-                    format!("expected 1 to {bound} for {}, found {k}", kind.name()),
-                );
-                ok = false;
-            }
-        }
-        let alpha = match s.alpha {
-            Some(al) if kind != IntegratorKind::Hht => {
-                self.problem(format!("{spath}.alpha"), format!("alpha ({al}) is a setting of hht only"));
-                ok = false;
-                d.alpha
-            }
-            Some(al) if !(-1.0 / 3.0 - 1e-12..=0.0).contains(&al) => {
-                self.problem(format!("{spath}.alpha"), format!("expected alpha in [-1/3, 0], found {al}"));
-                ok = false;
-                d.alpha
-            }
-            Some(al) => al,
-            None => d.alpha,
-        };
-        if s.formulation.is_some() && kind != IntegratorKind::Bdf {
-            self.problem(format!("{spath}.formulation"), "formulation is a setting of bdf only");
-            ok = false;
-        }
-        let formulation = s.formulation.unwrap_or(d.formulation);
-        ok.then_some(IntegratorSettings {
+        integrator = IntegratorSettings {
             kind,
-            rtol,
-            atol,
-            initial_step,
-            max_step,
-            max_order: s.max_order,
-            alpha,
-            formulation,
-            fixed_step: None,
-            max_steps: d.max_steps,
-        })
+            max_order: d.max_order,
+            alpha: d.alpha,
+            formulation: d.formulation,
+            fixed_step: d.fixed_step,
+            ..base.integrator
+        };
+    }
+    let fallback = Fallback { t_end: Some(base.t_end), step: Some(base.step), settings: base.settings, integrator };
+    let mut problems = Vec::new();
+    match timing(&mut problems, &base.name, changes, &fallback) {
+        Some(Timing { t_start, t_end, step, settings, integrator }) if problems.is_empty() => {
+            Ok(Analysis { t_start, t_end, step, settings, integrator, ..base.clone() })
+        }
+        _ => Err(problems),
+    }
+}
+
+/// What an analysis has where its entry leaves a field out: the engine's defaults for an entry
+/// of a model file (which must give `t_end` and `step`), the compiled analysis for
+/// [`revise`].
+struct Fallback {
+    t_end: Option<f64>,
+    step: Option<f64>,
+    settings: SolverSettings,
+    integrator: IntegratorSettings,
+}
+
+impl Fallback {
+    fn file() -> Fallback {
+        Fallback {
+            t_end: None,
+            step: None,
+            settings: SolverSettings::default(),
+            integrator: IntegratorSettings::default(),
+        }
+    }
+}
+
+/// The times and solver settings of a compiled analysis.
+struct Timing {
+    t_start: f64,
+    t_end: f64,
+    step: f64,
+    settings: SolverSettings,
+    integrator: IntegratorSettings,
+}
+
+/// The times and solver settings of the analysis `name` from its entry `a`, each field it
+/// leaves out taken from `base`; `None` after a problem (every one is added to `problems`, at
+/// `analyses.<name>.<field>`).
+fn timing(problems: &mut Vec<Problem>, name: &str, a: &AnalysisSpec, base: &Fallback) -> Option<Timing> {
+    let path = format!("analyses.{name}");
+    let t0 = finite(problems, &format!("{path}.t_start"), a.t_start);
+    let span = span(problems, &path, a, base, t0);
+    let settings = solver_settings(problems, &format!("{path}.solver"), &a.solver, &base.settings);
+    let integrator = integrator(problems, &path, name, a, &base.integrator);
+    let (t0, (t1, h)) = (t0?, span?);
+    if t1 < t0 {
+        problems.push(Problem::new(format!("{path}.t_end"), format!("t_end ({t1}) is before t_start ({t0})")));
+        return None;
+    }
+    if let Some(message) = output_step_problem(t0, t1, h) {
+        problems.push(Problem::new(format!("{path}.step"), message));
+        return None;
+    }
+    Some(Timing { t_start: t0, t_end: t1, step: h, settings: settings?, integrator: integrator? })
+}
+
+/// `(t_end, step)` of the analysis at `path`: both required (unless `base` has them), except
+/// that `static` defaults to one equilibrium at `t_start` and `modes` is at `t_start` and takes
+/// neither.
+fn span(
+    problems: &mut Vec<Problem>,
+    path: &str,
+    a: &AnalysisSpec,
+    base: &Fallback,
+    t0: Option<f64>,
+) -> Option<(f64, f64)> {
+    let kind = a.kind;
+    if kind == AnalysisKind::Modes {
+        for (field, given) in [("t_end", a.t_end.is_some()), ("step", a.step.is_some())] {
+            if given {
+                problems.push(Problem::new(
+                    format!("{path}.{field}"),
+                    "a modes analysis is at one time (t_start); remove t_end and step",
+                ));
+            }
+        }
+        return if a.t_end.is_some() || a.step.is_some() { None } else { Some((t0?, 1.0)) };
+    }
+    let t1 = match (a.t_end, base.t_end) {
+        (Some(t), _) => finite(problems, &format!("{path}.t_end"), t),
+        (None, Some(t)) => Some(t),
+        (None, None) if kind == AnalysisKind::Static && a.step.is_none() => return Some((t0?, 1.0)),
+        (None, None) => {
+            problems.push(Problem::new(
+                format!("{path}.t_end"),
+                format!("required: the end time of the {} analysis, s", kind.name()),
+            ));
+            None
+        }
+    };
+    let h = match (a.step, base.step) {
+        (Some(h), _) => positive(problems, &format!("{path}.step"), h),
+        (None, Some(h)) => Some(h),
+        (None, None) => {
+            problems.push(Problem::new(format!("{path}.step"), "required: the output step, s"));
+            None
+        }
+    };
+    Some((t1?, h?))
+}
+
+/// The integrator of the analysis `name` at `path` and its settings, each left out taken from
+/// `base`: only a dynamic analysis names one or gives its settings, each given tolerance and
+/// step must be positive, and each setting must belong to the integrator.
+fn integrator(
+    problems: &mut Vec<Problem>,
+    path: &str,
+    name: &str,
+    a: &AnalysisSpec,
+    base: &IntegratorSettings,
+) -> Option<IntegratorSettings> {
+    let s = &a.solver;
+    let spath = format!("{path}.solver");
+    if a.kind != AnalysisKind::Dynamic {
+        let given = [
+            (format!("{path}.integrator"), a.integrator.is_some()),
+            (format!("{spath}.rtol"), s.rtol.is_some()),
+            (format!("{spath}.atol"), s.atol.is_some()),
+            (format!("{spath}.initial_step"), s.initial_step.is_some()),
+            (format!("{spath}.max_step"), s.max_step.is_some()),
+            (format!("{spath}.max_order"), s.max_order.is_some()),
+            (format!("{spath}.alpha"), s.alpha.is_some()),
+            (format!("{spath}.formulation"), s.formulation.is_some()),
+        ];
+        let mut ok = true;
+        for (field, _) in given.into_iter().filter(|(_, given)| *given) {
+            let message = format!("only a dynamic analysis has an integrator; '{name}' is {}", a.kind.name());
+            problems.push(Problem::new(field, message));
+            ok = false;
+        }
+        return ok.then_some(*base);
+    }
+    let kind = a.integrator.unwrap_or(base.kind);
+    let mut ok = true;
+    let mut pos = |problems: &mut Vec<Problem>, field: &str, v: Option<f64>| -> Option<f64> {
+        let r = positive(problems, &format!("{spath}.{field}"), v?);
+        ok &= r.is_some();
+        r
+    };
+    let rtol = pos(problems, "rtol", s.rtol).unwrap_or(base.rtol);
+    let atol = pos(problems, "atol", s.atol).unwrap_or(base.atol);
+    let initial_step = pos(problems, "initial_step", s.initial_step).or(base.initial_step);
+    let max_step = pos(problems, "max_step", s.max_step).or(base.max_step);
+    let bound = IntegratorSettings::order_bound(kind);
+    if let Some(k) = s.max_order {
+        if kind == IntegratorKind::Hht {
+            problems.push(Problem::new(
+                format!("{spath}.max_order"),
+                "hht has a fixed order (2); max_order is for bdf and abam",
+            ));
+            ok = false;
+        } else if k == 0 || k > bound {
+            problems.push(Problem::new(
+                format!("{spath}.max_order"),
+                format!("expected 1 to {bound} for {}, found {k}", kind.name()),
+            ));
+            ok = false;
+        }
+    }
+    let alpha = match s.alpha {
+        Some(al) if kind != IntegratorKind::Hht => {
+            problems.push(Problem::new(format!("{spath}.alpha"), format!("alpha ({al}) is a setting of hht only")));
+            ok = false;
+            base.alpha
+        }
+        Some(al) if !(-1.0 / 3.0 - 1e-12..=0.0).contains(&al) => {
+            problems.push(Problem::new(format!("{spath}.alpha"), format!("expected alpha in [-1/3, 0], found {al}")));
+            ok = false;
+            base.alpha
+        }
+        Some(al) => al,
+        None => base.alpha,
+    };
+    if s.formulation.is_some() && kind != IntegratorKind::Bdf {
+        problems.push(Problem::new(format!("{spath}.formulation"), "formulation is a setting of bdf only"));
+        ok = false;
+    }
+    ok.then_some(IntegratorSettings {
+        kind,
+        rtol,
+        atol,
+        initial_step,
+        max_step,
+        max_order: s.max_order.or(base.max_order),
+        alpha,
+        formulation: s.formulation.unwrap_or(base.formulation),
+        ..*base
+    })
+}
+
+/// The position solver's settings at `path`, each left out taken from `base`.
+fn solver_settings(
+    problems: &mut Vec<Problem>,
+    path: &str,
+    s: &SolverSpec,
+    base: &SolverSettings,
+) -> Option<SolverSettings> {
+    let mut ok = true;
+    let mut pos = |problems: &mut Vec<Problem>, field: &str, v: Option<f64>, default: f64| -> f64 {
+        match v {
+            Some(v) => positive(problems, &format!("{path}.{field}"), v).unwrap_or_else(|| {
+                ok = false;
+                default
+            }),
+            None => default,
+        }
+    };
+    let tolerance = pos(problems, "tolerance", s.tolerance, base.tolerance);
+    let max_rotation = pos(problems, "max_rotation", s.max_rotation, base.max_rotation);
+    let min_substep = pos(problems, "min_substep", s.min_substep, base.min_substep);
+    let singular_condition = pos(problems, "singular_condition", s.singular_condition, base.singular_condition);
+    let max_iterations = s.max_iterations.unwrap_or(base.max_iterations);
+    if max_iterations == 0 || max_iterations > 1000 {
+        problems.push(Problem::new(
+            format!("{path}.max_iterations"),
+            format!("expected 1 to 1000 iterations, found {max_iterations}"),
+        ));
+        ok = false;
+    }
+    if min_substep >= 1.0 {
+        problems.push(Problem::new(format!("{path}.min_substep"), "expected a fraction of the output step below 1"));
+        ok = false;
+    }
+    ok.then_some(SolverSettings { tolerance, max_iterations, max_rotation, min_substep, singular_condition })
+}
+
+/// `v`, or a problem at `path` when it is not finite.
+fn finite(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f64> {
+    if v.is_finite() {
+        Some(v)
+    } else {
+        problems.push(Problem::new(path, format!("expected a finite number, found {v}")));
+        None
+    }
+}
+
+/// `v`, or a problem at `path` when it is not a finite number above zero.
+fn positive(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f64> {
+    let v = finite(problems, path, v)?;
+    if v > 0.0 {
+        Some(v)
+    } else {
+        problems.push(Problem::new(path, format!("expected a positive number, found {v}")));
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::model::Model;
+    use crate::Error;
+
+    /// A pendulum with the analyses `analyses` (YAML flow mappings, one a line).
+    fn pendulum(analyses: &str) -> Result<Model, Error> {
+        Model::from_yaml(&format!(
+            "bodies:\n  p: {{mass: 1, inertia: 0.1, position: [1, 0], angle: 0, points: {{o: [-1, 0]}}}}\n\
+             joints:\n  o: {{type: revolute, body_i: p, point_i: o, body_j: ground, point_j: [0, 0]}}\n\
+             analyses:\n{analyses}"
+        ))
     }
 
-    fn settings(&mut self, path: &str, s: &super::spec::SolverSpec) -> Option<SolverSettings> {
-        let d = SolverSettings::default();
-        let mut ok = true;
-        let mut pos = |cx: &mut Self, field: &str, v: Option<f64>, default: f64| -> f64 {
-            match v {
-                Some(v) => cx.positive(&format!("{path}.{field}"), v).unwrap_or_else(|| {
-                    ok = false;
-                    default
-                }),
-                None => default,
-            }
-        };
-        let tolerance = pos(self, "tolerance", s.tolerance, d.tolerance);
-        let max_rotation = pos(self, "max_rotation", s.max_rotation, d.max_rotation);
-        let min_substep = pos(self, "min_substep", s.min_substep, d.min_substep);
-        let singular_condition = pos(self, "singular_condition", s.singular_condition, d.singular_condition);
-        let max_iterations = s.max_iterations.unwrap_or(d.max_iterations);
-        if max_iterations == 0 || max_iterations > 1000 {
-            self.problem(
-                format!("{path}.max_iterations"),
-                format!("expected 1 to 1000 iterations, found {max_iterations}"),
-            );
-            ok = false;
+    fn problems(analyses: &str) -> Vec<String> {
+        match pendulum(analyses) {
+            Err(Error::Model(p)) => p.iter().map(|p| p.to_string()).collect(),
+            other => panic!("expected a model error, found {other:?}"),
         }
-        if min_substep >= 1.0 {
-            self.problem(format!("{path}.min_substep"), "expected a fraction of the output step below 1");
-            ok = false;
+    }
+
+    /// The settings of an integrator belong to a dynamic analysis, as the integrator does (a
+    /// kinematic analysis ignored an `rtol` before, while it refused an `integrator`).
+    #[test]
+    fn dynamics_settings_belong_to_a_dynamic_analysis() {
+        let p = problems("  s: {type: static, integrator: hht, solver: {rtol: 1e-3, formulation: index3}}\n");
+        let only = "only a dynamic analysis has an integrator; 's' is static";
+        for field in ["analyses.s.integrator", "analyses.s.solver.rtol", "analyses.s.solver.formulation"] {
+            assert!(p.contains(&format!("{field}: {only}")), "{field}: {p:?}");
         }
-        ok.then_some(SolverSettings { tolerance, max_iterations, max_rotation, min_substep, singular_condition })
+        assert_eq!(p.len(), 3, "{p:?}");
+    }
+
+    /// An `rtol` below what round-off resolves is raised to it with a warning when the analysis
+    /// runs, in the file as in an override (the file refused one below `1e-14` before).
+    #[test]
+    fn a_tolerance_below_round_off_compiles() {
+        let model = pendulum("  d: {type: dynamic, t_end: 1, step: 0.1, solver: {rtol: 1e-16}}\n").unwrap();
+        assert_eq!(model.analyses["d"].integrator.rtol, 1e-16);
+    }
+
+    /// Every problem of an analysis is reported, not only the first: a bad tolerance does not
+    /// hide an end time before the start.
+    #[test]
+    fn every_problem_of_an_analysis_is_reported() {
+        let p = problems("  d: {type: dynamic, t_start: 1, t_end: 0.5, step: 0.1, solver: {atol: 0}}\n");
+        assert!(p.iter().any(|p| p == "analyses.d.t_end: t_end (0.5) is before t_start (1)"), "{p:?}");
+        assert!(p.iter().any(|p| p == "analyses.d.solver.atol: expected a positive number, found 0"), "{p:?}");
     }
 }

@@ -1,15 +1,17 @@
 //! Model files: schema ([`spec`]), reading with every problem located ([`parse_partial`]), and
-//! compilation into an indexed, immutable [`Model`] ([`compile_partial`]).
+//! compilation into an indexed, immutable [`Model`] ([`compile_partial`]), whose analyses carry
+//! the compiled form of their `solver:` section ([`SolverSettings`], [`IntegratorSettings`]).
 
 mod compile;
 mod parse;
+mod settings;
 pub mod spec;
 
-pub(crate) use compile::output_step_problem;
+pub(crate) use compile::revise;
 pub use compile::{compile, compile_partial};
 pub use parse::{parse_partial, parse_spec, Parsed};
+pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
 
-use crate::analysis::{IntegratorSettings, SolverSettings};
 use crate::constraints::Constraint;
 use crate::error::{Error, Result};
 use crate::forces::{Force, StateExpr};

@@ -755,7 +755,7 @@ pub enum LinearisePoint {
 }
 
 /// Settings of the position solver (assembly and kinematics). Defaults and their reasons are in
-/// `docs/kinematics.md` and on [`crate::analysis::SolverSettings`].
+/// `docs/kinematics.md` and on [`crate::model::SolverSettings`].
 #[derive(Debug, Clone, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SolverSpec {

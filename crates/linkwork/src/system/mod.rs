@@ -4,6 +4,7 @@
 
 use crate::constraints::{Config, Constraint};
 use crate::error::{Error, RowName};
+use crate::linalg::Pattern;
 use crate::model::{Element, Model};
 use faer::MatMut;
 
@@ -132,6 +133,37 @@ impl<'m> System<'m> {
         Some(Error::NonFinite { time: t, element: format!("{section}.{}", e.name), expression, value: v[row] })
     }
 
+    /// The compressed-column pattern of the rows `selected` (ascending) of `Phi_q`, renumbered
+    /// `0..selected.len()`; its map goes from each entry of each element's Jacobian block (in
+    /// block order, as [`System::entries`]) to its value, for [`System::fill_jacobian`].
+    pub fn pattern(&self, selected: &[usize]) -> Pattern {
+        let mut local = vec![None; self.m];
+        for (k, &r) in selected.iter().enumerate() {
+            local[r] = Some(k);
+        }
+        let entries = self.entries().into_iter().map(|(row, col)| local[row].map(|r| (r, col)));
+        Pattern::new(selected.len(), self.n, entries)
+    }
+
+    /// `(q, t) => Phi_q` values in `pattern` (from [`System::pattern`]), `values: (nnz)`.
+    pub fn fill_jacobian(&mut self, pattern: &Pattern, q: &Config<'_>, t: f64, values: &mut [f64]) {
+        values.fill(0.0);
+        let mut k = 0;
+        let Self { elements, block, .. } = self;
+        for e in elements.iter() {
+            let c = e.constraint.as_ref();
+            let len = c.rows() * c.columns().len();
+            let block = &mut block[..len];
+            c.jacobian(q, t, block);
+            for (&pos, &v) in pattern.map[k..k + len].iter().zip(block.iter()) {
+                if pos != usize::MAX {
+                    values[pos] += v;
+                }
+            }
+            k += len;
+        }
+    }
+
     /// The row with the largest absolute value of `v (m)`, and that value.
     pub fn worst_row(&self, v: &[f64]) -> (RowName, f64) {
         let (k, x) = v
@@ -139,73 +171,5 @@ impl<'m> System<'m> {
             .enumerate()
             .fold((0, 0.0f64), |(bk, bx), (k, x)| if x.abs() > bx { (k, x.abs()) } else { (bk, bx) });
         (self.row_name(k), x)
-    }
-}
-
-/// A compressed-column pattern of `Phi_q` restricted to chosen rows, fixed for an analysis, and
-/// the map from each element's Jacobian block entries to positions in the value array.
-#[derive(Debug, Clone)]
-pub struct Pattern {
-    /// (n + 1) column pointers.
-    pub col_ptr: Vec<usize>,
-    /// (nnz) row index of each value, in the renumbered (selected) rows.
-    pub row_idx: Vec<usize>,
-    /// (sum of block sizes) value position of each block entry, or `usize::MAX` for unselected rows.
-    pub(crate) map: Vec<usize>,
-    /// Number of selected rows.
-    pub nrows: usize,
-}
-
-impl Pattern {
-    /// Pattern of the rows `selected` (global row indices, ascending) of `sys`.
-    pub fn new(sys: &System<'_>, selected: &[usize]) -> Pattern {
-        let mut local = vec![usize::MAX; sys.m];
-        for (k, &r) in selected.iter().enumerate() {
-            local[r] = k;
-        }
-        // (column, local row) of every block entry, in block order.
-        let mut entries = Vec::new();
-        for (c, rows) in sys.constraints() {
-            for row in rows {
-                for &col in c.columns() {
-                    entries.push((col, local[row]));
-                }
-            }
-        }
-        let mut sorted: Vec<(usize, usize)> = entries.iter().copied().filter(|e| e.1 != usize::MAX).collect();
-        sorted.sort_unstable();
-        sorted.dedup();
-        let mut col_ptr = vec![0; sys.n + 1];
-        for &(c, _) in &sorted {
-            col_ptr[c + 1] += 1;
-        }
-        for c in 0..sys.n {
-            col_ptr[c + 1] += col_ptr[c];
-        }
-        let row_idx = sorted.iter().map(|e| e.1).collect();
-        let map = entries
-            .iter()
-            .map(|e| if e.1 == usize::MAX { usize::MAX } else { sorted.binary_search(e).unwrap_or(usize::MAX) })
-            .collect();
-        Pattern { col_ptr, row_idx, map, nrows: selected.len() }
-    }
-
-    /// `(q, t) => Phi_q` values in this pattern, `values: (nnz)`.
-    pub fn fill(&self, sys: &mut System<'_>, q: &Config<'_>, t: f64, values: &mut [f64]) {
-        values.fill(0.0);
-        let mut k = 0;
-        let System { elements, block, .. } = sys;
-        for e in elements.iter() {
-            let c = e.constraint.as_ref();
-            let len = c.rows() * c.columns().len();
-            let block = &mut block[..len];
-            c.jacobian(q, t, block);
-            for (&pos, &v) in self.map[k..k + len].iter().zip(block.iter()) {
-                if pos != usize::MAX {
-                    values[pos] += v;
-                }
-            }
-            k += len;
-        }
     }
 }

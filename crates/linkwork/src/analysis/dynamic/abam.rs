@@ -83,8 +83,8 @@ use super::{
 };
 use crate::analysis::RANK_TOLERANCE;
 use crate::error::Error;
+use crate::linalg::Pattern;
 use crate::linalg::SparseLu;
-use crate::system::Pattern;
 
 /// Newton iterations for the dependent coordinates before the attempt fails. The iteration uses
 /// the factors of `B` at the accepted state (a chord method, linear convergence at a rate of the

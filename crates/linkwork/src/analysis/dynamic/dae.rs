@@ -31,9 +31,9 @@
 use crate::constraints::{Anchor, BodyIx, Config};
 use crate::error::Error;
 use crate::forces::{derivatives, potential_rate, DualWork};
-use crate::linalg::{FactorError, SparseLu};
+use crate::linalg::{FactorError, Pattern, SparseLu};
 use crate::model::{ForceElement, Model};
-use crate::system::{Pattern, System};
+use crate::system::System;
 use faer::MatMut;
 
 /// Regularisation of the constraint block, relative to `1 / max mass` (see the module docs).
@@ -54,35 +54,26 @@ struct Kkt {
 impl Kkt {
     fn new(n: usize, m: usize, entries: &[(usize, usize)], force_cols: &[&[usize]]) -> Result<Kkt, FactorError> {
         let dim = n + m;
-        // (column, row) of every structural entry.
-        let mut all: Vec<(usize, usize)> = (0..dim).map(|k| (k, k)).collect();
-        for &(r, c) in entries {
-            all.push((c, n + r));
-            all.push((n + r, c));
-        }
-        for cols in force_cols {
-            for &r in cols.iter() {
-                all.extend(cols.iter().map(|&c| (c, r)));
-            }
-        }
-        all.sort_unstable();
-        all.dedup();
-        let mut col_ptr = vec![0; dim + 1];
-        for &(c, _) in &all {
-            col_ptr[c + 1] += 1;
-        }
-        for c in 0..dim {
-            col_ptr[c + 1] += col_ptr[c];
-        }
-        let row_idx = all.iter().map(|e| e.1).collect();
-        let pos = |col: usize, row: usize| all.binary_search(&(col, row)).unwrap_or(usize::MAX);
-        let diag = (0..dim).map(|k| pos(k, k)).collect();
-        let jac = entries.iter().map(|&(r, c)| (pos(c, n + r), pos(n + r, c))).collect();
+        // `(row, column)` of every structural entry, in this order: the diagonal, each entry of
+        // `Phi_q` (row `n + r`) and its transpose, each force's block row by row.
+        let diag = (0..dim).map(|k| (k, k));
+        let jac = entries.iter().flat_map(|&(r, c)| [(n + r, c), (c, n + r)]);
+        let forces =
+            force_cols.iter().flat_map(|cols| cols.iter().flat_map(move |&r| cols.iter().map(move |&c| (r, c))));
+        let pattern = Pattern::new(dim, dim, diag.chain(jac).chain(forces).map(Some));
+        let (diag, rest) = pattern.map.split_at(dim);
+        let (jac, mut rest) = rest.split_at(2 * entries.len());
+        let jac = jac.chunks(2).map(|p| (p[0], p[1])).collect();
         let forces = force_cols
             .iter()
-            .map(|cols| cols.iter().flat_map(|&r| cols.iter().map(move |&c| (c, r))).map(|(c, r)| pos(c, r)).collect())
+            .map(|cols| {
+                let (block, tail) = rest.split_at(cols.len() * cols.len());
+                rest = tail;
+                block.to_vec()
+            })
             .collect();
-        let lu = SparseLu::new(Pattern { col_ptr, row_idx, map: vec![], nrows: dim })?;
+        let diag = diag.to_vec();
+        let lu = SparseLu::new(pattern)?;
         Ok(Kkt { lu, diag, jac, forces })
     }
 

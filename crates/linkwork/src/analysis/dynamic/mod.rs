@@ -29,29 +29,24 @@ pub mod hht;
 #[cfg(test)]
 mod order_tests;
 mod output;
-mod settings;
 
+pub use crate::model::spec::{Formulation, IntegratorKind};
 pub use dae::{Dae, LinearStats, EPS_REL};
 pub use output::{factor_error, Output, ENERGY_COLUMNS};
-pub use settings::{Formulation, IntegratorKind, IntegratorSettings};
 
 use super::{assemble, independent_rows};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, RowName};
-use crate::model::{Analysis, Model};
+use crate::model::{Analysis, IntegratorSettings, Model};
 use crate::results::{Failure, Results};
 use faer::Mat;
 use serde_json::json;
 
-/// The most steps one analysis may take before it stops with an error, so that no input can keep
-/// the program busy for hours: 5 million steps of a small model take about a minute.
-pub const MAX_STEPS: usize = 5_000_000;
-
 /// The smallest step an integrator may take at `t` in a run of length `span`, s: 16 units of
 /// round-off of the time, below which `t + h` no longer differs from `t` in a useful way.
-/// When `steps` has used up the budget (`settings.max_steps`, by default [`MAX_STEPS`]) the run
-/// stops, with the cause [`step_failure`] sees at `(q, t)` (a force or driver singular in time, a
-/// singular position), else naming the tolerances of `settings` that asked for so many steps.
+/// When `steps` has used up the budget (`settings.max_steps`, by default
+/// [`crate::model::MAX_STEPS`]) the run stops, with the cause [`step_failure`] sees at `(q, t)`
+/// (a force or driver singular in time, a singular position), else naming the tolerances of `settings` that asked for so many steps.
 pub fn min_step(
     dae: &mut Dae<'_>,
     q: &[f64],
@@ -470,7 +465,21 @@ pub type Outcome = (DynamicStats, Result<(), Error>);
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::FactorError;
+    use crate::model::MAX_STEPS;
     use crate::Model;
+
+    /// Memory running out in a factorization is its own error, with its time, and the summary
+    /// says when (it was a file error with no path, so Python raised `FileError`).
+    #[test]
+    fn out_of_memory_is_its_own_error() {
+        let e = factor_error(FactorError::OutOfMemory, 0.25);
+        assert!(matches!(e, Error::OutOfMemory { time, .. } if time == 0.25), "{e:?}");
+        assert_eq!(e.to_string(), "out of memory while factorizing at t = 0.25 s");
+        let model = Model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/fourbar.yaml")).unwrap();
+        let summary = Results::of_model(&model).summary_json(Some(&e));
+        assert_eq!(summary["error_time"], 0.25);
+    }
 
     /// The quintic Hermite interpolant reproduces a quintic polynomial and its derivative
     /// exactly (to rounding), from values, first and second derivatives at both ends.

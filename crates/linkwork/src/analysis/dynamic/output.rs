@@ -164,6 +164,6 @@ pub fn factor_error(e: FactorError, t: f64) -> Error {
                 "the equations of motion do not determine coordinate {column}: a body with no mass or inertia in a direction no joint fixes"
             ),
         },
-        FactorError::OutOfMemory => Error::Io { path: String::new(), message: "out of memory while factorizing".into() },
+        FactorError::OutOfMemory => Error::OutOfMemory { time: t, what: "while factorizing".into() },
     }
 }

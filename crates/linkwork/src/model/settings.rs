@@ -1,6 +1,48 @@
-//! Settings of the dynamic integrators, each default with its reason.
+//! The compiled form of an analysis' `solver:` section: the settings of the position solver and
+//! of the dynamic integrators, each default with its reason.
 
-pub use crate::model::spec::{Formulation, IntegratorKind};
+use super::spec::{Formulation, IntegratorKind};
+
+/// Settings of the position solver, with the reason for each default.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct SolverSettings {
+    /// Newton has converged when the max-norm of `Phi` is below this, m or rad. Default `1e-12`:
+    /// about 1000 ulps of a metre-sized mechanism, so that positions are good to about ten digits
+    /// after the Jacobian's amplification, and still reachable in double precision.
+    pub tolerance: f64,
+    /// Newton iterations per attempt before a sub-step is halved. Default 12: from a
+    /// second-order predictor Newton needs 2 to 4; more means the step left the branch.
+    pub max_iterations: usize,
+    /// Largest rotation of any body within one sub-step, rad. Default 0.35: the predictor's error
+    /// is then about `0.35^3 / 6 ~ 7e-3` rad, well inside Newton's region of convergence, so the
+    /// solution cannot jump to the other assembly branch; 0.2 cost 40% more time on the
+    /// quick-return benchmark with the same results (`docs/performance.md`).
+    pub max_rotation: f64,
+    /// Smallest sub-step, as a fraction of the output step, before the analysis gives up.
+    /// Default `1e-8` (27 halvings): a mechanism that needs more is at a singular position, and
+    /// stopping this close to it makes the singular value that proves it small (`~sqrt(1e-8)`).
+    pub min_substep: f64,
+    /// 1-norm condition estimate of the driven Jacobian above which a position counts as
+    /// singular. Default `1e10`: velocities and accelerations would lose more than ten of
+    /// sixteen digits.
+    pub singular_condition: f64,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings {
+            tolerance: 1e-12,
+            max_iterations: 12,
+            max_rotation: 0.35,
+            min_substep: 1e-8,
+            singular_condition: 1e10,
+        }
+    }
+}
+
+/// The most steps one analysis may take before it stops with an error, so that no input can keep
+/// the program busy for hours: 5 million steps of a small model take about a minute.
+pub const MAX_STEPS: usize = 5_000_000;
 
 /// Settings of a dynamic analysis' integrator.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -15,8 +57,8 @@ pub struct IntegratorSettings {
     /// micrometre on a metre-sized machine; it governs coordinates that pass through zero.
     pub atol: f64,
     /// First step, s. Default: the time in which the state changes by about 1% (Hairer,
-    /// Norsett and Wanner's starting step, [`super::step_bounds`]), shrunk by the error test if
-    /// too large.
+    /// Norsett and Wanner's starting step, computed by the integrators at the start), shrunk by
+    /// the error test if too large.
     pub initial_step: Option<f64>,
     /// Largest step, s. Default: the run's length. The output step does not limit it: each
     /// integrator interpolates at its own order between its steps, so a fine output grid costs
@@ -40,7 +82,7 @@ pub struct IntegratorSettings {
     #[serde(skip)]
     pub(crate) fixed_step: Option<f64>,
     /// The step budget: the most steps the run may take before it stops with an error. Default
-    /// [`super::MAX_STEPS`], minutes of CPU at most. Not a model-file setting: a caller that must
+    /// [`MAX_STEPS`], minutes of CPU at most. Not a model-file setting: a caller that must
     /// have an answer sooner lowers it (the fuzz target, `fuzz/`, to keep an execution short).
     #[serde(skip)]
     pub max_steps: usize,
@@ -58,7 +100,7 @@ impl Default for IntegratorSettings {
             alpha: -0.3,
             formulation: Formulation::Si2,
             fixed_step: None,
-            max_steps: super::MAX_STEPS,
+            max_steps: MAX_STEPS,
         }
     }
 }

@@ -1,0 +1,103 @@
+//! The entry point of every analysis: the analysis a model names, with the changes of one run
+//! ([`Overrides`]) checked as the model file's own entries are, dispatched by its type, and the
+//! warnings about its tolerances added to its summary.
+
+use super::{dynamic, run_inverse, run_kinematic, run_modes, run_static, tolerance_warnings};
+use crate::error::{Error, Problem};
+use crate::model::spec::{AnalysisKind, AnalysisSpec, IntegratorKind, SolverSpec};
+use crate::model::{revise, Analysis, Model};
+use crate::results::{Failure, Results};
+use serde_json::{json, Value};
+
+/// Changes to an analysis for one run (the command line's `--integrator`, `--rtol`, `--atol`,
+/// `--t-end` and `--step`); `None` keeps the file's value.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Overrides {
+    /// The integrator of a dynamic analysis.
+    pub integrator: Option<IntegratorKind>,
+    /// Relative tolerance of a dynamic analysis.
+    pub rtol: Option<f64>,
+    /// Absolute tolerance of a dynamic analysis.
+    pub atol: Option<f64>,
+    /// End time, s.
+    pub t_end: Option<f64>,
+    /// Output step, s.
+    pub step: Option<f64>,
+}
+
+impl Overrides {
+    /// `analysis` with these changes, written into its entry of the model file and checked as
+    /// the file's own entries are; or every problem, each at the option that set its field.
+    fn apply(&self, analysis: &Analysis) -> Result<Analysis, Error> {
+        let changes = AnalysisSpec {
+            kind: analysis.kind,
+            drivers: None,
+            forces: None,
+            t_start: analysis.t_start,
+            t_end: self.t_end,
+            step: self.step,
+            about: None,
+            integrator: self.integrator,
+            solver: SolverSpec { rtol: self.rtol, atol: self.atol, ..Default::default() },
+        };
+        revise(analysis, &changes)
+            .map_err(|problems| Error::Model(problems.into_iter().map(|p| self.at_option(&analysis.name, p)).collect()))
+    }
+
+    /// A problem with a field of the analysis `name`, at the option that set the field.
+    fn at_option(&self, name: &str, problem: Problem) -> Problem {
+        let field = problem.path.strip_prefix(&format!("analyses.{name}.")).unwrap_or_default();
+        let option = match field {
+            "t_end" => "--t-end",
+            // The output grid: the step if it was given, else the end time that the file's step
+            // no longer fits (the file's own grid was checked when it compiled).
+            "step" if self.step.is_none() && self.t_end.is_some() => "--t-end",
+            "step" => "--step",
+            "integrator" => "--integrator",
+            "solver.rtol" => "--rtol",
+            "solver.atol" => "--atol",
+            _ => return problem,
+        };
+        Problem { path: option.into(), ..problem }
+    }
+}
+
+impl Model {
+    /// Run the analysis called `name`.
+    pub fn run(&self, name: &str) -> Result<Results, Box<Failure>> {
+        self.run_with(name, &Overrides::default())
+    }
+
+    /// Run the analysis called `name` with `overrides` applied.
+    pub fn run_with(&self, name: &str, overrides: &Overrides) -> Result<Results, Box<Failure>> {
+        let analysis = match self.analysis(name) {
+            Ok(a) => overrides.apply(a).map_err(|error| Box::new(Failure { error, results: Results::new(self, a) }))?,
+            Err(error) => return Err(Box::new(Failure { error, results: Results::of_model(self) })),
+        };
+        let mut outcome = match analysis.kind {
+            AnalysisKind::Kinematic => run_kinematic(self, &analysis),
+            AnalysisKind::Dynamic => dynamic::run_dynamic(self, &analysis),
+            AnalysisKind::Inverse => run_inverse(self, &analysis),
+            AnalysisKind::Static => run_static(self, &analysis),
+            AnalysisKind::Modes => run_modes(self, &analysis),
+        };
+        let results = match &mut outcome {
+            Ok(r) => r,
+            Err(f) => &mut f.results,
+        };
+        // The first output's positions (the assembled start), else the file's guess.
+        let q = self
+            .bodies
+            .iter()
+            .flat_map(|b| ["x", "y", "phi"].map(|c| results.column(&format!("{}.{c}", b.name))?.first().copied()))
+            .collect::<Option<Vec<f64>>>()
+            .unwrap_or_else(|| self.q0());
+        // The analysis's own warnings (a dynamic run's) follow the tolerances'.
+        let mut warnings = tolerance_warnings(&analysis, &q);
+        if let Some(Value::Array(own)) = results.summary.get("warnings") {
+            warnings.extend(own.iter().filter_map(|w| w.as_str().map(String::from)));
+        }
+        results.summary.insert("warnings".into(), json!(warnings));
+        outcome
+    }
+}
