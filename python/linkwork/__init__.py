@@ -31,6 +31,7 @@ from .errors import (
     LinkworkError,
     ModelError,
     NonFiniteError,
+    OutOfMemoryError,
     SingularError,
     SolverError,
 )
@@ -50,6 +51,7 @@ __all__ = [
     "Model",
     "ModelError",
     "NonFiniteError",
+    "OutOfMemoryError",
     "Results",
     "SingularError",
     "SolverError",

@@ -19,6 +19,7 @@ __all__ = [
     "LinkworkError",
     "ModelError",
     "NonFiniteError",
+    "OutOfMemoryError",
     "PyModel",
     "PyResults",
     "SingularError",
@@ -120,6 +121,8 @@ class NonFiniteError(SolverError):
     element: str
     expression: str
     value: float
+
+class OutOfMemoryError(SolverError, MemoryError): ...
 
 class FileError(LinkworkError, OSError):
     path: str
