@@ -241,15 +241,7 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
         ),
         Error::OutOfMemory { time, .. } => {
             let class = py.import("linkwork._linkwork")?.getattr(OUT_OF_MEMORY_ERROR)?;
-            (
-                PyErr::from_value(class.call1((message,))?),
-                vec![
-                    ("time", time.into_pyobject(py)?.into_any()),
-                    ("joints", joints.into_pyobject(py)?.into_any()),
-                    ("rows", Vec::<String>::new().into_pyobject(py)?.into_any()),
-                    ("results", results()?.into_bound(py)),
-                ],
-            )
+            (PyErr::from_value(class.call1((message,))?), failure(*time, vec![])?)
         }
         Error::Io { path, .. } => {
             let class = py.import("linkwork._linkwork")?.getattr(FILE_ERROR)?;
