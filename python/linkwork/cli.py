@@ -2,9 +2,11 @@
 
 ::
 
-    linkwork run MODEL [--analysis NAME] [--out DIR]   run an analysis, write results.csv and summary.json
+    linkwork run MODEL [--analysis NAME] [--out DIR]   run an analysis, write results.csv, summary.json,
+        [--no-report]                                  model.yaml and report.html (not with --no-report)
         [--integrator bdf|hht|abam] [--rtol R] [--atol A] [--t-end T] [--step H]
                                                        change the analysis for this run
+    linkwork report DIR                                rebuild DIR/report.html from the files of a run
     linkwork check MODEL [--json]                      degrees of freedom, redundant rows, assembly
     linkwork schema                                    the JSON Schema of model files
 
@@ -77,8 +79,9 @@ def _parser() -> argparse.ArgumentParser:
 
     run = commands.add_parser(
         "run",
-        help="run an analysis and write results.csv and summary.json",
-        description="Run an analysis of MODEL and write results.csv and summary.json into the output folder.",
+        help="run an analysis and write results.csv, summary.json, model.yaml and report.html",
+        description="Run an analysis of MODEL and write results.csv, summary.json, model.yaml (the model as run) "
+        "and report.html (the animated mechanism and its plots, opens offline) into the output folder.",
     )
     run.add_argument("model", metavar="MODEL", help="model file (YAML)")
     run.add_argument("--analysis", "-a", metavar="NAME", help="analysis to run (default: the first in the file)")
@@ -88,7 +91,17 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--atol", type=float, metavar="A", help="absolute error tolerance of a dynamic analysis")
     run.add_argument("--t-end", type=float, metavar="T", help="end time, s")
     run.add_argument("--step", type=float, metavar="H", help="output step, s")
+    run.add_argument("--no-report", action="store_true", help="do not write report.html")
     run.set_defaults(command=_run)
+
+    report = commands.add_parser(
+        "report",
+        help="rebuild report.html from a results folder",
+        description="Rebuild DIR/report.html from the files `linkwork run` wrote into DIR: model.yaml, "
+        "results.csv and summary.json.",
+    )
+    report.add_argument("folder", metavar="DIR", type=Path, help="a folder written by `linkwork run`")
+    report.set_defaults(command=_report)
 
     check = commands.add_parser(
         "check",
@@ -121,16 +134,26 @@ def _run(args: argparse.Namespace) -> int:
         partial = error.results
         if isinstance(partial, Results):
             try:
-                partial.write(out)
+                partial.write(out, report=not args.no_report)
             except FileError as write_error:
                 _err(f"error: the partial results could not be written: {write_error}")
                 return EXIT_SOLVER
             _err(f"partial results ({_span(partial)}) written to {_folder(out)} (status: failed)")
         return EXIT_SOLVER
-    results.write(out)
+    results.write(out, report=not args.no_report)
     _print_summary(results)
-    files = "results.csv, summary.json and modes.csv" if results.modes else "results.csv and summary.json"
-    print(f"wrote {_folder(out)}{files}")
+    files = ["results.csv", "summary.json", *(["modes.csv"] if results.modes else []), "model.yaml"]
+    files += [] if args.no_report else ["report.html"]
+    print(f"wrote {_folder(out)}{', '.join(files[:-1])} and {files[-1]}")
+    return EXIT_OK
+
+
+def _report(args: argparse.Namespace) -> int:
+    from . import report
+
+    folder: Path = args.folder
+    report.write(folder / "report.html", report.from_folder(folder))
+    print(f"wrote {folder / 'report.html'}")
     return EXIT_OK
 
 

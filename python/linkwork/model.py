@@ -44,6 +44,11 @@ class Model:
         return cls._wrap(_linkwork.PyModel.from_yaml(text))
 
     @property
+    def source(self) -> str:
+        """The text of the model file: what ``model.yaml`` in an output folder holds."""
+        return self._native.source
+
+    @property
     def name(self) -> str:
         """The model's title (``name:`` in the file)."""
         return self._native.name
@@ -86,6 +91,25 @@ class Model:
         report: dict[str, Any] = self._native.check()
         return report
 
+    def drawing(self) -> dict[str, Any]:
+        """The picture of the mechanism: ``bodies`` (each with ``name``, its named ``points`` and
+        its ``joint_points``, in its own frame, m) and ``joints`` (each with ``name``, ``type``,
+        ``body_i``, ``p``, ``body_j``, ``q`` and its ``shape``: ``pin``, ``slide`` with ``axis``
+        and ``offset``, ``rod``, ``gears`` with ``r_i``, ``r_j`` and ``internal``, ``disc`` with
+        ``axis`` and ``radius``, or ``held``)."""
+        return self._native.drawing()
+
+    def draw(self) -> Any:
+        """The assembled pose of the mechanism alone (its joints, no drivers), with the initial
+        guess of the file faded beside it, as a ``plotly`` figure (shown by a notebook)."""
+        from . import report
+
+        assembly = self.check()["mechanism"]["assembly"]
+        names = assembly_coordinates(self.bodies)
+        assembled = dict(zip(names, assembly["q"], strict=True))
+        guess = {n: q - dq for (n, q), dq in zip(assembled.items(), assembly["change"], strict=True)}
+        return report.figure(report.pose_figure(self.drawing(), [("initial guess", guess, 0.3), ("assembled", assembled, 1.0)]))
+
     def run(
         self,
         analysis: str | None = None,
@@ -121,10 +145,10 @@ class Model:
             if value is not None and not isinstance(value, numbers.Real):
                 raise model_error(option, f"expected a number, found {value!r} ({type(value).__name__})")
         try:
-            return Results(self._native.run(analysis, integrator, rtol, atol, t_end, step))
+            return Results(self._native.run(analysis, integrator, rtol, atol, t_end, step), self)
         except (SolverError, AssemblyError) as error:
             if isinstance(error.results, _linkwork.PyResults):
-                error.results = Results(error.results)
+                error.results = Results(error.results, self)
             raise
 
     def __repr__(self) -> str:
@@ -133,3 +157,8 @@ class Model:
             f"<linkwork.Model {self.name!r}{source}: {len(self.bodies)} bodies, "
             f"{len(self.joints)} joints, {len(self.drivers)} drivers, analyses {self.analyses}>"
         )
+
+
+def assembly_coordinates(bodies: list[str]) -> list[str]:
+    """The names of the coordinates in the engine's order: ``<body>.x, <body>.y, <body>.phi``."""
+    return [f"{b}.{c}" for b in bodies for c in ("x", "y", "phi")]

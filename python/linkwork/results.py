@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterator
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -12,6 +13,8 @@ from . import _linkwork
 
 if TYPE_CHECKING:
     import pandas
+
+    from .model import Model
 
 
 class Results:
@@ -28,10 +31,14 @@ class Results:
     linearised about) and its modes in :attr:`modes`.
     """
 
-    __slots__ = ("_columns", "_index", "_native", "_time", "_values")
+    __slots__ = ("_columns", "_index", "_native", "_time", "_values", "model")
 
-    def __init__(self, native: _linkwork.PyResults) -> None:
+    model: Model
+    """The model that was run."""
+
+    def __init__(self, native: _linkwork.PyResults, model: Model) -> None:
         self._native = native
+        self.model = model
         self._columns: list[str] = native.names
         self._index = {name: k for k, name in enumerate(self._columns)}
         # Copied out of the engine once; read-only so that every view stays true to the run.
@@ -127,10 +134,46 @@ class Results:
         index = pd.Index(self._time.copy(), name="time")
         return pd.DataFrame(self._values.copy(), index=index, columns=list(self._columns))
 
-    def write(self, out_dir: str | os.PathLike[str]) -> None:
-        """Write ``results.csv`` and ``summary.json`` (and ``modes.csv`` for a modes analysis) into
-        ``out_dir`` (created if missing), in the engine's format: the same files as ``linkwork run``."""
+    def write(self, out_dir: str | os.PathLike[str], report: bool = True) -> None:
+        """Write ``results.csv``, ``summary.json`` (and ``modes.csv`` for a modes analysis) and
+        ``model.yaml`` (the model file as run) into ``out_dir`` (created if missing), in the
+        engine's format, and ``report.html`` unless ``report`` is false: the same files as
+        ``linkwork run``."""
+        from . import report as reports
+
         self._native.write(os.fspath(out_dir))
+        reports.write_text(Path(out_dir) / "model.yaml", self.model.source)
+        if report:
+            reports.write(Path(out_dir) / "report.html", self._run())
+
+    def _run(self) -> Any:
+        from .report import Run
+
+        columns = {name: self._values[:, k] for k, name in enumerate(self._columns)}
+        return Run(self.model.drawing(), self._time, columns, self.summary)
+
+    def plot(self, *columns: str) -> Any:
+        """A ``plotly`` figure of ``columns`` (default: every body's angle) against time."""
+        from . import report
+
+        names = list(columns) or [f"{b}.phi" for b in self.model.bodies]
+        for name in names:
+            self[name]  # a KeyError naming the columns there are
+        return report.figure(report.line_figure(self._run(), names))
+
+    def animate(self) -> Any:
+        """The mechanism moving through the results, with play, pause and a time slider, as a
+        ``plotly`` figure (shown by a notebook)."""
+        from . import report
+
+        if not len(self):
+            raise ValueError("no output point was computed: there is no pose to draw")
+        return report.figure(report.mechanism_figure(self._run()))
+
+    def _repr_html_(self) -> str:
+        from . import report
+
+        return report.compact_html(self.summary, len(self), self._time)
 
     def __repr__(self) -> str:
         summary = self.summary

@@ -43,6 +43,12 @@ impl PyModel {
         &self.model.name
     }
 
+    /// The text of the model file.
+    #[getter]
+    fn source(&self) -> &str {
+        &self.model.source
+    }
+
     /// Names of the moving bodies, in file order.
     #[getter]
     fn bodies(&self) -> Vec<String> {
@@ -72,6 +78,13 @@ impl PyModel {
     fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let report = py.detach(|| guard(|| check(&self.model)))?.map_err(|e| to_pyerr(py, e, None))?;
         let value = serde_json::to_value(&report).map_err(|e| errors::internal(&e.to_string()))?;
+        json::to_py(py, &value)
+    }
+
+    /// The picture of the mechanism, as the engine's `Drawing` in plain Python objects: each
+    /// body's points in its frame, each joint's bodies, points and shape.
+    fn drawing<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let value = serde_json::to_value(self.model.drawing()).map_err(|e| errors::internal(&e.to_string()))?;
         json::to_py(py, &value)
     }
 

@@ -9,7 +9,7 @@
 //! ```
 //! Haug (1989) section 3.2; Nikravesh (2018) section 7.3.
 
-use super::{Anchor, BodyIx, Config, Constraint, Pair, Separation};
+use super::{Anchor, BodyIx, Config, Constraint, Pair, Separation, Shape, Sketch};
 
 /// Which coordinate an [`Absolute`] constraint holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -58,6 +58,9 @@ impl Absolute {
 impl Constraint for Absolute {
     fn anchor(&self) -> Anchor {
         self.pair.anchor(self.point)
+    }
+    fn sketch(&self) -> Option<Sketch> {
+        Some(Sketch { i: self.pair.i, p: self.point, j: BodyIx::GROUND, q: self.point, shape: Shape::Held })
     }
     fn row_names(&self) -> &[&'static str] {
         match self.kind {

@@ -12,7 +12,7 @@
 //! price of a multiplier that is a force divided by `2 L`. Haug (1989) section 3.4.1; Nikravesh
 //! (2018) section 7.2.
 
-use super::{dot, Anchor, BodyIx, Config, Constraint, PointPair};
+use super::{dot, Anchor, BodyIx, Config, Constraint, PointPair, Shape, Sketch};
 
 /// Two body points at a fixed distance.
 #[derive(Debug, Clone)]
@@ -31,6 +31,10 @@ impl Distance {
 impl Constraint for Distance {
     fn anchor(&self) -> Anchor {
         self.points.anchor()
+    }
+    fn sketch(&self) -> Option<Sketch> {
+        let pts = &self.points;
+        Some(Sketch { i: pts.pair.i, p: pts.s_p, j: pts.pair.j, q: pts.s_q, shape: Shape::Rod })
     }
     fn row_names(&self) -> &[&'static str] {
         &["distance"]

@@ -31,7 +31,7 @@
 
 use std::f64::consts::TAU;
 
-use super::{dot, perp, Anchor, BodyIx, Config, ConfigBuf, Constraint, Pair, Separation};
+use super::{dot, perp, Anchor, BodyIx, Config, ConfigBuf, Constraint, Pair, Separation, Shape, Sketch};
 
 /// External or internal meshing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -104,6 +104,16 @@ impl GearPair {
 impl Constraint for GearPair {
     fn anchor(&self) -> Anchor {
         self.pair.anchor(self.s_i)
+    }
+    fn sketch(&self) -> Option<Sketch> {
+        let (r_i, r_j, internal) = (self.r_i, self.r_j.abs(), self.kind == GearKind::Internal);
+        Some(Sketch {
+            i: self.pair.i,
+            p: self.s_i,
+            j: self.pair.j,
+            q: self.s_j,
+            shape: Shape::Gears { r_i, r_j, internal },
+        })
     }
     fn row_names(&self) -> &[&'static str] {
         &["rolling"]

@@ -28,10 +28,9 @@ pub use gear::{GearKind, GearPair};
 pub use point_line::PointOnLine;
 pub use revolute::Revolute;
 pub use rolling::{RackPinion, Rolling, RollingDisc};
-pub use translational::Translational;
-
 use std::fmt::Debug;
 use std::ops::Deref;
+pub use translational::Translational;
 
 /// Positions `q (n)` together with each body's rotation `(cos phi, sin phi)`, computed once per
 /// evaluation of the whole system rather than once per joint (a fifth of the kinematic run's time
@@ -120,6 +119,64 @@ pub trait Constraint: Debug + Send + Sync {
     fn time_function(&self) -> Option<&crate::expr::TimeFunction> {
         None
     }
+    /// How the joint is drawn (the report's picture of the mechanism); `None` for rows with no
+    /// picture of their own (drivers, general constraints).
+    fn sketch(&self) -> Option<Sketch> {
+        None
+    }
+}
+
+/// A joint as a picture: the point `p` of body i and the point `q` of body j it joins (each in
+/// its body's frame; ground's frame is the global one), and its shape.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sketch {
+    /// The first body.
+    pub i: BodyIx,
+    /// Its point, body i frame, m.
+    pub p: [f64; 2],
+    /// The second body.
+    pub j: BodyIx,
+    /// Its point, body j frame, m.
+    pub q: [f64; 2],
+    /// What is drawn at the points.
+    pub shape: Shape,
+}
+
+/// The shape of a [`Sketch`], serialized as `{"shape": "pin"}`, `{"shape": "slide", "axis": [..],
+/// "offset": ..}` and so on.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(tag = "shape", rename_all = "snake_case")]
+pub enum Shape {
+    /// A pin: `p` and `q` coincide.
+    Pin,
+    /// `q` slides on body i's guide line through `p` along `axis` (body i frame, unit), at a
+    /// signed distance `offset` (m) to its left.
+    Slide {
+        /// Direction of the guide, body i frame, unit.
+        axis: [f64; 2],
+        /// Signed distance of `q` from the line, m (0 for a slider or pin-in-slot).
+        offset: f64,
+    },
+    /// A massless rod from `p` to `q`.
+    Rod,
+    /// Pitch circles of radius `r_i` about `p` and `r_j` about `q` (m); `internal`: j is a ring.
+    Gears {
+        /// Pitch radius of gear i, m.
+        r_i: f64,
+        /// Pitch radius of gear j, m.
+        r_j: f64,
+        /// Whether gear j is a ring with gear i inside it.
+        internal: bool,
+    },
+    /// A disc of `radius` (m) about `q` rolling on body i's line through `p` along `axis`.
+    Disc {
+        /// Direction of the line, body i frame, unit.
+        axis: [f64; 2],
+        /// Radius (pitch radius of a pinion), m.
+        radius: f64,
+    },
+    /// Body i's point `p` held in x, y or angle against ground (`j` is ground, `q = p`).
+    Held,
 }
 
 /// Where a joint's reaction is reported: on body `i`, about `point` (body i frame), with `j` the
@@ -357,6 +414,10 @@ pub(crate) struct Projection {
 }
 
 impl Projection {
+    /// The line's direction when `w` is its unit normal `R90 u`: `u = -R90 w`.
+    pub fn along(&self) -> [f64; 2] {
+        [self.w[1], -self.w[0]]
+    }
     #[inline]
     fn geometry(&self, q: &Config<'_>) -> ([f64; 2], Separation) {
         let w = Frame::of(self.i, q).rotate(self.w);

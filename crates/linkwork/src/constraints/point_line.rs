@@ -13,7 +13,7 @@
 //! `e > 0` puts `Q` on the left of the line (the side `R90 v'_i` points to). Haug (1989) sections
 //! 3.3.2 and 3.4.2; Nikravesh (2018) section 7.1.
 
-use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Pair, Projection};
+use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Pair, Projection, Shape, Sketch};
 
 /// A point of body j on (or at a fixed offset from) a line of body i.
 #[derive(Debug, Clone)]
@@ -36,6 +36,16 @@ impl PointOnLine {
 impl Constraint for PointOnLine {
     fn anchor(&self) -> Anchor {
         self.pair.anchor(self.line.s_p)
+    }
+    fn sketch(&self) -> Option<Sketch> {
+        let l = &self.line;
+        Some(Sketch {
+            i: l.i,
+            p: l.s_p,
+            j: l.j,
+            q: l.s_q,
+            shape: Shape::Slide { axis: l.along(), offset: self.offset },
+        })
     }
     fn row_names(&self) -> &[&'static str] {
         &["line"]

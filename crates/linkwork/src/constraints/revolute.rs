@@ -8,7 +8,7 @@
 //! ```
 //! with `B = dA/dphi`. Haug (1989) section 3.3.1; Nikravesh (2018) section 7.1.
 
-use super::{Anchor, BodyIx, Config, Constraint, Frame, Pair, Separation};
+use super::{Anchor, BodyIx, Config, Constraint, Frame, Pair, Separation, Shape, Sketch};
 
 /// A revolute joint between body i (point `P`) and body j (point `Q`).
 #[derive(Debug, Clone)]
@@ -28,6 +28,9 @@ impl Revolute {
 impl Constraint for Revolute {
     fn anchor(&self) -> Anchor {
         self.pair.anchor(self.s_p)
+    }
+    fn sketch(&self) -> Option<Sketch> {
+        Some(Sketch { i: self.pair.i, p: self.s_p, j: self.pair.j, q: self.s_q, shape: Shape::Pin })
     }
     fn row_names(&self) -> &[&'static str] {
         &["x", "y"]

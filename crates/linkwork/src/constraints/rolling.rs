@@ -32,7 +32,7 @@
 //! frame and the rack on a translational joint), so it has only the rolling row; a rolling disc
 //! adds the contact row. Haug (1989) section 3.4.5; Nikravesh (2018) section 7.4.
 
-use super::{perp, unit, Anchor, BodyIx, Config, ConfigBuf, Constraint, Pair, Projection};
+use super::{perp, unit, Anchor, BodyIx, Config, ConfigBuf, Constraint, Pair, Projection, Shape, Sketch};
 
 /// The no-slip row shared by [`RackPinion`] and [`RollingDisc`].
 #[derive(Debug, Clone)]
@@ -115,6 +115,12 @@ impl<const CONTACT: bool> Rolling<CONTACT> {
 impl<const CONTACT: bool> Constraint for Rolling<CONTACT> {
     fn anchor(&self) -> Anchor {
         self.pair.anchor(self.s_c)
+    }
+    fn sketch(&self) -> Option<Sketch> {
+        // Drawn from the line body (i) to the disc (j), the order the line's projection has.
+        let n = &self.normal;
+        let shape = Shape::Disc { axis: n.along(), radius: self.lever.abs() };
+        Some(Sketch { i: n.i, p: n.s_p, j: n.j, q: n.s_q, shape })
     }
     fn row_names(&self) -> &[&'static str] {
         if CONTACT {

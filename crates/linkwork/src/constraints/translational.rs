@@ -18,7 +18,7 @@
 //! takes the whole turns from the starting relative angle, so that a body written a turn away
 //! (`phi = 2 pi + 0.1` against the axes' `0.1`) stays on its branch. Haug (1989) section 3.3.2; Nikravesh (2018) section 7.1.
 
-use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Pair, Projection};
+use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Pair, Projection, Shape, Sketch};
 
 /// A translational joint between body i (line through `P` along `v_i`) and body j (point `Q`, axis
 /// `v_j`).
@@ -52,6 +52,10 @@ impl Translational {
 impl Constraint for Translational {
     fn anchor(&self) -> Anchor {
         self.pair.anchor(self.line.s_p)
+    }
+    fn sketch(&self) -> Option<Sketch> {
+        let l = &self.line;
+        Some(Sketch { i: l.i, p: l.s_p, j: l.j, q: l.s_q, shape: Shape::Slide { axis: l.along(), offset: 0.0 } })
     }
     fn row_names(&self) -> &[&'static str] {
         &["line", "angle"]

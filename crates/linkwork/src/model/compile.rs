@@ -100,7 +100,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec
     let analyses = cx.analyses();
     if cx.problems.is_empty() {
         let name = spec.name.clone().unwrap_or_else(|| "model".into());
-        Ok(Model { name, bodies, joints, drivers, gravity, forces, measures, analyses })
+        Ok(Model { name, bodies, joints, drivers, gravity, forces, measures, analyses, source: String::new() })
     } else {
         Err(cx.problems)
     }

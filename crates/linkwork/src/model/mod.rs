@@ -3,12 +3,14 @@
 //! the compiled form of their `solver:` section ([`SolverSettings`], [`IntegratorSettings`]).
 
 mod compile;
+mod drawing;
 mod parse;
 mod settings;
 pub mod spec;
 
 pub(crate) use compile::revise;
 pub use compile::{compile, compile_partial};
+pub use drawing::{BodyDrawing, Drawing, JointDrawing};
 pub use parse::{parse_partial, parse_spec, Parsed};
 pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
 
@@ -234,6 +236,9 @@ pub struct Model {
     pub measures: Vec<Measure>,
     /// Analyses by name, in file order.
     pub analyses: IndexMap<String, Analysis>,
+    /// The text of the model file it was compiled from (empty for a model compiled from a
+    /// spec): what an output folder keeps as `model.yaml`, to reproduce the run.
+    pub source: String,
 }
 
 impl Model {
@@ -249,7 +254,7 @@ impl Model {
     pub fn from_yaml(text: &str) -> Result<Model> {
         let parsed = parse_partial(text).map_err(Error::Model)?;
         match compile_partial(&parsed.spec, &parsed.broken) {
-            Ok(model) if parsed.problems.is_empty() => Ok(model),
+            Ok(model) if parsed.problems.is_empty() => Ok(Model { source: text.to_string(), ..model }),
             Ok(_) => Err(Error::Model(parsed.problems)),
             Err(more) => Err(Error::Model(parsed.problems.into_iter().chain(more).collect())),
         }

@@ -1,0 +1,236 @@
+"""The report in a real browser: every analysis of every example writes a `report.html` that opens
+offline in headless Chromium (Debian's, driven by Playwright), makes no network request, logs no
+console error, has data in every plot and an animation that moves.
+
+The browser is Debian's `chromium` (`.ci/run` installs it). Where it is missing these tests skip,
+unless `LINKWORK_BROWSER_TESTS=required` (set by `.ci/run`), where they fail instead.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import linkwork
+from linkwork import report
+
+from conftest import EXAMPLES, RunLinkwork
+
+REQUIRED = os.environ.get("LINKWORK_BROWSER_TESTS") == "required"
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+EXAMPLE_RUNS = [
+    pytest.param(path, name, id=f"{path.stem}-{name}")
+    for path in sorted(EXAMPLES.glob("*.yaml"))
+    for name in linkwork.load(path).analyses
+]
+
+# Plots with data per report, at least: the issue's bar for the quick-return (positions,
+# velocities, accelerations and more), held for every analysis type.
+MIN_PLOTS = 4
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    """Headless Chromium, once for the module."""
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        if REQUIRED:
+            raise
+        pytest.skip("playwright is not installed (pip install '.[test]')")
+    if CHROMIUM is None:
+        if REQUIRED:
+            pytest.fail("no chromium on PATH (apt-get install chromium)")
+        pytest.skip("no chromium on PATH (apt-get install chromium)")
+    with sync_playwright() as playwright:
+        chromium = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        yield chromium
+        chromium.close()
+
+
+def open_report(browser: Any, path: Path) -> tuple[Any, list[str], list[str]]:
+    """Open `path`; return the page once its plots are drawn, every URL it requested and every
+    console error or page error."""
+    page = browser.new_page(viewport={"width": 1300, "height": 900})
+    requests: list[str] = []
+    errors: list[str] = []
+    page.on("request", lambda r: requests.append(r.url))
+    page.on("console", lambda m: errors.append(m.text) if m.type in ("error", "warning") else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(path.as_uri())
+    page.wait_for_selector("body[data-ready=true]", timeout=60_000)
+    return page, requests, errors
+
+
+def points_per_plot(page: Any) -> dict[str, int]:
+    """For every plot on the page, the number of finite values it draws."""
+    counts: dict[str, int] = page.evaluate(
+        """() => Object.fromEntries([...document.querySelectorAll('.js-plotly-plot')].map(div => [div.id,
+            div.data.reduce((n, t) => n + (t.y || []).filter(v => v !== null && Number.isFinite(v)).length, 0)]))"""
+    )
+    return counts
+
+
+def mechanism_x(page: Any, div: str = "mechanism") -> list[Any]:
+    """The x values of every trace drawn in the mechanism's plot now."""
+    values: list[Any] = page.evaluate(f"() => document.getElementById('{div}').data.map(t => t.x)")
+    return values
+
+
+@pytest.mark.parametrize(("path", "analysis"), EXAMPLE_RUNS)
+def test_every_example_report_opens_offline_with_plots_and_a_moving_mechanism(
+    path: Path, analysis: str, tmp_path: Path, browser: Any
+) -> None:
+    model = linkwork.load(path)
+    try:
+        results = model.run(analysis)
+    except (linkwork.SolverError, linkwork.AssemblyError) as error:  # the lock-up example fails by design
+        assert isinstance(error.results, linkwork.Results)
+        results = error.results
+    results.write(tmp_path)
+    page, requests, errors = open_report(browser, tmp_path / "report.html")
+    try:
+        assert requests == [(tmp_path / "report.html").as_uri()], "the page asked for more than itself"
+        assert errors == []
+        counts = points_per_plot(page)
+        plots = {k: n for k, n in counts.items() if k.startswith("plot")}
+        assert len(plots) >= MIN_PLOTS, counts
+        assert all(n > 0 for n in plots.values()), counts
+        drawn = [k for k in counts if k == "mechanism" or k.startswith("mode")]
+        assert drawn, "no mechanism drawn"
+        # A mode moves through its period; a run through its rows (a static equilibrium at one
+        # time is one pose).
+        animated = [k for k in drawn if k.startswith("mode") or len(results) > 1]
+        for div in animated:
+            frames = page.evaluate(f"() => document.getElementById('{div}')._transitionData._frames.length")
+            assert frames > 1, f"{div}: a single frame does not move"
+            before = mechanism_x(page, div)
+            # Move the time slider to 37 % of the way, through its own method, as a drag would (not
+            # to the end or the middle: a crank turning whole turns is back where it started).
+            page.evaluate(
+                f"""() => {{ const d = document.getElementById('{div}'); const steps = d.layout.sliders[0].steps;
+                    const step = steps[Math.floor(0.37 * steps.length)];
+                    return Plotly.animate(d, step.args[0], step.args[1]); }}"""
+            )
+            assert mechanism_x(page, div) != before, f"{div}: a frame within draws the first one's pose"
+        if "mechanism" in counts and len(results) > 1:
+            # Played, the animation moves on by itself, and the plots' time line follows.
+            page.evaluate("() => Plotly.animate('mechanism', ['0'], {mode: 'immediate', frame: {duration: 0}})")
+            start = mechanism_x(page)
+            page.get_by_text("▶ play").click()
+            page.wait_for_timeout(400)
+            assert mechanism_x(page) != start, "play did not move the mechanism"
+            line = page.evaluate("() => document.getElementById('plot0').layout.shapes[0].x0")
+            assert line > results.time[0]
+        page.screenshot(path=str(tmp_path / "report.png"), full_page=True)
+    finally:
+        page.close()
+
+
+def test_the_report_marks_a_failed_run_and_draws_its_partial_results(tmp_path: Path, browser: Any) -> None:
+    model = linkwork.load(EXAMPLES / "slider_crank_lockup.yaml")
+    with pytest.raises(linkwork.SolverError) as caught:
+        model.run()
+    partial = caught.value.results
+    assert isinstance(partial, linkwork.Results) and len(partial) > 1
+    partial.write(tmp_path)
+    page, _, errors = open_report(browser, tmp_path / "report.html")
+    try:
+        assert errors == []
+        failure = page.inner_text(".failure")
+        assert "partial results" in failure and f"{partial.summary['error_time']:.9g}" in failure
+    finally:
+        page.close()
+
+
+def test_run_writes_the_report_and_the_model_and_report_rebuilds_it(linkwork: RunLinkwork, tmp_path: Path) -> None:
+    out = tmp_path / "qr"
+    done = linkwork("run", EXAMPLES / "quick_return_a.yaml", "--out", out)
+    assert done.code == 0, done.output
+    assert "report.html" in done.stdout
+    assert (out / "model.yaml").read_text() == (EXAMPLES / "quick_return_a.yaml").read_text()
+    first = (out / "report.html").read_bytes()
+    (out / "report.html").unlink()
+    rebuilt = linkwork("report", out)
+    assert rebuilt.code == 0, rebuilt.output
+    # The files hold every number exactly (shortest round-trip form), so the page is the same.
+    assert (out / "report.html").read_bytes() == first
+
+
+def test_no_report_skips_the_page(linkwork: RunLinkwork, tmp_path: Path) -> None:
+    out = tmp_path / "qr"
+    done = linkwork("run", EXAMPLES / "quick_return_a.yaml", "--out", out, "--no-report")
+    assert done.code == 0, done.output
+    assert not (out / "report.html").exists()
+    assert (out / "model.yaml").exists()
+
+
+def test_report_of_a_folder_that_is_not_a_run_names_the_folder(linkwork: RunLinkwork, tmp_path: Path) -> None:
+    done = linkwork("report", tmp_path)
+    assert done.code == 2
+    assert str(tmp_path) in done.output and "not a results folder" in done.output
+
+
+def test_the_report_decimates_what_it_draws_but_keeps_every_peak() -> None:
+    """A long run draws at most MAX_FRAMES frames and MAX_PLOT_POINTS points a curve, and the
+    largest and smallest values survive the decimation."""
+    n = 100_001
+    t = np.linspace(0.0, 10.0, n)
+    y = np.sin(7 * t)
+    y[12_345] = 5.0
+    y[67_891] = -4.0
+    rows = report._plot_rows(y)
+    assert len(rows) <= report.MAX_PLOT_POINTS + 2
+    assert {12_345, 67_891, 0, n - 1} <= set(rows.tolist())
+    assert len(report._frame_rows(n)) == report.MAX_FRAMES
+
+
+def test_results_plot_and_animate_give_figures() -> None:
+    go = pytest.importorskip("plotly.graph_objects")
+    results = linkwork.load(EXAMPLES / "quick_return_a.yaml").run()
+    fig = results.plot("rocker.phi", "crank.phi")
+    assert isinstance(fig, go.Figure)
+    assert [t.name for t in fig.data] == ["rocker.phi", "crank.phi"]
+    assert list(fig.data[0].y) == pytest.approx(results["rocker.phi"].tolist(), rel=1e-5)
+    with pytest.raises(KeyError, match="no column 'nope'"):
+        results.plot("nope")
+    movie = results.animate()
+    assert len(movie.frames) == len(results)
+    assert "quick-return" in results._repr_html_()
+
+
+def test_model_draw_shows_the_assembled_pose_and_the_guess() -> None:
+    model = linkwork.load(EXAMPLES / "quick_return_a.yaml")
+    fig = model.draw()
+    names = [t.name for t in fig.data]
+    assert "crank (assembled)" in names and "crank (initial guess)" in names
+    guess = next(t for t in fig.data if t.name == "crank (initial guess)")
+    assert guess.opacity == pytest.approx(0.3)
+
+
+def test_drawing_places_every_joint_on_its_bodies() -> None:
+    """The drawing's joint points, put in place with the assembled coordinates, coincide for a pin
+    and sit on the guide for a slide: the same geometry as the constraint equations."""
+    model = linkwork.load(EXAMPLES / "quick_return_a.yaml")
+    results = model.run()
+    run = results._run()
+    poses = report._Poses(run, np.arange(len(results)))
+    for joint in model.drawing()["joints"]:
+        px, py = poses.point(joint["body_i"], joint["p"])
+        qx, qy = poses.point(joint["body_j"], joint["q"])
+        # The kinematic solver stops at 1e-12 m; 1e-9 leaves three orders for the Jacobian's
+        # amplification, and a wrong point (a swapped body, a frame not applied) is off by metres.
+        if joint["shape"] == "pin":
+            assert np.max(np.hypot(qx - px, qy - py)) < 1e-9, joint["name"]
+        elif joint["shape"] == "slide":
+            ux, uy = poses.direction(joint["body_i"], joint["axis"])
+            normal = -(qx - px) * uy + (qy - py) * ux
+            assert np.max(np.abs(normal - joint["offset"])) < 1e-9, joint["name"]
+
