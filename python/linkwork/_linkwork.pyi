@@ -4,6 +4,7 @@ The types of what `crates/linkwork-py/src/` exports; `python -m mypy.stubtest li
 checks them against the built module (`.ci/run`).
 """
 
+from collections.abc import Callable
 from typing import Any, final
 
 import numpy as np
@@ -59,6 +60,7 @@ class PyModel:
         atol: float | None = None,
         t_end: float | None = None,
         step: float | None = None,
+        progress: Callable[[float, float, float, int], object] | None = None,
     ) -> PyResults: ...
 
 @final

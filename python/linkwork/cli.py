@@ -12,7 +12,8 @@
 
 Exit status: 0 success; 2 an invalid model, a file that cannot be read or written, or a bad command
 line (every problem is printed as ``path: message``); 3 a solver failure (what failed, when, in
-which joints; the results computed until then are still written); 1 an internal error (a bug).
+which joints; the results computed until then are still written); 130 interrupted by Ctrl-C (the
+results until then are written, ``"status": "interrupted"``); 1 an internal error (a bug).
 """
 
 from __future__ import annotations
@@ -33,6 +34,8 @@ EXIT_OK = 0
 EXIT_INTERNAL = 1
 EXIT_MODEL = 2
 EXIT_SOLVER = 3
+# 128 + SIGINT, as a shell reports a process that Ctrl-C ended.
+EXIT_INTERRUPTED = 130
 
 # The coordinates of one body, in the engine's order.
 COORDINATES = ("x", "y", "phi")
@@ -65,14 +68,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_INTERNAL
     except KeyboardInterrupt:
         _err("interrupted")
-        return 130
+        return EXIT_INTERRUPTED
 
 
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="linkwork",
         description="Planar multibody kinematics: check and run mechanism models.",
-        epilog="Exit status: 0 success, 2 invalid model or file, 3 solver failure, 1 internal error.",
+        epilog="Exit status: 0 success, 2 invalid model or file, 3 solver failure, 130 interrupted, 1 internal error.",
     )
     parser.add_argument("--version", action="version", version=f"linkwork {_linkwork.__version__}")
     commands = parser.add_subparsers(title="commands", required=True, metavar="COMMAND")
@@ -92,6 +95,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--t-end", type=float, metavar="T", help="end time, s")
     run.add_argument("--step", type=float, metavar="H", help="output step, s")
     run.add_argument("--no-report", action="store_true", help="do not write report.html")
+    run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     run.set_defaults(command=_run)
 
     report = commands.add_parser(
@@ -127,8 +131,22 @@ def _run(args: argparse.Namespace) -> int:
     out: Path = args.out if args.out is not None else Path("out") / Path(args.model).stem
     try:
         results = model.run(
-            args.analysis, integrator=args.integrator, rtol=args.rtol, atol=args.atol, t_end=args.t_end, step=args.step
+            args.analysis,
+            integrator=args.integrator,
+            rtol=args.rtol,
+            atol=args.atol,
+            t_end=args.t_end,
+            step=args.step,
+            # On a terminal only: a bar in a log file is noise.
+            progress=sys.stderr.isatty() and not args.quiet,
         )
+    except KeyboardInterrupt as interrupt:
+        partial = getattr(interrupt, "results", None)
+        if not isinstance(partial, Results):
+            raise
+        partial.write(out, report=not args.no_report)
+        _err(f"interrupted: partial results ({_span(partial)}) written to {_folder(out)} (status: interrupted)")
+        return EXIT_INTERRUPTED
     except (SolverError, AssemblyError) as error:
         _print_failure(error)
         partial = error.results

@@ -4,11 +4,44 @@ from __future__ import annotations
 
 import numbers
 import os
+import sys
+import time
+from collections.abc import Callable
 from typing import Any
+
+from tqdm import tqdm
 
 from . import _linkwork
 from .errors import AssemblyError, SolverError, model_error
 from .results import Results
+
+
+class ProgressBar:
+    """A tqdm bar on stderr over a run's simulated time: the time reached of the total, steps a
+    second and the time left. Shown only after half a second, so short runs print nothing."""
+
+    #: Seconds before the bar shows: a run shorter than this needs no bar.
+    DELAY = 0.5
+
+    def __init__(self) -> None:
+        self._bar: tqdm[Any] | None = None
+        self._start = time.monotonic()
+
+    def update(self, t: float, t_start: float, t_end: float, steps: int) -> None:
+        """The run is at time ``t`` of ``[t_start, t_end]`` after ``steps`` steps."""
+        if self._bar is None:
+            total = max(t_end - t_start, 0.0)
+            self._bar = tqdm(
+                total=total, unit="s", unit_scale=False, delay=self.DELAY, file=sys.stderr,
+                bar_format="{l_bar}{bar}| t = {n:.4g} of {total:.4g} s [{elapsed}<{remaining}{postfix}]",
+            )
+        rate = steps / max(time.monotonic() - self._start, 1e-9)
+        self._bar.set_postfix_str(f"{rate:,.0f} steps/s", refresh=False)
+        self._bar.update(max(t - t_start, 0.0) - self._bar.n)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
 
 
 class Model:
@@ -119,6 +152,7 @@ class Model:
         atol: float | None = None,
         t_end: float | None = None,
         step: float | None = None,
+        progress: bool | Callable[[float, float, float, int], object] = False,
     ) -> Results:
         """Run the analysis called ``analysis`` (default: the first one in the file).
 
@@ -126,8 +160,14 @@ class Model:
         ``"hht"`` or ``"abam"``), the tolerances ``rtol`` and ``atol`` (dynamic analyses), the end
         time ``t_end`` and the output step ``step`` (s). A bad value raises :class:`ModelError`.
 
+        ``progress=True`` shows a progress bar (tqdm, on stderr): simulated time reached of the
+        total, steps a second, time left. A callable is called instead, about 20 times a second,
+        as ``progress(time, t_start, t_end, steps)``; an exception it raises stops the run and is
+        raised.
+
         On a solver failure the exception (:class:`SolverError`, :class:`AssemblyError`) has
-        ``results``: the :class:`Results` computed before the failure.
+        ``results``: the :class:`Results` computed before the failure. Ctrl-C stops the run at
+        its next step (within 0.2 s) and raises ``KeyboardInterrupt`` with ``results`` too.
         """
         if analysis is None:
             if not self.analyses:
@@ -144,12 +184,18 @@ class Model:
                 raise model_error(option, f"expected a number, found {value} (a bool)")
             if value is not None and not isinstance(value, numbers.Real):
                 raise model_error(option, f"expected a number, found {value!r} ({type(value).__name__})")
+        bar = ProgressBar() if progress is True else None
+        report = bar.update if bar is not None else (progress or None)
         try:
-            return Results(self._native.run(analysis, integrator, rtol, atol, t_end, step), self)
-        except (SolverError, AssemblyError) as error:
-            if isinstance(error.results, _linkwork.PyResults):
-                error.results = Results(error.results, self)
+            return Results(self._native.run(analysis, integrator, rtol, atol, t_end, step, report), self)
+        except (SolverError, AssemblyError, KeyboardInterrupt) as error:
+            partial = getattr(error, "results", None)
+            if isinstance(partial, _linkwork.PyResults):
+                error.results = Results(partial, self)  # type: ignore[union-attr]
             raise
+        finally:
+            if bar is not None:
+                bar.close()
 
     def __repr__(self) -> str:
         source = f" from {self.path!r}" if self.path else ""

@@ -1,8 +1,9 @@
 """The report: one self-contained HTML page with the animated mechanism, plots linked to its time,
 the summary and the failure if there was one.
 
-The page embeds plotly's JavaScript (from the ``plotly`` package) and its data, so that it opens
-offline and makes no network request. What is drawn is decimated so that the page stays light on
+The page embeds plotly's JavaScript (from the ``plotly`` package) and its data, gzipped, so that
+it opens offline and makes no network request (the browser unpacks them with its own
+``DecompressionStream``: Chromium 80, Firefox 113, Safari 16.4 and later). What is drawn is decimated so that the page stays light on
 long runs (:data:`MAX_FRAMES`, :data:`MAX_PLOT_POINTS`); the data files are never decimated.
 
 The figures are plain plotly dicts (``{"data": [...], "layout": {...}, "frames": [...]}``), built
@@ -12,6 +13,9 @@ here without plotly's Python validation, so that :meth:`linkwork.Results.plot` a
 
 from __future__ import annotations
 
+import base64
+import functools
+import gzip
 import html
 import json
 import math
@@ -29,6 +33,13 @@ MAX_FRAMES = 300
 #: Points drawn per curve at most: the minimum and the maximum of each of 1000 buckets, so that
 #: every peak of a long run stays visible on a plot a screen wide (1000 to 2000 pixels).
 MAX_PLOT_POINTS = 2000
+
+#: Curves a plot draws at most: a legend of more cannot be read, and a model of 100 bodies would
+#: otherwise draw 900 curves of positions; every column is in ``results.csv``.
+MAX_CURVES = 12
+
+#: Points of each path of a named point: a smooth curve at any zoom a screen allows.
+MAX_PATH_POINTS = 1000
 
 #: Significant digits of the numbers drawn: a hundredth of a pixel on a 4000-pixel-wide plot.
 DIGITS = 6
@@ -216,7 +227,15 @@ def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray
     xs_all = np.concatenate([p[0] for p in every]) if every else np.zeros(1)
     ys_all = np.concatenate([p[1] for p in every]) if every else np.zeros(1)
     size = max(float(np.ptp(xs_all)), float(np.ptp(ys_all)), 1e-9)
-    block = 0.03 * size  # half the side of a slider block: visible, and small beside the links
+    # Half the side of a slider block (and the scale of pins' hatching): small beside the picture
+    # and beside a typical link (the median length of the bodies with two points), but never
+    # below a hundredth of the picture, where it could no longer be seen.
+    lengths = [
+        max(math.dist(a, b) for a in pts for b in pts)
+        for pts in ([*body["points"].values(), *body["joint_points"].values()] for body in bodies)
+        if len(pts) > 1
+    ]
+    block = min(0.03 * size, max(0.12 * float(np.median(lengths)), 0.01 * size)) if lengths else 0.03 * size
 
     static: list[dict[str, Any]] = []
     moving: list[dict[str, Any]] = []
@@ -229,19 +248,26 @@ def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray
             x, y = xy(f)
             per_frame[f].append({"x": x, "y": y})
 
-    # Traces of the named points (coupler curves), over the whole run, faint.
-    trace_rows = _plot_rows(np.asarray(run.time, dtype=float))
-    all_poses = _Poses(run, trace_rows)
+    # Paths of the named points (coupler curves), over the whole run, faint: through at most
+    # MAX_PATH_POINTS rows, and of the MAX_CURVES points that travel furthest.
+    n = len(run.time)
+    path_rows = np.unique(np.linspace(0, n - 1, min(n, MAX_PATH_POINTS)).round().astype(int))
+    all_poses = _Poses(run, path_rows)
+    paths: list[tuple[float, int, str, np.ndarray, np.ndarray]] = []
     for b, body in enumerate(bodies):
         for name, s in body["points"].items():
             x, y = all_poses.point(body["name"], s)
-            static.append(
-                {
-                    "type": "scatter", "mode": "lines", "x": _num(x), "y": _num(y),
-                    "line": {"color": PALETTE[b % len(PALETTE)], "width": 1, "dash": "dot"},
-                    "opacity": 0.5, "name": f"{body['name']}.{name} path", "hoverinfo": "name", "showlegend": False,
-                }
-            )
+            length = float(np.nansum(np.hypot(np.diff(x), np.diff(y))))
+            if length > 0.0:
+                paths.append((length, b, f"{body['name']}.{name}", x, y))
+    for _, b, name, x, y in sorted(paths, key=lambda p: -p[0])[:MAX_CURVES]:
+        static.append(
+            {
+                "type": "scatter", "mode": "lines", "x": _num(x), "y": _num(y),
+                "line": {"color": PALETTE[b % len(PALETTE)], "width": 1, "dash": "dot"},
+                "opacity": 0.5, "name": f"{name} path", "hoverinfo": "name", "showlegend": False,
+            }
+        )
 
     # Ground: a hatched base under each ground point of a pin, and fixed guides.
     hatch = _Paths()
@@ -403,6 +429,8 @@ def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray
         "margin": {"l": 60, "r": 20, "t": 30, "b": 40},
         "hovermode": "closest",
         "legend": {"orientation": "h", "y": 1.02, "yanchor": "bottom"},
+        # Bodies are named on hover; a legend of more than a dozen hides the picture.
+        "showlegend": len(bodies) <= MAX_CURVES,
         "height": 520,
     }
     if frames > 1:
@@ -502,12 +530,21 @@ def plots(run: Run) -> list[dict[str, Any]]:
     out: list[dict[str, Any]] = []
 
     used: set[str] = set()
-
     one_state = len(run.time) == 1
+
+    def spread(c: str, log: bool) -> float:
+        """How much a curve varies (on a log plot: how far it reaches)."""
+        y = np.asarray(cols[c], dtype=float)
+        y = y[np.isfinite(y)]
+        return float(np.max(np.abs(y), initial=0.0)) if log else float(np.ptp(y)) if len(y) else 0.0
 
     def add(columns: Sequence[str], title: str, ylabel: str, log: bool = False) -> None:
         columns = [c for c in columns if c in cols]
         used.update(columns)
+        if len(columns) > MAX_CURVES:
+            kept = set(sorted(columns, key=lambda c: spread(c, log), reverse=True)[:MAX_CURVES])
+            title = f"{title} (the {MAX_CURVES} of {len(columns)} that vary most)"
+            columns = [c for c in columns if c in kept]
         if columns:
             out.append(bar_figure(run, columns, title, ylabel) if one_state else line_figure(run, columns, title, ylabel, log))
 
@@ -651,8 +688,18 @@ text-align: left; vertical-align: top; } th { font-weight: 600; white-space: now
 
 # Every plot gets a vertical line at the animation's time; clicking a plot moves the animation.
 _SCRIPT = """
-(function () {
-  const figures = JSON.parse(document.getElementById('figures').textContent);
+// plotly's source and the figures are stored gzipped (base64): the page is a third of its size.
+const unpack = id => {
+  const bytes = Uint8Array.from(atob(document.getElementById(id).textContent), c => c.charCodeAt(0));
+  return new Response(new Blob([bytes]).stream().pipeThrough(new DecompressionStream('gzip'))).text();
+};
+unpack('plotly').then(source => {
+  const library = document.createElement('script');
+  library.textContent = source;
+  document.head.appendChild(library);
+  return unpack('figures');
+}).then(text => {
+  const figures = JSON.parse(text);
   const draw = (id, fig) => Plotly.newPlot(id, fig.data, fig.layout, {responsive: true, displaylogo: false})
       .then(() => fig.frames ? Plotly.addFrames(id, fig.frames) : null);
   const mech = figures.mechanism;
@@ -683,12 +730,13 @@ _SCRIPT = """
     setTime(times[0]);
     document.body.dataset.ready = 'true';
   });
-})();
+}).catch(error => console.error(error));
 """
 
 
 def page(run: Run, plotly_js: str) -> str:
-    """The whole report as one HTML page, with ``plotly_js`` (the library's source) embedded."""
+    """The whole report as one HTML page, with ``plotly_js`` (the library's source, packed by
+    :func:`_packed`) embedded."""
     s = run.summary
     modes = mode_figures(run) if s.get("type") == "modes" else []
     mech = None if modes or not len(run.time) else mechanism_figure(run)
@@ -712,14 +760,21 @@ def page(run: Run, plotly_js: str) -> str:
         body.append('<div class="plots">' + "".join(f'<div id="plot{k}"></div>' for k in range(len(plot_list))) + "</div>")
     body += ["<h2>Summary</h2>", summary_html(s)]
     # `</` cannot appear inside a script element: escape it in the JSON.
-    data = json.dumps(figures, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
+    data = json.dumps(figures, separators=(",", ":"), allow_nan=False)
     return (
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-        f"<title>{html.escape(title)}</title><style>{_STYLE}</style>"
-        f"<script>{plotly_js}</script></head><body>\n"
+        f"<title>{html.escape(title)}</title><style>{_STYLE}</style></head><body>\n"
         + "\n".join(body)
-        + f'\n<script type="application/json" id="figures">{data}</script>\n<script>{_SCRIPT}</script>\n</body></html>\n'
+        + f'\n<script type="application/gzip" id="plotly">{plotly_js}</script>'
+        + f'\n<script type="application/gzip" id="figures">{_packed(data)}</script>'
+        + f"\n<script>{_SCRIPT}</script>\n</body></html>\n"
     )
+
+
+def _packed(text: str) -> str:
+    """``text`` gzipped and in base64, as the page unpacks it (no time stamp: the same text gives
+    the same page)."""
+    return base64.b64encode(gzip.compress(text.encode(), compresslevel=9, mtime=0)).decode()
 
 
 def compact_html(summary: Mapping[str, Any], rows: int, time: np.ndarray) -> str:
@@ -771,12 +826,14 @@ def write_text(path: Any, text: str) -> None:
         temp.unlink(missing_ok=True)
 
 
+@functools.cache
 def plotly_js() -> str:
-    """plotly's JavaScript, from the ``plotly`` package."""
+    """plotly's JavaScript, from the ``plotly`` package, packed as the page stores it (once per
+    process: packing takes a third of a second)."""
     from plotly.offline import get_plotlyjs
 
     source: str = get_plotlyjs()
-    return source
+    return _packed(source)
 
 
 def from_folder(folder: Any) -> Run:

@@ -243,6 +243,12 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
             let class = py.import("linkwork._linkwork")?.getattr(OUT_OF_MEMORY_ERROR)?;
             (PyErr::from_value(class.call1((message,))?), failure(*time, vec![])?)
         }
+        // Stopped by the Python side, which raises its own exception (`KeyboardInterrupt`);
+        // this is what an interruption raises when it comes from elsewhere.
+        Error::Interrupted { time } => (
+            pyo3::exceptions::PyKeyboardInterrupt::new_err(message),
+            Attributes::new(py).with("time", time)?,
+        ),
         Error::Io { path, .. } => {
             let class = py.import("linkwork._linkwork")?.getattr(FILE_ERROR)?;
             let err = PyErr::from_value(class.call1((message,))?);

@@ -193,6 +193,12 @@ pub enum Error {
         /// Which factorization (`while factorizing`, `in the symbolic factorization`).
         what: String,
     },
+    /// The run was asked to stop (Ctrl-C) and stopped at the next time it reached.
+    #[error("interrupted at t = {when} s", when = seconds(.time))]
+    Interrupted {
+        /// The time it stopped at, s.
+        time: f64,
+    },
     /// Reading or writing a file failed.
     #[error("{path}: {message}")]
     Io {

@@ -39,6 +39,7 @@ pub mod expr;
 pub mod forces;
 pub mod linalg;
 pub mod model;
+pub mod progress;
 pub mod results;
 pub mod system;
 

@@ -92,6 +92,8 @@ impl Results {
     /// columns after the body quantities, `extra`; or, when one of them is not finite, append
     /// nothing and name its column: no NaN or infinity leaves as a result, whatever the analysis
     /// (each analysis first looks for the element to blame; this is the net under all of them).
+    /// Every output time is reported to the run's [`progress`](crate::progress), which may stop
+    /// the run there (after the row is kept).
     pub(crate) fn push(&mut self, t: f64, q: &[f64], qdot: &[f64], qddot: &[f64], extra: &[f64]) -> Result<(), Error> {
         let bodies = q.len() / 3;
         debug_assert_eq!(self.columns.len(), 9 * bodies + extra.len(), "one extra value per extra column");
@@ -109,7 +111,7 @@ impl Results {
         for (c, v) in self.columns.iter_mut().zip(values()) {
             c.push(v);
         }
-        Ok(())
+        crate::progress::reached(t)
     }
 
     /// Add to the summary of an analysis with reactions: `reaction_bodies` (the body each joint's
@@ -192,7 +194,12 @@ impl Results {
     /// The summary as JSON, with `status` ("ok" or "failed") and the error if there is one.
     pub fn summary_json(&self, error: Option<&Error>) -> Value {
         let mut s = self.summary.clone();
-        s.insert("status".into(), json!(if error.is_some() { "failed" } else { "ok" }));
+        let status = match error {
+            None => "ok",
+            Some(Error::Interrupted { .. }) => "interrupted",
+            Some(_) => "failed",
+        };
+        s.insert("status".into(), json!(status));
         if let Some(e) = error {
             s.insert("error".into(), json!(e.to_string()));
             s.insert("error_elements".into(), json!(e.elements()));
@@ -204,7 +211,8 @@ impl Results {
             | Error::Integration { time, .. }
             | Error::NonFinite { time, .. }
             | Error::Unbounded { time, .. }
-            | Error::OutOfMemory { time, .. } = e
+            | Error::OutOfMemory { time, .. }
+            | Error::Interrupted { time } = e
             {
                 s.insert("error_time".into(), json!(time));
             }

@@ -6,7 +6,9 @@ use super::{dynamic, run_inverse, run_kinematic, run_modes, run_static, toleranc
 use crate::error::{Error, Problem};
 use crate::model::spec::{AnalysisKind, AnalysisSpec, IntegratorKind, SolverSpec};
 use crate::model::{revise, Analysis, Model};
+use crate::progress::{self, Progress};
 use crate::results::{Failure, Results};
+use std::sync::Arc;
 use serde_json::{json, Value};
 
 /// Changes to an analysis for one run (the command line's `--integrator`, `--rtol`, `--atol`,
@@ -70,17 +72,29 @@ impl Model {
 
     /// Run the analysis called `name` with `overrides` applied.
     pub fn run_with(&self, name: &str, overrides: &Overrides) -> Result<Results, Box<Failure>> {
+        self.run_watched(name, overrides, &Progress::new())
+    }
+
+    /// Run the analysis called `name` with `overrides` applied, reporting to `progress` (which
+    /// another thread reads, and may stop the run through).
+    pub fn run_watched(
+        &self,
+        name: &str,
+        overrides: &Overrides,
+        progress: &Arc<Progress>,
+    ) -> Result<Results, Box<Failure>> {
         let analysis = match self.analysis(name) {
             Ok(a) => overrides.apply(a).map_err(|error| Box::new(Failure { error, results: Results::new(self, a) }))?,
             Err(error) => return Err(Box::new(Failure { error, results: Results::of_model(self) })),
         };
-        let mut outcome = match analysis.kind {
+        progress.begin(analysis.t_start, analysis.t_end);
+        let mut outcome = progress::scope(progress, || match analysis.kind {
             AnalysisKind::Kinematic => run_kinematic(self, &analysis),
             AnalysisKind::Dynamic => dynamic::run_dynamic(self, &analysis),
             AnalysisKind::Inverse => run_inverse(self, &analysis),
             AnalysisKind::Static => run_static(self, &analysis),
             AnalysisKind::Modes => run_modes(self, &analysis),
-        };
+        });
         let results = match &mut outcome {
             Ok(r) => r,
             Err(f) => &mut f.results,

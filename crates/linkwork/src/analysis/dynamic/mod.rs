@@ -236,7 +236,8 @@ impl Span {
     }
 
     /// The smallest step at `t` ([`min_step`] over this run), or the error that stops the run:
-    /// the step budget spent, or (`shrunk`: for methods whose accepted steps can shrink the step
+    /// an interruption (every step attempt reports its time to the run's progress), the step
+    /// budget spent, or (`shrunk`: for methods whose accepted steps can shrink the step
     /// too, as an error estimate that grows from step to step) `h` already below the smallest.
     #[allow(clippy::too_many_arguments)]
     pub fn smallest_step(
@@ -249,6 +250,7 @@ impl Span {
         settings: &IntegratorSettings,
         shrunk: bool,
     ) -> Result<f64, Error> {
+        crate::progress::reached(t)?;
         let h_min = min_step(dae, q, self.taken + steps, t, h, self.length, settings)?;
         if shrunk && h < h_min {
             // Stop here rather than creep towards zero.
