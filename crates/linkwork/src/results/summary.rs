@@ -42,15 +42,15 @@ pub struct Summary {
     #[serde(flatten)]
     pub analysis: Option<AnalysisHeader>,
     /// Degrees of freedom the joints and active drivers leave: the coordinates less the rank of
-    /// `Phi_q` at the start (0 for a kinematic or inverse analysis, which needs a fully driven
-    /// model).
+    /// `Phi_q` at the start (a modes analysis: at the state it linearises about; 0 for a kinematic
+    /// or inverse analysis, which needs a fully driven model).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dof: Option<usize>,
     /// Messages about the run (tolerances below what the arithmetic reaches, `abam`'s
     /// crossings); empty when there is nothing to say.
     pub warnings: Vec<String>,
-    /// Rows of `Phi_q` that repeat earlier rows (at the start), left out of the solve: they hold
-    /// implicitly.
+    /// Rows of `Phi_q` that repeat earlier rows, where [`Summary::dof`] is counted: they hold
+    /// implicitly (a kinematic, inverse or dynamic analysis leaves them out of its solve).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub redundant_rows: Option<Vec<RowName>>,
     /// Joints (and drivers) whose share of the reactions the equations leave open (redundant
