@@ -98,6 +98,40 @@ def test_summary(results_a: linkwork.Results) -> None:
     assert "41 points" in repr(results_a)
 
 
+def test_summary_keys_are_attributes(model_a: linkwork.Model, results_a: linkwork.Results) -> None:
+    """The summary is the dict of summary.json, and each key is also a typed attribute: the same
+    header and the same shape of each fact (``dof``, ``redundant_rows``) for every analysis."""
+    summary = results_a.summary
+    assert isinstance(summary, linkwork.Summary) and isinstance(summary, dict)
+    assert summary.status == "ok" and summary.error is None and summary.error_time is None
+    assert (summary.model, summary.analysis, summary.type) == (model_a.name, "kinematics", "kinematic")
+    assert (summary.bodies, summary.coordinates, summary.joints) == (5, 15, model_a.joints)
+    assert summary.active_drivers == ["crank_drive"] and summary.output_points == 41
+    assert summary.dof == 0 and summary.redundant_rows == [] and summary.warnings == []
+    assert summary.statistics is not None and summary.statistics["max_condition"] < 1e3
+    assert summary.modes is None and summary.peaks is None and summary.stable is None
+    assert {key: getattr(summary, key) for key in summary} == dict(summary)
+    runs = [("dynamics", "dynamic", 1, "O.force"), ("inverse", "inverse", 0, "crank_drive.effort")]
+    for name, kind, dof, peak in runs:
+        other = model_a.run(name, t_end=0.2).summary
+        assert (other.type, other.dof, other.redundant_rows) == (kind, dof, [])
+        assert other.peaks is not None and other.peaks[peak]["max_abs"] > 0
+        assert other.reaction_bodies is not None and other.reaction_bodies["O"] == "crank"
+    integrator = model_a.run("dynamics", t_end=0.2).summary.integrator
+    assert integrator is not None and integrator["kind"] == "bdf"
+
+
+def test_summary_of_a_static_and_a_modes_analysis() -> None:
+    hanging = linkwork.load(EXAMPLES / "hanging_fourbar.yaml")
+    rest = hanging.run("rest").summary
+    assert rest.type == "static" and rest.stable is True and rest.index == 0 and rest.dof == 1
+    assert rest.min_reduced_stiffness is not None and rest.min_reduced_stiffness > 0
+    vibration = hanging.run("vibration").summary
+    assert vibration.type == "modes" and vibration.about == "equilibrium" and vibration.dof == 1
+    assert vibration.modes is not None and vibration.modes[0]["kind"] == "vibration"
+    assert vibration.redundant_rows == [] and vibration.statistics is None
+
+
 def test_to_pandas(results_a: linkwork.Results) -> None:
     pd = pytest.importorskip("pandas")
     frame = results_a.to_pandas()
@@ -247,6 +281,10 @@ def test_singular_error_carries_partial_results() -> None:
     assert 0 < len(partial) <= 13 and partial.time[-1] < error.time
     assert partial.summary["status"] == "failed"
     assert partial.summary["error_time"] == error.time
+    failed = partial.summary
+    assert (failed.status, failed.error_time, failed.output_points) == ("failed", error.time, len(partial))
+    assert failed.error is not None and "singular" in failed.error
+    assert failed.error_elements is not None and {"A", "B", "guide"} <= set(failed.error_elements)
     # Until the lock-up the crank follows its driver, theta = t.
     np.testing.assert_allclose(partial["crank.phi"], partial.time, rtol=0, atol=1e-12)
 

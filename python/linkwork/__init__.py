@@ -36,7 +36,7 @@ from .errors import (
     SolverError,
 )
 from .model import Model
-from .results import Results
+from .results import Results, Summary
 
 __version__: str = _linkwork.__version__
 
@@ -55,6 +55,7 @@ __all__ = [
     "Results",
     "SingularError",
     "SolverError",
+    "Summary",
     "__version__",
     "from_yaml",
     "load",

@@ -28,7 +28,7 @@ from typing import Any
 from . import _linkwork
 from .errors import AssemblyError, FileError, InternalError, LinkworkError, ModelError, SolverError
 from .model import Model
-from .results import Results
+from .results import Results, Summary
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
@@ -177,49 +177,48 @@ def _report(args: argparse.Namespace) -> int:
 
 def _print_summary(results: Results) -> None:
     s = results.summary
-    stats: dict[str, Any] = s.get("statistics") or {}
-    print(f"{s.get('model', '')}: analysis '{s.get('analysis', '')}' ({s.get('type', '')})")
-    drivers = ", ".join(s.get("active_drivers", [])) or "none"
-    print(f"  {s.get('bodies', '?')} bodies, {s.get('coordinates', '?')} coordinates; drivers: {drivers}")
+    stats = s.statistics or {}
+    print(f"{s.model}: analysis '{s.analysis}' ({s.type})")
+    drivers = ", ".join(s.active_drivers or []) or "none"
+    print(f"  {s.bodies} bodies, {s.coordinates} coordinates; drivers: {drivers}")
     print(f"  {_span(results)}")
-    if stats and s.get("type") == "dynamic":
-        integrator: dict[str, Any] = s.get("integrator") or {}
+    if stats and s.type == "dynamic":
+        integrator = s.integrator or {}
         print(
-            f"  {integrator.get('kind', '?')}: {stats.get('steps', '?')} steps "
-            f"({stats.get('rejected_steps', '?')} rejected by the error test, "
-            f"{stats.get('newton_failures', '?')} by Newton), {stats.get('newton_iterations', '?')} Newton iterations, "
-            f"{stats.get('factorizations', '?')} factorizations"
+            f"  {integrator['kind']}: {stats['steps']} steps "
+            f"({stats['rejected_steps']} rejected by the error test, "
+            f"{stats['newton_failures']} by Newton), {stats['newton_iterations']} Newton iterations, "
+            f"{stats['factorizations']} factorizations"
         )
-        residuals: dict[str, Any] = s.get("residuals") or {}
+        residuals = s.residuals or {}
         print(
-            f"  largest constraint residuals at output: position {_num(residuals.get('max_position'))}, "
-            f"velocity {_num(residuals.get('max_velocity'))}"
+            f"  largest constraint residuals at output: position {_num(residuals['max_position'])}, "
+            f"velocity {_num(residuals['max_velocity'])}"
         )
-    elif s.get("type") == "static":
+    elif s.type == "static":
         print(
-            f"  {stats.get('iterations', '?')} Newton iterations, {stats.get('descents', '?')} descent(s), "
-            f"{stats.get('load_steps', '?')} load steps; "
-            f"largest residuals: force {_num(stats.get('force_residual'))}, "
-            f"position {_num(stats.get('position_residual'))}; stable: {s.get('stable')} (index {s.get('index')})"
+            f"  {stats['iterations']} Newton iterations, {stats['descents']} descent(s), "
+            f"{stats['load_steps']} load steps; "
+            f"largest residuals: force {_num(stats['force_residual'])}, "
+            f"position {_num(stats['position_residual'])}; stable: {s.stable} (index {s.index})"
         )
-    elif s.get("type") == "modes":
-        about = s.get("about", "?")
-        print(f"  {s.get('dof', '?')} degree(s) of freedom, linearised about the {about} state")
-        if s.get("stable") is False:
-            print(f"  UNSTABLE: the {about} state is not a stable equilibrium; its unstable modes come first")
+    elif s.type == "modes":
+        print(f"  {s.dof} degree(s) of freedom, linearised about the {s.about} state")
+        if s.stable is False:
+            print(f"  UNSTABLE: the {s.about} state is not a stable equilibrium; its unstable modes come first")
         for k, mode in enumerate(results.modes, 1):
             print(f"  mode {k}: {_describe_mode(mode)}")
     elif stats:
         print(
-            f"  {stats.get('substeps', '?')} sub-steps ({stats.get('rejected_substeps', '?')} rejected), "
-            f"{stats.get('newton_iterations', '?')} Newton iterations, "
-            f"{stats.get('factorizations', '?')} factorizations"
+            f"  {stats['substeps']} sub-steps ({stats['rejected_substeps']} rejected), "
+            f"{stats['newton_iterations']} Newton iterations, "
+            f"{stats['factorizations']} factorizations"
         )
         print(
-            f"  largest residual {_num(stats.get('max_residual'))}, "
-            f"largest condition estimate {_num(stats.get('max_condition'))}"
+            f"  largest residual {_num(stats['max_residual'])}, "
+            f"largest condition estimate {_num(stats['max_condition'])}"
         )
-        redundant = [f"{r['element']}.{r['equation']}" for r in stats.get("redundant_rows", [])]
+        redundant = [f"{r['element']}.{r['equation']}" for r in s.redundant_rows or []]
         if redundant:
             print(f"  redundant rows (hold implicitly): {', '.join(redundant)}")
     _print_peaks(s)
@@ -243,22 +242,22 @@ def _describe_mode(mode: dict[str, Any]) -> str:
     return f"{mode['frequency']:.6g} Hz{damping}"
 
 
-def _print_peaks(s: dict[str, Any]) -> None:
+def _print_peaks(s: Summary) -> None:
     """The largest driver efforts and joint forces, and the joints whose shares are open."""
-    peaks: dict[str, Any] = s.get("peaks") or {}
+    peaks = s.peaks or {}
     efforts = [name for name in peaks if name.endswith(".effort")]
-    forces = sorted((n for n in peaks if n.endswith(".force")), key=lambda n: -(peaks[n].get("max_abs") or 0.0))
+    forces = sorted((n for n in peaks if n.endswith(".force")), key=lambda n: -peaks[n]["max_abs"])
     for name in efforts + forces[:5]:
         peak = peaks[name]
-        print(f"  peak {name:<24} {_num(peak.get('max_abs'))} at t = {peak.get('time') or 0:g} s")
+        print(f"  peak {name:<24} {_num(peak['max_abs'])} at t = {peak['time'] or 0:g} s")
     if len(forces) > 5:
         print(f"  ({len(forces) - 5} more joints' peaks in summary.json)")
-    indeterminate = s.get("indeterminate_joints") or []
+    indeterminate = s.indeterminate_joints or []
     if indeterminate:
         print(
             f"  indeterminate joints (redundant supports; minimum-norm reactions): {', '.join(indeterminate)}"
         )
-    for warning in s.get("warnings") or []:
+    for warning in s.warnings:
         print(f"  warning: {warning}")
 
 

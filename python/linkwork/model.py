@@ -185,7 +185,7 @@ class Model:
             if value is not None and not isinstance(value, numbers.Real):
                 raise model_error(option, f"expected a number, found {value!r} ({type(value).__name__})")
         bar = ProgressBar() if progress is True else None
-        report = bar.update if bar is not None else (progress or None)
+        report = bar.update if bar is not None else progress if callable(progress) else None
         try:
             return Results(self._native.run(analysis, integrator, rtol, atol, t_end, step, report), self)
         except (SolverError, AssemblyError, KeyboardInterrupt) as error:

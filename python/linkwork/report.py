@@ -25,6 +25,8 @@ from typing import Any
 
 import numpy as np
 
+from .results import Summary
+
 #: Animation frames drawn at most: 30 frames a second for 10 s of playback. Each frame carries every
 #: moving trace, so the page grows with the frames; more than a few hundred only make the slider
 #: finer than a pointer can set.
@@ -66,7 +68,7 @@ class Run:
     drawing: Mapping[str, Any]
     time: np.ndarray
     columns: Mapping[str, np.ndarray]
-    summary: Mapping[str, Any]
+    summary: Summary
     title: str = ""
 
 
@@ -366,8 +368,8 @@ def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray
     # Reactions of a static analysis: each joint's force on its first body as an arrow at its
     # point there, the largest a sixth of the picture long.
     arrows: list[tuple[str, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
-    if run.summary.get("type") == "static":
-        on = run.summary.get("reaction_bodies") or {}
+    if run.summary.type == "static":
+        on = run.summary.reaction_bodies or {}
         for j in joints:
             fx, fy = run.columns.get(f"{j['name']}.fx"), run.columns.get(f"{j['name']}.fy")
             if fx is None or fy is None or j["name"] not in on:
@@ -525,7 +527,7 @@ def _body_columns(run: Run, quantities: Sequence[str]) -> list[str]:
 
 def plots(run: Run) -> list[dict[str, Any]]:
     """The plots suited to the run's analysis, each with data."""
-    kind = run.summary.get("type", "")
+    kind = run.summary.type or ""
     cols = run.columns
     out: list[dict[str, Any]] = []
 
@@ -549,7 +551,7 @@ def plots(run: Run) -> list[dict[str, Any]]:
             out.append(bar_figure(run, columns, title, ylabel) if one_state else line_figure(run, columns, title, ylabel, log))
 
     if kind == "modes":
-        out += mode_plots(run.summary.get("modes") or [])
+        out += mode_plots(run.summary.modes or [])
         add(_body_columns(run, ["x", "y", "phi"]), "the state linearised about", "m, rad")
         return out
 
@@ -585,7 +587,7 @@ def plots(run: Run) -> list[dict[str, Any]]:
 def mode_figures(run: Run) -> list[tuple[str, dict[str, Any]]]:
     """Each mode's shape animated about the state linearised about: one period in 40 frames, the
     largest displacement a tenth of the mechanism's size."""
-    modes = run.summary.get("modes") or []
+    modes = run.summary.modes or []
     if not modes:
         return []
     base = {name: np.asarray(col, dtype=float)[:1] for name, col in run.columns.items()}
@@ -637,25 +639,25 @@ def _text(v: Any) -> str:
     return "none" if v is None else str(v)
 
 
-def failure_html(summary: Mapping[str, Any]) -> str:
+def failure_html(summary: Summary) -> str:
     """The failure, if the run failed, and the warnings, as HTML."""
     s = summary
     parts = []
-    status = s.get("status", "ok")
+    status = s.status or "ok"
     if status != "ok":
-        where = f" at t = {s['error_time']:.9g} s" if s.get("error_time") is not None else ""
-        elements = s.get("error_elements") or []
+        where = f" at t = {s.error_time:.9g} s" if s.error_time is not None else ""
+        elements = s.error_elements or []
         in_ = f" (in {', '.join(elements)})" if elements else ""
         parts.append(
             f'<div class="failure"><b>The run {html.escape(str(status))}{html.escape(where)}{html.escape(in_)}.</b> '
-            f"{html.escape(str(s.get('error', '')))}<br>These are the partial results computed until then.</div>"
+            f"{html.escape(s.error or '')}<br>These are the partial results computed until then.</div>"
         )
-    for w in s.get("warnings") or []:
+    for w in s.warnings or []:
         parts.append(f'<div class="warning">{html.escape(str(w))}</div>')
     return "\n".join(parts)
 
 
-def summary_html(summary: Mapping[str, Any]) -> str:
+def summary_html(summary: Summary) -> str:
     """The model summary and the solver statistics, as HTML."""
     s = summary
     parts = []
@@ -664,10 +666,10 @@ def summary_html(summary: Mapping[str, Any]) -> str:
     if "assembly" in s:
         head.append(("assembly", s["assembly"]))
     parts.append("<h3>Model</h3>" + _table(head))
-    stats = s.get("statistics")
+    stats = s.statistics
     if isinstance(stats, dict) and stats:
         parts.append("<h3>Solver statistics</h3>" + _table(list(stats.items())))
-    peaks = s.get("peaks")
+    peaks = s.peaks
     if isinstance(peaks, dict) and peaks:
         rows = [(k, f"{v.get('max_abs', 0.0):.6g} at t = {v.get('time')} s") for k, v in peaks.items()]
         parts.append("<h3>Peaks</h3>" + _table(rows))
@@ -738,13 +740,13 @@ def page(run: Run, plotly_js: str) -> str:
     """The whole report as one HTML page, with ``plotly_js`` (the library's source, packed by
     :func:`_packed`) embedded."""
     s = run.summary
-    modes = mode_figures(run) if s.get("type") == "modes" else []
+    modes = mode_figures(run) if s.type == "modes" else []
     mech = None if modes or not len(run.time) else mechanism_figure(run)
     plot_list = plots(run) if len(run.time) else []
     figures = {"mechanism": mech, "plots": plot_list, "modes": [fig for _, fig in modes]}
-    title = run.title or f"{s.get('model', 'model')}: {s.get('analysis', '')}"
+    title = run.title or f"{s.model}: {s.analysis or ''}"
     body = [f"<h1>{html.escape(title)}</h1>",
-            f"<div>{html.escape(str(s.get('type', '')))} analysis, status {html.escape(str(s.get('status', 'ok')))}</div>",
+            f"<div>{html.escape(s.type or 'no')} analysis, status {html.escape(s.status or 'ok')}</div>",
             failure_html(s)]
     if mech is not None:
         body += ['<h2>The mechanism <span id="now"></span></h2>', '<div id="mechanism"></div>']
@@ -777,11 +779,11 @@ def _packed(text: str) -> str:
     return base64.b64encode(gzip.compress(text.encode(), compresslevel=9, mtime=0)).decode()
 
 
-def compact_html(summary: Mapping[str, Any], rows: int, time: np.ndarray) -> str:
+def compact_html(summary: Summary, rows: int, time: np.ndarray) -> str:
     """A few lines on a run, for a notebook: analysis, status, output span, warnings, error."""
     span = f"t = {time[0]:.6g} .. {time[-1]:.6g} s" if rows else "no output"
-    head = f"<b>{html.escape(str(summary.get('model', '')))}</b>: {html.escape(str(summary.get('analysis', '')))} " + (
-        f"({html.escape(str(summary.get('type', '')))}), {html.escape(str(summary.get('status', 'ok')))}, {rows} points, {span}"
+    head = f"<b>{html.escape(summary.model or '')}</b>: {html.escape(summary.analysis or '')} " + (
+        f"({html.escape(summary.type or '')}), {html.escape(summary.status or 'ok')}, {rows} points, {span}"
     )
     return f"<div>{head}{failure_html(summary)}</div>"
 
@@ -800,7 +802,7 @@ def pose_figure(drawing: Mapping[str, Any], poses: Sequence[tuple[str, Mapping[s
     layout: dict[str, Any] = {}
     for label, q, opacity in poses:
         columns = {name: np.array([value]) for name, value in q.items()}
-        fig = mechanism_figure(Run(drawing, np.zeros(1), columns, {}))
+        fig = mechanism_figure(Run(drawing, np.zeros(1), columns, Summary()))
         for trace in fig["data"]:
             if trace["name"].endswith(" path"):
                 continue
@@ -857,7 +859,7 @@ def from_folder(folder: Any) -> Run:
     header, body = rows[0], rows[1:]
     values = np.array(body, dtype=float).reshape(len(body), len(header))
     columns = {name: values[:, k] for k, name in enumerate(header) if name != "time"}
-    return Run(model.drawing(), values[:, header.index("time")], columns, summary)
+    return Run(model.drawing(), values[:, header.index("time")], columns, Summary(summary))
 
 
 def write(path: Any, run: Run) -> None:

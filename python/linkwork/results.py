@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast, overload
 
 import numpy as np
 
@@ -15,6 +15,97 @@ if TYPE_CHECKING:
     import pandas
 
     from .model import Model
+
+_T = TypeVar("_T")
+
+
+class _Key(Generic[_T]):
+    """A read-only attribute of :class:`Summary`: its key of the same name, ``None`` when absent."""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self._name = name
+
+    @overload
+    def __get__(self, summary: None, owner: type) -> _Key[_T]: ...
+    @overload
+    def __get__(self, summary: Summary, owner: type) -> _T: ...
+    def __get__(self, summary: Summary | None, owner: type) -> _Key[_T] | _T:
+        if summary is None:
+            return self
+        # Declared per key: optional where a summary may lack the key, so that absent is None.
+        return cast(_T, summary.get(self._name))
+
+
+class Summary(dict[str, Any]):
+    """What ``summary.json`` says: a dict, as read from the file, whose keys are also attributes.
+
+    ``summary["dof"]`` and ``summary.dof`` are the same value; an attribute whose key this summary
+    does not have (``modes`` of a kinematic analysis, ``dof`` of a run that failed before it was
+    known) is ``None``. Every summary has the model's ``model``, ``bodies``, ``coordinates``,
+    ``joints``, and ``output_points``, ``warnings`` and ``status``; every analysis adds
+    ``analysis``, ``type``, ``active_drivers``, ``settings``, and once it has the rank of the
+    constraint Jacobian ``dof`` and ``redundant_rows``. ``docs/model-format.md`` lists the rest.
+    """
+
+    __slots__ = ()
+
+    model: _Key[str] = _Key()
+    """Name of the model."""
+    bodies: _Key[int] = _Key()
+    """Number of moving bodies."""
+    coordinates: _Key[int] = _Key()
+    """Number of coordinates, three per body."""
+    joints: _Key[list[str]] = _Key()
+    """The joints, in file order."""
+    output_points: _Key[int] = _Key()
+    """Number of output points written."""
+    warnings: _Key[list[str]] = _Key()
+    """Messages about the run; empty when there is nothing to say."""
+    status: _Key[str] = _Key()
+    """``"ok"``; ``"failed"`` when the run stopped at an error; ``"interrupted"`` when Ctrl-C stopped it."""
+    error: _Key[str | None] = _Key()
+    """The error's message, when the run failed."""
+    error_elements: _Key[list[str] | None] = _Key()
+    """The joints and drivers the error names, when the run failed."""
+    error_time: _Key[float | None] = _Key()
+    """When the error happened, s, when it happened at a time."""
+    analysis: _Key[str | None] = _Key()
+    """Name of the analysis run (``None`` when the run named none of the model's)."""
+    active_drivers: _Key[list[str] | None] = _Key()
+    """The drivers the analysis holds."""
+    settings: _Key[dict[str, Any] | None] = _Key()
+    """The position solver's settings."""
+    dof: _Key[int | None] = _Key()
+    """Degrees of freedom the joints and active drivers leave."""
+    redundant_rows: _Key[list[dict[str, str]] | None] = _Key()
+    """Rows that repeat earlier ones (they hold implicitly), each ``{"element": ..., "equation": ...}``."""
+    indeterminate_joints: _Key[list[str] | None] = _Key()
+    """Joints whose share of the reactions the equations leave open (minimum-norm reactions)."""
+    assembly: _Key[dict[str, Any] | None] = _Key()
+    """The assembly at the start: ``iterations``, ``residual``, ``velocity_residual``."""
+    statistics: _Key[dict[str, Any] | None] = _Key()
+    """What the solver did (its keys depend on the analysis' type)."""
+    integrator: _Key[dict[str, Any] | None] = _Key()
+    """The integrator's settings (dynamic)."""
+    residuals: _Key[dict[str, float] | None] = _Key()
+    """The largest constraint residuals at output, ``max_position`` and ``max_velocity`` (dynamic)."""
+    stable: _Key[bool | None] = _Key()
+    """Whether the state is a stable equilibrium (static, modes)."""
+    index: _Key[int | None] = _Key()
+    """Unstable directions of the equilibrium reached (static; ``None`` also when there was none)."""
+    min_reduced_stiffness: _Key[float | None] = _Key()
+    """Smallest eigenvalue of the reduced tangent stiffness over the equilibria written (static)."""
+    about: _Key[str | None] = _Key()
+    """The state a modes analysis linearised about."""
+    modes: _Key[list[dict[str, Any]] | None] = _Key()
+    """The modes of a modes analysis (see :attr:`Results.modes`)."""
+    reaction_bodies: _Key[dict[str, str] | None] = _Key()
+    """The body each joint's reaction acts on (inverse, static, dynamic)."""
+    peaks: _Key[dict[str, dict[str, Any]] | None] = _Key()
+    """Per joint and active driver the largest reaction or effort ``max_abs`` and its ``time``."""
+    # Last: in the class body `type` is this attribute from here on.
+    type: _Key[str | None] = _Key()
+    """The analysis' type: ``kinematic``, ``inverse``, ``static``, ``modes`` or ``dynamic``."""
 
 
 class Results:
@@ -63,10 +154,10 @@ class Results:
         return self._values
 
     @property
-    def summary(self) -> dict[str, Any]:
-        """What ``summary.json`` says: sizes, solver statistics, ``status`` and any error."""
-        summary: dict[str, Any] = self._native.summary
-        return summary
+    def summary(self) -> Summary:
+        """What ``summary.json`` says, as a dict whose keys are also attributes (:class:`Summary`):
+        sizes, solver statistics, ``status`` and any error."""
+        return Summary(self._native.summary)
 
     @property
     def ok(self) -> bool:
@@ -82,9 +173,8 @@ class Results:
         ``damped_frequency`` (Hz), ``damping_ratio`` (``None`` for a neutral or unstable mode),
         ``growth_rate`` (``Re s``, 1/s, of an unstable mode: it grows as ``exp(rate t)``; ``None``
         otherwise), ``eigenvalue`` (``[re, im]``, 1/s) and ``shape`` (``{"<body>.x": ...}``, the
-        largest component 1). ``summary["stable"]`` is false when any mode is unstable."""
-        modes: list[dict[str, Any]] = self.summary.get("modes") or []
-        return modes
+        largest component 1). ``summary.stable`` is false when any mode is unstable."""
+        return self.summary.modes or []
 
     def __getitem__(self, name: str) -> np.ndarray:
         """The column called ``name`` (``"time"`` included), as a read-only numpy array."""
@@ -117,7 +207,7 @@ class Results:
         fx, fy, torque = (self[f"{joint}.{q}"] for q in ("fx", "fy", "torque"))
         if frame == "global":
             return fx, fy, torque
-        body = (self.summary.get("reaction_bodies") or {}).get(joint)
+        body = (self.summary.reaction_bodies or {}).get(joint)
         if body is None or body == "ground":
             return fx, fy, torque
         phi = self[f"{body}.phi"]
@@ -177,9 +267,8 @@ class Results:
 
     def __repr__(self) -> str:
         summary = self.summary
-        status = summary.get("status", "?")
         span = f"t = {self._time[0]:g} .. {self._time[-1]:g} s" if len(self) else "no output"
         return (
-            f"<linkwork.Results {summary.get('analysis', '')!r} ({status}): {len(self)} points, {span}, "
+            f"<linkwork.Results {summary.analysis or ''!r} ({summary.status}): {len(self)} points, {span}, "
             f"{len(self._columns)} columns>"
         )

@@ -245,10 +245,9 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
         }
         // Stopped by the Python side, which raises its own exception (`KeyboardInterrupt`);
         // this is what an interruption raises when it comes from elsewhere.
-        Error::Interrupted { time } => (
-            pyo3::exceptions::PyKeyboardInterrupt::new_err(message),
-            Attributes::new(py).with("time", time)?,
-        ),
+        Error::Interrupted { time } => {
+            (pyo3::exceptions::PyKeyboardInterrupt::new_err(message), Attributes::new(py).with("time", time)?)
+        }
         Error::Io { path, .. } => {
             let class = py.import("linkwork._linkwork")?.getattr(FILE_ERROR)?;
             let err = PyErr::from_value(class.call1((message,))?);

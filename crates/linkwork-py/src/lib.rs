@@ -9,11 +9,11 @@ mod json;
 
 use errors::{guard, to_pyerr};
 use linkwork::analysis::check;
+use linkwork::progress::Progress;
 use linkwork::{Error, Results};
 use numpy::ndarray::{Array2, ShapeBuilder};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
-use linkwork::progress::Progress;
 use std::path::PathBuf;
 use std::sync::mpsc::RecvTimeoutError;
 use std::time::Duration;

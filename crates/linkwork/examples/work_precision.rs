@@ -103,7 +103,7 @@ fn output_step_effect() {
                 };
                 let time = start.elapsed().as_secs_f64();
                 let err = pendulum_error(&r);
-                let steps = &r.summary["statistics"]["steps"];
+                let steps = &r.summary_json(None)["statistics"]["steps"];
                 println!("| | {label} | {tol:e} | {cap} | {err:.2e}{note} | {time:.2} | {steps} |");
             }
         }
@@ -145,7 +145,7 @@ fn sweep(filter: &str, integrator: &str) {
                             (format!("**stopped**: {}", f.error), f.results)
                         }
                     };
-                    let steps = &r.summary["statistics"]["steps"];
+                    let steps = &r.summary_json(None)["statistics"]["steps"];
                     println!("| {file} | {analysis} | {label} | {tol:e} | {outcome} | {time:.2} | {steps} |");
                 }
             }
@@ -170,11 +170,11 @@ fn one(file: &str, integrator: &str, tol: f64) {
             f.results
         }
     };
-    println!("{file} {integrator} {tol:e}: {time:.3} s, {}", r.summary["statistics"]);
+    println!("{file} {integrator} {tol:e}: {time:.3} s, {}", r.summary_json(None)["statistics"]);
     if file.contains("nfourbar") {
         println!("B0 error to t = {}: {:.3e} m", r.time.last().unwrap_or(&0.0), nfourbar_error(&r, 40));
     }
-    println!("warnings: {}", r.summary["warnings"]);
+    println!("warnings: {}", r.summary_json(None)["warnings"]);
 }
 
 fn main() {
@@ -215,7 +215,7 @@ fn main() {
                     Err(f) => (f.results, format!(" (failed: {})", f.error)),
                 };
                 let (error, unit) = (case.error)(&results);
-                let s = &results.summary["statistics"];
+                let s = &results.summary_json(None)["statistics"];
                 let error = if unit == "digits" { format!("{error:.2}") } else { format!("{error:.2e}") };
                 println!(
                     "| {} | {label} | {tol:e} | {error}{failure} | {unit} | {best:.3} | {} | {} | {} |",

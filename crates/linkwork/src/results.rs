@@ -2,11 +2,21 @@
 //! `<body>.x, .y, .phi, .vx, .vy, .omega, .ax, .ay, .alpha` per body, SI units, angles unwrapped;
 //! for dynamics every joint's `<joint>.fx, .fy, .torque`, every active driver's
 //! `<driver>.effort`, the energies and constraint residuals; then one column per measure) and
-//! `summary.json` (model sizes, degrees of freedom, solver statistics, status).
+//! `summary.json` ([`Summary`], with `output_points`, `status` and the error if there is one:
+//! the same header and the same shape of each fact for every analysis, see [`summary`]).
+
+pub mod summary;
+
+pub use summary::{
+    AnalysisHeader, AssemblyReport, DynamicStats, EquilibriumReport, KinematicStats, Mode, ModeKind, Peak, Reactions,
+    Residuals, StaticStats, Statistics, Summary,
+};
 
 use crate::error::Error;
 use crate::model::{Analysis, Model};
-use serde_json::{json, Map, Value};
+use serde::Serialize;
+use serde_json::Value;
+use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -23,8 +33,8 @@ pub struct Results {
     pub names: Vec<String>,
     /// (columns x rows) values, column by column.
     pub columns: Vec<Vec<f64>>,
-    /// Everything `summary.json` says besides the status.
-    pub summary: Map<String, Value>,
+    /// Everything `summary.json` says besides `output_points`, the status and the error.
+    pub summary: Summary,
 }
 
 /// A failed analysis: the error and every result computed before it.
@@ -40,14 +50,12 @@ impl Results {
     /// Empty results with the columns of `model` for `analysis`.
     pub fn new(model: &Model, analysis: &Analysis) -> Results {
         let mut results = Results::of_model(model);
-        let summary = &mut results.summary;
-        summary.insert("analysis".into(), json!(analysis.name));
-        summary.insert("type".into(), json!(analysis.kind));
-        summary.insert(
-            "active_drivers".into(),
-            json!(analysis.drivers.iter().map(|&d| &model.drivers[d].name).collect::<Vec<_>>()),
-        );
-        summary.insert("settings".into(), json!(analysis.settings));
+        results.summary.analysis = Some(AnalysisHeader {
+            analysis: analysis.name.clone(),
+            kind: analysis.kind,
+            active_drivers: analysis.drivers.iter().map(|&d| model.drivers[d].name.clone()).collect(),
+            settings: analysis.settings,
+        });
         results
     }
 
@@ -56,11 +64,13 @@ impl Results {
     pub fn of_model(model: &Model) -> Results {
         let names: Vec<String> =
             model.bodies.iter().flat_map(|b| BODY_QUANTITIES.iter().map(move |q| format!("{}.{q}", b.name))).collect();
-        let mut summary = Map::new();
-        summary.insert("model".into(), json!(model.name));
-        summary.insert("bodies".into(), json!(model.bodies.len()));
-        summary.insert("coordinates".into(), json!(model.n()));
-        summary.insert("joints".into(), json!(model.joints.iter().map(|j| &j.name).collect::<Vec<_>>()));
+        let summary = Summary {
+            model: model.name.clone(),
+            bodies: model.bodies.len(),
+            coordinates: model.n(),
+            joints: model.joints.iter().map(|j| j.name.clone()).collect(),
+            ..Summary::default()
+        };
         Results { time: Vec::new(), columns: vec![Vec::new(); names.len()], names, summary }
     }
 
@@ -119,25 +129,24 @@ impl Results {
     /// joint the largest resultant force `|(fx, fy)|` and the largest `|torque|`, for every
     /// active driver the largest `|effort|`, each with its time, for sizing bearings and motors).
     pub(crate) fn insert_reaction_summary(&mut self, model: &Model, analysis: &Analysis) {
-        let on: Map<String, Value> = model
+        let reaction_bodies = model
             .joints
             .iter()
             .map(|j| {
                 let body = j.constraint.anchor().i.0.map_or("ground", |k| model.bodies[k / 3].name.as_str());
-                (j.name.clone(), json!(body))
+                (j.name.clone(), body.to_string())
             })
             .collect();
-        self.summary.insert("reaction_bodies".into(), Value::Object(on));
-        let peak = |values: &mut dyn Iterator<Item = f64>| -> Value {
+        let peak = |values: &mut dyn Iterator<Item = f64>| -> Peak {
             let (mut best, mut at) = (0.0f64, None);
             for (k, v) in values.enumerate() {
                 if v.abs() >= best || at.is_none() {
                     (best, at) = (v.abs(), Some(k));
                 }
             }
-            json!({"max_abs": best, "time": at.map(|k| self.time[k])})
+            Peak { max_abs: best, time: at.map(|k| self.time[k]) }
         };
-        let mut peaks = Map::new();
+        let mut peaks = BTreeMap::new();
         for j in &model.joints {
             let (Some(fx), Some(fy), Some(m)) = (
                 self.column(&format!("{}.fx", j.name)),
@@ -155,7 +164,7 @@ impl Results {
                 peaks.insert(name, peak(&mut e.iter().copied()));
             }
         }
-        self.summary.insert("peaks".into(), Value::Object(peaks));
+        self.summary.reactions = Some(Reactions { reaction_bodies, peaks });
     }
 
     /// The column called `name` (`time` included).
@@ -191,33 +200,54 @@ impl Results {
         })
     }
 
-    /// The summary as JSON, with `status` ("ok" or "failed") and the error if there is one.
+    /// The summary as JSON: [`Results::summary`] with `output_points`, `status` ("ok",
+    /// "failed", or "interrupted" when the run was asked to stop) and, if there is one, the error (`error`, its message; `error_elements`, the
+    /// joints and drivers it names; `error_time` when it happened at a time).
     pub fn summary_json(&self, error: Option<&Error>) -> Value {
-        let mut s = self.summary.clone();
-        let status = match error {
-            None => "ok",
-            Some(Error::Interrupted { .. }) => "interrupted",
-            Some(_) => "failed",
-        };
-        s.insert("status".into(), json!(status));
-        if let Some(e) = error {
-            s.insert("error".into(), json!(e.to_string()));
-            s.insert("error_elements".into(), json!(e.elements()));
-            if let Error::Singular { time, .. }
-            | Error::Convergence { time, .. }
-            | Error::Equilibrium { time, .. }
-            | Error::NoEquilibrium { time, .. }
-            | Error::Assembly { time, .. }
-            | Error::Integration { time, .. }
-            | Error::NonFinite { time, .. }
-            | Error::Unbounded { time, .. }
-            | Error::OutOfMemory { time, .. }
-            | Error::Interrupted { time } = e
-            {
-                s.insert("error_time".into(), json!(time));
-            }
+        /// What `summary.json` holds: the summary, then what the run's outcome adds.
+        #[derive(Serialize)]
+        struct Written<'a> {
+            #[serde(flatten)]
+            summary: &'a Summary,
+            output_points: usize,
+            status: &'static str,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            error: Option<String>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            error_elements: Option<Vec<String>>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            error_time: Option<f64>,
         }
-        Value::Object(s)
+        let error_time = match error {
+            Some(
+                Error::Singular { time, .. }
+                | Error::Convergence { time, .. }
+                | Error::Equilibrium { time, .. }
+                | Error::NoEquilibrium { time, .. }
+                | Error::Assembly { time, .. }
+                | Error::Integration { time, .. }
+                | Error::NonFinite { time, .. }
+                | Error::Unbounded { time, .. }
+                | Error::OutOfMemory { time, .. }
+                | Error::Interrupted { time },
+            ) => Some(*time),
+            _ => None,
+        };
+        let written = Written {
+            summary: &self.summary,
+            output_points: self.len(),
+            status: match error {
+                None => "ok",
+                Some(Error::Interrupted { .. }) => "interrupted",
+                Some(_) => "failed",
+            },
+            error: error.map(|e| e.to_string()),
+            error_elements: error.map(Error::elements),
+            error_time,
+        };
+        // Plain data (strings, counts, finite or `None` numbers; a non-finite one is written as
+        // null): serializing it cannot fail.
+        serde_json::to_value(written).unwrap_or_default()
     }
 
     /// Write `modes.csv` of a modes analysis at `path`: one line per mode, `mode, kind, frequency,
@@ -230,11 +260,12 @@ impl Results {
     }
 
     fn stage_modes_csv(&self, path: &Path) -> Result<Option<Staged>, Error> {
-        let Some(Value::Array(modes)) = self.summary.get("modes") else { return Ok(None) };
+        let Some(modes) = &self.summary.modes else { return Ok(None) };
         // The shape's coordinates in the order of the columns (bodies in file order).
-        let shape = modes.first().and_then(|m| m["shape"].as_object());
+        let shape = modes.first().map(|m| &m.shape);
         let coords: Vec<&String> = self.names.iter().filter(|n| shape.is_some_and(|s| s.contains_key(*n))).collect();
-        let num = |v: &Value| v.as_f64().map(|x| format!("{x:?}")).unwrap_or_default();
+        // Empty where the mode has no such number, or (as null in `summary.json`) it is not finite.
+        let num = |v: Option<f64>| v.filter(|x| x.is_finite()).map(|x| format!("{x:?}")).unwrap_or_default();
         Staged::write(path, |w| {
             write!(w, "mode,kind,frequency,damped_frequency,damping_ratio,growth_rate")?;
             for c in &coords {
@@ -242,12 +273,14 @@ impl Results {
             }
             writeln!(w)?;
             for (k, m) in modes.iter().enumerate() {
-                write!(w, "{},{}", k + 1, m["kind"].as_str().unwrap_or_default())?;
-                for key in ["frequency", "damped_frequency", "damping_ratio", "growth_rate"] {
-                    write!(w, ",{}", num(&m[key]))?;
+                // The kind as `summary.json` spells it.
+                let kind = serde_json::to_value(m.kind).unwrap_or_default();
+                write!(w, "{},{}", k + 1, kind.as_str().unwrap_or_default())?;
+                for value in [m.frequency, Some(m.damped_frequency), m.damping_ratio, m.growth_rate] {
+                    write!(w, ",{}", num(value))?;
                 }
                 for c in &coords {
-                    write!(w, ",{}", num(&m["shape"][c.as_str()]))?;
+                    write!(w, ",{}", num(m.shape.get(c.as_str()).copied()))?;
                 }
                 writeln!(w)?;
             }
@@ -320,7 +353,7 @@ mod tests {
             time: vec![0.0, 1.0],
             names: vec!["a.x".into()],
             columns: vec![vec![value, value]],
-            summary: Map::new(),
+            summary: Summary::default(),
         }
     }
 

@@ -23,12 +23,12 @@ fn double_pendulum_energy() {
         );
         let r = linkwork::Model::from_yaml(&text).unwrap().run("dynamics").unwrap_or_else(|f| panic!("{}", f.error));
         // The run is the one patched in, not the file's default integrator and formulation.
-        assert_eq!(r.summary["integrator"]["kind"], integrator);
+        assert_eq!(r.summary_json(None)["integrator"]["kind"], integrator);
         if !formulation.is_empty() {
-            assert_eq!(r.summary["integrator"]["formulation"], formulation);
+            assert_eq!(r.summary_json(None)["integrator"]["formulation"], formulation);
         }
         let drift = energy_drift(&r);
-        eprintln!("{integrator} {formulation}: drift {drift:e} J, {}", r.summary["statistics"]);
+        eprintln!("{integrator} {formulation}: drift {drift:e} J, {}", r.summary_json(None)["statistics"]);
         assert!(drift < bound, "{integrator} {formulation}: drift {drift}");
     }
 }

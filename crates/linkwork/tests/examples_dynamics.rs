@@ -45,7 +45,7 @@ fn run(model: &Model, analysis: &str, overrides: &Overrides) -> Results {
         model.name,
         overrides.integrator,
         r.len(),
-        r.summary["statistics"]
+        r.summary_json(None)["statistics"]
     );
     r
 }
@@ -147,7 +147,7 @@ fn quick_return_a_moves_as_model_b_allows() {
                 ];
                 worst = worst.max(max_abs(residuals));
             }
-            let own = r.summary["residuals"]["max_position"].as_f64().expect("residuals");
+            let own = r.summary_json(None)["residuals"]["max_position"].as_f64().expect("residuals");
             eprintln!(
                 "quick-return A {analysis} {integrator}: model B's equations to {worst:.2e}, A's own to {own:.2e}"
             );
@@ -277,7 +277,11 @@ fn nfourbar_a02_moves_as_one_degree_of_freedom() {
             Err(f) => (f.results, Some(f.error)),
         };
         eprintln!("nfourbar {integrator}: {} outputs, error {error:?}", r.len());
-        eprintln!("summary: redundant rows {}, dof {}", r.summary["redundant_rows"], r.summary["dof"]);
+        eprintln!(
+            "summary: redundant rows {}, dof {}",
+            r.summary_json(None)["redundant_rows"],
+            r.summary_json(None)["dof"]
+        );
         if let Some(e) = &error {
             match e {
                 Error::Singular { time, rows, .. } | Error::Integration { time, rows, .. } => {
@@ -392,9 +396,9 @@ fn nfourbar_a02_abam_crosses_the_flat_positions_at_1e_11_to_1e_13() {
         let error = nfourbar_error(&r, 40);
         assert!(error < bound, "{tol:e}: B0 {error:e}");
         if tol < 1e-11 {
-            let crossings = r.summary["statistics"]["crossings"].as_u64().unwrap_or(0);
+            let crossings = r.summary_json(None)["statistics"]["crossings"].as_u64().unwrap_or(0);
             assert!(crossings > 0, "{tol:e}: no crossing");
-            let warnings = r.summary["warnings"].as_array().cloned().unwrap_or_default();
+            let warnings = r.summary_json(None)["warnings"].as_array().cloned().unwrap_or_default();
             let warned = warnings.iter().any(|w| w.as_str().is_some_and(|w| w.contains("bdf took the state across")));
             assert!(warned, "{tol:e}: {warnings:?}");
         }
@@ -404,5 +408,8 @@ fn nfourbar_a02_abam_crosses_the_flat_positions_at_1e_11_to_1e_13() {
     model.analyses["dynamics"].integrator.max_steps = 400;
     let f = model.run_with("dynamics", &tight("abam", 1e-12)).expect_err("a budget of 400 steps");
     assert!(f.error.to_string().contains("more than 400 steps"), "{}", f.error);
-    assert!(f.results.summary["statistics"]["crossings"].as_u64().unwrap_or(0) > 0, "no crossing before the budget");
+    assert!(
+        f.results.summary_json(None)["statistics"]["crossings"].as_u64().unwrap_or(0) > 0,
+        "no crossing before the budget"
+    );
 }

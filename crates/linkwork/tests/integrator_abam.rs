@@ -15,7 +15,7 @@ fn double_pendulum_energy_abam() {
     let (_, r) = run("double_pendulum.yaml", "dynamics_abam");
     let elapsed = clock.elapsed();
     let drift = energy_drift(&r);
-    let stats = &r.summary["statistics"];
+    let stats = &r.summary_json(None)["statistics"];
     eprintln!("abam drift {drift:e} in {elapsed:?}, stats {stats}");
     assert!(drift < 1e-3, "drift {drift}");
     let count = |k: &str| stats[k].as_u64().unwrap();
@@ -62,7 +62,7 @@ fn torsion_errors(rtol: f64, extra: &str) -> (f64, f64, serde_json::Value) {
         worst.0 = worst.0.max((phi[k] - 0.5 * (2.0 * t).cos()).abs());
         worst.1 = worst.1.max((omega[k] + (2.0 * t).sin()).abs());
     }
-    (worst.0, worst.1, r.summary["statistics"].clone())
+    (worst.0, worst.1, r.summary_json(None)["statistics"].clone())
 }
 
 /// Tolerance proportionality: the global error follows the tolerance. Measured largest errors
@@ -122,7 +122,7 @@ analyses:
 fn slider_crank_repartitions_through_full_turns() {
     let model = linkwork::Model::from_yaml(&free_slider_crank(3.0)).unwrap();
     let r = model.run("dynamics").unwrap_or_else(|f| panic!("{}", f.error));
-    let stats = &r.summary["statistics"];
+    let stats = &r.summary_json(None)["statistics"];
     let crank = col(&r, "crank.phi");
     let turns = (crank[crank.len() - 1] - crank[0]) / std::f64::consts::TAU;
     let drift = energy_drift(&r);

@@ -54,7 +54,7 @@ fn run(
 }
 
 fn stat(r: &Results, name: &str) -> f64 {
-    r.summary["statistics"][name].as_f64().unwrap_or(f64::NAN)
+    r.summary_json(None)["statistics"][name].as_f64().unwrap_or(f64::NAN)
 }
 
 /// Largest error of every body's position columns against the quadrature reference.
@@ -95,7 +95,7 @@ fn velocities_in_the_error_test_make_the_error_follow_the_tolerance() {
     let tol = 1e-8;
     let o = Overrides { integrator: Some(IntegratorKind::Bdf), rtol: Some(tol), atol: Some(tol), ..Default::default() };
     let default = model.run_with("dynamics", &o).unwrap_or_else(|f| panic!("{}", f.error));
-    assert_eq!(default.summary["integrator"]["formulation"], "si2");
+    assert_eq!(default.summary_json(None)["integrator"]["formulation"], "si2");
     let si2 = quick_return_error(&default, &reference);
     let (r, e, _) = run(&mut model, "dynamics", Formulation::Index3, tol, None);
     assert!(e.is_none(), "{e:?}");
@@ -119,7 +119,7 @@ fn newton_at_round_off_converges_instead_of_shrinking_the_step() {
         for tol in [1e-12, 1e-13] {
             let (r, e, _) = run(&mut model, "dynamics", formulation, tol, None);
             let err = quick_return_error(&r, &reference);
-            eprintln!("{formulation:?} {tol:e}: error {err:.2e}, statistics {}", r.summary["statistics"]);
+            eprintln!("{formulation:?} {tol:e}: error {err:.2e}, statistics {}", r.summary_json(None)["statistics"]);
             assert!(e.is_none(), "{formulation:?} {tol:e}: {e:?}");
             if formulation == Formulation::Si2 && tol == 1e-12 {
                 assert!(err <= 1000.0 * tol, "{err:.3e}");
@@ -139,7 +139,7 @@ fn si2_passes_the_flat_n_four_bar_with_index3_steps() {
     let mut model = load("iftomm_a02_nfourbar.yaml");
     let (r, e, _) = run(&mut model, "dynamics", Formulation::Si2, 1e-10, Some(1.5));
     let err = nfourbar_error(&r, 40);
-    eprintln!("A02 to 1.5 s at 1e-10: error {err:.2e}, statistics {}", r.summary["statistics"]);
+    eprintln!("A02 to 1.5 s at 1e-10: error {err:.2e}, statistics {}", r.summary_json(None)["statistics"]);
     assert!(e.is_none(), "{e:?}");
     assert!(err < 1e-6, "{err:.3e}");
 }
@@ -193,7 +193,7 @@ fn a02_at_1e_12_and_1e_13_passes_the_flat_positions() {
     for tol in [1e-12, 1e-13] {
         let (r, e, _) = run(&mut model, "dynamics", Formulation::Si2, tol, Some(1.5));
         let err = nfourbar_error(&r, 40);
-        eprintln!("A02 to 1.5 s at {tol:e}: error {err:.2e}, statistics {}", r.summary["statistics"]);
+        eprintln!("A02 to 1.5 s at {tol:e}: error {err:.2e}, statistics {}", r.summary_json(None)["statistics"]);
         assert!(e.is_none(), "{tol:e}: {e:?}");
         assert!(err < 1e-8, "{tol:e}: {err:.3e}");
     }
@@ -212,7 +212,7 @@ fn a02_at_1e_12_runs_to_the_end_within_2e_5() {
     let mut model = load("iftomm_a02_nfourbar.yaml");
     let (r, e, _) = run(&mut model, "dynamics", Formulation::Si2, 1e-12, None);
     let err = nfourbar_error(&r, 40);
-    eprintln!("A02 20 s at 1e-12: error {err:.2e}, statistics {}", r.summary["statistics"]);
+    eprintln!("A02 20 s at 1e-12: error {err:.2e}, statistics {}", r.summary_json(None)["statistics"]);
     assert!(e.is_none(), "{e:?}");
     assert!(err < 2e-5, "{err:.3e}");
     assert_eq!(stat(&r, "newton_failures"), 0.0);
@@ -234,7 +234,7 @@ fn tightest_tolerance_runs_the_loaded_quick_returns_and_andrews() {
     ] {
         let mut model = load(file);
         let (r, e, _) = run(&mut model, analysis, Formulation::Si2, 1e-13, None);
-        eprintln!("{file} {analysis} at 1e-13: statistics {}", r.summary["statistics"]);
+        eprintln!("{file} {analysis} at 1e-13: statistics {}", r.summary_json(None)["statistics"]);
         assert!(e.is_none(), "{file} {analysis}: {e:?}");
         if file == "andrews.yaml" {
             let digits = andrews_digits(&r, &ANDREWS_END_CONVERGED);

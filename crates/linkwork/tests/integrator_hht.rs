@@ -41,7 +41,7 @@ fn run_tol(model: &Model, analysis: &str, kind: IntegratorKind, tol: f64, t_end:
 }
 
 fn steps(r: &Results) -> u64 {
-    r.summary["statistics"]["steps"].as_u64().unwrap()
+    r.summary_json(None)["statistics"]["steps"].as_u64().unwrap()
 }
 
 /// The coasting quick-return A (analysis `dynamics`, 2 s) at 1e-6, 1e-8, 1e-10 against the
@@ -129,7 +129,7 @@ fn a02_passes_the_flat_position_at_1e_12_and_1e_13() {
     for tol in [1e-12, 1e-13] {
         let (r, _) = run_tol(&model, "dynamics", IntegratorKind::Hht, tol, Some(1.0));
         let err = nfourbar_error(&r, 40);
-        eprintln!("A02 to 1 s at {tol:e}: error {err:.2e}, {}", r.summary["statistics"]);
+        eprintln!("A02 to 1 s at {tol:e}: error {err:.2e}, {}", r.summary_json(None)["statistics"]);
         assert!(err < 1e-6, "{tol:e}: {err:.3e}");
     }
 }
@@ -152,7 +152,7 @@ fn diag() {
             let periods = r.time[r.len() - 1] / std::f64::consts::PI;
             let phi = col(&r, "bar.phi");
             let err = r.time.iter().zip(phi).map(|(t, p)| (p - 0.5 * (2.0 * t).cos()).abs()).fold(0.0, f64::max);
-            eprintln!("BAR tol {tol:e}: energy loss per period {:.4e} (E0 {:.4}, min {:.4e} max {:.4e}) phi error {err:.3e} steps {} cpu {cpu:.2} {}", (e[0] - e[e.len() - 1]) / e[0] / periods, e[0], e.iter().cloned().fold(f64::INFINITY, f64::min), e.iter().cloned().fold(0.0, f64::max), steps(&r), r.summary["statistics"]);
+            eprintln!("BAR tol {tol:e}: energy loss per period {:.4e} (E0 {:.4}, min {:.4e} max {:.4e}) phi error {err:.3e} steps {} cpu {cpu:.2} {}", (e[0] - e[e.len() - 1]) / e[0] / periods, e[0], e.iter().cloned().fold(f64::INFINITY, f64::min), e.iter().cloned().fold(0.0, f64::max), steps(&r), r.summary_json(None)["statistics"]);
         }
     }
     if what.contains("a01") {
@@ -167,13 +167,13 @@ fn diag() {
                 a01_energy_loss_per_period(&r),
                 e[..per].iter().map(|x| (x - e[0]).abs()).fold(0.0, f64::max)
             );
-            eprintln!("A01 residuals {}", r.summary["residuals"]);
+            eprintln!("A01 residuals {}", r.summary_json(None)["residuals"]);
             eprintln!(
                 "A01 hht tol {tol:e}: error {:.3e} drift {:.3e} steps {} cpu {cpu:.2} s stats {}",
                 a01_error(&r),
                 energy_drift(&r),
                 steps(&r),
-                r.summary["statistics"]
+                r.summary_json(None)["statistics"]
             );
         }
     }
@@ -195,7 +195,7 @@ fn diag() {
                 Ok(r) => eprintln!(
                     "{name} hht {tol:e}: ok in {:.2} s, {}",
                     clock.elapsed().as_secs_f64(),
-                    r.summary["statistics"]
+                    r.summary_json(None)["statistics"]
                 ),
                 Err(f) => {
                     eprintln!("{name} hht {tol:e}: stopped in {:.2} s: {}", clock.elapsed().as_secs_f64(), f.error)
@@ -212,7 +212,7 @@ fn diag() {
                 "QR hht tol {tol:e}: error {:.3e} steps {} cpu {cpu:.2} s stats {}",
                 qr.error(&r),
                 steps(&r),
-                r.summary["statistics"]
+                r.summary_json(None)["statistics"]
             );
         }
     }

@@ -8,7 +8,12 @@ use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::Model;
 
 fn warnings(r: &linkwork::Results) -> Vec<String> {
-    r.summary["warnings"].as_array().expect("warnings").iter().map(|w| w.as_str().unwrap().to_string()).collect()
+    r.summary_json(None)["warnings"]
+        .as_array()
+        .expect("warnings")
+        .iter()
+        .map(|w| w.as_str().unwrap().to_string())
+        .collect()
 }
 
 /// The quick-return's kinematics with `solver.tolerance: 1e-18` (below the 1.4e-14 that 64 units
@@ -97,7 +102,7 @@ fn an_integrator_tolerance_below_round_off_warns_and_runs() {
         let w = warnings(&r);
         assert!(w.iter().any(|w| w.contains("solver.rtol 1e-16")), "{integrator}: {w:?}");
         let worst = common::references::pendulum_error(&r);
-        eprintln!("{integrator}: {worst:.2e} m, statistics {}", r.summary["statistics"]);
+        eprintln!("{integrator}: {worst:.2e} m, statistics {}", r.summary_json(None)["statistics"]);
         assert!(worst < bound, "{integrator}: {worst}");
     }
 }

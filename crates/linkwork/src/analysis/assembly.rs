@@ -10,6 +10,7 @@
 use super::{min_norm_solve, residual_floor, select_columns};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Result};
+use crate::results::AssemblyReport;
 use crate::system::System;
 use faer::Mat;
 
@@ -37,6 +38,17 @@ pub struct Assembly {
     pub velocity_residual: f64,
     /// (n) `q - q_guess`.
     pub change: Vec<f64>,
+}
+
+impl Assembly {
+    /// What the summary says of it.
+    pub fn report(&self) -> AssemblyReport {
+        AssemblyReport {
+            iterations: self.iterations,
+            residual: self.residual,
+            velocity_residual: self.velocity_residual,
+        }
+    }
 }
 
 /// Assemble `sys` at time `t` from `q0`, `qdot0`. `given: (2n)` marks the positions (first `n`)

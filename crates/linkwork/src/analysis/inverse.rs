@@ -20,7 +20,6 @@ use crate::error::Error;
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
 use faer::Mat;
-use serde_json::json;
 
 /// The largest force or moment left unbalanced by the multipliers, relative to the largest
 /// load or inertia force, before the position counts as singular: `1e-5`. A backward-stable
@@ -96,7 +95,7 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         Ok(())
     });
     let finish = |results: &mut Results| {
-        results.summary.insert("indeterminate_joints".into(), json!(indeterminate.clone().unwrap_or_default()));
+        results.summary.indeterminate_joints = Some(indeterminate.clone().unwrap_or_default());
         results.insert_reaction_summary(model, analysis);
     };
     match outcome {

@@ -17,10 +17,9 @@ use crate::constraints::{Config, ConfigBuf};
 use crate::error::{Error, Problem, RowName};
 use crate::linalg::{FactorError, SparseLu};
 use crate::model::{Analysis, Model};
-use crate::results::{Failure, Results};
+use crate::results::{Failure, KinematicStats, Results, Statistics};
 use crate::system::System;
 use faer::Mat;
-use serde_json::json;
 
 /// Smallest/largest singular value of the driven Jacobian below which a failure is blamed on a
 /// singular position (a lock-up or dead centre) rather than on a driver or on Newton: near a
@@ -33,31 +32,6 @@ const SINGULAR_RATIO: f64 = 1e-3;
 /// outputs, which no output grid can show. Without it a driver `exp(40*t)` took 2.5e8
 /// sub-steps (430 s) to reach the `min_substep` floor.
 const MAX_SUBSTEPS_PER_OUTPUT: usize = 100_000;
-
-/// What the kinematic solver did.
-#[derive(Debug, Clone, Default, serde::Serialize)]
-pub struct KinematicStats {
-    /// Output points written (including the initial one).
-    pub output_points: usize,
-    /// Accepted sub-steps.
-    pub substeps: usize,
-    /// Rejected sub-steps (Newton failure or branch jump), each followed by halving.
-    pub rejected_substeps: usize,
-    /// Newton iterations in all attempts.
-    pub newton_iterations: usize,
-    /// Numeric LU factorizations.
-    pub factorizations: usize,
-    /// Largest `|Phi|` accepted at an output point.
-    pub max_residual: f64,
-    /// Largest 1-norm condition estimate of the driven Jacobian at an output point.
-    pub max_condition: f64,
-    /// Rows left out of the square system because they repeat earlier rows.
-    pub redundant_rows: Vec<RowName>,
-    /// Assembly at the start time.
-    pub assembly_iterations: usize,
-    /// Largest change assembly made to the initial guess.
-    pub assembly_max_change: f64,
-}
 
 /// Why a Newton attempt failed.
 struct NewtonFailure {
@@ -298,7 +272,6 @@ pub(crate) fn run_driven(
         tolerance: settings.tolerance,
         max_iterations: settings.max_iterations,
         stats: KinematicStats {
-            redundant_rows,
             assembly_iterations: assembly.iterations,
             assembly_max_change: assembly.change.iter().fold(0.0f64, |a, x| a.max(x.abs())),
             max_residual: assembly.residual,
@@ -389,24 +362,21 @@ pub(crate) fn run_driven(
         Ok(())
     })();
     s.stats.output_points = results.len();
-    insert_summary(&mut results, &s.stats, &assembly);
+    insert_summary(&mut results, &s.stats, &assembly, redundant_rows);
     match outcome {
         Ok(()) => Ok(results),
         Err(e) => Err(fail(results, e)),
     }
 }
 
-/// Add the solver's statistics and the assembly at the start to the summary of `results`.
-fn insert_summary(results: &mut Results, stats: &KinematicStats, assembly: &Assembly) {
-    let points = results.len();
+/// Add the solver's statistics, the rows left out and the assembly at the start to the summary
+/// of `results`.
+fn insert_summary(results: &mut Results, stats: &KinematicStats, assembly: &Assembly, redundant_rows: Vec<RowName>) {
     let summary = &mut results.summary;
-    summary.insert("output_points".into(), json!(points));
-    summary.insert("dof".into(), json!(0));
-    summary.insert("statistics".into(), json!(stats));
-    summary.insert(
-        "assembly".into(),
-        json!({"iterations": assembly.iterations, "residual": assembly.residual, "velocity_residual": assembly.velocity_residual}),
-    );
+    summary.dof = Some(0);
+    summary.statistics = Some(Statistics::Kinematic(stats.clone()));
+    summary.redundant_rows = Some(redundant_rows);
+    summary.assembly = Some(assembly.report());
 }
 
 fn check_condition(s: &mut Solver<'_>, limit: f64) -> Result<(), Error> {

@@ -16,7 +16,7 @@ pub use assembly::{assemble, Assembly};
 pub use check::{check, independent_rows, AnalysisCheck, CheckReport, SystemCheck};
 pub(crate) use inverse::reaction_columns;
 pub use inverse::run_inverse;
-pub use kinematic::{run_kinematic, KinematicStats};
+pub use kinematic::run_kinematic;
 pub use modes::run_modes;
 pub use run::Overrides;
 pub use statics::run_static;

@@ -25,51 +25,13 @@
 
 use super::dynamic::{factor_error, Dae};
 use super::statics::{solve, Statics, ZERO_STIFFNESS};
-use super::{assemble, element_names, indeterminate_rows};
+use super::{assemble, element_names, independent_rows, indeterminate_rows};
 use crate::error::Error;
 use crate::model::spec::LinearisePoint;
 use crate::model::{Analysis, Model};
-use crate::results::{Failure, Results};
+use crate::results::{Failure, Mode, ModeKind, Results};
 use faer::linalg::solvers::DenseSolveCore;
 use faer::Mat;
-use serde_json::{json, Map, Value};
-
-/// What a mode's motion does, from its eigenvalue `s`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ModeKind {
-    /// An oscillation that does not grow: `Im s > 0`, `Re s <= 0`.
-    Vibration,
-    /// A motion that dies away without oscillating (overdamped): `s` real and negative.
-    Decay,
-    /// No stiffness and no damping along it: `s = 0`, the mechanism drifts.
-    Neutral,
-    /// Unstable: the mechanism falls away without oscillating, `s` real and positive.
-    Divergence,
-    /// Unstable: an oscillation that grows, `Re s > 0`, `Im s > 0`.
-    Flutter,
-}
-
-/// One mode of the linearised mechanism.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct Mode {
-    /// What the motion does.
-    pub kind: ModeKind,
-    /// Undamped natural frequency `|s| / 2 pi`, Hz (`None` for an unstable mode).
-    pub frequency: Option<f64>,
-    /// Damped frequency `Im s / 2 pi`, Hz (0 for a non-oscillating mode).
-    pub damped_frequency: f64,
-    /// Damping ratio `-Re s / |s|` (`None` for a neutral or an unstable mode).
-    pub damping_ratio: Option<f64>,
-    /// Growth rate `Re s` of an unstable mode, 1/s: the motion grows as `e^{rate t}` (`None`
-    /// for a stable mode).
-    pub growth_rate: Option<f64>,
-    /// The eigenvalue `s = [Re, Im]` (with `Im >= 0`), 1/s.
-    pub eigenvalue: [f64; 2],
-    /// The shape: each coordinate `<body>.x, .y, .phi`'s share, the largest 1 (the real part
-    /// after turning the complex shape so that its largest component is real).
-    pub shape: Map<String, Value>,
-}
 
 /// Run a modes analysis.
 pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
@@ -159,12 +121,12 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
     let mut jac = Mat::<f64>::zeros(st.dae.m, n);
     st.dae.jacobian_dense(jac.as_mut());
     let s = &mut results.summary;
-    s.insert("output_points".into(), json!(1));
-    s.insert("dof".into(), json!(f));
-    s.insert("about".into(), json!(analysis.about));
-    s.insert("stable".into(), json!(stable));
-    s.insert("modes".into(), json!(modes));
-    s.insert("indeterminate_joints".into(), json!(element_names(&st.dae.sys, &indeterminate_rows(jac.as_ref()))));
+    s.dof = Some(f);
+    s.redundant_rows = Some(independent_rows(jac.as_ref()).1.iter().map(|&r| st.dae.sys.row_name(r)).collect());
+    s.about = Some(analysis.about);
+    s.stable = Some(stable);
+    s.modes = Some(modes);
+    s.indeterminate_joints = Some(element_names(&st.dae.sys, &indeterminate_rows(jac.as_ref())));
     Ok(results)
 }
 
@@ -266,7 +228,7 @@ fn mode(eigenvalue: [f64; 2], re: &[f64], im: &[f64], names: &[String], zero: f6
                 _ if i == big => 1.0,
                 _ => (re[i] * br + im[i] * bi) / (norm * norm),
             };
-            (names[i].clone(), json!(v))
+            (names[i].clone(), v)
         })
         .collect();
     let tau = 2.0 * std::f64::consts::PI;

@@ -9,7 +9,6 @@ use crate::model::{revise, Analysis, Model};
 use crate::progress::{self, Progress};
 use crate::results::{Failure, Results};
 use std::sync::Arc;
-use serde_json::{json, Value};
 
 /// Changes to an analysis for one run (the command line's `--integrator`, `--rtol`, `--atol`,
 /// `--t-end` and `--step`); `None` keeps the file's value.
@@ -108,10 +107,8 @@ impl Model {
             .unwrap_or_else(|| self.q0());
         // The analysis's own warnings (a dynamic run's) follow the tolerances'.
         let mut warnings = tolerance_warnings(&analysis, &q);
-        if let Some(Value::Array(own)) = results.summary.get("warnings") {
-            warnings.extend(own.iter().filter_map(|w| w.as_str().map(String::from)));
-        }
-        results.summary.insert("warnings".into(), json!(warnings));
+        warnings.append(&mut results.summary.warnings);
+        results.summary.warnings = warnings;
         outcome
     }
 }

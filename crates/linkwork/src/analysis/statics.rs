@@ -45,12 +45,14 @@
 //! damping do not matter.
 
 use super::dynamic::{factor_error, Dae};
-use super::{assemble, element_names, indeterminate_rows, min_norm_solve, residual_floor, RANK_TOLERANCE};
+use super::{
+    assemble, element_names, independent_rows, indeterminate_rows, min_norm_solve, residual_floor, RANK_TOLERANCE,
+};
+use crate::constraints::ConfigBuf;
 use crate::error::{Error, Unbalanced};
 use crate::model::{Analysis, Model};
-use crate::results::{Failure, Results};
+use crate::results::{EquilibriumReport, Failure, Results, StaticStats, Statistics};
 use faer::{Mat, MatMut, MatRef};
-use serde_json::json;
 
 /// Newton iterations per equilibrium (or load step) before it counts as not converging.
 /// Default 50: with the exact tangent Newton needs 3 to 8 from a fair guess; the line search
@@ -90,23 +92,6 @@ pub const DESCENT_MAX_STEP: f64 = 0.25;
 /// turn) or fifty times the mechanism's size at the largest step. A load that drives the
 /// mechanism that far downhill without the slope turning has no equilibrium along the way.
 pub const MAX_DESCENT_STEPS: usize = 200;
-
-/// What the static solver did, for `summary.json`.
-#[derive(Debug, Clone, Default, serde::Serialize)]
-pub struct StaticStats {
-    /// Newton iterations in all equilibria and load steps.
-    pub iterations: usize,
-    /// Load steps taken where Newton and the descents did not converge (0: none needed).
-    pub load_steps: usize,
-    /// Descents from a point that was not a stable equilibrium (0: Newton went straight to one).
-    pub descents: usize,
-    /// Largest force residual `|Q - Phi_q^T lambda|` at a written equilibrium, N or N m.
-    pub force_residual: f64,
-    /// Largest constraint residual `|Phi|` at a written equilibrium, m or rad.
-    pub position_residual: f64,
-    /// The largest load `F` the force tolerance is relative to.
-    pub load_scale: f64,
-}
 
 /// Why an equilibrium iteration stopped short.
 struct NotConverged {
@@ -669,6 +654,12 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
         Ok(a) => a,
         Err(e) => return Err(fail(results, e)),
     };
+    // The degrees of freedom and the redundant rows at the assembled start, as dynamics finds them.
+    let mut jac = Mat::<f64>::zeros(dae.m, n);
+    dae.sys.jacobian_dense(&ConfigBuf::new(&assembly.q).view(), t0, jac.as_mut());
+    let (independent, redundant) = independent_rows(jac.as_ref());
+    results.summary.dof = Some(n - independent.len());
+    results.summary.redundant_rows = Some(redundant.iter().map(|&r| dae.sys.row_name(r)).collect());
     let mut st = Statics::new(&mut dae, analysis.settings.tolerance, &assembly.q, t0);
     let zero = vec![0.0; n];
     let mut react = Vec::new();
@@ -715,12 +706,10 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
         _ => (true, Some(0)),
     };
     let s = &mut results.summary;
-    s.insert("output_points".into(), json!(results.time.len()));
-    s.insert("statistics".into(), json!(stats));
-    s.insert("stable".into(), json!(stable));
-    s.insert("index".into(), json!(index));
-    s.insert("min_reduced_stiffness".into(), json!(min_stiffness));
-    s.insert("indeterminate_joints".into(), json!(indeterminate.unwrap_or_default()));
+    s.statistics = Some(Statistics::Static(stats));
+    s.stable = Some(stable);
+    s.equilibrium = Some(EquilibriumReport { index, min_reduced_stiffness: min_stiffness });
+    s.indeterminate_joints = Some(indeterminate.unwrap_or_default());
     results.insert_reaction_summary(model, analysis);
     match error {
         None => Ok(results),

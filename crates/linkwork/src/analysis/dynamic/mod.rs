@@ -38,9 +38,9 @@ use super::{assemble, independent_rows};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, RowName};
 use crate::model::{Analysis, IntegratorSettings, Model};
-use crate::results::{Failure, Results};
+pub use crate::results::DynamicStats;
+use crate::results::{Failure, Residuals, Results, Statistics};
 use faer::Mat;
-use serde_json::json;
 
 /// The smallest step an integrator may take at `t` in a run of length `span`, s: 16 units of
 /// round-off of the time, below which `t + h` no longer differs from `t` in a useful way.
@@ -71,36 +71,6 @@ pub fn min_step(
         });
     }
     Ok(h_min)
-}
-
-/// What an integrator did, for `summary.json`.
-#[derive(Debug, Clone, Default, serde::Serialize)]
-pub struct DynamicStats {
-    /// Accepted steps.
-    pub steps: usize,
-    /// Steps rejected by the error test.
-    pub rejected_steps: usize,
-    /// Steps rejected because Newton's method did not converge.
-    pub newton_failures: usize,
-    /// Newton iterations in all attempts.
-    pub newton_iterations: usize,
-    /// Evaluations of the Newton matrix (`jacobian_evaluations` of the linear algebra).
-    pub jacobian_evaluations: usize,
-    /// Numeric factorizations.
-    pub factorizations: usize,
-    /// Smallest and largest accepted step, s.
-    pub smallest_step: f64,
-    /// Largest accepted step, s.
-    pub largest_step: f64,
-    /// Highest order used (`bdf`, `abam`; 2 for `hht`).
-    pub max_order_used: usize,
-    /// Independent coordinates used by `abam`: the first choice and each change of it.
-    pub partitions: usize,
-    /// Stretches `abam` handed to `bdf` across a singular position, where its error estimate is
-    /// the round-off noise of the accelerations (see `abam`).
-    pub crossings: usize,
-    /// Start of the first such stretch, s.
-    pub first_crossing: Option<f64>,
 }
 
 impl DynamicStats {
@@ -401,7 +371,7 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     let mut jac = Mat::<f64>::zeros(m, n);
     dae.sys.jacobian_dense(&ConfigBuf::new(&assembly.q).view(), t0, jac.as_mut());
     let (independent, redundant) = independent_rows(jac.as_ref());
-    let redundant_rows: Vec<String> = redundant.iter().map(|&r| dae.sys.row_name(r).to_string()).collect();
+    let redundant_rows: Vec<RowName> = redundant.iter().map(|&r| dae.sys.row_name(r)).collect();
     let indeterminate = crate::analysis::element_names(&dae.sys, &crate::analysis::indeterminate_rows(jac.as_ref()));
     if let Some(problem) = crate::analysis::massless_motion(model, jac.as_ref()) {
         return Err(fail(out.results, Error::Model(vec![problem])));
@@ -431,29 +401,19 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     stats.factorizations = dae.stats.factorizations;
     let mut results = out.results;
     let s = &mut results.summary;
-    s.insert("output_points".into(), json!(results.time.len()));
-    s.insert("dof".into(), json!(n - independent.len()));
-    s.insert("integrator".into(), json!(settings));
-    s.insert("statistics".into(), json!(stats));
-    s.insert("redundant_rows".into(), json!(redundant_rows));
-    s.insert("indeterminate_joints".into(), json!(indeterminate));
-    s.insert(
-        "assembly".into(),
-        json!({"iterations": assembly.iterations, "residual": assembly.residual, "velocity_residual": assembly.velocity_residual}),
-    );
-    s.insert(
-        "residuals".into(),
-        json!({"max_position": out.max_position_residual, "max_velocity": out.max_velocity_residual}),
-    );
+    s.dof = Some(n - independent.len());
+    s.integrator = Some(settings);
+    s.redundant_rows = Some(redundant_rows);
+    s.indeterminate_joints = Some(indeterminate);
+    s.assembly = Some(assembly.report());
+    s.residuals = Some(Residuals { max_position: out.max_position_residual, max_velocity: out.max_velocity_residual });
     if let Some(t) = stats.first_crossing {
-        s.insert(
-            "warnings".into(),
-            json!([format!(
-                "abam: near singular positions (Phi_q losing rank; the first at t = {t:.6} s) the error estimate at rtol {:e} was the round-off noise of the accelerations; bdf took the state across, in {} stretches",
-                settings.rtol, stats.crossings
-            )]),
-        );
+        s.warnings.push(format!(
+            "abam: near singular positions (Phi_q losing rank; the first at t = {t:.6} s) the error estimate at rtol {:e} was the round-off noise of the accelerations; bdf took the state across, in {} stretches",
+            settings.rtol, stats.crossings
+        ));
     }
+    s.statistics = Some(Statistics::Dynamic(stats));
     results.insert_reaction_summary(model, analysis);
     match error {
         None => Ok(results),

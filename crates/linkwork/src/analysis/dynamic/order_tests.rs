@@ -114,7 +114,7 @@ fn hht_fixed(model: &Model, analysis: &str, h: f64, tol: f64, t_end: Option<f64>
     s.atol = tol;
     s.fixed_step = Some(h);
     let r = run_dynamic(model, &a).unwrap_or_else(|f| panic!("hht h {h}: {}", f.error));
-    let stats = &r.summary["statistics"];
+    let stats = &r.summary_json(None)["statistics"];
     assert_eq!(stats["newton_failures"], 0, "h {h}: {stats}");
     r
 }
