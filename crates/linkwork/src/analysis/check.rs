@@ -5,9 +5,10 @@
 //! combination of the rows before it is redundant. This names the later of two parallel links as
 //! the redundant one, as a designer reading the file would.
 
-use super::{assemble, Assembly, RANK_TOLERANCE};
+use super::{assemble, Assembly};
 use crate::constraints::ConfigBuf;
 use crate::error::{Result, RowName};
+use crate::linalg::dense::RANK_TOLERANCE;
 use crate::model::spec::AnalysisKind;
 use crate::model::Model;
 use crate::system::System;

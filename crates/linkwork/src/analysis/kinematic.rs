@@ -12,21 +12,16 @@
 //! also serves as the chord-Newton matrix of the next sub-step); nothing is allocated in the time
 //! loop except the growth of the output columns, reserved up front.
 
-use super::{assemble, independent_rows, residual_floor, Assembly};
+use super::{assemble, independent_rows, residual_floor, Assembly, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::{Config, ConfigBuf};
 use crate::error::{Error, Problem, RowName};
+use crate::linalg::dense::smallest_singular;
 use crate::linalg::{FactorError, SparseLu};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
 use crate::system::System;
 use faer::Mat;
 use serde_json::json;
-
-/// Smallest/largest singular value of the driven Jacobian below which a failure is blamed on a
-/// singular position (a lock-up or dead centre) rather than on a driver or on Newton: near a
-/// simple rank drop the smallest singular value falls in proportion to the distance from the
-/// singular position, so 1e-3 blames it within about a thousandth of the mechanism's scale.
-const SINGULAR_RATIO: f64 = 1e-3;
 
 /// Sub-steps between two output times beyond which the motion is too fast to follow: 100,000,
 /// a body turning up to 35,000 rad (5,600 turns, at the default `max_rotation`) between two
@@ -173,24 +168,15 @@ impl Solver<'_> {
         unreachable!("the loop returns at it == max_iterations")
     }
 
-    /// The rows of the smallest singular value of the driven Jacobian at `q`, and the ratio of
-    /// the smallest to the largest singular value.
+    /// The ratio of the smallest to the largest singular value of the driven Jacobian at `q`,
+    /// and the rows of the smallest ([`smallest_singular`]).
     fn diagnose(&mut self) -> (f64, Vec<RowName>) {
         let n = self.sys.n;
         let mut jac = Mat::<f64>::zeros(self.sys.m, n);
         self.sys.jacobian_dense(&Config::new(&self.q, &self.rot_q), self.t, jac.as_mut());
         let sq = Mat::from_fn(self.rows.len(), n, |i, j| jac[(self.rows[i], j)]);
-        let Ok(svd) = sq.svd() else { return (0.0, vec![]) };
-        let s = svd.S().column_vector();
-        let k = s.nrows() - 1; // singular values come in decreasing order
-        let ratio = if s[0] > 0.0 { s[k] / s[0] } else { 0.0 };
-        let u = svd.U();
-        let umax = (0..u.nrows()).map(|i| u[(i, k)].abs()).fold(0.0f64, f64::max);
-        let rows = (0..u.nrows())
-            .filter(|&i| u[(i, k)].abs() >= 0.2 * umax)
-            .map(|i| self.sys.row_name(self.rows[i]))
-            .collect();
-        (ratio, rows)
+        let (ratio, rows) = smallest_singular(sq.as_ref());
+        (ratio, rows.into_iter().map(|i| self.sys.row_name(self.rows[i])).collect())
     }
 }
 
@@ -432,7 +418,7 @@ fn too_fast(s: &mut Solver<'_>, model: &Model, drivers: &[usize], target: f64, s
         return e;
     }
     let (ratio, rows) = s.diagnose();
-    let fastest = if ratio < SINGULAR_RATIO { None } else { model.fastest_driver(drivers, s.t, limit) };
+    let fastest = if ratio < SINGULAR_RATIO_KINEMATIC { None } else { model.fastest_driver(drivers, s.t, limit) };
     fastest.unwrap_or_else(|| Error::Singular {
         time: s.t,
         rows,
@@ -449,7 +435,7 @@ fn give_up(s: &mut Solver<'_>, model: &Model, drivers: &[usize], t_new: f64, ste
         return e;
     }
     let (ratio, rows) = s.diagnose();
-    if ratio < SINGULAR_RATIO {
+    if ratio < SINGULAR_RATIO_KINEMATIC {
         return Error::Singular {
             time: s.t,
             rows,

@@ -45,8 +45,9 @@
 //! damping do not matter.
 
 use super::dynamic::{factor_error, Dae};
-use super::{assemble, element_names, indeterminate_rows, min_norm_solve, residual_floor, RANK_TOLERANCE};
+use super::{assemble, element_names, indeterminate_rows, residual_floor};
 use crate::error::{Error, Unbalanced};
+use crate::linalg::dense::{min_norm_solve, null_space};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
 use faer::{Mat, MatMut, MatRef};
@@ -481,21 +482,6 @@ pub(crate) fn geometric_stiffness(dae: &mut Dae<'_>, q: &[f64], lambda: &[f64], 
         }
     }
     dae.positions(q, t);
-}
-
-/// An orthonormal basis `(n x f)` of the null space of `jac (m x n)` (right singular vectors of
-/// the singular values below `RANK_TOLERANCE` times the largest).
-pub(crate) fn null_space(jac: MatRef<'_, f64>) -> Mat<f64> {
-    let (m, n) = (jac.nrows(), jac.ncols());
-    if m == 0 {
-        return Mat::identity(n, n);
-    }
-    let Ok(svd) = jac.svd() else { return Mat::zeros(n, 0) };
-    let s = svd.S().column_vector();
-    let smax = (0..s.nrows()).map(|k| s[k]).fold(0.0f64, f64::max);
-    let rank = (0..s.nrows()).filter(|&k| s[k] > RANK_TOLERANCE * smax).count();
-    let v = svd.V();
-    Mat::from_fn(n, n - rank, |i, j| v[(i, rank + j)])
 }
 
 /// The load scale `F` of the force tolerance: the largest generalised load at `q`, or the largest

@@ -37,6 +37,7 @@ pub use output::{factor_error, Output, ENERGY_COLUMNS};
 use super::{assemble, independent_rows};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, RowName};
+use crate::linalg::dense::smallest_singular;
 use crate::model::{Analysis, IntegratorSettings, Model};
 use crate::results::{Failure, Results};
 use faer::Mat;
@@ -258,24 +259,13 @@ impl Span {
     }
 }
 
-/// The rows of the smallest singular value of `Phi_q` at `(q, t)` (those with at least a fifth
-/// of the largest component of its left singular vector), and the ratio of the smallest to the
-/// largest singular value: the evidence of a singular position.
+/// The ratio of the smallest to the largest singular value of `Phi_q` at `(q, t)`, and the rows
+/// of the smallest ([`smallest_singular`]): the evidence of a singular position.
 pub fn singular_rows(dae: &mut Dae<'_>, q: &[f64], t: f64) -> (f64, Vec<RowName>) {
-    let (n, m) = (dae.n, dae.m);
-    if m == 0 {
-        return (1.0, vec![]);
-    }
-    let mut jac = Mat::<f64>::zeros(m, n);
+    let mut jac = Mat::<f64>::zeros(dae.m, dae.n);
     dae.sys.jacobian_dense(&ConfigBuf::new(q).view(), t, jac.as_mut());
-    let Ok(svd) = jac.thin_svd() else { return (0.0, vec![]) };
-    let s = svd.S().column_vector();
-    let k = s.nrows() - 1;
-    let ratio = if s[0] > 0.0 { s[k] / s[0] } else { 0.0 };
-    let u = svd.U();
-    let umax = (0..m).map(|i| u[(i, k)].abs()).fold(0.0f64, f64::max);
-    let rows = (0..m).filter(|&i| u[(i, k)].abs() >= 0.2 * umax).map(|i| dae.sys.row_name(i)).collect();
-    (ratio, rows)
+    let (ratio, rows) = smallest_singular(jac.as_ref());
+    (ratio, rows.into_iter().map(|i| dae.sys.row_name(i)).collect())
 }
 
 /// A force that changes by more than this fraction of itself over the step at which an
@@ -316,7 +306,7 @@ pub fn step_failure(dae: &mut Dae<'_>, q: &[f64], t: f64, h: f64, cause: &str) -
         };
     }
     let (ratio, rows) = singular_rows(dae, q, t);
-    if ratio < 1e-6 {
+    if ratio < crate::analysis::SINGULAR_RATIO_DYNAMIC {
         return Error::Singular {
             time: t,
             rows,

@@ -1,0 +1,235 @@
+//! Dense linear algebra by the singular value decomposition `A = U S V^T`, knowing no mechanics:
+//! the null space, the minimum-norm least-squares solution, the rows that take part in a linear
+//! dependence, and the rows of the smallest singular value.
+//!
+//! One threshold decides the numerical rank everywhere: a singular value counts as zero below
+//! [`RANK_TOLERANCE`] times the largest. How small the smallest singular value must be for a
+//! position to count as singular is not a question of rank but of how close a solver can get
+//! to such a position; the analyses that ask it set their own ratio and compare it with the one
+//! [`smallest_singular`] returns.
+
+use faer::{Mat, MatRef};
+
+/// Relative size of a singular value (to the largest) below which it counts as zero: `1e-9`.
+/// Far above rounding (the SVD gives singular values to `~1e-16` of the largest, so a matrix of
+/// rank `r` shows its zero ones at `~1e-16 cond`), and far below any ratio of the well-posed
+/// problems solved with it (a Jacobian of a mechanism a metre across has ratios of `1e-1` to
+/// `1e-4` away from singular positions).
+pub const RANK_TOLERANCE: f64 = 1e-9;
+
+/// A component of a unit left singular vector above which its row takes part in the
+/// combination of rows that vanishes: `1e-8`. The vectors of the zero singular values are
+/// accurate to `~eps cond`, so a row outside the dependence shows components at rounding
+/// (`1e-16` and a few orders of magnitude of amplification), and a row inside it at least
+/// `1 / sqrt(rows)` of the vector shared among the rows that take part.
+pub const DEPENDENCE_COMPONENT: f64 = 1e-8;
+
+/// Share of the largest component of the smallest singular value's left singular vector from
+/// which a row counts as taking part in it: a fifth. At a simple rank loss the vector is spread
+/// over the rows of one closed loop with comparable components (a four-bar's flat position puts
+/// `0.3` to `0.6` on each of its rows), while rows of other loops stay at rounding or at a
+/// coupling through shared bodies, below it.
+pub const SMALLEST_ROW_SHARE: f64 = 0.2;
+
+/// The numerical rank of singular values `s` in decreasing order: how many are above
+/// [`RANK_TOLERANCE`] times the largest.
+fn rank(s: faer::ColRef<'_, f64>) -> usize {
+    let smax = (0..s.nrows()).map(|k| s[k]).fold(0.0f64, f64::max);
+    (0..s.nrows()).filter(|&k| s[k] > RANK_TOLERANCE * smax).count()
+}
+
+/// The minimum-norm least-squares solution `x (cols)` of `a x = b`, `V S^+ U^T b` with the
+/// singular values below [`RANK_TOLERANCE`] times the largest dropped. `None` when the SVD fails
+/// (a non-finite entry).
+pub fn min_norm_solve(a: MatRef<'_, f64>, b: &[f64]) -> Option<Vec<f64>> {
+    let (m, n) = (a.nrows(), a.ncols());
+    if n == 0 || m == 0 {
+        return Some(vec![0.0; n]);
+    }
+    let svd = a.thin_svd().ok()?;
+    let (u, s, v) = (svd.U(), svd.S().column_vector(), svd.V());
+    let mut x = vec![0.0; n];
+    for k in 0..rank(s) {
+        let c: f64 = (0..m).map(|i| u[(i, k)] * b[i]).sum::<f64>() / s[k];
+        for (j, xj) in x.iter_mut().enumerate() {
+            *xj += v[(j, k)] * c;
+        }
+    }
+    Some(x)
+}
+
+/// An orthonormal basis `(cols x f)` of the null space of `a`: the right singular vectors of the
+/// singular values below [`RANK_TOLERANCE`] times the largest (every direction when `a` has no
+/// rows; none when the SVD fails on a non-finite entry).
+pub fn null_space(a: MatRef<'_, f64>) -> Mat<f64> {
+    let (m, n) = (a.nrows(), a.ncols());
+    if m == 0 {
+        return Mat::identity(n, n);
+    }
+    let Ok(svd) = a.svd() else { return Mat::zeros(n, 0) };
+    let r = rank(svd.S().column_vector());
+    let v = svd.V();
+    Mat::from_fn(n, n - r, |i, j| v[(i, r + j)])
+}
+
+/// The rows of `a` that take part in a linear dependence among its rows: those with a component
+/// above [`DEPENDENCE_COMPONENT`] in the left null space (the combinations of rows that vanish,
+/// one per dependent row). Every row when `a` has no columns; none when the rows are
+/// independent or the SVD fails on a non-finite entry.
+pub fn dependent_rows(a: MatRef<'_, f64>) -> Vec<usize> {
+    let (m, n) = (a.nrows(), a.ncols());
+    if m == 0 || n == 0 {
+        return (0..m).collect();
+    }
+    let Ok(svd) = a.svd() else { return vec![] };
+    let r = rank(svd.S().column_vector());
+    let u = svd.U();
+    (0..m).filter(|&i| (r..m).any(|k| u[(i, k)].abs() > DEPENDENCE_COMPONENT)).collect()
+}
+
+/// The ratio of the smallest singular value of `a` to the largest, and the rows of the smallest:
+/// those whose component of its left singular vector is at least [`SMALLEST_ROW_SHARE`] of the
+/// largest. A ratio of 1 and no rows when `a` is empty; 0 and no rows when the SVD fails on a
+/// non-finite entry.
+pub fn smallest_singular(a: MatRef<'_, f64>) -> (f64, Vec<usize>) {
+    let m = a.nrows();
+    if m == 0 || a.ncols() == 0 {
+        return (1.0, vec![]);
+    }
+    let Ok(svd) = a.thin_svd() else { return (0.0, vec![]) };
+    let s = svd.S().column_vector();
+    // Singular values come in decreasing order.
+    let k = s.nrows() - 1;
+    let ratio = if s[0] > 0.0 { s[k] / s[0] } else { 0.0 };
+    let u = svd.U();
+    let umax = (0..m).map(|i| u[(i, k)].abs()).fold(0.0f64, f64::max);
+    let rows = (0..m).filter(|&i| u[(i, k)].abs() >= SMALLEST_ROW_SHARE * umax).collect();
+    (ratio, rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Differences between two computations of the same quantity of size about 1 in double
+    /// precision: a few hundred units of round-off, for the SVD's and the products' rounding on
+    /// matrices of a few rows.
+    const CLOSE: f64 = 1e-13;
+
+    /// A `4 x 5` matrix of rank 2: rows 2 and 3 are combinations of rows 0 and 1
+    /// (`r2 = r0 + 2 r1`, `r3 = 3 r0 - r1`).
+    fn rank_two() -> Mat<f64> {
+        let r0 = [1.0, 2.0, 0.0, -1.0, 3.0];
+        let r1 = [0.0, 1.0, 4.0, 2.0, -2.0];
+        Mat::from_fn(4, 5, |i, j| match i {
+            0 => r0[j],
+            1 => r1[j],
+            2 => r0[j] + 2.0 * r1[j],
+            _ => 3.0 * r0[j] - r1[j],
+        })
+    }
+
+    /// The null space of a rank-2 `4 x 5` matrix has dimension `5 - 2 = 3`; its vectors satisfy
+    /// `A v = 0` and are orthonormal.
+    #[test]
+    fn null_space_has_the_dimension_of_the_rank_and_is_orthonormal() {
+        let a = rank_two();
+        let basis = null_space(a.as_ref());
+        assert_eq!(basis.ncols(), 3);
+        let av = &a * &basis;
+        let gram = basis.transpose() * &basis;
+        for j in 0..3 {
+            assert!((0..4).all(|i| av[(i, j)].abs() < CLOSE), "A v = {av:?}");
+            for k in 0..3 {
+                let expected = if j == k { 1.0 } else { 0.0 };
+                assert!((gram[(j, k)] - expected).abs() < CLOSE, "V^T V = {gram:?}");
+            }
+        }
+        // No rows: every direction is free. Full column rank: none.
+        assert_eq!(null_space(Mat::<f64>::zeros(0, 3).as_ref()).ncols(), 3);
+        assert_eq!(null_space(Mat::<f64>::identity(3, 3).as_ref()).ncols(), 0);
+    }
+
+    /// A relative singular value just above the tolerance counts, one just below does not.
+    #[test]
+    fn the_rank_threshold_is_relative_to_the_largest_singular_value() {
+        for (scale, size) in [(1.0, 1e3), (1e6, 1e-3)] {
+            let a = |small: f64| Mat::from_fn(2, 2, |i, j| if i == j { scale * [size, size * small][i] } else { 0.0 });
+            assert_eq!(null_space(a(10.0 * RANK_TOLERANCE).as_ref()).ncols(), 0);
+            assert_eq!(null_space(a(0.1 * RANK_TOLERANCE).as_ref()).ncols(), 1);
+        }
+    }
+
+    /// The minimum-norm solution of a consistent under-determined system solves it, is
+    /// orthogonal to the null space, and equals the pseudo-inverse solution
+    /// `A^T (A A^T)^-1 b` of a full-row-rank `A`.
+    #[test]
+    fn min_norm_solve_is_the_pseudo_inverse_solution() {
+        let a = Mat::from_fn(2, 4, |i, j| [[1.0, 2.0, 0.0, -1.0], [0.0, 1.0, 4.0, 2.0]][i][j]);
+        let b = [3.0, -1.0];
+        let x = min_norm_solve(a.as_ref(), &b).unwrap();
+        // A A^T = [[6, 0], [0, 21]], so A^T (A A^T)^-1 b = A^T [1/2, -1/21].
+        let y = [0.5, -1.0 / 21.0];
+        for (j, xj) in x.iter().enumerate() {
+            let expected = a[(0, j)] * y[0] + a[(1, j)] * y[1];
+            assert!((xj - expected).abs() < CLOSE, "{x:?}");
+        }
+        let basis = null_space(a.as_ref());
+        for k in 0..basis.ncols() {
+            let along: f64 = (0..4).map(|j| basis[(j, k)] * x[j]).sum();
+            assert!(along.abs() < CLOSE, "component {along} along the null space");
+        }
+    }
+
+    /// With dependent rows and an inconsistent right-hand side the solution is the least-squares
+    /// one: `A^T (A x - b) = 0`; and it lies in the row space (orthogonal to the null space).
+    #[test]
+    fn min_norm_solve_is_least_squares_with_dependent_rows() {
+        let a = rank_two();
+        let b = [1.0, -2.0, 0.5, 4.0];
+        let x = min_norm_solve(a.as_ref(), &b).unwrap();
+        let residual: Vec<f64> = (0..4).map(|i| (0..5).map(|j| a[(i, j)] * x[j]).sum::<f64>() - b[i]).collect();
+        for j in 0..5 {
+            let normal: f64 = (0..4).map(|i| a[(i, j)] * residual[i]).sum();
+            assert!(normal.abs() < 1e-12, "A^T r = {normal} in column {j}");
+        }
+        let basis = null_space(a.as_ref());
+        for k in 0..basis.ncols() {
+            let along: f64 = (0..5).map(|j| basis[(j, k)] * x[j]).sum();
+            assert!(along.abs() < CLOSE, "component {along} along the null space");
+        }
+        assert_eq!(min_norm_solve(Mat::<f64>::zeros(0, 2).as_ref(), &[]), Some(vec![0.0, 0.0]));
+        assert_eq!(min_norm_solve(Mat::from_fn(1, 1, |_, _| f64::NAN).as_ref(), &[1.0]), None);
+    }
+
+    /// Rows 0 to 3 of the rank-2 matrix all take part in its dependences; a fifth row
+    /// independent of them (a unit vector outside their span) does not.
+    #[test]
+    fn dependent_rows_are_the_rows_of_the_left_null_space() {
+        let a = rank_two();
+        assert_eq!(dependent_rows(a.as_ref()), [0, 1, 2, 3]);
+        let basis = null_space(a.as_ref());
+        let extra = Mat::from_fn(5, 5, |i, j| if i < 4 { a[(i, j)] } else { basis[(j, 0)] });
+        assert_eq!(dependent_rows(extra.as_ref()), [0, 1, 2, 3]);
+        assert!(dependent_rows(Mat::<f64>::identity(3, 3).as_ref()).is_empty());
+        assert_eq!(dependent_rows(Mat::<f64>::zeros(2, 0).as_ref()), [0, 1]);
+    }
+
+    /// `diag(4, 2, 1e-3)` turned by an orthogonal matrix on each side has the ratio `2.5e-4`,
+    /// and the rows of its smallest singular value are those where the third column of the left
+    /// rotation is at least a fifth of its largest entry.
+    #[test]
+    fn smallest_singular_value_and_its_rows() {
+        // Left rotation: its third column, (0.8, 0, 0.6) after the permutation, spans rows 0 and 2.
+        let u = Mat::from_fn(3, 3, |i, j| [[0.6, 0.0, 0.8], [0.0, 1.0, 0.0], [-0.8, 0.0, 0.6]][i][j]);
+        let (c, s) = (0.3f64.cos(), 0.3f64.sin());
+        let v = Mat::from_fn(3, 3, |i, j| [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]][i][j]);
+        let d = Mat::from_fn(3, 3, |i, j| if i == j { [4.0, 2.0, 1e-3][i] } else { 0.0 });
+        let a = &u * &d * v.transpose();
+        let (ratio, rows) = smallest_singular(a.as_ref());
+        assert!((ratio - 2.5e-4).abs() < CLOSE, "{ratio}");
+        assert_eq!(rows, [0, 2]);
+        assert_eq!(smallest_singular(Mat::<f64>::zeros(0, 3).as_ref()), (1.0, vec![]));
+        assert_eq!(smallest_singular(Mat::<f64>::zeros(2, 2).as_ref()).0, 0.0);
+    }
+}
