@@ -5,6 +5,7 @@
 //! combination of the rows before it is redundant. This names the later of two parallel links as
 //! the redundant one, as a designer reading the file would.
 
+use super::setup::{held, unmet_freedom};
 use super::{assemble, Assembly};
 use crate::constraints::ConfigBuf;
 use crate::error::{Result, RowName};
@@ -101,13 +102,7 @@ pub fn independent_rows(jac: MatRef<'_, f64>) -> (Vec<usize>, Vec<usize>) {
 pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) -> Result<SystemCheck> {
     let mut sys = System::new(model, drivers);
     let n = model.n();
-    let given: Vec<bool> = if hold_given {
-        let pos = model.bodies.iter().flat_map(|b| [b.given[0], b.given[1], b.given[2]]);
-        let vel = model.bodies.iter().flat_map(|b| [b.given[3], b.given[4], b.given[5]]);
-        pos.chain(vel).collect()
-    } else {
-        vec![false; 2 * n]
-    };
+    let given = held(model, hold_given);
     let assembly =
         assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t, crate::model::SolverSettings::default().tolerance)?;
     let mut jac = Mat::<f64>::zeros(sys.m, n);
@@ -147,24 +142,9 @@ pub fn check(model: &Model) -> Result<CheckReport> {
                 || (a.kind == AnalysisKind::Modes && a.about == crate::model::spec::LinearisePoint::Initial);
             let entry = match check_system(model, &a.drivers, hold, a.t_start) {
                 Ok(system) => {
-                    let loaded = model.gravity != [0.0, 0.0] || !a.forces.is_empty();
                     let warning = match a.kind {
-                        AnalysisKind::Kinematic | AnalysisKind::Inverse if system.dof > 0 => Some(format!(
-                            "a{} {} analysis needs a fully driven model: {} degree(s) of freedom remain, add {} driver(s)",
-                            if a.kind == AnalysisKind::Inverse { "n" } else { "" },
-                            a.kind.name(),
-                            system.dof,
-                            system.dof
-                        )),
-                        AnalysisKind::Static if system.dof > 0 && !loaded => Some(format!(
-                            "a static analysis needs every degree of freedom held: {} remain with no gravity, force or spring to hold them",
-                            system.dof
-                        )),
-                        AnalysisKind::Modes if system.dof == 0 => {
-                            Some("a modes analysis needs a degree of freedom: the drivers leave none".to_string())
-                        }
                         AnalysisKind::Dynamic => massless(model, &a.drivers, &system.assembly.q, a.t_start),
-                        _ => None,
+                        _ => unmet_freedom(model, a, system.equations, system.rank),
                     };
                     AnalysisCheck { kind: a.kind, system: Some(system), error: None, warning }
                 }

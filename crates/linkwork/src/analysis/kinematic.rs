@@ -12,6 +12,7 @@
 //! also serves as the chord-Newton matrix of the next sub-step); nothing is allocated in the time
 //! loop except the growth of the output columns, reserved up front.
 
+use super::setup::{held, output_times, unmet_freedom};
 use super::{assemble, independent_rows, residual_floor, Assembly, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::{Config, ConfigBuf};
 use crate::error::{Error, Problem, RowName};
@@ -226,7 +227,7 @@ pub(crate) fn run_driven(
     let mut sys = System::new(model, &analysis.drivers);
     let t0 = analysis.t_start;
     // The drivers determine every coordinate, so nothing is held: least change from the guess.
-    let given = vec![false; 2 * n];
+    let given = held(model, false);
     let assembly: Assembly = match assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t0, settings.tolerance) {
         Ok(a) => a,
         Err(e) => return Err(fail(results, e)),
@@ -234,24 +235,8 @@ pub(crate) fn run_driven(
     let mut jac = Mat::<f64>::zeros(sys.m, n);
     sys.jacobian_dense(&ConfigBuf::new(&assembly.q).view(), t0, jac.as_mut());
     let (rows, redundant) = independent_rows(jac.as_ref());
-    if rows.len() < n {
-        let dof = n - rows.len();
-        // With at least as many equations as coordinates, a rank drop at the start may also be a
-        // start at a dead centre: the rank alone cannot tell the two apart, so say both.
-        let or_singular = if sys.m >= n {
-            ", unless the start position is a singular one (a dead centre or lock-up, where the Jacobian loses rank)"
-        } else {
-            ""
-        };
-        let problem = Problem::new(
-            format!("analyses.{}.drivers", analysis.name),
-            format!(
-                "a{} {} analysis needs a fully driven model, but {dof} degree(s) of freedom remain with these drivers ({n} coordinates, {} independent equations): add {dof} driver(s){or_singular}",
-                if analysis.kind.name().starts_with('i') { "n" } else { "" },
-                analysis.kind.name(),
-                rows.len()
-            ),
-        );
+    if let Some(message) = unmet_freedom(model, analysis, sys.m, rows.len()) {
+        let problem = Problem::new(format!("analyses.{}.drivers", analysis.name), message);
         return Err(fail(results, Error::Model(vec![problem])));
     }
     let redundant_rows: Vec<RowName> = redundant.iter().map(|&r| sys.row_name(r)).collect();
@@ -292,11 +277,7 @@ pub(crate) fn run_driven(
         },
     };
     let h = analysis.step;
-    let count = ((analysis.t_end - t0) / h + 1e-9).floor() as usize;
-    let mut times: Vec<f64> = (0..=count).map(|k| t0 + k as f64 * h).collect();
-    if analysis.t_end - times[count] > 1e-9 * h {
-        times.push(analysis.t_end);
-    }
+    let times = output_times(analysis);
     results.reserve(times.len());
 
     let outcome = (|| -> Result<(), Error> {

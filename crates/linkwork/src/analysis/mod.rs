@@ -10,6 +10,7 @@ mod inverse;
 mod kinematic;
 mod modes;
 mod run;
+mod setup;
 mod statics;
 
 pub use assembly::{assemble, Assembly};

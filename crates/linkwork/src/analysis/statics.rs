@@ -45,6 +45,7 @@
 //! damping do not matter.
 
 use super::dynamic::{factor_error, Dae};
+use super::setup::{held, output_times};
 use super::{assemble, element_names, indeterminate_rows, residual_floor};
 use crate::error::{Error, Unbalanced};
 use crate::linalg::dense::{min_norm_solve, null_space};
@@ -644,13 +645,8 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
     names.extend(model.measures.iter().map(|m| m.name.clone()));
     results.add_columns(names);
     let t0 = analysis.t_start;
-    let mut times = vec![t0];
-    let count = ((analysis.t_end - t0) / analysis.step + 1e-9).floor() as usize;
-    times.extend((1..=count).map(|k| t0 + k as f64 * analysis.step));
-    if analysis.t_end - times[times.len() - 1] > 1e-9 * analysis.step {
-        times.push(analysis.t_end);
-    }
-    let given = vec![false; 2 * n];
+    let times = output_times(analysis);
+    let given = held(model, false);
     let assembly = match assemble(&mut dae.sys, &model.q0(), &model.qdot0(), &given, t0, analysis.settings.tolerance) {
         Ok(a) => a,
         Err(e) => return Err(fail(results, e)),

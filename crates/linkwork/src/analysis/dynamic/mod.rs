@@ -378,10 +378,8 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     let m = dae.m;
     let mut out = Output::new(model, analysis, n, m);
     let t0 = analysis.t_start;
-    // Assembly holds what the user marked as given: positions first, then velocities.
-    let given: Vec<bool> = (0..2)
-        .flat_map(|half| model.bodies.iter().flat_map(move |b| b.given[3 * half..3 * half + 3].to_vec()))
-        .collect();
+    // Assembly holds what the user marked as given.
+    let given = crate::analysis::setup::held(model, true);
     let assembly = match assemble(&mut dae.sys, &model.q0(), &model.qdot0(), &given, t0, analysis.settings.tolerance) {
         Ok(a) => a,
         Err(e) => return Err(fail(out.results, e)),
