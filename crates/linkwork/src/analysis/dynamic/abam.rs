@@ -518,13 +518,13 @@ impl Split<'_, '_> {
     /// their new values into `qd`, and return the correction's weighted RMS norm.
     fn correct_dependent(&mut self, positions: bool) -> f64 {
         let x = if positions { &mut self.q } else { &mut self.v };
-        let mut size = 0.0;
+        let size =
+            super::wrms(self.dep.iter().zip(&self.rhs).map(|(&c, &d)| (d, x[c])), self.dep.len(), self.rtol, self.atol);
         for ((&c, &d), out) in self.dep.iter().zip(&self.rhs).zip(self.qd.iter_mut()) {
-            size += (d / (self.atol + self.rtol * x[c].abs())).powi(2);
             x[c] += d;
             *out = x[c];
         }
-        (size / self.dep.len().max(1) as f64).sqrt()
+        size
     }
 
     /// `(t, y) => (q, v)` and, when `yp` is given, `[qddot; lambda]` into `sol` and

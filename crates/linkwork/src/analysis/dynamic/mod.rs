@@ -145,14 +145,15 @@ pub struct Start {
     pub lambda: Vec<f64>,
 }
 
-/// Weighted root-mean-square norm `sqrt(mean((v_k / (atol + rtol |y_k|))^2))` of the error
-/// estimate `v` against the solution `y`, as DASSL and Hairer-Wanner: 1 means "at the tolerance".
-pub fn wrms(v: &[f64], y: &[f64], rtol: f64, atol: f64) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    let s: f64 = v.iter().zip(y).map(|(e, x)| (e / (atol + rtol * x.abs())).powi(2)).sum();
-    (s / v.len() as f64).sqrt()
+/// Weighted root-mean-square norm `sqrt(sum_k (v_k / (atol + rtol |y_k|))^2 / count)` of an
+/// error estimate or correction `v` against the solution `y`, given as the pairs `(v_k, y_k)`,
+/// over `count` components (0 for none), as DASSL and Hairer-Wanner: 1 means "at the tolerance".
+/// The error norm of every integrator's error test and Newton test, and of the starting step;
+/// `count` may exceed the pairs given when some components carry no error (a massless
+/// coordinate's load), which then count as zero in the mean.
+pub fn wrms(terms: impl IntoIterator<Item = (f64, f64)>, count: usize, rtol: f64, atol: f64) -> f64 {
+    let s: f64 = terms.into_iter().map(|(v, y)| (v / (atol + rtol * y.abs())).powi(2)).sum();
+    (s / count.max(1) as f64).sqrt()
 }
 
 /// Units of round-off that a Newton correction cannot get below: the residual of the equations
@@ -186,9 +187,10 @@ pub fn step_bounds(settings: &IntegratorSettings, start: &Start, span: f64) -> (
     let h_max = settings.max_step.unwrap_or(span).min(span);
     let h0 = settings.initial_step.unwrap_or_else(|| {
         let (rt, at) = (settings.rtol, settings.atol);
-        let y: Vec<f64> = start.q.iter().chain(&start.qdot).copied().collect();
-        let dy: Vec<f64> = start.qdot.iter().chain(&start.qddot).copied().collect();
-        let (d0, d1) = (wrms(&y, &y, rt, at), wrms(&dy, &y, rt, at));
+        let y = || start.q.iter().chain(&start.qdot).copied();
+        let dy = start.qdot.iter().chain(&start.qddot).copied();
+        let count = 2 * start.q.len();
+        let (d0, d1) = (wrms(y().zip(y()), count, rt, at), wrms(dy.zip(y()), count, rt, at));
         if d0 < 1e-5 || d1 < 1e-5 {
             1e-6
         } else {
