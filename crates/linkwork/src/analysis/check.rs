@@ -5,7 +5,7 @@
 //! combination of the rows before it is redundant. This names the later of two parallel links as
 //! the redundant one, as a designer reading the file would.
 
-use super::setup::{held, unmet_freedom};
+use super::setup::{coordinate_names, held, unmet_freedom};
 use super::{assemble, Assembly};
 use crate::constraints::ConfigBuf;
 use crate::error::{Result, RowName};
@@ -157,11 +157,7 @@ pub fn check(model: &Model) -> Result<CheckReport> {
         model: model.name.clone(),
         bodies: model.bodies.iter().map(|b| b.name.clone()).collect(),
         coordinates: model.n(),
-        coordinate_names: model
-            .bodies
-            .iter()
-            .flat_map(|b| ["x", "y", "phi"].map(|c| format!("{}.{c}", b.name)))
-            .collect(),
+        coordinate_names: coordinate_names(model),
         mechanism,
         analyses,
     })

@@ -24,7 +24,7 @@
 //! damping ratio.
 
 use super::dynamic::{factor_error, Dae};
-use super::setup::{held, unmet_freedom};
+use super::setup::{coordinate_names, held, unmet_freedom};
 use super::statics::{solve, Statics, ZERO_STIFFNESS};
 use super::{assemble, element_names, indeterminate_rows};
 use crate::error::Error;
@@ -115,8 +115,7 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
     let m_n = Mat::from_fn(n, f, |i, j| mass[i] * basis[(i, j)]);
     let mr = basis.transpose() * &m_n;
     let cr = basis.transpose() * &c * &basis;
-    let names: Vec<String> =
-        model.bodies.iter().flat_map(|b| ["x", "y", "phi"].map(|q| format!("{}.{q}", b.name))).collect();
+    let names = coordinate_names(model);
     let kscale = (0..f).flat_map(|i| (0..f).map(move |j| (i, j))).map(|(i, j)| kr[(i, j)].abs()).fold(0.0, f64::max);
     let symmetric = (0..f).all(|i| (0..i).all(|j| (kr[(i, j)] - kr[(j, i)]).abs() <= 1e-8 * kscale));
     let undamped = (0..f).all(|i| (0..f).all(|j| cr[(i, j)] == 0.0));

@@ -1,9 +1,19 @@
-//! What the analyses set up alike: the output times, the initial values that assembly holds,
-//! and what an analysis needs of the degrees of freedom its drivers leave (told by `check` before
-//! a run, and by the analysis itself when it runs).
+//! What the analyses set up alike: the names of the coordinates, the output times, the initial
+//! values that assembly holds, and what an analysis needs of the degrees of freedom its drivers
+//! leave (told by `check` before a run, and by the analysis itself when it runs).
 
 use crate::model::spec::AnalysisKind;
 use crate::model::{Analysis, Model};
+
+/// The name `<body>.x`, `.y` or `.phi` of coordinate `k`.
+pub(crate) fn coordinate_name(model: &Model, k: usize) -> String {
+    format!("{}.{}", model.bodies[k / 3].name, ["x", "y", "phi"][k % 3])
+}
+
+/// The name of each coordinate, in the order of `q`.
+pub(crate) fn coordinate_names(model: &Model) -> Vec<String> {
+    (0..model.n()).map(|k| coordinate_name(model, k)).collect()
+}
 
 /// The output times of `analysis`: `t_start` and every `step` after it up to `t_end`, then
 /// `t_end` itself when the last falls short of it by more than `1e-9` of a step. The same

@@ -45,7 +45,7 @@
 //! damping do not matter.
 
 use super::dynamic::{factor_error, Dae};
-use super::setup::{held, output_times};
+use super::setup::{coordinate_name, held, output_times};
 use super::{assemble, element_names, indeterminate_rows, residual_floor};
 use crate::error::{Error, Unbalanced};
 use crate::linalg::dense::{min_norm_solve, null_space};
@@ -500,11 +500,6 @@ fn load_scale(dae: &mut Dae<'_>, q: &[f64], t: f64) -> f64 {
 
 fn max_abs(v: &[f64]) -> f64 {
     v.iter().fold(0.0f64, |a, x| a.max(x.abs()))
-}
-
-/// The name `<body>.x`, `.y` or `.phi` of coordinate `k`.
-fn coordinate_name(model: &Model, k: usize) -> String {
-    format!("{}.{}", model.bodies[k / 3].name, ["x", "y", "phi"][k % 3])
 }
 
 /// The coordinates with the largest share of the direction `v (n)`, as `body.x` names, for
