@@ -12,7 +12,7 @@
 //! also serves as the chord-Newton matrix of the next sub-step); nothing is allocated in the time
 //! loop except the growth of the output columns, reserved up front.
 
-use super::setup::{held, output_times, unmet_freedom};
+use super::setup::{fail, held, output_times, unmet_freedom};
 use super::{assemble, independent_rows, residual_floor, Assembly, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::{Config, ConfigBuf};
 use crate::error::{Error, Problem, RowName};
@@ -221,7 +221,6 @@ pub(crate) fn run_driven(
     let mut results = Results::new(model, analysis);
     let mut extra = Vec::with_capacity(names.len());
     results.add_columns(names);
-    let fail = |results: Results, error: Error| Box::new(Failure { error, results });
     let settings = analysis.settings;
     let n = model.n();
     let mut sys = System::new(model, &analysis.drivers);

@@ -24,7 +24,7 @@
 //! damping ratio.
 
 use super::dynamic::{factor_error, Dae};
-use super::setup::{coordinate_names, held, unmet_freedom};
+use super::setup::{coordinate_names, fail, held, unmet_freedom};
 use super::statics::{solve, Statics, ZERO_STIFFNESS};
 use super::{assemble, element_names, indeterminate_rows};
 use crate::error::Error;
@@ -74,7 +74,6 @@ pub struct Mode {
 
 /// Run a modes analysis.
 pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
-    let fail = |results: Results, error: Error| Box::new(Failure { error, results });
     let t = analysis.t_start;
     let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
         Ok(d) => d,

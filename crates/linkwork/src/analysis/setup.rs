@@ -1,9 +1,17 @@
 //! What the analyses set up alike: the names of the coordinates, the output times, the initial
-//! values that assembly holds, and what an analysis needs of the degrees of freedom its drivers
-//! leave (told by `check` before a run, and by the analysis itself when it runs).
+//! values that assembly holds, what an analysis needs of the degrees of freedom its drivers
+//! leave (told by `check` before a run, and by the analysis itself when it runs), and the
+//! failure that keeps the results written before it.
 
+use crate::error::Error;
 use crate::model::spec::AnalysisKind;
 use crate::model::{Analysis, Model};
+use crate::results::{Failure, Results};
+
+/// The failure of a run by `error`, with the `results` written before it.
+pub(crate) fn fail(results: Results, error: Error) -> Box<Failure> {
+    Box::new(Failure { error, results })
+}
 
 /// The name `<body>.x`, `.y` or `.phi` of coordinate `k`.
 pub(crate) fn coordinate_name(model: &Model, k: usize) -> String {

@@ -45,7 +45,7 @@
 //! damping do not matter.
 
 use super::dynamic::{factor_error, Dae};
-use super::setup::{coordinate_name, held, output_times};
+use super::setup::{coordinate_name, fail, held, output_times};
 use super::{assemble, element_names, indeterminate_rows, residual_floor};
 use crate::error::{Error, Unbalanced};
 use crate::linalg::dense::{min_norm_solve, null_space};
@@ -628,7 +628,6 @@ fn free(analysis: &Analysis, t: f64, coordinates: &[String]) -> Error {
 /// Run a static (or quasi-static) analysis. On failure the equilibria found until then are
 /// kept.
 pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
-    let fail = |results: Results, error: Error| Box::new(Failure { error, results });
     let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
         Ok(d) => d,
         Err(e) => return Err(fail(Results::new(model, analysis), factor_error(e, analysis.t_start))),

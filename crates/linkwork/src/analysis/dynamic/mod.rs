@@ -34,6 +34,7 @@ pub use crate::model::spec::{Formulation, IntegratorKind};
 pub use dae::{Dae, LinearStats, EPS_REL};
 pub use output::{factor_error, Output, ENERGY_COLUMNS};
 
+use super::setup::{fail, held};
 use super::{assemble, independent_rows};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, RowName};
@@ -372,7 +373,6 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     // A tighter rtol would ask the error test to resolve round-off (warned in the summary).
     settings.rtol = settings.rtol.max(super::RTOL_FLOOR);
     let n = model.n();
-    let fail = |results: Results, error: Error| Box::new(Failure { error, results });
     let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
         Ok(d) => d,
         Err(e) => return Err(fail(Results::new(model, analysis), factor_error(e, analysis.t_start))),
@@ -381,7 +381,7 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     let mut out = Output::new(model, analysis, n, m);
     let t0 = analysis.t_start;
     // Assembly holds what the user marked as given.
-    let given = crate::analysis::setup::held(model, true);
+    let given = held(model, true);
     let assembly = match assemble(&mut dae.sys, &model.q0(), &model.qdot0(), &given, t0, analysis.settings.tolerance) {
         Ok(a) => a,
         Err(e) => return Err(fail(out.results, e)),
