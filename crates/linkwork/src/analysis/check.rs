@@ -9,11 +9,11 @@ use super::setup::{coordinate_names, held, unmet_freedom};
 use super::{assemble, Assembly};
 use crate::constraints::ConfigBuf;
 use crate::error::{Result, RowName};
-use crate::linalg::dense::RANK_TOLERANCE;
+use crate::linalg::dense::independent_rows;
 use crate::model::spec::AnalysisKind;
 use crate::model::Model;
 use crate::system::System;
-use faer::{Mat, MatRef};
+use faer::Mat;
 use indexmap::IndexMap;
 
 /// Degrees of freedom and redundancy of one set of active constraints.
@@ -68,34 +68,6 @@ pub struct CheckReport {
     pub mechanism: SystemCheck,
     /// Each analysis by name, with its drivers.
     pub analyses: IndexMap<String, AnalysisCheck>,
-}
-
-/// Greedy independent rows of `jac (m x n)` in order: modified Gram-Schmidt, twice for accuracy.
-/// Returns `(independent, redundant)` row indices.
-pub fn independent_rows(jac: MatRef<'_, f64>) -> (Vec<usize>, Vec<usize>) {
-    let (m, n) = (jac.nrows(), jac.ncols());
-    let scale = (0..m).map(|i| (0..n).map(|j| jac[(i, j)].powi(2)).sum::<f64>().sqrt()).fold(0.0f64, f64::max);
-    let mut basis: Vec<Vec<f64>> = Vec::new();
-    let (mut keep, mut drop) = (Vec::new(), Vec::new());
-    for i in 0..m {
-        let mut v: Vec<f64> = (0..n).map(|j| jac[(i, j)]).collect();
-        let norm0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        for _ in 0..2 {
-            for b in &basis {
-                let d: f64 = v.iter().zip(b).map(|(x, y)| x * y).sum();
-                v.iter_mut().zip(b).for_each(|(x, y)| *x -= d * y);
-            }
-        }
-        let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if norm <= RANK_TOLERANCE.sqrt() * norm0.max(scale) || norm == 0.0 {
-            drop.push(i);
-        } else {
-            v.iter_mut().for_each(|x| *x /= norm);
-            basis.push(v);
-            keep.push(i);
-        }
-    }
-    (keep, drop)
 }
 
 /// Assemble the model with the joints and the given drivers and examine its Jacobian there.

@@ -13,8 +13,9 @@ mod run;
 mod setup;
 mod statics;
 
+pub use crate::linalg::dense::independent_rows;
 pub use assembly::{assemble, Assembly};
-pub use check::{check, independent_rows, AnalysisCheck, CheckReport, SystemCheck};
+pub use check::{check, AnalysisCheck, CheckReport, SystemCheck};
 pub(crate) use inverse::reaction_columns;
 pub use inverse::run_inverse;
 pub use kinematic::{run_kinematic, KinematicStats};
