@@ -391,10 +391,11 @@ impl Adams {
 mod tests {
     use super::*;
 
-    /// The weighted RMS norm with weights `tol (1 + |y|)` of the solution `y`.
+    /// The integrators' error norm ([`super::super::wrms`]) at `rtol = atol = tol` against the
+    /// solution `y`.
     fn weighted(y: &[f64], tol: f64) -> impl FnMut(&[f64]) -> f64 {
-        let w: Vec<f64> = y.iter().map(|x| tol * (1.0 + x.abs())).collect();
-        move |x: &[f64]| (x.iter().zip(&w).map(|(a, b)| (a / b).powi(2)).sum::<f64>() / x.len() as f64).sqrt()
+        let y = y.to_vec();
+        move |x: &[f64]| super::super::wrms(x.iter().copied().zip(y.iter().copied()), x.len(), tol, tol)
     }
 
     /// Integrate `y' = f(t, y)` with the Adams core alone, as the driver does; returns
