@@ -11,16 +11,11 @@ use common::{col, energy_drift};
 use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::{Error, Model, Overrides, Results};
 
-/// The integrators every example runs with.
-const INTEGRATORS: &[&str] = &["bdf", "hht", "abam"];
+/// The integrators every example runs with: all of them.
+const INTEGRATORS: &[&str] = IntegratorKind::NAMES;
 
 fn kind(name: &str) -> IntegratorKind {
-    match name {
-        "hht" => IntegratorKind::Hht,
-        "bdf" => IntegratorKind::Bdf,
-        "abam" => IntegratorKind::Abam,
-        _ => panic!("unknown integrator {name}"),
-    }
+    IntegratorKind::from_name(name).unwrap_or_else(|| panic!("unknown integrator {name}"))
 }
 
 fn load(name: &str) -> Model {

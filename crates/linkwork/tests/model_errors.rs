@@ -256,6 +256,32 @@ fn dynamics_problems_are_listed_with_their_paths() {
     has(&p, "analyses.bdf7.solver.max_order", "expected 1 to 6 for bdf, found 7");
 }
 
+/// Ground where a moving body is needed, and one body at both ends of a joint or driver, are
+/// refused at the field that names them.
+#[test]
+fn ground_and_one_body_twice_are_refused() {
+    let text = r#"
+bodies:
+  a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}
+joints:
+  ax: {type: absolute_x, body: ground}
+  phi: {type: absolute_angle, body: ground}
+  pin: {type: revolute, body_i: a, point_i: [0, 0], body_j: a, point_j: [1, 0]}
+drivers:
+  turn: {type: angle, body: ground, function: t}
+  slide: {type: y, body: ground, function: t}
+  relative: {type: relative_angle, body_i: a, body_j: a, function: t}
+"#;
+    let p = problems(text);
+    has(&p, "joints.ax.body", "ground cannot be constrained; name a moving body");
+    has(&p, "joints.phi.body", "ground cannot be constrained; name a moving body");
+    has(&p, "joints.pin.body_j", "a joint needs two different bodies, found 'a' twice");
+    has(&p, "drivers.turn.body", "ground cannot be driven; name a moving body");
+    has(&p, "drivers.slide.body", "ground cannot be driven; name a moving body");
+    has(&p, "drivers.relative.body_j", "a joint needs two different bodies, found 'a' twice");
+    assert_eq!(p.len(), 6, "{p:#?}");
+}
+
 /// Command-line overrides are checked like file values; the option is the path.
 #[test]
 fn overrides_are_checked() {

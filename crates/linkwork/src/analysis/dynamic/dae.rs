@@ -162,7 +162,7 @@ impl<'m> Dae<'m> {
         let entries = sys.entries();
         let forces: Vec<&ForceElement> = forces.iter().map(|&k| &model.forces[k]).collect();
         let force_cols: Vec<&[usize]> = forces.iter().map(|f| f.force.columns()).collect();
-        let applied = forces.iter().map(|f| !matches!(f.kind, "spring_damper" | "rotational_spring_damper")).collect();
+        let applied = forces.iter().map(|f| f.applied).collect();
         let kkt = Kkt::new(n, m, &entries, &force_cols)?;
         let w = force_cols.iter().map(|c| c.len()).max().unwrap_or(0);
         let max_mass = mass.iter().fold(0.0f64, |a, &b| a.max(b));
