@@ -6,7 +6,7 @@
 mod common;
 
 use common::references::{elliptic_k, nfourbar_error, nfourbar_reference, ANDREWS, ANDREWS_END, ANDREWS_START};
-use common::{col, energy_drift};
+use common::{at_tolerance, col, energy_drift};
 
 use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::{Error, Model, Overrides, Results};
@@ -29,7 +29,7 @@ fn with(integrator: &str) -> Overrides {
 
 /// Overrides that select `integrator` with `rtol = atol = tol`.
 fn tight(integrator: &str, tol: f64) -> Overrides {
-    Overrides { rtol: Some(tol), atol: Some(tol), ..with(integrator) }
+    at_tolerance(kind(integrator), tol, None)
 }
 
 /// Run `analysis` of `model`; panics with the engine's message on failure.
