@@ -50,6 +50,12 @@ pub const SLIDER_CRANK_JOINTS: &str = "joints:
   guide: {type: translational, body_i: ground, point_i: [0, 0], axis_i: [1, 0], body_j: slider, point_j: [0, 0], axis_j: [1, 0]}
 ";
 
+/// The text of an example's model file with each `(from, to)` of `changes` made in turn, by
+/// [`patch`].
+pub fn patched_example(name: &str, changes: &[(&str, &str)]) -> String {
+    changes.iter().fold(example_text(name), |text, (from, to)| patch(&text, from, to))
+}
+
 /// Load and run an example's analysis; panics with the engine's message on failure.
 pub fn run(name: &str, analysis: &str) -> (Model, Results) {
     let model = Model::load(example(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
