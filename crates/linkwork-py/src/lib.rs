@@ -119,15 +119,15 @@ impl PyModel {
         progress: Option<Py<PyAny>>,
     ) -> PyResult<PyResults> {
         use linkwork::analysis::dynamic::IntegratorKind;
-        let integrator = match integrator {
+        let integrator = match integrator.map(|name| (name, IntegratorKind::from_name(name))) {
             None => None,
-            Some("bdf") => Some(IntegratorKind::Bdf),
-            Some("hht") => Some(IntegratorKind::Hht),
-            Some("abam") => Some(IntegratorKind::Abam),
-            Some(other) => {
+            Some((_, Some(kind))) => Some(kind),
+            Some((other, None)) => {
+                let (last, rest) = IntegratorKind::NAMES.split_last().expect("there are integrators");
+                let expected = format!("{} or {last}", rest.join(", "));
                 let problem = linkwork::Problem::new(
                     "--integrator",
-                    format!("unknown integrator '{other}'; expected bdf, hht or abam"),
+                    format!("unknown integrator '{other}'; expected {expected}"),
                 );
                 return Err(to_pyerr(py, Error::Model(vec![problem]), None));
             }

@@ -33,8 +33,10 @@ use references::{
 };
 use std::time::Instant;
 
-const INTEGRATORS: [(&str, IntegratorKind); 3] =
-    [("bdf", IntegratorKind::Bdf), ("hht", IntegratorKind::Hht), ("abam", IntegratorKind::Abam)];
+/// Every integrator, with its name in model files.
+fn integrators() -> impl Iterator<Item = (&'static str, IntegratorKind)> {
+    IntegratorKind::NAMES.iter().filter_map(|&name| Some((name, IntegratorKind::from_name(name)?)))
+}
 
 fn example(name: &str) -> String {
     format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))
@@ -91,7 +93,7 @@ fn output_step_effect() {
     let capped = text.replace(from, "dynamics: {type: dynamic, t_end: 2000, step: 0.01, solver: {max_step: 0.01}}");
     println!("| A01, 200,001 outputs | integrator | rtol = atol | max_step | error (m) | CPU time (s) | steps |");
     println!("| --- | --- | --- | --- | --- | --- | --- |");
-    for (label, kind) in INTEGRATORS {
+    for (label, kind) in integrators() {
         for tol in [1e-6, 1e-8] {
             for (cap, yaml) in [("0.01 (output step)", &capped), ("default", &text)] {
                 let model = Model::from_yaml(yaml).expect("model");
@@ -129,11 +131,11 @@ fn sweep(filter: &str, integrator: &str) {
         let dynamic: Vec<&String> =
             model.analyses.iter().filter(|(_, a)| a.kind == AnalysisKind::Dynamic).map(|(name, _)| name).collect();
         for analysis in dynamic {
-            for (label, kind) in INTEGRATORS.iter().filter(|(l, _)| l.contains(integrator)) {
+            for (label, kind) in integrators().filter(|(l, _)| l.contains(integrator)) {
                 for e in 4..=13 {
                     let tol = 10f64.powi(-e);
                     let o =
-                        Overrides { integrator: Some(*kind), rtol: Some(tol), atol: Some(tol), ..Default::default() };
+                        Overrides { integrator: Some(kind), rtol: Some(tol), atol: Some(tol), ..Default::default() };
                     let start = Instant::now();
                     let run = model.run_with(analysis, &o);
                     let time = start.elapsed().as_secs_f64();
@@ -157,9 +159,10 @@ fn sweep(filter: &str, integrator: &str) {
 /// One run of `file`'s `dynamics` with `integrator` at `rtol = atol = tol`: its outcome, CPU
 /// time and statistics.
 fn one(file: &str, integrator: &str, tol: f64) {
-    let (_, kind) = INTEGRATORS.iter().find(|(l, _)| *l == integrator).expect("INTEGRATOR: bdf, hht or abam");
+    let kind = IntegratorKind::from_name(integrator)
+        .unwrap_or_else(|| panic!("INTEGRATOR: one of {}", IntegratorKind::NAMES.join(", ")));
     let model = Model::load(example(file)).expect("model");
-    let o = Overrides { integrator: Some(*kind), rtol: Some(tol), atol: Some(tol), ..Default::default() };
+    let o = Overrides { integrator: Some(kind), rtol: Some(tol), atol: Some(tol), ..Default::default() };
     let start = Instant::now();
     let run = model.run_with("dynamics", &o);
     let time = start.elapsed().as_secs_f64();
@@ -197,7 +200,7 @@ fn main() {
             continue;
         }
         let model = Model::load(example(case.file)).expect("model");
-        for (label, kind) in INTEGRATORS {
+        for (label, kind) in integrators() {
             for &tol in case.tolerances {
                 let o = Overrides { integrator: Some(kind), rtol: Some(tol), atol: Some(tol), ..Default::default() };
                 let (mut best, mut outcome) = (f64::INFINITY, None);

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{example, example_text, patch, run};
+use common::{example, example_text, patch, patched_example, run};
 use linkwork::analysis::check;
 use linkwork::{Error, Model};
 
@@ -83,12 +83,15 @@ fn kinematic_analysis_needs_a_fully_driven_model() {
 /// other analyses are still checked.
 #[test]
 fn an_analysis_that_cannot_assemble_is_reported_in_its_entry() {
-    let text = example_text("quick_return_b.yaml");
-    let text = patch(&text, "drivers:\n", "drivers:\n  too_far: {type: angle, body: rocker, function: \"9\"}\n");
-    let text = patch(
-        &text,
-        "analyses:\n",
-        "analyses:\n  clash: {type: kinematic, drivers: [crank_drive, too_far], t_end: 1, step: 0.1}\n",
+    let text = patched_example(
+        "quick_return_b.yaml",
+        &[
+            ("drivers:\n", "drivers:\n  too_far: {type: angle, body: rocker, function: \"9\"}\n"),
+            (
+                "analyses:\n",
+                "analyses:\n  clash: {type: kinematic, drivers: [crank_drive, too_far], t_end: 1, step: 0.1}\n",
+            ),
+        ],
     );
     let model = Model::from_yaml(&text).unwrap();
     let report = check(&model).unwrap();
@@ -158,12 +161,16 @@ fn condition_limit_stops_the_analysis() {
 /// causes; a model short of equations is told only to add drivers.
 #[test]
 fn a_start_at_a_dead_centre_is_named_as_a_possible_cause() {
-    let text = patch(
-        &example_text("slider_crank.yaml"),
-        "motor: {type: angle, body: crank, function: \"2*pi*t\"}",
-        "push: {type: x, body: slider, function: \"0.4 - 0.1*t\"}",
+    let text = patched_example(
+        "slider_crank.yaml",
+        &[
+            (
+                "motor: {type: angle, body: crank, function: \"2*pi*t\"}",
+                "push: {type: x, body: slider, function: \"0.4 - 0.1*t\"}",
+            ),
+            ("drivers: [motor]", "drivers: [push]"),
+        ],
     );
-    let text = patch(&text, "drivers: [motor]", "drivers: [push]");
     let model = Model::from_yaml(&text).unwrap();
     let failure = model.run("kinematics").expect_err("singular start");
     let message = failure.error.to_string();
@@ -261,12 +268,16 @@ fn an_infinite_driver_rate_at_the_start_is_named() {
 /// velocities that cannot all hold, and names both rows.
 #[test]
 fn conflicting_drivers_are_not_blamed_on_given_velocities() {
-    let patched = patch(
-        &example_text("fourbar.yaml"),
-        "  motor: {type: angle, body: crank, function: \"2*t\"}",
-        "  motor: {type: angle, body: crank, function: \"2*t\"}\n  motor2: {type: angle, body: crank, function: \"3*t\"}",
+    let patched = patched_example(
+        "fourbar.yaml",
+        &[
+            (
+                "  motor: {type: angle, body: crank, function: \"2*t\"}",
+                "  motor: {type: angle, body: crank, function: \"2*t\"}\n  motor2: {type: angle, body: crank, function: \"3*t\"}",
+            ),
+            ("drivers: [motor]", "drivers: [motor, motor2]"),
+        ],
     );
-    let patched = patch(&patched, "drivers: [motor]", "drivers: [motor, motor2]");
     let failure = Model::from_yaml(&patched).unwrap().run("kinematics").expect_err("the drivers conflict");
     let message = failure.error.to_string();
     assert!(matches!(failure.error, Error::Assembly { .. }), "{message}");
@@ -331,14 +342,17 @@ analyses:
     assert_eq!(problems[0].path, "bodies.wheel.inertia", "{e}");
     assert!(problems[0].message.contains("wheel.phi can move with no mass or inertia"), "{e}");
 
-    let text = example_text("slider_crank.yaml");
-    let text = patch(&text, "{mass: 2.0, inertia: 0.015,", "{mass: 0.0, inertia: 0.0,");
-    let text = patch(
-        &text,
-        "kinematics: {type: kinematic, drivers: [motor], t_end: 2.0, step: 0.01}",
-        "dyn: {type: dynamic, drivers: [], t_end: 0.2, step: 0.01}",
+    let massless_rod = patched_example(
+        "slider_crank.yaml",
+        &[
+            ("{mass: 2.0, inertia: 0.015,", "{mass: 0.0, inertia: 0.0,"),
+            (
+                "kinematics: {type: kinematic, drivers: [motor], t_end: 2.0, step: 0.01}",
+                "dyn: {type: dynamic, drivers: [], t_end: 0.2, step: 0.01}",
+            ),
+            ("name: slider-crank", "name: slider-crank\ngravity: [0, -9.81]"),
+        ],
     );
-    let massless_rod = patch(&text, "name: slider-crank", "name: slider-crank\ngravity: [0, -9.81]");
     let model = Model::from_yaml(&massless_rod).unwrap();
     assert_eq!(check(&model).unwrap().analyses["dyn"].warning, None);
     let r = model.run("dyn").unwrap_or_else(|f| panic!("{}", f.error));

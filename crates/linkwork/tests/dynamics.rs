@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{col, energy_drift, patch};
+use common::{col, energy_drift, integrators, patch};
 use linkwork::analysis::dynamic::IntegratorKind;
 
 /// The double pendulum's energy (about 15 J of motion) over 5 s at the default tolerances
@@ -239,16 +239,25 @@ analyses:
     linkwork::Model::from_yaml(&text).unwrap()
 }
 
+/// `model`'s `dynamics` run with each integrator, each of which must stop (`why`): the
+/// integrator, its failure and the failure's message.
+fn stops(model: &linkwork::Model, why: &str) -> Vec<(IntegratorKind, linkwork::Failure, String)> {
+    let stop = |(_, integrator)| {
+        let o = linkwork::Overrides { integrator: Some(integrator), ..Default::default() };
+        let failure = *model.run_with("dynamics", &o).expect_err(why);
+        let message = failure.error.to_string();
+        (integrator, failure, message)
+    };
+    integrators().map(stop).collect()
+}
+
 /// A torque that turns NaN between output times, `sqrt(0.503 - t)`, stopped every integrator at
 /// 0.503 s as a torque that "grows without bound" (its rate does, but its value goes to 0 and
 /// is NaN past 0.503 s). The run now says it is NaN there, naming it and its expression.
 #[test]
 fn a_torque_that_turns_nan_inside_a_step_is_named() {
     let model = pendulum_with_torque("kick", "sqrt(0.503-t)", 0.01);
-    for integrator in [IntegratorKind::Bdf, IntegratorKind::Hht, IntegratorKind::Abam] {
-        let o = linkwork::Overrides { integrator: Some(integrator), ..Default::default() };
-        let failure = model.run_with("dynamics", &o).expect_err("NaN past t = 0.503 s");
-        let message = failure.error.to_string();
+    for (integrator, failure, message) in stops(&model, "NaN past t = 0.503 s") {
         let linkwork::Error::NonFinite { time, element, expression, value } = &failure.error else {
             panic!("{integrator:?}: expected a NaN force, got {message}")
         };
@@ -266,10 +275,7 @@ fn a_torque_that_turns_nan_inside_a_step_is_named() {
 #[test]
 fn a_nan_torque_stops_the_run_naming_it() {
     let model = pendulum_with_torque("flip", "(t-0.5)/abs(t-0.5)", 0.1);
-    for integrator in [IntegratorKind::Bdf, IntegratorKind::Hht, IntegratorKind::Abam] {
-        let o = linkwork::Overrides { integrator: Some(integrator), ..Default::default() };
-        let failure = model.run_with("dynamics", &o).expect_err("NaN at t = 0.5 s");
-        let message = failure.error.to_string();
+    for (integrator, failure, message) in stops(&model, "NaN at t = 0.5 s") {
         match &failure.error {
             linkwork::Error::NonFinite { time, element, expression, value } => {
                 assert!((time - 0.5).abs() < 1e-12, "{integrator:?}: {message}");
@@ -296,10 +302,7 @@ fn a_nan_torque_stops_the_run_naming_it() {
 #[test]
 fn a_torque_with_a_pole_stops_the_run_naming_it() {
     let model = pendulum_with_torque("kick", "1/(t-0.503)", 0.01);
-    for integrator in [IntegratorKind::Bdf, IntegratorKind::Hht, IntegratorKind::Abam] {
-        let o = linkwork::Overrides { integrator: Some(integrator), ..Default::default() };
-        let failure = model.run_with("dynamics", &o).expect_err("a pole at t = 0.503 s");
-        let message = failure.error.to_string();
+    for (integrator, failure, message) in stops(&model, "a pole at t = 0.503 s") {
         match &failure.error {
             linkwork::Error::Unbounded { time, element, expression, rate, .. } => {
                 // The failure is at the smallest step, 16 units of round-off of t, from the pole.
@@ -327,10 +330,7 @@ fn a_lowered_step_budget_stops_the_run_at_it() {
                 analyses:\n  dynamics: {type: dynamic, t_end: 0.03, step: 0.01}\n";
     let mut model = linkwork::Model::from_yaml(text).unwrap();
     model.analyses["dynamics"].integrator.max_steps = 1000;
-    for integrator in [IntegratorKind::Bdf, IntegratorKind::Hht, IntegratorKind::Abam] {
-        let o = linkwork::Overrides { integrator: Some(integrator), ..Default::default() };
-        let failure = model.run_with("dynamics", &o).expect_err("3e9 rad/s for 0.03 s");
-        let message = failure.error.to_string();
+    for (integrator, failure, message) in stops(&model, "3e9 rad/s for 0.03 s") {
         eprintln!("{integrator:?}: {message}");
         assert!(matches!(failure.error, linkwork::Error::Integration { .. }), "{integrator:?}: {message}");
         assert!(message.contains("more than 1000 steps (the step budget)"), "{integrator:?}: {message}");

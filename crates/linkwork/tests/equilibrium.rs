@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{col, patch};
+use common::{col, patch, SLIDER_CRANK_JOINTS};
 use linkwork::{Error, Model, Results};
 
 fn run(yaml: &str, analysis: &str) -> Results {
@@ -22,12 +22,7 @@ bodies:
   rod: {{mass: 2.0, inertia: 0.015, position: [0.24, 0.01], angle: -0.1, points: {{A: [-0.15, 0], B: [0.15, 0]}}}}
   slider: {{mass: 1.5, inertia: 0.001, position: [0.38, 0.0], angle: 0.0}}
 {extra_bodies}
-joints:
-  O: {{type: revolute, body_i: crank, point_i: O, body_j: ground, point_j: [0, 0]}}
-  A: {{type: revolute, body_i: crank, point_i: A, body_j: rod, point_j: A}}
-  B: {{type: revolute, body_i: rod, point_i: B, body_j: slider, point_j: [0, 0]}}
-  guide: {{type: translational, body_i: ground, point_i: [0, 0], axis_i: [1, 0], body_j: slider, point_j: [0, 0], axis_j: [1, 0]}}
-drivers:
+{SLIDER_CRANK_JOINTS}drivers:
   motor: {{type: angle, body: crank, function: "0.3 + t"}}
 forces:
 {forces}

@@ -6,21 +6,16 @@
 mod common;
 
 use common::references::{elliptic_k, nfourbar_error, nfourbar_reference, ANDREWS, ANDREWS_END, ANDREWS_START};
-use common::{col, energy_drift};
+use common::{at_tolerance, col, energy_drift};
 
 use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::{Error, Model, Overrides, Results};
 
-/// The integrators every example runs with.
-const INTEGRATORS: &[&str] = &["bdf", "hht", "abam"];
+/// The integrators every example runs with: all of them.
+const INTEGRATORS: &[&str] = IntegratorKind::NAMES;
 
 fn kind(name: &str) -> IntegratorKind {
-    match name {
-        "hht" => IntegratorKind::Hht,
-        "bdf" => IntegratorKind::Bdf,
-        "abam" => IntegratorKind::Abam,
-        _ => panic!("unknown integrator {name}"),
-    }
+    IntegratorKind::from_name(name).unwrap_or_else(|| panic!("unknown integrator {name}"))
 }
 
 fn load(name: &str) -> Model {
@@ -34,7 +29,7 @@ fn with(integrator: &str) -> Overrides {
 
 /// Overrides that select `integrator` with `rtol = atol = tol`.
 fn tight(integrator: &str, tol: f64) -> Overrides {
-    Overrides { rtol: Some(tol), atol: Some(tol), ..with(integrator) }
+    at_tolerance(kind(integrator), tol, None)
 }
 
 /// Run `analysis` of `model`; panics with the engine's message on failure.

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{col, energy_drift, run};
+use common::{col, energy_drift, run, SLIDER_CRANK_JOINTS};
 
 /// The double pendulum at the default tolerances (1e-6) over 5 s, falling from rest through a
 /// drop of about 20 J of potential energy. Measured: drift 4.5e-5 J in 454 steps (16 rejected),
@@ -107,12 +107,7 @@ bodies:
   crank: {{mass: 1, inertia: 0.1, position: [-1.3, -0.7], angle: 0.5, points: {{O: [1.5, 0], A: [2.5, 0]}}, omega: 6.283185307179586, given: [phi, omega]}}
   rod: {{mass: 2, inertia: 1.5, position: [2.3, 0.2], angle: -0.15, points: {{A: [-1.5, 0], B: [1.5, 0]}}}}
   slider: {{mass: 1, inertia: 0.1, position: [3.8, 0], angle: 0}}
-joints:
-  O: {{type: revolute, body_i: crank, point_i: O, body_j: ground, point_j: [0, 0]}}
-  A: {{type: revolute, body_i: crank, point_i: A, body_j: rod, point_j: A}}
-  B: {{type: revolute, body_i: rod, point_i: B, body_j: slider, point_j: [0, 0]}}
-  guide: {{type: translational, body_i: ground, point_i: [0, 0], axis_i: [1, 0], body_j: slider, point_j: [0, 0], axis_j: [1, 0]}}
-analyses:
+{SLIDER_CRANK_JOINTS}analyses:
   dynamics: {{type: dynamic, integrator: abam, t_end: {t_end}, step: 0.01}}
 "
     )

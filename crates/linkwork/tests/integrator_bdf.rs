@@ -14,10 +14,10 @@
 
 mod common;
 
-use common::col;
 use common::references::{andrews_digits, nfourbar_error, pendulum_a01, QuickReturn, ANDREWS_END_CONVERGED, SAMPLES};
+use common::{at_tolerance, col};
 use linkwork::analysis::dynamic::{Formulation, IntegratorKind};
-use linkwork::{Model, Overrides, Results};
+use linkwork::{Model, Results};
 use std::time::Instant;
 
 fn load(name: &str) -> Model {
@@ -37,13 +37,7 @@ fn run(
     if let Some(k) = std::env::var("MAX_ORDER").ok().and_then(|s| s.parse().ok()) {
         model.analyses[analysis].integrator.max_order = Some(k);
     }
-    let o = Overrides {
-        integrator: Some(IntegratorKind::Bdf),
-        rtol: Some(tol),
-        atol: Some(tol),
-        t_end,
-        ..Default::default()
-    };
+    let o = at_tolerance(IntegratorKind::Bdf, tol, t_end);
     let start = Instant::now();
     let r = model.run_with(analysis, &o);
     let cpu = start.elapsed().as_secs_f64();
@@ -93,7 +87,7 @@ fn velocities_in_the_error_test_make_the_error_follow_the_tolerance() {
     let mut model = load("quick_return_a.yaml");
     let reference = QuickReturn::new(&model, 6.283, SAMPLES);
     let tol = 1e-8;
-    let o = Overrides { integrator: Some(IntegratorKind::Bdf), rtol: Some(tol), atol: Some(tol), ..Default::default() };
+    let o = at_tolerance(IntegratorKind::Bdf, tol, None);
     let default = model.run_with("dynamics", &o).unwrap_or_else(|f| panic!("{}", f.error));
     assert_eq!(default.summary_json(None)["integrator"]["formulation"], "si2");
     let si2 = quick_return_error(&default, &reference);

@@ -6,35 +6,21 @@
 mod common;
 
 use common::references::{nfourbar_error, pendulum_error as a01_error, QuickReturn, QUICK_RETURN_CRANK_SPEED, SAMPLES};
-use common::{col, energy_drift};
+use common::{at_tolerance, col, energy_drift};
 use linkwork::analysis::dynamic::IntegratorKind;
-use linkwork::{Model, Overrides, Results};
+use linkwork::{Model, Results};
 
 /// A bar pinned off its centre on a torsion spring: `phi = 0.5 cos 2t` exactly (as order_tests.rs).
-const BAR: &str = "
-name: pinned bar on a torsion spring
-bodies:
-  bar:
-    mass: 2
-    inertia: 0.5
-    position: [0.43879128094518, 0.23971276930210]
-    angle: 0.5
-    points: {O: [-0.5, 0]}
-    given: [phi]
-joints:
-  O: {type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}
-forces:
-  spring: {type: rotational_spring_damper, body_i: bar, body_j: ground, stiffness: 4, free_angle: 0}
-analyses:
-  dynamics: {type: dynamic, t_end: 62.83185307179586, step: 0.1}
-";
+const BAR: &str = include_str!("models/pinned_bar.yaml");
+/// How long `diag` runs the bar without `TEND`, s: 20 periods.
+const BAR_END: f64 = 62.83185307179586;
 
 fn load(name: &str) -> Model {
     Model::load(common::example(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 fn run_tol(model: &Model, analysis: &str, kind: IntegratorKind, tol: f64, t_end: Option<f64>) -> (Results, f64) {
-    let o = Overrides { integrator: Some(kind), rtol: Some(tol), atol: Some(tol), t_end, ..Default::default() };
+    let o = at_tolerance(kind, tol, t_end);
     let clock = std::time::Instant::now();
     let r = model.run_with(analysis, &o).unwrap_or_else(|f| panic!("{} {analysis} {tol}: {}", model.name, f.error));
     (r, clock.elapsed().as_secs_f64())
@@ -146,7 +132,7 @@ fn diag() {
     if what.contains("bar") {
         let m = Model::from_yaml(BAR).unwrap();
         for &tol in &tols {
-            let (r, cpu) = run_tol(&m, "dynamics", IntegratorKind::Hht, tol, t_end);
+            let (r, cpu) = run_tol(&m, "dynamics", IntegratorKind::Hht, tol, t_end.or(Some(BAR_END)));
             let (t, v) = (col(&r, "kinetic_energy"), col(&r, "potential_energy"));
             let e: Vec<f64> = (0..r.len()).map(|k| t[k] + v[k]).collect();
             let periods = r.time[r.len() - 1] / std::f64::consts::PI;
@@ -183,13 +169,7 @@ fn diag() {
         }
         let m = load(name);
         for &tol in &tols {
-            let o = Overrides {
-                integrator: Some(IntegratorKind::Hht),
-                rtol: Some(tol),
-                atol: Some(tol),
-                t_end,
-                ..Default::default()
-            };
+            let o = at_tolerance(IntegratorKind::Hht, tol, t_end);
             let clock = std::time::Instant::now();
             match m.run_with("dynamics", &o) {
                 Ok(r) => eprintln!(

@@ -14,12 +14,22 @@ fn problems(text: &str) -> Vec<String> {
     }
 }
 
+/// Whether `list` has a problem at `path` (none: at the top) whose message contains `words`.
+fn found(list: &[String], path: &str, words: &str) -> bool {
+    let prefix = if path.is_empty() { String::new() } else { format!("{path}: ") };
+    list.iter().any(|p| p.starts_with(&prefix) && p.contains(words))
+}
+
 fn has(list: &[String], path: &str, words: &str) {
     let prefix = if path.is_empty() { String::new() } else { format!("{path}: ") };
-    assert!(
-        list.iter().any(|p| p.starts_with(&prefix) && p.contains(words)),
-        "no '{prefix}...{words}...' in {list:#?}"
-    );
+    assert!(found(list, path, words), "no '{prefix}...{words}...' in {list:#?}");
+}
+
+/// Each `(path, words)` of `expected` is in `list`, as [`has`] checks one; the message names
+/// every one that is not.
+fn has_each(list: &[String], expected: &[(&str, &str)]) {
+    let missing: Vec<_> = expected.iter().filter(|(path, words)| !found(list, path, words)).collect();
+    assert!(missing.is_empty(), "not found: {missing:#?}\nin {list:#?}");
 }
 
 const BAD: &str = r#"
@@ -45,20 +55,25 @@ analyses:
 #[test]
 fn every_problem_is_listed_with_its_path() {
     let p = problems(BAD);
-    has(&p, "bodies.crank.inertia", "finite");
-    has(&p, "bodies.rocker.colour", "unknown field");
-    has(&p, "bodies.link", "missing field `inertia`");
-    has(&p, "bodies.slider.position[1]", "invalid type: string");
-    has(&p, "joints.B.body_j", "unknown body 'rokcer'");
-    has(&p, "joints.S.axis_i", "zero-length axis");
-    has(&p, "joints.crank", "duplicate name");
-    has(&p, "joints.E.expression", "unknown name 'rocker.z'");
-    has(&p, "joints.F.expression", "cannot read the expression");
-    has(&p, "joints.P.point_i", "unknown point 'tip'");
-    has(&p, "joints.Q.type", "unknown type `revolut`");
-    has(&p, "drivers.d.function", "unknown name 'q'");
-    has(&p, "analyses.kin.drivers[1]", "unknown driver 'e'");
-    has(&p, "analyses.kin.step", "positive");
+    has_each(
+        &p,
+        &[
+            ("bodies.crank.inertia", "finite"),
+            ("bodies.rocker.colour", "unknown field"),
+            ("bodies.link", "missing field `inertia`"),
+            ("bodies.slider.position[1]", "invalid type: string"),
+            ("joints.B.body_j", "unknown body 'rokcer'"),
+            ("joints.S.axis_i", "zero-length axis"),
+            ("joints.crank", "duplicate name"),
+            ("joints.E.expression", "unknown name 'rocker.z'"),
+            ("joints.F.expression", "cannot read the expression"),
+            ("joints.P.point_i", "unknown point 'tip'"),
+            ("joints.Q.type", "unknown type `revolut`"),
+            ("drivers.d.function", "unknown name 'q'"),
+            ("analyses.kin.drivers[1]", "unknown driver 'e'"),
+            ("analyses.kin.step", "positive"),
+        ],
+    );
     assert_eq!(p.len(), 14, "{p:#?}");
 }
 
@@ -91,8 +106,7 @@ analyses:
 fn negative_mass_is_refused_once_the_body_reads() {
     let text = "bodies:\n  a: {mass: -2, inertia: -1, position: [0, 0], angle: 0}\n";
     let p = problems(text);
-    has(&p, "bodies.a.mass", "mass >= 0");
-    has(&p, "bodies.a.inertia", ">= 0");
+    has_each(&p, &[("bodies.a.mass", "mass >= 0"), ("bodies.a.inertia", ">= 0")]);
 }
 
 #[test]
@@ -100,8 +114,13 @@ fn a_number_too_large_for_a_double_is_out_of_range() {
     let p = problems(
         "bodies:\n  a: {mass: 1e400, inertia: 1, position: [0, 0], angle: 0}\n  b: {mass: 1, inertia: 1, position: [0, -2.5e309], angle: 0}\n",
     );
-    has(&p, "bodies.a.mass", "number 1e400 is out of range");
-    has(&p, "bodies.b.position[1]", "number -2.5e309 is out of range");
+    has_each(
+        &p,
+        &[
+            ("bodies.a.mass", "number 1e400 is out of range"),
+            ("bodies.b.position[1]", "number -2.5e309 is out of range"),
+        ],
+    );
     // A string that is a string stays one.
     has(
         &problems("bodies:\n  a: {mass: heavy, inertia: 1, position: [0, 0], angle: 0}\n"),
@@ -234,26 +253,58 @@ analyses:
 #[test]
 fn dynamics_problems_are_listed_with_their_paths() {
     let p = problems(BAD_DYNAMICS);
-    has(&p, "gravity[1]", "invalid type: string");
-    has(&p, "bodies.crank.mass", "mass >= 0");
-    has(&p, "bodies.crank.inertia", ">= 0");
-    has(&p, "forces.drag.torque", "unknown name 'crank.omgea'");
-    has(&p, "forces.push.body", "ground does not move");
-    has(&p, "forces.spring.point_j", "unknown point 'tip'");
-    has(&p, "forces.spring.stiffness", ">= 0");
-    has(&p, "forces.twist.body_j", "two different bodies");
-    has(&p, "forces.what.type", "unknown type `magnet`");
-    has(&p, "measures.stroke", "unknown name 'rokcer.ax'");
-    has(&p, "measures.tip.component", "unknown variant `z`");
-    has(&p, "analyses.dyn.solver.rtol", "positive");
-    has(&p, "analyses.dyn.solver.atol", "positive");
-    has(&p, "analyses.dyn.solver.alpha", "[-1/3, 0]");
-    has(&p, "analyses.dyn.solver.max_order", "fixed order");
-    has(&p, "analyses.kin.integrator", "only a dynamic analysis");
-    has(&p, "analyses.abam.solver.alpha", "hht only");
-    has(&p, "analyses.abam.solver.formulation", "bdf only");
-    // The integrator by its name in the file, not the engine's ("for Bdf" before).
-    has(&p, "analyses.bdf7.solver.max_order", "expected 1 to 6 for bdf, found 7");
+    has_each(
+        &p,
+        &[
+            ("gravity[1]", "invalid type: string"),
+            ("bodies.crank.mass", "mass >= 0"),
+            ("bodies.crank.inertia", ">= 0"),
+            ("forces.drag.torque", "unknown name 'crank.omgea'"),
+            ("forces.push.body", "ground does not move"),
+            ("forces.spring.point_j", "unknown point 'tip'"),
+            ("forces.spring.stiffness", ">= 0"),
+            ("forces.twist.body_j", "two different bodies"),
+            ("forces.what.type", "unknown type `magnet`"),
+            ("measures.stroke", "unknown name 'rokcer.ax'"),
+            ("measures.tip.component", "unknown variant `z`"),
+            ("analyses.dyn.solver.rtol", "positive"),
+            ("analyses.dyn.solver.atol", "positive"),
+            ("analyses.dyn.solver.alpha", "[-1/3, 0]"),
+            ("analyses.dyn.solver.max_order", "fixed order"),
+            ("analyses.kin.integrator", "only a dynamic analysis"),
+            ("analyses.abam.solver.alpha", "hht only"),
+            ("analyses.abam.solver.formulation", "bdf only"),
+            // The integrator by its name in the file, not the engine's ("for Bdf" before).
+            ("analyses.bdf7.solver.max_order", "expected 1 to 6 for bdf, found 7"),
+        ],
+    );
+}
+
+/// Ground where a moving body is needed, and one body at both ends of a joint or driver, are
+/// refused at the field that names them, each entry with that one problem.
+#[test]
+fn ground_and_one_body_twice_are_refused() {
+    let base = "bodies:\n  a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n";
+    let (constrained, driven) =
+        ("ground cannot be constrained; name a moving body", "ground cannot be driven; name a moving body");
+    let twice = "a joint needs two different bodies, found 'a' twice";
+    let cases = [
+        ("joints:\n  ax: {type: absolute_x, body: ground}\n", "joints.ax.body", constrained),
+        ("joints:\n  phi: {type: absolute_angle, body: ground}\n", "joints.phi.body", constrained),
+        (
+            "joints:\n  pin: {type: revolute, body_i: a, point_i: [0, 0], body_j: a, point_j: [1, 0]}\n",
+            "joints.pin.body_j",
+            twice,
+        ),
+        ("drivers:\n  turn: {type: angle, body: ground, function: t}\n", "drivers.turn.body", driven),
+        ("drivers:\n  slide: {type: y, body: ground, function: t}\n", "drivers.slide.body", driven),
+        ("drivers:\n  rel: {type: relative_angle, body_i: a, body_j: a, function: t}\n", "drivers.rel.body_j", twice),
+    ];
+    for (entry, path, words) in cases {
+        let p = problems(&(base.to_string() + entry));
+        has(&p, path, words);
+        assert_eq!(p.len(), 1, "{p:#?}");
+    }
 }
 
 /// Command-line overrides are checked like file values; the option is the path.
@@ -264,8 +315,7 @@ fn overrides_are_checked() {
     let e = model.run_with("dynamics", &bad).unwrap_err().error;
     let Error::Model(p) = e else { panic!("expected a model error") };
     let p: Vec<String> = p.iter().map(|p| p.to_string()).collect();
-    has(&p, "--rtol", "positive");
-    has(&p, "--t-end", "start");
+    has_each(&p, &[("--rtol", "positive"), ("--t-end", "start")]);
     let kin = Model::load(example("fourbar.yaml")).unwrap();
     let e = kin.run_with("kinematics", &linkwork::Overrides { atol: Some(1e-3), ..Default::default() }).unwrap_err();
     // In the model file's words, not the engine's type names ("is Kinematic" before).

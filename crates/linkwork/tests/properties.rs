@@ -427,6 +427,18 @@ fn fully_driven(m: &Mechanism) -> bool {
     m.equations() + m.drivers.len() == 3 * m.bodies.len()
 }
 
+/// The mechanism of `recipe` with its drivers when they drive every freedom; `None`, tallied as
+/// such, when they do not.
+fn driven(recipe: &Recipe, tally: &Tally) -> Option<Mechanism> {
+    let m = build(recipe, true);
+    if fully_driven(&m) {
+        Some(m)
+    } else {
+        tally.add("not fully driven");
+        None
+    }
+}
+
 // ------------------------------------------------------------------------------------------
 // The model file.
 
@@ -436,6 +448,11 @@ fn fmt2(v: [f64; 2]) -> String {
 
 fn body_name(b: Option<usize>) -> String {
     b.map_or("ground".into(), |k| format!("b{k}"))
+}
+
+/// The fields `body_i, point_i, body_j, point_j` of an element between the points `i` and `j`.
+fn ends(i: At, j: At) -> String {
+    format!("body_i: {}, point_i: {}, body_j: {}, point_j: {}", body_name(i.0), fmt2(i.1), body_name(j.0), fmt2(j.1))
 }
 
 /// `kind`: `kinematic`, `inverse`, `dynamic` or `static`. Drivers and torques only where they
@@ -459,13 +476,7 @@ fn yaml(m: &Mechanism, kind: &str, settings: &str) -> String {
     }
     s.push_str("joints:\n");
     for (k, j) in m.joints.iter().enumerate() {
-        let ends = format!(
-            "body_i: {}, point_i: {}, body_j: {}, point_j: {}",
-            body_name(j.i.0),
-            fmt2(j.i.1),
-            body_name(j.j.0),
-            fmt2(j.j.1)
-        );
+        let ends = ends(j.i, j.j);
         let extra = match j.kind {
             JointKind::Revolute => "type: revolute".to_string(),
             JointKind::Translational { axis_i, axis_j, .. } => {
@@ -493,11 +504,8 @@ fn yaml(m: &Mechanism, kind: &str, settings: &str) -> String {
                 ),
                 Driver::Distance { p, q, a0, amp, w } => writeln!(
                     s,
-                    "  d{k}: {{type: distance, body_i: {}, point_i: {}, body_j: {}, point_j: {}, function: \"{a0:?} + {amp:?}*sin({w:?}*t)\"}}",
-                    body_name(p.0),
-                    fmt2(p.1),
-                    body_name(q.0),
-                    fmt2(q.1)
+                    "  d{k}: {{type: distance, {}, function: \"{a0:?} + {amp:?}*sin({w:?}*t)\"}}",
+                    ends(p, q)
                 ),
             };
         }
@@ -507,11 +515,8 @@ fn yaml(m: &Mechanism, kind: &str, settings: &str) -> String {
     for (k, sp) in m.springs.iter().enumerate() {
         let _ = writeln!(
             s,
-            "  s{k}: {{type: spring_damper, body_i: {}, point_i: {}, body_j: {}, point_j: {}, stiffness: {:?}, free_length: {:?}}}",
-            body_name(sp.p.0),
-            fmt2(sp.p.1),
-            body_name(sp.q.0),
-            fmt2(sp.q.1),
+            "  s{k}: {{type: spring_damper, {}, stiffness: {:?}, free_length: {:?}}}",
+            ends(sp.p, sp.q),
             sp.k,
             sp.free
         );
@@ -603,11 +608,7 @@ fn property(name: &str, check: impl Fn(&Recipe, &Tally) -> Result<(), TestCaseEr
 #[test]
 fn driven_kinematics_keeps_the_constraints() {
     property("kinematics", |recipe, tally| {
-        let m = build(recipe, true);
-        if !fully_driven(&m) {
-            tally.add("not fully driven");
-            return Ok(());
-        }
+        let Some(m) = driven(recipe, tally) else { return Ok(()) };
         let tolerance = 1e-10;
         let (text, outcome) = run(&m, "kinematic", &format!("tolerance: {tolerance:?}"));
         // A dead centre, a lock-up or an assembly that the drivers make impossible is a typed
@@ -705,11 +706,7 @@ impl Balance {
 #[test]
 fn inverse_reactions_balance_every_body() {
     property("inverse", |recipe, tally| {
-        let m = build(recipe, true);
-        if !fully_driven(&m) {
-            tally.add("not fully driven");
-            return Ok(());
-        }
+        let Some(m) = driven(recipe, tally) else { return Ok(()) };
         let (text, outcome) = run(&m, "inverse", "");
         let r = tallied(&outcome, tally);
         for row in 0..r.len() {

@@ -3,8 +3,7 @@
 
 mod common;
 
-use common::{col, example_text, patch};
-use linkwork::analysis::dynamic::IntegratorKind;
+use common::{at_tolerance, col, example_text, integrators, patch};
 use linkwork::Model;
 
 fn warnings(r: &linkwork::Results) -> Vec<String> {
@@ -56,16 +55,8 @@ fn a_mechanism_far_from_the_origin_assembles_at_the_round_off_floor() {
         "body_j: ground, point_j: [0, 0]",
         "body_j: ground, point_j: [100000, 0]",
     );
-    for (integrator, kind) in
-        [("bdf", IntegratorKind::Bdf), ("hht", IntegratorKind::Hht), ("abam", IntegratorKind::Abam)]
-    {
-        let o = linkwork::Overrides {
-            integrator: Some(kind),
-            t_end: Some(1.0),
-            rtol: Some(1e-11),
-            atol: Some(1e-8),
-            ..Default::default()
-        };
+    for (integrator, kind) in integrators() {
+        let o = linkwork::Overrides { atol: Some(1e-8), ..at_tolerance(kind, 1e-11, Some(1.0)) };
         let near = Model::from_yaml(&text).unwrap().run_with("dynamics", &o).unwrap();
         let r = Model::from_yaml(&far)
             .unwrap()
@@ -88,21 +79,13 @@ fn a_mechanism_far_from_the_origin_assembles_at_the_round_off_floor() {
 #[test]
 fn an_integrator_tolerance_below_round_off_warns_and_runs() {
     let model = Model::load(common::example("iftomm_a01_pendulum.yaml")).unwrap();
-    for (integrator, kind, bound) in
-        [("hht", IntegratorKind::Hht, 1e-6), ("bdf", IntegratorKind::Bdf, 1e-6), ("abam", IntegratorKind::Abam, 1e-6)]
-    {
-        let o = linkwork::Overrides {
-            integrator: Some(kind),
-            t_end: Some(0.2),
-            rtol: Some(1e-16),
-            atol: Some(1e-16),
-            ..Default::default()
-        };
+    for (integrator, kind) in integrators() {
+        let o = at_tolerance(kind, 1e-16, Some(0.2));
         let r = model.run_with("dynamics", &o).unwrap_or_else(|f| panic!("{integrator}: {}", f.error));
         let w = warnings(&r);
         assert!(w.iter().any(|w| w.contains("solver.rtol 1e-16")), "{integrator}: {w:?}");
         let worst = common::references::pendulum_error(&r);
         eprintln!("{integrator}: {worst:.2e} m, statistics {}", r.summary_json(None)["statistics"]);
-        assert!(worst < bound, "{integrator}: {worst}");
+        assert!(worst < 1e-6, "{integrator}: {worst}");
     }
 }

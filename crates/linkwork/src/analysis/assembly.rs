@@ -7,9 +7,10 @@
 //! the SVD so that redundant rows and remaining freedom are both handled; a backtracking line
 //! search on `|Phi|_2` keeps a rough guess from diverging.
 
-use super::{min_norm_solve, residual_floor, select_columns};
+use super::{residual_floor, select_columns};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Result};
+use crate::linalg::dense::min_norm_solve;
 use crate::results::AssemblyReport;
 use crate::system::System;
 use faer::Mat;

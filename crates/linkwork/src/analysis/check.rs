@@ -5,13 +5,15 @@
 //! combination of the rows before it is redundant. This names the later of two parallel links as
 //! the redundant one, as a designer reading the file would.
 
-use super::{assemble, Assembly, RANK_TOLERANCE};
+use super::setup::{coordinate_names, held, unmet_freedom};
+use super::{assemble, Assembly};
 use crate::constraints::ConfigBuf;
 use crate::error::{Result, RowName};
+use crate::linalg::dense::independent_rows;
 use crate::model::spec::AnalysisKind;
 use crate::model::Model;
 use crate::system::System;
-use faer::{Mat, MatRef};
+use faer::Mat;
 use indexmap::IndexMap;
 
 /// Degrees of freedom and redundancy of one set of active constraints.
@@ -68,45 +70,11 @@ pub struct CheckReport {
     pub analyses: IndexMap<String, AnalysisCheck>,
 }
 
-/// Greedy independent rows of `jac (m x n)` in order: modified Gram-Schmidt, twice for accuracy.
-/// Returns `(independent, redundant)` row indices.
-pub fn independent_rows(jac: MatRef<'_, f64>) -> (Vec<usize>, Vec<usize>) {
-    let (m, n) = (jac.nrows(), jac.ncols());
-    let scale = (0..m).map(|i| (0..n).map(|j| jac[(i, j)].powi(2)).sum::<f64>().sqrt()).fold(0.0f64, f64::max);
-    let mut basis: Vec<Vec<f64>> = Vec::new();
-    let (mut keep, mut drop) = (Vec::new(), Vec::new());
-    for i in 0..m {
-        let mut v: Vec<f64> = (0..n).map(|j| jac[(i, j)]).collect();
-        let norm0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        for _ in 0..2 {
-            for b in &basis {
-                let d: f64 = v.iter().zip(b).map(|(x, y)| x * y).sum();
-                v.iter_mut().zip(b).for_each(|(x, y)| *x -= d * y);
-            }
-        }
-        let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if norm <= RANK_TOLERANCE.sqrt() * norm0.max(scale) || norm == 0.0 {
-            drop.push(i);
-        } else {
-            v.iter_mut().for_each(|x| *x /= norm);
-            basis.push(v);
-            keep.push(i);
-        }
-    }
-    (keep, drop)
-}
-
 /// Assemble the model with the joints and the given drivers and examine its Jacobian there.
 pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) -> Result<SystemCheck> {
     let mut sys = System::new(model, drivers);
     let n = model.n();
-    let given: Vec<bool> = if hold_given {
-        let pos = model.bodies.iter().flat_map(|b| [b.given[0], b.given[1], b.given[2]]);
-        let vel = model.bodies.iter().flat_map(|b| [b.given[3], b.given[4], b.given[5]]);
-        pos.chain(vel).collect()
-    } else {
-        vec![false; 2 * n]
-    };
+    let given = held(model, hold_given);
     let assembly =
         assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t, crate::model::SolverSettings::default().tolerance)?;
     let mut jac = Mat::<f64>::zeros(sys.m, n);
@@ -146,24 +114,9 @@ pub fn check(model: &Model) -> Result<CheckReport> {
                 || (a.kind == AnalysisKind::Modes && a.about == crate::model::spec::LinearisePoint::Initial);
             let entry = match check_system(model, &a.drivers, hold, a.t_start) {
                 Ok(system) => {
-                    let loaded = model.gravity != [0.0, 0.0] || !a.forces.is_empty();
                     let warning = match a.kind {
-                        AnalysisKind::Kinematic | AnalysisKind::Inverse if system.dof > 0 => Some(format!(
-                            "a{} {} analysis needs a fully driven model: {} degree(s) of freedom remain, add {} driver(s)",
-                            if a.kind == AnalysisKind::Inverse { "n" } else { "" },
-                            a.kind.name(),
-                            system.dof,
-                            system.dof
-                        )),
-                        AnalysisKind::Static if system.dof > 0 && !loaded => Some(format!(
-                            "a static analysis needs every degree of freedom held: {} remain with no gravity, force or spring to hold them",
-                            system.dof
-                        )),
-                        AnalysisKind::Modes if system.dof == 0 => {
-                            Some("a modes analysis needs a degree of freedom: the drivers leave none".to_string())
-                        }
                         AnalysisKind::Dynamic => massless(model, &a.drivers, &system.assembly.q, a.t_start),
-                        _ => None,
+                        _ => unmet_freedom(model, a, system.equations, system.rank),
                     };
                     AnalysisCheck { kind: a.kind, system: Some(system), error: None, warning }
                 }
@@ -176,11 +129,7 @@ pub fn check(model: &Model) -> Result<CheckReport> {
         model: model.name.clone(),
         bodies: model.bodies.iter().map(|b| b.name.clone()).collect(),
         coordinates: model.n(),
-        coordinate_names: model
-            .bodies
-            .iter()
-            .flat_map(|b| ["x", "y", "phi"].map(|c| format!("{}.{c}", b.name)))
-            .collect(),
+        coordinate_names: coordinate_names(model),
         mechanism,
         analyses,
     })

@@ -15,8 +15,9 @@
 
 use super::dynamic::{factor_error, Dae};
 use super::kinematic::run_driven;
-use super::{element_names, indeterminate_rows, min_norm_solve};
+use super::{element_names, indeterminate_rows};
 use crate::error::Error;
+use crate::linalg::dense::min_norm_solve;
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
 use faer::Mat;

@@ -12,20 +12,16 @@
 //! also serves as the chord-Newton matrix of the next sub-step); nothing is allocated in the time
 //! loop except the growth of the output columns, reserved up front.
 
-use super::{assemble, independent_rows, residual_floor, Assembly};
+use super::setup::{fail, held, output_times, unmet_freedom};
+use super::{assemble, independent_rows, residual_floor, Assembly, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::{Config, ConfigBuf};
 use crate::error::{Error, Problem, RowName};
+use crate::linalg::dense::smallest_singular;
 use crate::linalg::{FactorError, SparseLu};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, KinematicStats, Results, Statistics};
 use crate::system::System;
 use faer::Mat;
-
-/// Smallest/largest singular value of the driven Jacobian below which a failure is blamed on a
-/// singular position (a lock-up or dead centre) rather than on a driver or on Newton: near a
-/// simple rank drop the smallest singular value falls in proportion to the distance from the
-/// singular position, so 1e-3 blames it within about a thousandth of the mechanism's scale.
-const SINGULAR_RATIO: f64 = 1e-3;
 
 /// Sub-steps between two output times beyond which the motion is too fast to follow: 100,000,
 /// a body turning up to 35,000 rad (5,600 turns, at the default `max_rotation`) between two
@@ -147,24 +143,15 @@ impl Solver<'_> {
         unreachable!("the loop returns at it == max_iterations")
     }
 
-    /// The rows of the smallest singular value of the driven Jacobian at `q`, and the ratio of
-    /// the smallest to the largest singular value.
+    /// The ratio of the smallest to the largest singular value of the driven Jacobian at `q`,
+    /// and the rows of the smallest ([`smallest_singular`]).
     fn diagnose(&mut self) -> (f64, Vec<RowName>) {
         let n = self.sys.n;
         let mut jac = Mat::<f64>::zeros(self.sys.m, n);
         self.sys.jacobian_dense(&Config::new(&self.q, &self.rot_q), self.t, jac.as_mut());
         let sq = Mat::from_fn(self.rows.len(), n, |i, j| jac[(self.rows[i], j)]);
-        let Ok(svd) = sq.svd() else { return (0.0, vec![]) };
-        let s = svd.S().column_vector();
-        let k = s.nrows() - 1; // singular values come in decreasing order
-        let ratio = if s[0] > 0.0 { s[k] / s[0] } else { 0.0 };
-        let u = svd.U();
-        let umax = (0..u.nrows()).map(|i| u[(i, k)].abs()).fold(0.0f64, f64::max);
-        let rows = (0..u.nrows())
-            .filter(|&i| u[(i, k)].abs() >= 0.2 * umax)
-            .map(|i| self.sys.row_name(self.rows[i]))
-            .collect();
-        (ratio, rows)
+        let (ratio, rows) = smallest_singular(sq.as_ref());
+        (ratio, rows.into_iter().map(|i| self.sys.row_name(self.rows[i])).collect())
     }
 }
 
@@ -208,13 +195,12 @@ pub(crate) fn run_driven(
     let mut results = Results::new(model, analysis);
     let mut extra = Vec::with_capacity(names.len());
     results.add_columns(names);
-    let fail = |results: Results, error: Error| Box::new(Failure { error, results });
     let settings = analysis.settings;
     let n = model.n();
     let mut sys = System::new(model, &analysis.drivers);
     let t0 = analysis.t_start;
     // The drivers determine every coordinate, so nothing is held: least change from the guess.
-    let given = vec![false; 2 * n];
+    let given = held(model, false);
     let assembly: Assembly = match assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t0, settings.tolerance) {
         Ok(a) => a,
         Err(e) => return Err(fail(results, e)),
@@ -222,24 +208,8 @@ pub(crate) fn run_driven(
     let mut jac = Mat::<f64>::zeros(sys.m, n);
     sys.jacobian_dense(&ConfigBuf::new(&assembly.q).view(), t0, jac.as_mut());
     let (rows, redundant) = independent_rows(jac.as_ref());
-    if rows.len() < n {
-        let dof = n - rows.len();
-        // With at least as many equations as coordinates, a rank drop at the start may also be a
-        // start at a dead centre: the rank alone cannot tell the two apart, so say both.
-        let or_singular = if sys.m >= n {
-            ", unless the start position is a singular one (a dead centre or lock-up, where the Jacobian loses rank)"
-        } else {
-            ""
-        };
-        let problem = Problem::new(
-            format!("analyses.{}.drivers", analysis.name),
-            format!(
-                "a{} {} analysis needs a fully driven model, but {dof} degree(s) of freedom remain with these drivers ({n} coordinates, {} independent equations): add {dof} driver(s){or_singular}",
-                if analysis.kind.name().starts_with('i') { "n" } else { "" },
-                analysis.kind.name(),
-                rows.len()
-            ),
-        );
+    if let Some(message) = unmet_freedom(model, analysis, sys.m, rows.len()) {
+        let problem = Problem::new(format!("analyses.{}.drivers", analysis.name), message);
         return Err(fail(results, Error::Model(vec![problem])));
     }
     let redundant_rows: Vec<RowName> = redundant.iter().map(|&r| sys.row_name(r)).collect();
@@ -279,11 +249,7 @@ pub(crate) fn run_driven(
         },
     };
     let h = analysis.step;
-    let count = ((analysis.t_end - t0) / h + 1e-9).floor() as usize;
-    let mut times: Vec<f64> = (0..=count).map(|k| t0 + k as f64 * h).collect();
-    if analysis.t_end - times[count] > 1e-9 * h {
-        times.push(analysis.t_end);
-    }
+    let times = output_times(analysis);
     results.reserve(times.len());
 
     let outcome = (|| -> Result<(), Error> {
@@ -402,7 +368,7 @@ fn too_fast(s: &mut Solver<'_>, model: &Model, drivers: &[usize], target: f64, s
         return e;
     }
     let (ratio, rows) = s.diagnose();
-    let fastest = if ratio < SINGULAR_RATIO { None } else { model.fastest_driver(drivers, s.t, limit) };
+    let fastest = if ratio < SINGULAR_RATIO_KINEMATIC { None } else { model.fastest_driver(drivers, s.t, limit) };
     fastest.unwrap_or_else(|| Error::Singular {
         time: s.t,
         rows,
@@ -419,7 +385,7 @@ fn give_up(s: &mut Solver<'_>, model: &Model, drivers: &[usize], t_new: f64, ste
         return e;
     }
     let (ratio, rows) = s.diagnose();
-    if ratio < SINGULAR_RATIO {
+    if ratio < SINGULAR_RATIO_KINEMATIC {
         return Error::Singular {
             time: s.t,
             rows,

@@ -10,10 +10,12 @@ mod inverse;
 mod kinematic;
 mod modes;
 mod run;
+mod setup;
 mod statics;
 
+pub use crate::linalg::dense::independent_rows;
 pub use assembly::{assemble, Assembly};
-pub use check::{check, independent_rows, AnalysisCheck, CheckReport, SystemCheck};
+pub use check::{check, AnalysisCheck, CheckReport, SystemCheck};
 pub(crate) use inverse::reaction_columns;
 pub use inverse::run_inverse;
 pub use kinematic::run_kinematic;
@@ -21,6 +23,7 @@ pub use modes::run_modes;
 pub use run::Overrides;
 pub use statics::run_static;
 
+use crate::linalg::dense::null_space;
 use faer::{Mat, MatRef};
 
 /// Units of round-off in a constraint residual: each row of `Phi` adds a few products of
@@ -60,56 +63,40 @@ pub fn tolerance_warnings(analysis: &crate::model::Analysis, q: &[f64]) -> Vec<S
     warnings
 }
 
-/// Relative size of a singular value (to the largest) below which it counts as zero when
-/// finding the rank of `Phi_q`: `1e-9` sits far above rounding (`~1e-16 * cond`) and far below
-/// any physical ratio of a well-posed mechanism.
-pub const RANK_TOLERANCE: f64 = 1e-9;
+/// Smallest/largest singular value of the driven Jacobian at which the kinematic solver gives
+/// up, below which the failure is blamed on a singular position (a lock-up or dead centre) rather
+/// than on a driver or on Newton: `1e-3`. The solver gives up at a singular position after
+/// halving its sub-step down to `min_substep` of the output step, which leaves it close to but
+/// not at the position: measured, the slider-crank's lock-up stops at `1.3e-6`, and the dead
+/// centres the property tests drive random loops into at `3.5e-7` to `4.2e-6`; a failure at a
+/// regular position (a driver too fast to follow) at `3e-2` and above. `1e-3` sits more than
+/// two hundred times above the first and thirty times below the second.
+///
+/// [`SINGULAR_RATIO_DYNAMIC`] answers the same question for the integrators, whose failures sit
+/// elsewhere on the scale, so the two are two numbers: `1e-6` here would miss most singular
+/// stops of the kinematic solver, and `1e-3` there would sit close above regular failures.
+pub(crate) const SINGULAR_RATIO_KINEMATIC: f64 = 1e-3;
 
-/// Minimum-norm least-squares solution `x (cols)` of `a x = b` by the SVD, dropping singular values
-/// below `RANK_TOLERANCE` times the largest. `None` when the SVD fails (non-finite input).
-pub(crate) fn min_norm_solve(a: MatRef<'_, f64>, b: &[f64]) -> Option<Vec<f64>> {
-    let (m, n) = (a.nrows(), a.ncols());
-    if n == 0 || m == 0 {
-        return Some(vec![0.0; n]);
-    }
-    let svd = a.thin_svd().ok()?;
-    let (u, s, v) = (svd.U(), svd.S().column_vector(), svd.V());
-    let smax = (0..s.nrows()).map(|k| s[k]).fold(0.0f64, f64::max);
-    let mut x = vec![0.0; n];
-    for k in 0..s.nrows() {
-        if s[k] <= RANK_TOLERANCE * smax || s[k] == 0.0 {
-            continue;
-        }
-        let c: f64 = (0..m).map(|i| u[(i, k)] * b[i]).sum::<f64>() / s[k];
-        for (j, xj) in x.iter_mut().enumerate() {
-            *xj += v[(j, k)] * c;
-        }
-    }
-    Some(x)
-}
+/// Smallest/largest singular value of `Phi_q` at which an integrator gives up, below which the
+/// failure is blamed on a singular position (a dead centre or lock-up) rather than on the forces
+/// or the tolerances: `1e-6`. An integrator gives up only when its step has fallen to 16 units
+/// of round-off of the time ([`dynamic::min_step`]) or its step budget is spent, by then at a
+/// singular position itself (measured: `3e-17` at the slider-crank's lock-up); while its failures
+/// at regular positions (a step budget spent, an error estimate that drove the step to round-off)
+/// came at ratios from `2.1e-3` up, only two to three times above the kinematic `1e-3`
+/// ([`SINGULAR_RATIO_KINEMATIC`]). `1e-6` keeps three orders of magnitude from each.
+pub(crate) const SINGULAR_RATIO_DYNAMIC: f64 = 1e-6;
 
 /// The columns `cols` of `a`, as a new matrix.
 pub(crate) fn select_columns(a: MatRef<'_, f64>, cols: &[usize]) -> Mat<f64> {
     Mat::from_fn(a.nrows(), cols.len(), |i, j| a[(i, cols[j])])
 }
 
-/// Rows of `jac (m x n)` whose multipliers `Phi_q^T lambda = g` does not determine: those with a
-/// component in the left null space of `jac` (the combinations of rows that vanish, one per
-/// redundant row). Their joints share a load in a way rigid bodies leave open; the minimum-norm
-/// multipliers are one choice. Empty when the rows are independent.
-pub(crate) fn indeterminate_rows(jac: MatRef<'_, f64>) -> Vec<usize> {
-    let (m, n) = (jac.nrows(), jac.ncols());
-    if m == 0 || n == 0 {
-        return (0..m).collect();
-    }
-    let Ok(svd) = jac.svd() else { return vec![] };
-    let s = svd.S().column_vector();
-    let smax = (0..s.nrows()).map(|k| s[k]).fold(0.0f64, f64::max);
-    let rank = (0..s.nrows()).filter(|&k| s[k] > RANK_TOLERANCE * smax).count();
-    let u = svd.U();
-    // The left singular vectors are unit vectors: a component above 1e-8 is far above rounding.
-    (0..m).filter(|&i| (rank..m).any(|k| u[(i, k)].abs() > 1e-8)).collect()
-}
+/// Rows of `jac (m x n)` whose multipliers `Phi_q^T lambda = g` does not determine: those in a
+/// linear dependence among the rows (one per redundant row). Their joints share a load in a way
+/// rigid bodies leave open; the minimum-norm multipliers are one choice. Empty when the rows are
+/// independent.
+pub(crate) use crate::linalg::dense::dependent_rows as indeterminate_rows;
 
 /// The names of the elements (joints, drivers) of `rows`, each once, in row order.
 pub(crate) fn element_names(sys: &crate::system::System<'_>, rows: &[usize]) -> Vec<String> {
@@ -135,7 +122,7 @@ const MASSLESS: f64 = 1e-12;
 /// massless wheel turning freely on its axle is not. `Some` problem at the mass or inertia field
 /// of the first body in that motion, naming its coordinates.
 pub(crate) fn massless_motion(model: &crate::model::Model, jac: MatRef<'_, f64>) -> Option<crate::Problem> {
-    let basis = statics::null_space(jac);
+    let basis = null_space(jac);
     let f = basis.ncols();
     if f == 0 {
         return None;

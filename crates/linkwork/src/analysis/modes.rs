@@ -24,6 +24,7 @@
 //! damping ratio.
 
 use super::dynamic::{factor_error, Dae};
+use super::setup::{coordinate_names, fail, held, unmet_freedom};
 use super::statics::{solve, Statics, ZERO_STIFFNESS};
 use super::{assemble, element_names, independent_rows, indeterminate_rows};
 use crate::error::Error;
@@ -35,7 +36,6 @@ use faer::Mat;
 
 /// Run a modes analysis.
 pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
-    let fail = |results: Results, error: Error| Box::new(Failure { error, results });
     let t = analysis.t_start;
     let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
         Ok(d) => d,
@@ -47,13 +47,7 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
     let path = format!("analyses.{}", analysis.name);
     let equilibrium = analysis.about == LinearisePoint::Equilibrium;
     // The initial state keeps what the user gave, as dynamics does; an equilibrium moves it.
-    let given: Vec<bool> = if equilibrium {
-        vec![false; 2 * n]
-    } else {
-        (0..2)
-            .flat_map(|half| model.bodies.iter().flat_map(move |b| b.given[3 * half..3 * half + 3].to_vec()))
-            .collect()
-    };
+    let given = held(model, !equilibrium);
     let assembly = match assemble(&mut dae.sys, &model.q0(), &model.qdot0(), &given, t, analysis.settings.tolerance) {
         Ok(a) => a,
         Err(e) => return Err(fail(results, e)),
@@ -76,18 +70,13 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
     let (k, c) = st.tangent(&q, &qdot, &lambda, t);
     let (kr, basis) = st.reduced(k.as_ref(), &q, t);
     let f = basis.ncols();
-    if f == 0 {
-        let problem = crate::Problem::new(
-            format!("{path}.drivers"),
-            "a modes analysis needs a degree of freedom: the joints and drivers leave none; drop a driver",
-        );
-        return Err(fail(results, Error::Model(vec![problem])));
+    if let Some(message) = unmet_freedom(model, analysis, m, n - f) {
+        return Err(fail(results, Error::Model(vec![crate::Problem::new(format!("{path}.drivers"), message)])));
     }
     let m_n = Mat::from_fn(n, f, |i, j| mass[i] * basis[(i, j)]);
     let mr = basis.transpose() * &m_n;
     let cr = basis.transpose() * &c * &basis;
-    let names: Vec<String> =
-        model.bodies.iter().flat_map(|b| ["x", "y", "phi"].map(|q| format!("{}.{q}", b.name))).collect();
+    let names = coordinate_names(model);
     let kscale = (0..f).flat_map(|i| (0..f).map(move |j| (i, j))).map(|(i, j)| kr[(i, j)].abs()).fold(0.0, f64::max);
     let symmetric = (0..f).all(|i| (0..i).all(|j| (kr[(i, j)] - kr[(j, i)]).abs() <= 1e-8 * kscale));
     let undamped = (0..f).all(|i| (0..f).all(|j| cr[(i, j)] == 0.0));

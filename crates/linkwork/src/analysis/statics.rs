@@ -45,11 +45,11 @@
 //! damping do not matter.
 
 use super::dynamic::{factor_error, Dae};
-use super::{
-    assemble, element_names, independent_rows, indeterminate_rows, min_norm_solve, residual_floor, RANK_TOLERANCE,
-};
+use super::setup::{coordinate_name, fail, held, output_times};
+use super::{assemble, element_names, independent_rows, indeterminate_rows, residual_floor};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Unbalanced};
+use crate::linalg::dense::{min_norm_solve, null_space};
 use crate::model::{Analysis, Model};
 use crate::results::{EquilibriumReport, Failure, Results, StaticStats, Statistics};
 use faer::{Mat, MatMut, MatRef};
@@ -468,21 +468,6 @@ pub(crate) fn geometric_stiffness(dae: &mut Dae<'_>, q: &[f64], lambda: &[f64], 
     dae.positions(q, t);
 }
 
-/// An orthonormal basis `(n x f)` of the null space of `jac (m x n)` (right singular vectors of
-/// the singular values below `RANK_TOLERANCE` times the largest).
-pub(crate) fn null_space(jac: MatRef<'_, f64>) -> Mat<f64> {
-    let (m, n) = (jac.nrows(), jac.ncols());
-    if m == 0 {
-        return Mat::identity(n, n);
-    }
-    let Ok(svd) = jac.svd() else { return Mat::zeros(n, 0) };
-    let s = svd.S().column_vector();
-    let smax = (0..s.nrows()).map(|k| s[k]).fold(0.0f64, f64::max);
-    let rank = (0..s.nrows()).filter(|&k| s[k] > RANK_TOLERANCE * smax).count();
-    let v = svd.V();
-    Mat::from_fn(n, n - rank, |i, j| v[(i, rank + j)])
-}
-
 /// The load scale `F` of the force tolerance: the largest generalised load at `q`, or the largest
 /// weight, or the smallest positive number when nothing loads the mechanism.
 fn load_scale(dae: &mut Dae<'_>, q: &[f64], t: f64) -> f64 {
@@ -498,11 +483,6 @@ fn load_scale(dae: &mut Dae<'_>, q: &[f64], t: f64) -> f64 {
 
 fn max_abs(v: &[f64]) -> f64 {
     v.iter().fold(0.0f64, |a, x| a.max(x.abs()))
-}
-
-/// The name `<body>.x`, `.y` or `.phi` of coordinate `k`.
-fn coordinate_name(model: &Model, k: usize) -> String {
-    format!("{}.{}", model.bodies[k / 3].name, ["x", "y", "phi"][k % 3])
 }
 
 /// The coordinates with the largest share of the direction `v (n)`, as `body.x` names, for
@@ -631,7 +611,6 @@ fn free(analysis: &Analysis, t: f64, coordinates: &[String]) -> Error {
 /// Run a static (or quasi-static) analysis. On failure the equilibria found until then are
 /// kept.
 pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
-    let fail = |results: Results, error: Error| Box::new(Failure { error, results });
     let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
         Ok(d) => d,
         Err(e) => return Err(fail(Results::new(model, analysis), factor_error(e, analysis.t_start))),
@@ -643,13 +622,8 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
     names.extend(model.measures.iter().map(|m| m.name.clone()));
     results.add_columns(names);
     let t0 = analysis.t_start;
-    let mut times = vec![t0];
-    let count = ((analysis.t_end - t0) / analysis.step + 1e-9).floor() as usize;
-    times.extend((1..=count).map(|k| t0 + k as f64 * analysis.step));
-    if analysis.t_end - times[times.len() - 1] > 1e-9 * analysis.step {
-        times.push(analysis.t_end);
-    }
-    let given = vec![false; 2 * n];
+    let times = output_times(analysis);
+    let given = held(model, false);
     let assembly = match assemble(&mut dae.sys, &model.q0(), &model.qdot0(), &given, t0, analysis.settings.tolerance) {
         Ok(a) => a,
         Err(e) => return Err(fail(results, e)),

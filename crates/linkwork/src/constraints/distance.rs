@@ -63,8 +63,7 @@ impl Constraint for Distance {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::check_fd_random;
-    use crate::constraints::testing::OnSlice;
+    use crate::constraints::testing::{assert_close, check_fd_random, evaluate};
 
     #[test]
     fn derivatives_match_finite_differences() {
@@ -84,17 +83,10 @@ mod tests {
     #[test]
     fn hand_derived_crank_link() {
         let c = Distance::new(BodyIx::GROUND, [1.0, 2.0], BodyIx(Some(0)), [0.5, 0.0], 2.0);
-        let q = [0.5, 0.0, 0.0];
-        let (mut phi, mut jac, mut g) = ([1.0], [0.0; 3], [0.0]);
-        c.phi_at(&q, 0.0, &mut phi);
-        c.jacobian_at(&q, 0.0, &mut jac);
-        c.gamma_at(&q, &[0.0, 0.0, 3.0], 0.0, &mut g);
+        let (phi, jac, g) = evaluate(&c, &[0.5, 0.0, 0.0], &[0.0, 0.0, 3.0]);
         assert!(phi[0].abs() < 1e-14, "{phi:?}");
         // d = r_Q - r_P = (1, 0) - (1, 2) = (0, -2); Phi_q_j = 2 d^T [I  B s'] = (0, -4, -2).
-        let expect = [0.0, -4.0, -2.0];
-        for (a, b) in jac.iter().zip(expect) {
-            assert!((a - b).abs() < 1e-14, "{jac:?}");
-        }
+        assert_close(&jac, &[0.0, -4.0, -2.0], 1e-14);
         assert!((g[0] + 4.5).abs() < 1e-14, "{g:?}");
     }
 }

@@ -107,6 +107,25 @@ pub fn check_fd_random_where(c: &dyn Constraint, bodies: usize, seed: u64, accep
     }
 }
 
+/// `(Phi, Phi_q, gamma)` of `c` at `q`, `qdot` and `t = 0`, for a hand-derived check (`Phi`
+/// starts as NaN, so that a row it does not write fails).
+pub fn evaluate(c: &dyn Constraint, q: &[f64], qdot: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let rows = c.rows();
+    let (mut phi, mut jac, mut gamma) = (vec![f64::NAN; rows], vec![0.0; rows * c.columns().len()], vec![0.0; rows]);
+    c.phi_at(q, 0.0, &mut phi);
+    c.jacobian_at(q, 0.0, &mut jac);
+    c.gamma_at(q, qdot, 0.0, &mut gamma);
+    (phi, jac, gamma)
+}
+
+/// Each entry of `got` within `tol` of `want`'s.
+pub fn assert_close(got: &[f64], want: &[f64], tol: f64) {
+    assert_eq!(got.len(), want.len(), "{got:?} against {want:?}");
+    for (a, b) in got.iter().zip(want) {
+        assert!((a - b).abs() < tol, "{got:?} against {want:?}");
+    }
+}
+
 /// Calls on a bare coordinate vector, for tests: computes the rotations and forwards.
 pub trait OnSlice {
     fn phi_at(&self, q: &[f64], t: f64, out: &mut [f64]);

@@ -82,8 +82,7 @@ impl Constraint for Translational {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::check_fd_random;
-    use crate::constraints::testing::OnSlice;
+    use crate::constraints::testing::{assert_close, check_fd_random, evaluate, OnSlice};
 
     #[test]
     fn derivatives_match_finite_differences() {
@@ -123,15 +122,9 @@ mod tests {
         let c = Translational::new(BodyIx(Some(0)), [0.0, 0.0], [2.0, 0.0], BodyIx(Some(3)), [0.0, 0.0], [0.0, 1.0]);
         let q = [0.0, 0.0, 0.0, 1.5, 0.25, -std::f64::consts::FRAC_PI_2];
         let qdot = [0.0, 0.0, 2.0, 0.0, 0.0, 0.0];
-        let (mut phi, mut jac, mut g) = ([1.0; 2], [0.0; 12], [0.0; 2]);
-        c.phi_at(&q, 0.0, &mut phi);
-        c.jacobian_at(&q, 0.0, &mut jac);
-        c.gamma_at(&q, &qdot, 0.0, &mut g);
+        let (phi, jac, g) = evaluate(&c, &q, &qdot);
         assert!((phi[0] - 0.25).abs() < 1e-14 && phi[1].abs() < 1e-15, "{phi:?}");
-        let expect = [0.0, -1.0, -1.5, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0];
-        for (a, b) in jac.iter().zip(expect) {
-            assert!((a - b).abs() < 1e-14, "{jac:?}");
-        }
+        assert_close(&jac, &[0.0, -1.0, -1.5, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0], 1e-14);
         assert!((g[0] - 1.0).abs() < 1e-14 && g[1] == 0.0, "{g:?}");
     }
 }

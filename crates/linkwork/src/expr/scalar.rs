@@ -79,177 +79,138 @@ pub trait Scalar:
     /// entries `hess = [f_uu, f_uw, f_ww]`.
     fn lift2(self, other: Self, f0: f64, grad: [f64; 2], hess: [f64; 3]) -> Self;
 
+    /// `f(self)` by the chain rule, with `f0 = f(v)` at `v = self.value()` and
+    /// `(f'(v), f''(v)) = derivatives(v, f0)`, which a type without derivatives (`ORDER` 0)
+    /// does not evaluate.
+    #[inline]
+    fn apply(self, f: impl FnOnce(f64) -> f64, derivatives: impl FnOnce(f64, f64) -> (f64, f64)) -> Self {
+        let v = self.value();
+        let f0 = f(v);
+        if Self::ORDER == 0 {
+            return Self::constant(f0);
+        }
+        let (f1, f2) = derivatives(v, f0);
+        self.lift(f0, f1, f2)
+    }
+
     /// Sine.
     fn sin(self) -> Self {
-        let v = self.value();
-        let s = v.sin();
-        if Self::ORDER == 0 {
-            return Self::constant(s);
-        }
-        self.lift(s, v.cos(), -s)
+        self.apply(f64::sin, |v, s| (v.cos(), -s))
     }
 
     /// Cosine.
     fn cos(self) -> Self {
-        let v = self.value();
-        let c = v.cos();
-        if Self::ORDER == 0 {
-            return Self::constant(c);
-        }
-        self.lift(c, -v.sin(), -c)
+        self.apply(f64::cos, |v, c| (-v.sin(), -c))
     }
 
     /// Tangent.
     fn tan(self) -> Self {
-        let v = self.value();
-        let t = v.tan();
-        if Self::ORDER == 0 {
-            return Self::constant(t);
-        }
-        let sec2 = 1.0 + t * t;
-        self.lift(t, sec2, 2.0 * t * sec2)
+        self.apply(f64::tan, |_, t| {
+            let sec2 = 1.0 + t * t;
+            (sec2, 2.0 * t * sec2)
+        })
     }
 
     /// Arc sine (NaN outside `[-1, 1]`; infinite derivative at `±1`).
     fn asin(self) -> Self {
-        let v = self.value();
-        let f0 = v.asin();
-        if Self::ORDER == 0 {
-            return Self::constant(f0);
-        }
-        let f1 = 1.0 / (1.0 - v * v).sqrt();
-        self.lift(f0, f1, v * f1 * f1 * f1)
+        self.apply(f64::asin, |v, _| {
+            let f1 = 1.0 / (1.0 - v * v).sqrt();
+            (f1, v * f1 * f1 * f1)
+        })
     }
 
     /// Arc cosine (NaN outside `[-1, 1]`; infinite derivative at `±1`).
     fn acos(self) -> Self {
-        let v = self.value();
-        let f0 = v.acos();
-        if Self::ORDER == 0 {
-            return Self::constant(f0);
-        }
-        let f1 = 1.0 / (1.0 - v * v).sqrt();
-        self.lift(f0, -f1, -v * f1 * f1 * f1)
+        self.apply(f64::acos, |v, _| {
+            let f1 = 1.0 / (1.0 - v * v).sqrt();
+            (-f1, -v * f1 * f1 * f1)
+        })
     }
 
     /// Arc tangent.
     fn atan(self) -> Self {
-        let v = self.value();
-        let f0 = v.atan();
-        if Self::ORDER == 0 {
-            return Self::constant(f0);
-        }
-        let f1 = 1.0 / (1.0 + v * v);
-        self.lift(f0, f1, -2.0 * v * f1 * f1)
+        self.apply(f64::atan, |v, _| {
+            let f1 = 1.0 / (1.0 + v * v);
+            (f1, -2.0 * v * f1 * f1)
+        })
     }
 
     /// Hyperbolic sine.
     fn sinh(self) -> Self {
-        let v = self.value();
-        let s = v.sinh();
-        if Self::ORDER == 0 {
-            return Self::constant(s);
-        }
-        self.lift(s, v.cosh(), s)
+        self.apply(f64::sinh, |v, s| (v.cosh(), s))
     }
 
     /// Hyperbolic cosine.
     fn cosh(self) -> Self {
-        let v = self.value();
-        let c = v.cosh();
-        if Self::ORDER == 0 {
-            return Self::constant(c);
-        }
-        self.lift(c, v.sinh(), c)
+        self.apply(f64::cosh, |v, c| (v.sinh(), c))
     }
 
     /// Hyperbolic tangent.
     fn tanh(self) -> Self {
-        let v = self.value();
-        let t = v.tanh();
-        if Self::ORDER == 0 {
-            return Self::constant(t);
-        }
-        let sech2 = 1.0 - t * t;
-        self.lift(t, sech2, -2.0 * t * sech2)
+        self.apply(f64::tanh, |_, t| {
+            let sech2 = 1.0 - t * t;
+            (sech2, -2.0 * t * sech2)
+        })
     }
 
     /// Exponential `e^self`.
     fn exp(self) -> Self {
-        let x = self.value().exp();
-        if Self::ORDER == 0 {
-            return Self::constant(x);
-        }
-        self.lift(x, x, x)
+        self.apply(f64::exp, |_, x| (x, x))
     }
 
     /// Natural logarithm (NaN for negative values, `-inf` at 0).
     fn ln(self) -> Self {
-        let v = self.value();
-        let f0 = v.ln();
-        if Self::ORDER == 0 {
-            return Self::constant(f0);
-        }
-        let r = 1.0 / v;
-        self.lift(f0, r, -r * r)
+        self.apply(f64::ln, |v, _| {
+            let r = 1.0 / v;
+            (r, -r * r)
+        })
     }
 
     /// Square root (NaN for negative values, infinite derivative at 0).
     fn sqrt(self) -> Self {
-        let v = self.value();
-        let r = v.sqrt();
-        if Self::ORDER == 0 {
-            return Self::constant(r);
-        }
-        let f1 = 0.5 / r;
-        self.lift(r, f1, -0.5 * f1 / v)
+        self.apply(f64::sqrt, |v, r| {
+            let f1 = 0.5 / r;
+            (f1, -0.5 * f1 / v)
+        })
     }
 
     /// Absolute value. The derivative is taken as `sign(v)`, i.e. 0 at `v = 0`.
     fn abs(self) -> Self {
-        let v = self.value();
-        if Self::ORDER == 0 {
-            return Self::constant(v.abs());
-        }
-        self.lift(v.abs(), sign_of(v), 0.0)
+        self.apply(f64::abs, |v, _| (sign_of(v), 0.0))
     }
 
     /// Sign: `1`, `-1`, or `0` at zero (unlike [`f64::signum`]); derivative 0.
     fn sign(self) -> Self {
-        let s = sign_of(self.value());
-        if Self::ORDER == 0 {
-            return Self::constant(s);
-        }
-        self.lift(s, 0.0, 0.0)
+        self.apply(sign_of, |_, _| (0.0, 0.0))
     }
 
     /// Integer power `self^n`, exact at `self = 0` for `n >= 0` (e.g. `x^2` at 0 has
     /// value 0, first derivative 0 and second derivative 2).
     fn powi(self, n: i32) -> Self {
-        let v = self.value();
-        let f0 = v.powi(n);
-        if Self::ORDER == 0 {
-            return Self::constant(f0);
-        }
-        let nf = f64::from(n);
-        // The factors n and n(n-1) vanish for n = 0 and n = 1; skip the power then so
-        // that 0 * inf cannot produce NaN at v = 0.
-        let f1 = if n == 0 { 0.0 } else { nf * v.powi(n.saturating_sub(1)) };
-        let f2 = if n == 0 || n == 1 { 0.0 } else { nf * (nf - 1.0) * v.powi(n.saturating_sub(2)) };
-        self.lift(f0, f1, f2)
+        self.apply(
+            |v| v.powi(n),
+            |v, _| {
+                let nf = f64::from(n);
+                // The factors n and n(n-1) vanish for n = 0 and n = 1; skip the power then so
+                // that 0 * inf cannot produce NaN at v = 0.
+                let f1 = if n == 0 { 0.0 } else { nf * v.powi(n.saturating_sub(1)) };
+                let f2 = if n == 0 || n == 1 { 0.0 } else { nf * (nf - 1.0) * v.powi(n.saturating_sub(2)) };
+                (f1, f2)
+            },
+        )
     }
 
     /// Power with a constant real exponent `self^c` (NaN for negative `self` unless
     /// `c` is an integer; exact at 0 for `c = 0` and `c = 1`).
     fn powf(self, c: f64) -> Self {
-        let v = self.value();
-        let f0 = v.powf(c);
-        if Self::ORDER == 0 {
-            return Self::constant(f0);
-        }
-        let f1 = if c == 0.0 { 0.0 } else { c * v.powf(c - 1.0) };
-        let f2 = if c == 0.0 || c == 1.0 { 0.0 } else { c * (c - 1.0) * v.powf(c - 2.0) };
-        self.lift(f0, f1, f2)
+        self.apply(
+            |v| v.powf(c),
+            |v, _| {
+                let f1 = if c == 0.0 { 0.0 } else { c * v.powf(c - 1.0) };
+                let f2 = if c == 0.0 || c == 1.0 { 0.0 } else { c * (c - 1.0) * v.powf(c - 2.0) };
+                (f1, f2)
+            },
+        )
     }
 
     /// General power `self^b = exp(b ln self)`, for a non-constant exponent.

@@ -1,8 +1,11 @@
-//! Sparse linear algebra, knowing no mechanics: compressed-column patterns built from lists of
+//! Linear algebra, knowing no mechanics: compressed-column patterns built from lists of
 //! entries ([`Pattern`]), and sparse LU for square systems: symbolic factorization once per
 //! analysis (faer's COLAMD ordering and elimination structure), numeric factorization per
 //! matrix, and a 1-norm condition estimate from the factors (Hager 1984, Higham 1988) to detect
-//! singular positions.
+//! singular positions. [`dense`]: rank, null space, minimum-norm solutions and the smallest
+//! singular value of small dense matrices by the SVD.
+
+pub mod dense;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::factor::PartialPivLuParams;

@@ -44,45 +44,19 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec
     let bodies = cx.bodies();
     cx.q0 = bodies.iter().flat_map(|b| b.q0).collect();
     cx.unique_names();
-    let joints: Vec<Element> = spec
-        .joints
-        .iter()
-        .filter_map(|(name, j)| {
-            let path = format!("joints.{name}");
-            cx.name(&path, name);
-            let c = cx.joint(&path, j)?;
-            Some(Element { name: name.clone(), kind: joint_kind(j), constraint: c })
-        })
-        .collect();
-    let drivers: Vec<Element> = spec
-        .drivers
-        .iter()
-        .filter_map(|(name, d)| {
-            let path = format!("drivers.{name}");
-            cx.name(&path, name);
-            let c = cx.driver(&path, d)?;
-            Some(Element { name: name.clone(), kind: driver_kind(d), constraint: c })
-        })
-        .collect();
-    let forces: Vec<ForceElement> = spec
-        .forces
-        .iter()
-        .filter_map(|(name, f)| {
-            let path = format!("forces.{name}");
-            cx.name(&path, name);
-            let force = cx.force(&path, f)?;
-            Some(ForceElement { name: name.clone(), kind: force_kind(f), force })
-        })
-        .collect();
-    let measures: Vec<Measure> = spec
-        .measures
-        .iter()
-        .filter_map(|(name, m)| {
-            let path = format!("measures.{name}");
-            cx.name(&path, name);
-            Some(Measure { name: name.clone(), kind: cx.measure(&path, m)? })
-        })
-        .collect();
+    let joints = cx.entries("joints", &spec.joints, |cx, name, path, j| {
+        Some(Element { name: name.into(), kind: j.name(), constraint: cx.joint(path, j)? })
+    });
+    let drivers = cx.entries("drivers", &spec.drivers, |cx, name, path, d| {
+        Some(Element { name: name.into(), kind: d.name(), constraint: cx.driver(path, d)? })
+    });
+    let forces = cx.entries("forces", &spec.forces, |cx, name, path, f| {
+        let applied = matches!(f, ForceSpec::Force(..) | ForceSpec::Torque(..));
+        Some(ForceElement { name: name.into(), kind: f.name(), applied, force: cx.force(path, f)? })
+    });
+    let measures = cx.entries("measures", &spec.measures, |cx, name, path, m| {
+        Some(Measure { name: name.into(), kind: cx.measure(path, m)? })
+    });
     let gravity = spec.gravity.and_then(|g| cx.vec2("gravity", g)).unwrap_or([0.0, 0.0]);
     // Each number is a double, but the weight is their product: past 1.8e308 it is infinite,
     // and every reaction and potential energy with it.
@@ -106,41 +80,12 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec
     }
 }
 
-fn joint_kind(j: &JointSpec) -> &'static str {
-    match j {
-        JointSpec::Revolute(..) => "revolute",
-        JointSpec::Translational(..) => "translational",
-        JointSpec::PointOnLine(..) => "point_on_line",
-        JointSpec::RevoluteTranslational(..) => "revolute_translational",
-        JointSpec::Distance(..) => "distance",
-        JointSpec::AbsoluteX(..) => "absolute_x",
-        JointSpec::AbsoluteY(..) => "absolute_y",
-        JointSpec::AbsoluteAngle(..) => "absolute_angle",
-        JointSpec::Gear(..) => "gear",
-        JointSpec::RackPinion(..) => "rack_pinion",
-        JointSpec::RollingDisc(..) => "rolling_disc",
-        JointSpec::Expression(..) => "expression",
-    }
-}
+/// What expressions name of a body (`crank.phi`, `crank.omega`): its coordinates, their rates
+/// and their accelerations.
+const QUANTITIES: [&str; 9] = ["x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha"];
 
-fn force_kind(f: &ForceSpec) -> &'static str {
-    match f {
-        ForceSpec::Force(..) => "force",
-        ForceSpec::Torque(..) => "torque",
-        ForceSpec::SpringDamper(..) => "spring_damper",
-        ForceSpec::RotationalSpringDamper(..) => "rotational_spring_damper",
-    }
-}
-
-fn driver_kind(d: &DriverSpec) -> &'static str {
-    match d {
-        DriverSpec::Angle(..) => "angle",
-        DriverSpec::RelativeAngle(..) => "relative_angle",
-        DriverSpec::Distance(..) => "distance",
-        DriverSpec::X(..) => "x",
-        DriverSpec::Y(..) => "y",
-    }
-}
+/// A body and a point of it, body frame.
+type End = (BodyIx, [f64; 2]);
 
 struct Cx<'s> {
     spec: &'s ModelSpec,
@@ -171,6 +116,23 @@ impl Cx<'_> {
 
     fn problem(&mut self, path: impl Into<String>, msg: impl Into<String>) {
         self.problems.push(Problem::new(path, msg));
+    }
+
+    /// Each entry of the model's `section` (`entries`) whose name is checked and which `build`
+    /// builds from its name, path and spec, in file order.
+    fn entries<S, T>(
+        &mut self,
+        section: &str,
+        entries: &IndexMap<String, S>,
+        mut build: impl FnMut(&mut Self, &str, &str, &S) -> Option<T>,
+    ) -> Vec<T> {
+        let mut out = Vec::new();
+        for (name, entry) in entries {
+            let path = format!("{section}.{name}");
+            self.name(&path, name);
+            out.extend(build(self, name, &path, entry));
+        }
+        out
     }
 
     fn name(&mut self, path: &str, name: &str) {
@@ -338,52 +300,67 @@ impl Cx<'_> {
     }
 
     /// A body and one of its points, both resolved.
-    fn body_point(
-        &mut self,
-        path: &str,
-        bfield: &str,
-        body: &str,
-        pfield: &str,
-        p: &PointRef,
-    ) -> Option<(BodyIx, [f64; 2])> {
+    fn body_point(&mut self, path: &str, bfield: &str, body: &str, pfield: &str, p: &PointRef) -> Option<End> {
         let b = self.body(&format!("{path}.{bfield}"), body);
         let s = self.point(&format!("{path}.{pfield}"), body, p);
         Some((b?, s?))
     }
 
-    fn distinct(&mut self, path: &str, i: &str, j: &str) -> bool {
-        if i == j {
-            self.problem(format!("{path}.body_j"), format!("a joint needs two different bodies, found '{i}' twice"));
-            false
-        } else {
-            true
+    /// The two ends of an element between two bodies (`body_i`, `point_i`, `body_j`, `point_j`
+    /// at `path`), resolved; a problem at `body_j` when both are the same body. An element between
+    /// the bodies themselves (a torque, a relative angle) takes their origins.
+    fn ends(
+        &mut self,
+        path: &str,
+        body_i: &str,
+        point_i: &PointRef,
+        body_j: &str,
+        point_j: &PointRef,
+    ) -> Option<[End; 2]> {
+        let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
+        let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+        if body_i == body_j {
+            let message = format!("a joint needs two different bodies, found '{body_i}' twice");
+            self.problem(format!("{path}.body_j"), message);
+            return None;
         }
+        Some([a?, b?])
+    }
+
+    /// A moving body and one of its points (`body`, `point` at `path`), resolved; ground is
+    /// refused, as what cannot be `verb` ("constrained", "driven").
+    fn moving_point(&mut self, path: &str, body: &str, point: &PointRef, verb: &str) -> Option<End> {
+        let (b, s) = self.body_point(path, "body", body, "point", point)?;
+        if b == BodyIx::GROUND {
+            self.problem(format!("{path}.body"), format!("ground cannot be {verb}; name a moving body"));
+            return None;
+        }
+        Some((b, s))
+    }
+
+    /// The distance between two body points in the initial guess, m.
+    fn initial_distance(&self, [(i, sp), (j, sq)]: [End; 2]) -> f64 {
+        let (p, r) = (Frame::of_slice(i, &self.q0).point(sp), Frame::of_slice(j, &self.q0).point(sq));
+        (r[0] - p[0]).hypot(r[1] - p[1])
     }
 
     fn joint(&mut self, path: &str, j: &JointSpec) -> Option<Box<dyn Constraint>> {
         use JointSpec as J;
         let c: Box<dyn Constraint> = match j {
             J::Revolute(RevoluteJoint { body_i, point_i, body_j, point_j }) => {
-                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
-                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
-                let ok = self.distinct(path, body_i, body_j);
-                let ((i, sp), (j, sq)) = (a?, b?);
-                ok.then_some(())?;
+                let [(i, sp), (j, sq)] = self.ends(path, body_i, point_i, body_j, point_j)?;
                 Box::new(Revolute::new(i, sp, j, sq))
             }
             J::Translational(TranslationalJoint { body_i, point_i, axis_i, body_j, point_j, axis_j }) => {
-                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
-                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+                let ends = self.ends(path, body_i, point_i, body_j, point_j);
                 let vi = self.axis(&format!("{path}.axis_i"), *axis_i);
                 let vj = self.axis(&format!("{path}.axis_j"), *axis_j);
-                let ok = self.distinct(path, body_i, body_j);
-                let ((i, sp), (j, sq), vi, vj) = (a?, b?, vi?, vj?);
-                ok.then_some(())?;
+                let ([(i, sp), (j, sq)], vi, vj) = (ends?, vi?, vj?);
                 let relative = i.coords(&self.q0)[2] - j.coords(&self.q0)[2];
                 Box::new(Translational::new(i, sp, vi, j, sq, vj).near(relative))
             }
             J::PointOnLine(PointOnLineJoint { body_i, point_i, axis_i, body_j, point_j }) => {
-                let (i, sp, vi, j, sq) = self.line_and_point(path, body_i, point_i, axis_i, body_j, point_j)?;
+                let ([(i, sp), (j, sq)], vi) = self.line_and_point(path, body_i, point_i, axis_i, body_j, point_j)?;
                 Box::new(PointOnLine::new(i, sp, vi, j, sq, 0.0))
             }
             J::RevoluteTranslational(RevoluteTranslationalJoint {
@@ -394,7 +371,7 @@ impl Cx<'_> {
                 point_j,
                 offset,
             }) => {
-                let (i, sp, vi, j, sq) = self.line_and_point(path, body_i, point_i, axis_i, body_j, point_j)?;
+                let ([(i, sp), (j, sq)], vi) = self.line_and_point(path, body_i, point_i, axis_i, body_j, point_j)?;
                 let offset = match offset {
                     Some(o) => self.finite(&format!("{path}.offset"), *o)?,
                     None => {
@@ -407,16 +384,12 @@ impl Cx<'_> {
                 Box::new(PointOnLine::new(i, sp, vi, j, sq, offset))
             }
             J::Distance(DistanceJoint { body_i, point_i, body_j, point_j, length }) => {
-                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
-                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
-                let ok = self.distinct(path, body_i, body_j);
-                let ((i, sp), (j, sq)) = (a?, b?);
-                ok.then_some(())?;
+                let ends = self.ends(path, body_i, point_i, body_j, point_j)?;
+                let [(i, sp), (j, sq)] = ends;
                 let length = match length {
                     Some(l) => self.positive(&format!("{path}.length"), *l)?,
                     None => {
-                        let (p, r) = (Frame::of_slice(i, &self.q0).point(sp), Frame::of_slice(j, &self.q0).point(sq));
-                        let l = (r[0] - p[0]).hypot(r[1] - p[1]);
+                        let l = self.initial_distance(ends);
                         if l < 1e-12 {
                             self.problem(
                                 format!("{path}.length"),
@@ -430,11 +403,7 @@ impl Cx<'_> {
                 Box::new(Distance::new(i, sp, j, sq, length))
             }
             J::AbsoluteX(AbsolutePoint { body, point, value }) | J::AbsoluteY(AbsolutePoint { body, point, value }) => {
-                let (b, s) = self.body_point(path, "body", body, "point", point)?;
-                if b == BodyIx::GROUND {
-                    self.problem(format!("{path}.body"), "ground cannot be constrained; name a moving body");
-                    return None;
-                }
+                let (b, s) = self.moving_point(path, body, point, "constrained")?;
                 let x = matches!(j, J::AbsoluteX(..));
                 let value = match value {
                     Some(v) => self.finite(&format!("{path}.value"), *v)?,
@@ -444,11 +413,7 @@ impl Cx<'_> {
                 Box::new(Absolute::new(kind, b, s, value))
             }
             J::AbsoluteAngle(AbsoluteAngleJoint { body, value }) => {
-                let b = self.body(&format!("{path}.body"), body)?;
-                if b == BodyIx::GROUND {
-                    self.problem(format!("{path}.body"), "ground cannot be constrained; name a moving body");
-                    return None;
-                }
+                let (b, _) = self.moving_point(path, body, &PointRef::default(), "constrained")?;
                 let value = match value {
                     Some(v) => self.finite(&format!("{path}.value"), *v)?,
                     None => b.coords(&self.q0)[2],
@@ -456,15 +421,12 @@ impl Cx<'_> {
                 Box::new(Absolute::new(AbsoluteKind::Angle, b, [0.0, 0.0], value))
             }
             J::Gear(GearJoint { body_i, point_i, radius_i, body_j, point_j, radius_j, internal }) => {
-                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
-                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+                let ends = self.ends(path, body_i, point_i, body_j, point_j);
                 let ri = self.positive(&format!("{path}.radius_i"), *radius_i);
                 let rj = self.positive(&format!("{path}.radius_j"), *radius_j);
-                let ok = self.distinct(path, body_i, body_j);
-                let ((i, si), (j, sj), ri, rj) = (a?, b?, ri?, rj?);
-                ok.then_some(())?;
-                let (ci, cj) = (Frame::of_slice(i, &self.q0).point(si), Frame::of_slice(j, &self.q0).point(sj));
-                if (cj[0] - ci[0]).hypot(cj[1] - ci[1]) < 1e-9 {
+                let (ends, ri, rj) = (ends?, ri?, rj?);
+                let [(i, si), (j, sj)] = ends;
+                if self.initial_distance(ends) < 1e-9 {
                     self.problem(
                         path,
                         "the gear centres coincide in the initial configuration: the line of centres is undefined",
@@ -477,13 +439,10 @@ impl Cx<'_> {
             J::RackPinion(RollingJoint { body_i, point_i, radius, body_j, point_j, axis_j })
             | J::RollingDisc(RollingJoint { body_i, point_i, radius, body_j, point_j, axis_j }) => {
                 let rack = matches!(j, J::RackPinion(..));
-                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
-                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+                let ends = self.ends(path, body_i, point_i, body_j, point_j);
                 let r = self.positive(&format!("{path}.radius"), *radius);
                 let v = self.axis(&format!("{path}.axis_j"), *axis_j);
-                let ok = self.distinct(path, body_i, body_j);
-                let ((i, sc), (j, sl), r, v) = (a?, b?, r?, v?);
-                ok.then_some(())?;
+                let ([(i, sc), (j, sl)], r, v) = (ends?, r?, v?);
                 if rack {
                     Box::new(RackPinion::new(i, sc, r, j, sl, v, &self.q0))
                 } else {
@@ -495,7 +454,7 @@ impl Cx<'_> {
         Some(c)
     }
 
-    #[allow(clippy::type_complexity)]
+    /// The ends of a point-on-line joint and the line's axis `axis_i`, resolved.
     fn line_and_point(
         &mut self,
         path: &str,
@@ -504,89 +463,52 @@ impl Cx<'_> {
         axis_i: &[f64; 2],
         body_j: &str,
         point_j: &PointRef,
-    ) -> Option<(BodyIx, [f64; 2], [f64; 2], BodyIx, [f64; 2])> {
-        let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
-        let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+    ) -> Option<([End; 2], [f64; 2])> {
+        let ends = self.ends(path, body_i, point_i, body_j, point_j);
         let v = self.axis(&format!("{path}.axis_i"), *axis_i);
-        let ok = self.distinct(path, body_i, body_j);
-        let ((i, sp), (j, sq), v) = (a?, b?, v?);
-        ok.then_some((i, sp, v, j, sq))
+        Some((ends?, v?))
     }
 
     /// A general constraint: names are `<body>.x`, `<body>.y`, `<body>.phi` and `t`.
     fn general(&mut self, path: &str, src: &str) -> Option<Box<dyn Constraint>> {
-        let spec = self.spec;
-        let known = self.body_names().join(", ");
-        let broken: Vec<&str> = self.broken.iter().filter_map(|b| b.strip_prefix("bodies.")).collect();
-        let mut uses_broken = false;
-        let mut vars: Vec<Var> = Vec::new();
-        let mut resolve = |name: &str| -> Result<usize, String> {
-            let var = if name == "t" {
-                Var::Time
-            } else {
-                let hint = || format!("expected <body>.x, <body>.y, <body>.phi or t, with a body among: {known}");
-                let (b, c) = name.split_once('.').ok_or_else(hint)?;
-                // A body that exists but could not be read: its own problem is reported.
-                let k = match spec.bodies.get_index_of(b) {
-                    Some(k) => k,
-                    None if broken.contains(&b) && ["x", "y", "phi"].contains(&c) => {
-                        uses_broken = true;
-                        0
-                    }
-                    None => return Err(hint()),
-                };
-                let off = match c {
-                    "x" => 0,
-                    "y" => 1,
-                    "phi" => 2,
-                    _ => return Err(hint()),
-                };
-                Var::Coord(3 * k + off)
-            };
-            Ok(match vars.iter().position(|v| *v == var) {
-                Some(s) => s,
-                None => {
-                    vars.push(var);
-                    vars.len() - 1
-                }
-            })
-        };
-        let expr = match Expr::parse(src, &mut resolve) {
-            Ok(e) => e,
-            Err(e) => {
-                self.problem(path, format!("cannot read the expression '{src}': {e}"));
-                return None;
-            }
-        };
-        if uses_broken {
-            return None;
-        }
-        match GeneralConstraint::try_new(expr, vars) {
-            Ok(c) => Some(Box::new(c)),
-            Err(e) => {
-                self.problem(path, e);
-                None
-            }
-        }
+        let var = |v: Option<(usize, usize)>| v.map_or(Var::Time, |(col, _)| Var::Coord(col));
+        let c = self.expression(path, src, 3, var, GeneralConstraint::try_new)?;
+        Some(Box::new(c))
     }
 
     /// An expression of time and state: `<body>.x, .y, .phi, .vx, .vy, .omega`, with
-    /// `accelerations` also `.ax, .ay, .alpha`, and `t`. `None` (with the problem recorded, unless
-    /// it names a body that could not be read) when it cannot be compiled.
+    /// `accelerations` also `.ax, .ay, .alpha`, and `t`.
     fn state_expr(&mut self, path: &str, src: &str, accelerations: bool) -> Option<StateExpr> {
+        let var = |v: Option<(usize, usize)>| match v {
+            None => StateVar::Time,
+            Some((col, 0)) => StateVar::Position(col),
+            Some((col, 1)) => StateVar::Velocity(col),
+            Some((col, _)) => StateVar::Acceleration(col),
+        };
+        self.expression(path, src, if accelerations { 9 } else { 6 }, var, StateExpr::try_new)
+    }
+
+    /// The expression `src` at `path` compiled by `build` from its variables: `t`, and
+    /// `<body>.<q>` for `q` among the first `quantities` of [`QUANTITIES`]; `var` makes each
+    /// variable from `None` (time) or `Some((column, order of derivative))`. `None` (with the
+    /// problem recorded, unless it names a body that could not be read) when it cannot be compiled.
+    fn expression<V: PartialEq, T>(
+        &mut self,
+        path: &str,
+        src: &str,
+        quantities: usize,
+        var: impl Fn(Option<(usize, usize)>) -> V,
+        build: impl FnOnce(Expr, Vec<V>) -> Result<T, String>,
+    ) -> Option<T> {
         let spec = self.spec;
         let known = self.body_names().join(", ");
         let broken: Vec<&str> = self.broken.iter().filter_map(|b| b.strip_prefix("bodies.")).collect();
-        let quantities: &[&str] = if accelerations {
-            &["x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha"]
-        } else {
-            &["x", "y", "phi", "vx", "vy", "omega"]
-        };
+        let quantities = &QUANTITIES[..quantities];
         let mut uses_broken = false;
-        let mut vars: Vec<StateVar> = Vec::new();
+        let mut vars: Vec<V> = Vec::new();
         let mut resolve = |name: &str| -> Result<usize, String> {
-            let var = if name == "t" {
-                StateVar::Time
+            let v = if name == "t" {
+                var(None)
             } else {
                 let hint = || {
                     let q: Vec<String> = quantities.iter().map(|q| format!("<body>.{q}")).collect();
@@ -594,6 +516,7 @@ impl Cx<'_> {
                 };
                 let (b, c) = name.split_once('.').ok_or_else(hint)?;
                 let at = quantities.iter().position(|q| *q == c).ok_or_else(hint)?;
+                // A body that exists but could not be read: its own problem is reported.
                 let k = match spec.bodies.get_index_of(b) {
                     Some(k) => k,
                     None if broken.contains(&b) => {
@@ -602,17 +525,12 @@ impl Cx<'_> {
                     }
                     None => return Err(hint()),
                 };
-                let col = 3 * k + at % 3;
-                match at / 3 {
-                    0 => StateVar::Position(col),
-                    1 => StateVar::Velocity(col),
-                    _ => StateVar::Acceleration(col),
-                }
+                var(Some((3 * k + at % 3, at / 3)))
             };
-            Ok(match vars.iter().position(|v| *v == var) {
+            Ok(match vars.iter().position(|u| *u == v) {
                 Some(s) => s,
                 None => {
-                    vars.push(var);
+                    vars.push(v);
                     vars.len() - 1
                 }
             })
@@ -627,8 +545,8 @@ impl Cx<'_> {
         if uses_broken {
             return None;
         }
-        match StateExpr::try_new(expr, vars) {
-            Ok(e) => Some(e),
+        match build(expr, vars) {
+            Ok(t) => Some(t),
             Err(e) => {
                 self.problem(path, e);
                 None
@@ -685,20 +603,15 @@ impl Cx<'_> {
                 free_length,
                 actuator,
             }) => {
-                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
-                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+                let ends = self.ends(path, body_i, point_i, body_j, point_j);
                 let k = self.non_negative(&format!("{path}.stiffness"), *stiffness);
                 let c = self.non_negative(&format!("{path}.damping"), *damping);
                 let act = self.load(&format!("{path}.actuator"), actuator);
-                let ok = self.distinct(path, body_i, body_j);
-                let ((i, sp), (j, sq), k, c, act) = (a?, b?, k?, c?, act?);
-                ok.then_some(())?;
+                let (ends, k, c, act) = (ends?, k?, c?, act?);
+                let [(i, sp), (j, sq)] = ends;
                 let l0 = match free_length {
                     Some(l) => self.non_negative(&format!("{path}.free_length"), *l)?,
-                    None => {
-                        let (p, r) = (Frame::of_slice(i, &self.q0).point(sp), Frame::of_slice(j, &self.q0).point(sq));
-                        (r[0] - p[0]).hypot(r[1] - p[1])
-                    }
+                    None => self.initial_distance(ends),
                 };
                 Box::new(SpringDamper::new(i.0, sp, j.0, sq, k, c, l0, act))
             }
@@ -710,14 +623,12 @@ impl Cx<'_> {
                 free_angle,
                 actuator,
             }) => {
-                let i = self.body(&format!("{path}.body_i"), body_i);
-                let j = self.body(&format!("{path}.body_j"), body_j);
+                let origin = PointRef::default();
+                let ends = self.ends(path, body_i, &origin, body_j, &origin);
                 let k = self.non_negative(&format!("{path}.stiffness"), *stiffness);
                 let c = self.non_negative(&format!("{path}.damping"), *damping);
                 let act = self.load(&format!("{path}.actuator"), actuator);
-                let ok = self.distinct(path, body_i, body_j);
-                let (i, j, k, c, act) = (i?, j?, k?, c?, act?);
-                ok.then_some(())?;
+                let ([(i, _), (j, _)], k, c, act) = (ends?, k?, c?, act?);
                 let theta0 = match free_angle {
                     Some(a) => self.finite(&format!("{path}.free_angle"), *a)?,
                     None => i.coords(&self.q0)[2] - j.coords(&self.q0)[2],
@@ -752,41 +663,28 @@ impl Cx<'_> {
         use DriverSpec as D;
         let (kind, f) = match d {
             D::Angle(AngleDriver { body, function }) => {
-                let b = self.body(&format!("{path}.body"), body);
+                let b = self.moving_point(path, body, &PointRef::default(), "driven");
                 let f = self.function(&format!("{path}.function"), function);
-                let b = b?;
-                if b == BodyIx::GROUND {
-                    self.problem(format!("{path}.body"), "ground cannot be driven; name a moving body");
-                    return None;
-                }
-                (DriverKind::Angle { body: b }, f?)
+                let ((b, _), f) = (b?, f?);
+                (DriverKind::Angle { body: b }, f)
             }
             D::RelativeAngle(RelativeAngleDriver { body_i, body_j, function }) => {
-                let i = self.body(&format!("{path}.body_i"), body_i);
-                let j = self.body(&format!("{path}.body_j"), body_j);
+                let origin = PointRef::default();
+                let ends = self.ends(path, body_i, &origin, body_j, &origin);
                 let f = self.function(&format!("{path}.function"), function);
-                let ok = self.distinct(path, body_i, body_j);
-                let (i, j) = (i?, j?);
-                ok.then_some(())?;
+                let [(i, _), (j, _)] = ends?;
                 (DriverKind::RelativeAngle { i, j }, f?)
             }
             D::Distance(DistanceDriver { body_i, point_i, body_j, point_j, function }) => {
-                let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
-                let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
+                let ends = self.ends(path, body_i, point_i, body_j, point_j);
                 let f = self.function(&format!("{path}.function"), function);
-                let ok = self.distinct(path, body_i, body_j);
-                let ((i, s_p), (j, s_q)) = (a?, b?);
-                ok.then_some(())?;
+                let [(i, s_p), (j, s_q)] = ends?;
                 (DriverKind::Distance { i, s_p, j, s_q }, f?)
             }
             D::X(PointDriver { body, point, function }) | D::Y(PointDriver { body, point, function }) => {
-                let bp = self.body_point(path, "body", body, "point", point);
+                let bp = self.moving_point(path, body, point, "driven");
                 let f = self.function(&format!("{path}.function"), function);
                 let (b, p) = bp?;
-                if b == BodyIx::GROUND {
-                    self.problem(format!("{path}.body"), "ground cannot be driven; name a moving body");
-                    return None;
-                }
                 let kind = if matches!(d, D::X(..)) {
                     DriverKind::X { body: b, point: p }
                 } else {

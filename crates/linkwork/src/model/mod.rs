@@ -60,6 +60,9 @@ pub struct ForceElement {
     pub name: String,
     /// Its `type` in the model file.
     pub kind: &'static str,
+    /// Whether it is an applied force or torque (`force`, `torque`) rather than a force element
+    /// (a spring-damper).
+    pub applied: bool,
     /// The force law.
     pub force: Box<dyn Force>,
 }

@@ -5,15 +5,41 @@
 //! not hide the problems of the next.
 
 use super::spec::{
-    AnalysisSpec, BodySpec, DriverSpec, ForceSpec, GroundSpec, JointSpec, MeasureSpec, ModelSpec, PointMeasure,
+    AnalysisSpec, BodySpec, DriverSpec, ForceSpec, GroundSpec, JointSpec, MeasureSpec, ModelSpec, PointMeasure, Tagged,
 };
 use crate::error::Problem;
 use indexmap::IndexMap;
 use serde::de::DeserializeOwned;
 use serde_yaml_ng::Value;
 
-const SECTIONS: [&str; 10] =
-    ["name", "description", "gravity", "ground", "bodies", "joints", "drivers", "forces", "measures", "analyses"];
+/// The fields of the struct `T` as serde reads them (the sections of a model file for
+/// [`ModelSpec`]): what `T::deserialize` hands a deserializer, which reads no further.
+fn fields<T: DeserializeOwned>() -> &'static [&'static str] {
+    struct Fields<'a>(&'a mut &'static [&'static str]);
+    impl<'de> serde::Deserializer<'de> for Fields<'_> {
+        type Error = serde::de::value::Error;
+        fn deserialize_any<V: serde::de::Visitor<'de>>(self, _: V) -> Result<V::Value, Self::Error> {
+            Err(serde::de::Error::custom("not a struct"))
+        }
+        fn deserialize_struct<V: serde::de::Visitor<'de>>(
+            self,
+            _: &'static str,
+            fields: &'static [&'static str],
+            _: V,
+        ) -> Result<V::Value, Self::Error> {
+            *self.0 = fields;
+            Err(serde::de::Error::custom("only the fields are asked for"))
+        }
+        serde::forward_to_deserialize_any! {
+            bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes byte_buf option unit
+            unit_struct newtype_struct seq tuple tuple_struct map enum identifier ignored_any
+        }
+    }
+    let mut fields: &'static [&'static str] = &[];
+    // Always an error: the deserializer stops once it has the fields.
+    let _ = T::deserialize(Fields(&mut fields));
+    fields
+}
 
 /// A model file read as far as it could be: the entries that deserialized, the problems of the
 /// others, and the names of those others (so that later checks do not call them unknown).
@@ -53,11 +79,12 @@ pub fn parse_partial(text: &str) -> Result<Parsed, Vec<Problem>> {
         return Err(vec![Problem::new("", "expected a mapping with sections bodies, joints, drivers, analyses")]);
     };
     let mut problems = Vec::new();
+    let sections = fields::<ModelSpec>();
     for key in map.keys() {
         match key.as_str() {
-            Some(k) if SECTIONS.contains(&k) => {}
+            Some(k) if sections.contains(&k) => {}
             Some(k) => {
-                problems.push(Problem::new(k, format!("unknown section; expected one of {}", SECTIONS.join(", "))))
+                problems.push(Problem::new(k, format!("unknown section; expected one of {}", sections.join(", "))))
             }
             None => problems.push(Problem::new("", format!("section names must be strings, found {}", describe(key)))),
         }
@@ -72,9 +99,9 @@ pub fn parse_partial(text: &str) -> Result<Parsed, Vec<Problem>> {
     }
     let mut broken = Vec::new();
     let bodies = section("bodies", get("bodies"), &mut problems, &mut broken, entry::<BodySpec>);
-    let joints = section("joints", get("joints"), &mut problems, &mut broken, tagged(&JointSpec::TYPES, joint));
-    let drivers = section("drivers", get("drivers"), &mut problems, &mut broken, tagged(&DriverSpec::TYPES, driver));
-    let forces = section("forces", get("forces"), &mut problems, &mut broken, tagged(&ForceSpec::TYPES, force));
+    let joints = section("joints", get("joints"), &mut problems, &mut broken, tagged::<JointSpec>());
+    let drivers = section("drivers", get("drivers"), &mut problems, &mut broken, tagged::<DriverSpec>());
+    let forces = section("forces", get("forces"), &mut problems, &mut broken, tagged::<ForceSpec>());
     let measures = section("measures", get("measures"), &mut problems, &mut broken, measure);
     let analyses = section("analyses", get("analyses"), &mut problems, &mut broken, entry::<AnalysisSpec>);
     let spec = ModelSpec { name, description, gravity, ground, bodies, joints, drivers, forces, measures, analyses };
@@ -114,56 +141,6 @@ fn entry<T: DeserializeOwned>(path: &str, v: &Value, problems: &mut Vec<Problem>
     }
 }
 
-/// A deserialization result that remembers the path inside the value.
-type Tracked<T> = Result<T, serde_path_to_error::Error<serde_yaml_ng::Error>>;
-
-/// A variant of a tagged section (`type: revolute`, ...) read from the entry without its `type`.
-fn variant<T: DeserializeOwned, U>(v: Value, wrap: fn(T) -> U) -> Tracked<U> {
-    serde_path_to_error::deserialize(v).map(wrap)
-}
-
-fn joint(kind: &str, v: Value) -> Option<Tracked<JointSpec>> {
-    use JointSpec as J;
-    Some(match kind {
-        "revolute" => variant(v, J::Revolute),
-        "translational" => variant(v, J::Translational),
-        "point_on_line" => variant(v, J::PointOnLine),
-        "revolute_translational" => variant(v, J::RevoluteTranslational),
-        "distance" => variant(v, J::Distance),
-        "absolute_x" => variant(v, J::AbsoluteX),
-        "absolute_y" => variant(v, J::AbsoluteY),
-        "absolute_angle" => variant(v, J::AbsoluteAngle),
-        "gear" => variant(v, J::Gear),
-        "rack_pinion" => variant(v, J::RackPinion),
-        "rolling_disc" => variant(v, J::RollingDisc),
-        "expression" => variant(v, J::Expression),
-        _ => return None,
-    })
-}
-
-fn driver(kind: &str, v: Value) -> Option<Tracked<DriverSpec>> {
-    use DriverSpec as D;
-    Some(match kind {
-        "angle" => variant(v, D::Angle),
-        "relative_angle" => variant(v, D::RelativeAngle),
-        "distance" => variant(v, D::Distance),
-        "x" => variant(v, D::X),
-        "y" => variant(v, D::Y),
-        _ => return None,
-    })
-}
-
-fn force(kind: &str, v: Value) -> Option<Tracked<ForceSpec>> {
-    use ForceSpec as F;
-    Some(match kind {
-        "force" => variant(v, F::Force),
-        "torque" => variant(v, F::Torque),
-        "spring_damper" => variant(v, F::SpringDamper),
-        "rotational_spring_damper" => variant(v, F::RotationalSpringDamper),
-        _ => return None,
-    })
-}
-
 /// A measure: an expression (a string) or a point component (a mapping), read by hand so that a
 /// bad field keeps its path.
 fn measure(path: &str, v: &Value, problems: &mut Vec<Problem>) -> Option<MeasureSpec> {
@@ -183,16 +160,12 @@ fn measure(path: &str, v: &Value, problems: &mut Vec<Problem>) -> Option<Measure
     }
 }
 
-/// An entry of a section whose entries name their kind in `type`. Serde's internally tagged
-/// enums buffer the entry before dispatching, which loses the path of a bad field; reading `type`
-/// here and deserializing the rest straight into the variant's struct keeps it
-/// (`joints.G.radius_i`, not `joints.G`).
-fn tagged<T>(
-    types: &'static [&'static str],
-    read: fn(&str, Value) -> Option<Tracked<T>>,
-) -> impl Fn(&str, &Value, &mut Vec<Problem>) -> Option<T> {
-    move |path, v, problems| {
-        let expected = || format!("expected one of: {}", types.join(", "));
+/// An entry of a section whose entries name their kind in `type`: the kind read here and the
+/// rest by [`Tagged::read`], which keeps the path of a bad field (`joints.G.radius_i`, not
+/// `joints.G`).
+fn tagged<T: Tagged>() -> impl Fn(&str, &Value, &mut Vec<Problem>) -> Option<T> {
+    |path, v, problems| {
+        let expected = || format!("expected one of: {}", T::TYPES.join(", "));
         let Value::Mapping(map) = v else {
             problems.push(Problem::new(
                 path,
@@ -216,14 +189,15 @@ fn tagged<T>(
         };
         let mut rest = map.clone();
         rest.remove("type");
-        match read(&kind, Value::Mapping(rest)) {
+        let mut track = serde_path_to_error::Track::new();
+        match T::read(&kind, serde_path_to_error::Deserializer::new(Value::Mapping(rest), &mut track)) {
             None => {
                 problems.push(Problem::new(format!("{path}.type"), format!("unknown type `{kind}`, {}", expected())));
                 None
             }
             Some(Ok(t)) => Some(t),
             Some(Err(e)) => {
-                problems.push(located(path, e));
+                problems.push(located(path, serde_path_to_error::Error::new(track.path(), e)));
                 None
             }
         }

@@ -4,7 +4,80 @@
 
 use indexmap::IndexMap;
 use schemars::JsonSchema;
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize};
+
+/// An enum whose variants model files call by name (`integrator: hht`, `type: revolute`), each
+/// name written once, as `"name" => Variant`: it is the variant's serde name, the enum's `NAMES`
+/// list it, and `name()` returns it. A plain enum also gets `from_name`; the `tagged` form, for a
+/// section whose entries name their kind in `type` (each variant holding the struct of its
+/// fields), implements [`Tagged`] with the same names.
+macro_rules! named {
+    (
+        tagged $(#[$attr:meta])*
+        pub enum $Enum:ident { $( $(#[$vattr:meta])* $name:literal => $Variant:ident($Inner:ty), )* }
+    ) => {
+        named! { @enum $(#[$attr])* pub enum $Enum { $( $(#[$vattr])* $name => $Variant($Inner), )* } }
+
+        impl Tagged for $Enum {
+            const TYPES: &'static [&'static str] = $Enum::NAMES;
+
+            fn read<'de, D: Deserializer<'de>>(kind: &str, d: D) -> Option<Result<Self, D::Error>> {
+                Some(match kind {
+                    $( $name => <$Inner>::deserialize(d).map($Enum::$Variant), )*
+                    _ => return None,
+                })
+            }
+        }
+    };
+    (
+        $(#[$attr:meta])*
+        pub enum $Enum:ident { $( $(#[$vattr:meta])* $name:literal => $Variant:ident, )* }
+    ) => {
+        named! { @enum $(#[$attr])* pub enum $Enum { $( $(#[$vattr])* $name => $Variant, )* } }
+
+        impl $Enum {
+            /// The variant called `name` in model files, if there is one.
+            pub fn from_name(name: &str) -> Option<Self> {
+                match name {
+                    $( $name => Some($Enum::$Variant), )*
+                    _ => None,
+                }
+            }
+        }
+    };
+    (
+        @enum $(#[$attr:meta])*
+        pub enum $Enum:ident { $( $(#[$vattr:meta])* $name:literal => $Variant:ident $(($Inner:ty))?, )* }
+    ) => {
+        $(#[$attr])*
+        pub enum $Enum {
+            $( $(#[$vattr])* #[serde(rename = $name)] $Variant $(($Inner))?, )*
+        }
+
+        impl $Enum {
+            /// Every name, as written in model files.
+            pub const NAMES: &'static [&'static str] = &[$($name),*];
+
+            /// Its name in the model file.
+            pub fn name(&self) -> &'static str {
+                match self {
+                    $( $Enum::$Variant { .. } => $name, )*
+                }
+            }
+        }
+    };
+}
+
+/// The kinds of a section's entries (joints, drivers, forces), which name theirs in `type`.
+pub trait Tagged: Sized {
+    /// Every `type`, as written in model files (the enum's `NAMES`).
+    const TYPES: &'static [&'static str];
+
+    /// The entry of `type: kind` read from `d`, the entry without its `type`; `None` when no
+    /// kind has that name. Reading the variant's struct straight from `d` keeps the path of a
+    /// bad field (serde's internally tagged enums buffer the entry first, which loses it).
+    fn read<'de, D: Deserializer<'de>>(kind: &str, d: D) -> Option<Result<Self, D::Error>>;
+}
 
 /// A planar mechanism: bodies, the joints and drivers between them, and the analyses to run.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
@@ -16,6 +89,10 @@ pub struct ModelSpec {
     /// Free text.
     #[serde(default)]
     pub description: Option<String>,
+    /// Gravitational acceleration `[gx, gy]`, m/s^2, acting on every body's centre of mass.
+    /// Default: none (`[0, 0]`).
+    #[serde(default)]
+    pub gravity: Option<[f64; 2]>,
     /// The fixed body `ground`: named points only (its frame is the global frame).
     #[serde(default)]
     pub ground: Option<GroundSpec>,
@@ -27,10 +104,6 @@ pub struct ModelSpec {
     /// Drivers (prescribed motions) by name; each analysis chooses which are active.
     #[serde(default)]
     pub drivers: IndexMap<String, DriverSpec>,
-    /// Gravitational acceleration `[gx, gy]`, m/s^2, acting on every body's centre of mass.
-    /// Default: none (`[0, 0]`).
-    #[serde(default)]
-    pub gravity: Option<[f64; 2]>,
     /// Applied forces and force elements by name.
     #[serde(default)]
     pub forces: IndexMap<String, ForceSpec>,
@@ -85,27 +158,25 @@ impl<'de> Deserialize<'de> for Quantity {
     }
 }
 
-/// An applied force or a force element.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(tag = "type", rename_all = "snake_case")]
-pub enum ForceSpec {
-    /// A force `[fx, fy]` at a point of a body, in the global frame or the body's frame; each
-    /// component a number or an expression of time and state.
-    Force(PointForce),
-    /// A torque on a body (counter-clockwise positive), a number or an expression.
-    Torque(TorqueSpec),
-    /// Translational spring-damper-actuator between two points: the force pushing the points
-    /// apart is `-stiffness (l - free_length) - damping dl/dt + actuator`.
-    SpringDamper(SpringDamperSpec),
-    /// Rotational spring-damper-actuator between two bodies: the torque on `body_i` (its
-    /// opposite on `body_j`) is `-stiffness (theta - free_angle) - damping dtheta/dt + actuator`,
-    /// `theta = phi_i - phi_j`.
-    RotationalSpringDamper(RotationalSpringDamperSpec),
-}
-
-impl ForceSpec {
-    /// Every force `type`, as written in model files.
-    pub const TYPES: [&'static str; 4] = ["force", "torque", "spring_damper", "rotational_spring_damper"];
+named! {
+    tagged
+    /// An applied force or a force element.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(tag = "type")]
+    pub enum ForceSpec {
+        /// A force `[fx, fy]` at a point of a body, in the global frame or the body's frame; each
+        /// component a number or an expression of time and state.
+        "force" => Force(PointForce),
+        /// A torque on a body (counter-clockwise positive), a number or an expression.
+        "torque" => Torque(TorqueSpec),
+        /// Translational spring-damper-actuator between two points: the force pushing the points
+        /// apart is `-stiffness (l - free_length) - damping dl/dt + actuator`.
+        "spring_damper" => SpringDamper(SpringDamperSpec),
+        /// Rotational spring-damper-actuator between two bodies: the torque on `body_i` (its
+        /// opposite on `body_j`) is `-stiffness (theta - free_angle) - damping dtheta/dt + actuator`,
+        /// `theta = phi_i - phi_j`.
+        "rotational_spring_damper" => RotationalSpringDamper(RotationalSpringDamperSpec),
+    }
 }
 
 /// The frame a force's components are given in.
@@ -339,45 +410,48 @@ impl Default for PointRef {
     }
 }
 
-/// A joint between two bodies (or a body and `ground`), or a general constraint. The first body
-/// (`body_i`) is the one whose reaction is reported.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(tag = "type", rename_all = "snake_case")]
-pub enum JointSpec {
-    /// Pin: `point_i` of `body_i` coincides with `point_j` of `body_j`. 2 equations.
-    Revolute(RevoluteJoint),
-    /// Prismatic: `point_j` of `body_j` slides on the line of `body_i` through `point_i` along
-    /// `axis_i`, and the bodies keep the relative angle that makes `axis_i` and `axis_j` parallel.
-    /// 2 equations.
-    Translational(TranslationalJoint),
-    /// Pin in slot: `point_j` of `body_j` stays on the line of `body_i` through `point_i` along
-    /// `axis_i`; rotation stays free. 1 equation.
-    PointOnLine(PointOnLineJoint),
-    /// Revolute-translational composite: `point_j` of `body_j` keeps a constant signed distance
-    /// `offset` from the line of `body_i` (a link pinned at `point_j` and sliding, at right angles,
-    /// on the line). 1 equation.
-    RevoluteTranslational(RevoluteTranslationalJoint),
-    /// Distance (revolute-revolute link): the two points stay `length` apart. 1 equation.
-    Distance(DistanceJoint),
-    /// Absolute x of a body point is constant. 1 equation.
-    AbsoluteX(AbsolutePoint),
-    /// Absolute y of a body point is constant. 1 equation.
-    AbsoluteY(AbsolutePoint),
-    /// Absolute angle of a body is constant. 1 equation.
-    AbsoluteAngle(AbsoluteAngleJoint),
-    /// Gear pair: pitch circles of radius `radius_i` and `radius_j` about `point_i` and `point_j`
-    /// roll without slip. The centre distance must be kept by other joints. 1 equation.
-    Gear(GearJoint),
-    /// Rack and pinion: the pinion's pitch circle (centre `point_i`, `radius`) rolls without slip
-    /// on the rack's pitch line through `point_j` along `axis_j`. The centre-to-line distance must
-    /// be kept by other joints. 1 equation.
-    RackPinion(RollingJoint),
-    /// A disc (centre `point_i`, `radius`) rolling without slip on the line of `body_j` through
-    /// `point_j` along `axis_j`: contact and no slip. 2 equations.
-    RollingDisc(RollingJoint),
-    /// A general constraint `expression = 0` in body coordinates (`crank.x`, `crank.y`,
-    /// `crank.phi`) and time `t`, differentiated exactly. 1 equation.
-    Expression(ExpressionJoint),
+named! {
+    tagged
+    /// A joint between two bodies (or a body and `ground`), or a general constraint. The first body
+    /// (`body_i`) is the one whose reaction is reported.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(tag = "type")]
+    pub enum JointSpec {
+        /// Pin: `point_i` of `body_i` coincides with `point_j` of `body_j`. 2 equations.
+        "revolute" => Revolute(RevoluteJoint),
+        /// Prismatic: `point_j` of `body_j` slides on the line of `body_i` through `point_i` along
+        /// `axis_i`, and the bodies keep the relative angle that makes `axis_i` and `axis_j` parallel.
+        /// 2 equations.
+        "translational" => Translational(TranslationalJoint),
+        /// Pin in slot: `point_j` of `body_j` stays on the line of `body_i` through `point_i` along
+        /// `axis_i`; rotation stays free. 1 equation.
+        "point_on_line" => PointOnLine(PointOnLineJoint),
+        /// Revolute-translational composite: `point_j` of `body_j` keeps a constant signed distance
+        /// `offset` from the line of `body_i` (a link pinned at `point_j` and sliding, at right angles,
+        /// on the line). 1 equation.
+        "revolute_translational" => RevoluteTranslational(RevoluteTranslationalJoint),
+        /// Distance (revolute-revolute link): the two points stay `length` apart. 1 equation.
+        "distance" => Distance(DistanceJoint),
+        /// Absolute x of a body point is constant. 1 equation.
+        "absolute_x" => AbsoluteX(AbsolutePoint),
+        /// Absolute y of a body point is constant. 1 equation.
+        "absolute_y" => AbsoluteY(AbsolutePoint),
+        /// Absolute angle of a body is constant. 1 equation.
+        "absolute_angle" => AbsoluteAngle(AbsoluteAngleJoint),
+        /// Gear pair: pitch circles of radius `radius_i` and `radius_j` about `point_i` and `point_j`
+        /// roll without slip. The centre distance must be kept by other joints. 1 equation.
+        "gear" => Gear(GearJoint),
+        /// Rack and pinion: the pinion's pitch circle (centre `point_i`, `radius`) rolls without slip
+        /// on the rack's pitch line through `point_j` along `axis_j`. The centre-to-line distance must
+        /// be kept by other joints. 1 equation.
+        "rack_pinion" => RackPinion(RollingJoint),
+        /// A disc (centre `point_i`, `radius`) rolling without slip on the line of `body_j` through
+        /// `point_j` along `axis_j`: contact and no slip. 2 equations.
+        "rolling_disc" => RollingDisc(RollingJoint),
+        /// A general constraint `expression = 0` in body coordinates (`crank.x`, `crank.y`,
+        /// `crank.phi`) and time `t`, differentiated exactly. 1 equation.
+        "expression" => Expression(ExpressionJoint),
+    }
 }
 
 /// Pin: `point_i` of `body_i` coincides with `point_j` of `body_j`. 2 equations.
@@ -544,44 +618,24 @@ pub struct ExpressionJoint {
     pub expression: String,
 }
 
-impl JointSpec {
-    /// Every joint `type`, as written in model files.
-    pub const TYPES: [&'static str; 12] = [
-        "revolute",
-        "translational",
-        "point_on_line",
-        "revolute_translational",
-        "distance",
-        "absolute_x",
-        "absolute_y",
-        "absolute_angle",
-        "gear",
-        "rack_pinion",
-        "rolling_disc",
-        "expression",
-    ];
-}
-
-impl DriverSpec {
-    /// Every driver `type`, as written in model files.
-    pub const TYPES: [&'static str; 5] = ["angle", "relative_angle", "distance", "x", "y"];
-}
-
-/// A prescribed motion: a coordinate of the mechanism equals `function` of time `t` (an
-/// expression such as `"6.1506 + 2*pi*t"`; its derivatives are exact).
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(tag = "type", rename_all = "snake_case")]
-pub enum DriverSpec {
-    /// Angle of `body`, rad.
-    Angle(AngleDriver),
-    /// Angle of `body_i` minus angle of `body_j`, rad.
-    RelativeAngle(RelativeAngleDriver),
-    /// Distance between two points, m.
-    Distance(DistanceDriver),
-    /// Global x of a body point, m.
-    X(PointDriver),
-    /// Global y of a body point, m.
-    Y(PointDriver),
+named! {
+    tagged
+    /// A prescribed motion: a coordinate of the mechanism equals `function` of time `t` (an
+    /// expression such as `"6.1506 + 2*pi*t"`; its derivatives are exact).
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(tag = "type")]
+    pub enum DriverSpec {
+        /// Angle of `body`, rad.
+        "angle" => Angle(AngleDriver),
+        /// Angle of `body_i` minus angle of `body_j`, rad.
+        "relative_angle" => RelativeAngle(RelativeAngleDriver),
+        /// Distance between two points, m.
+        "distance" => Distance(DistanceDriver),
+        /// Global x of a body point, m.
+        "x" => X(PointDriver),
+        /// Global y of a body point, m.
+        "y" => Y(PointDriver),
+    }
 }
 
 /// Angle of `body`, rad.
@@ -671,29 +725,19 @@ pub struct AnalysisSpec {
     pub solver: SolverSpec,
 }
 
-/// The integrators of dynamic analyses (`docs/integrators.md`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum IntegratorKind {
-    /// Variable-order (1 to 6), variable-step BDF on the stabilised index-2 equations (or the
-    /// index-3 ones), as Adams GSTIFF and DASSL.
-    #[default]
-    Bdf,
-    /// HHT-alpha on the index-3 equations with step-size control (Negrut et al. 2007).
-    Hht,
-    /// Coordinate partitioning with a variable-order, variable-step Adams-Bashforth-Moulton method
-    /// on the independent coordinates (Wehage and Haug 1982), as Adams ABAM.
-    Abam,
-}
-
-impl IntegratorKind {
-    /// Its name in the model file (`integrator: bdf`).
-    pub fn name(self) -> &'static str {
-        match self {
-            IntegratorKind::Bdf => "bdf",
-            IntegratorKind::Hht => "hht",
-            IntegratorKind::Abam => "abam",
-        }
+named! {
+    /// The integrators of dynamic analyses (`docs/integrators.md`).
+    #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+    pub enum IntegratorKind {
+        /// Variable-order (1 to 6), variable-step BDF on the stabilised index-2 equations (or the
+        /// index-3 ones), as Adams GSTIFF and DASSL.
+        #[default]
+        "bdf" => Bdf,
+        /// HHT-alpha on the index-3 equations with step-size control (Negrut et al. 2007).
+        "hht" => Hht,
+        /// Coordinate partitioning with a variable-order, variable-step Adams-Bashforth-Moulton method
+        /// on the independent coordinates (Wehage and Haug 1982), as Adams ABAM.
+        "abam" => Abam,
     }
 }
 
@@ -711,35 +755,23 @@ pub enum Formulation {
     Si2,
 }
 
-/// Kinds of analysis.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum AnalysisKind {
-    /// Position, velocity and acceleration of a fully driven mechanism.
-    Kinematic,
-    /// Motion under forces: the equations of motion integrated in time, with joint reactions.
-    Dynamic,
-    /// Inverse dynamics (kinetostatics) of a fully driven mechanism: the kinematic motion, and
-    /// the joint reactions and driver efforts it needs.
-    Inverse,
-    /// Static equilibrium under the loads, at `t_start` or, quasi-statically, at each output time
-    /// of a slowly driven mechanism.
-    Static,
-    /// Linearisation about an equilibrium (or the initial state): natural frequencies, damping
-    /// ratios and mode shapes.
-    Modes,
-}
-
-impl AnalysisKind {
-    /// Its `type` in the model file.
-    pub fn name(self) -> &'static str {
-        match self {
-            AnalysisKind::Kinematic => "kinematic",
-            AnalysisKind::Dynamic => "dynamic",
-            AnalysisKind::Inverse => "inverse",
-            AnalysisKind::Static => "static",
-            AnalysisKind::Modes => "modes",
-        }
+named! {
+    /// Kinds of analysis.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+    pub enum AnalysisKind {
+        /// Position, velocity and acceleration of a fully driven mechanism.
+        "kinematic" => Kinematic,
+        /// Motion under forces: the equations of motion integrated in time, with joint reactions.
+        "dynamic" => Dynamic,
+        /// Inverse dynamics (kinetostatics) of a fully driven mechanism: the kinematic motion, and
+        /// the joint reactions and driver efforts it needs.
+        "inverse" => Inverse,
+        /// Static equilibrium under the loads, at `t_start` or, quasi-statically, at each output time
+        /// of a slowly driven mechanism.
+        "static" => Static,
+        /// Linearisation about an equilibrium (or the initial state): natural frequencies, damping
+        /// ratios and mode shapes.
+        "modes" => Modes,
     }
 }
 

@@ -7,8 +7,9 @@
 
 pub mod references;
 
+use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::expr::{HyperDual, Scalar};
-use linkwork::{Model, Results};
+use linkwork::{Model, Overrides, Results};
 
 /// Path of a file in the repository's `examples/` folder.
 pub fn example(name: &str) -> String {
@@ -26,6 +27,33 @@ pub fn patch(text: &str, from: &str, to: &str) -> String {
     let count = text.matches(from).count();
     assert_eq!(count, 1, "{from:?} occurs {count} times in the text to patch, not once");
     text.replacen(from, to, 1)
+}
+
+/// Overrides that select the integrator `kind` at `rtol = atol = tol` over `t_end` (the
+/// analysis's own when `None`).
+pub fn at_tolerance(kind: IntegratorKind, tol: f64, t_end: Option<f64>) -> Overrides {
+    Overrides { integrator: Some(kind), rtol: Some(tol), atol: Some(tol), t_end, ..Default::default() }
+}
+
+/// Every integrator, with its name in model files.
+pub fn integrators() -> impl Iterator<Item = (&'static str, IntegratorKind)> {
+    IntegratorKind::NAMES.iter().map(|&name| (name, IntegratorKind::from_name(name).expect("a name of NAMES")))
+}
+
+/// The joints of a slider-crank of bodies `crank` (points `O`, `A`), `rod` (`A`, `B`) and
+/// `slider`: the crank pinned to ground at `O`, the rod to the crank at `A` and to the slider at
+/// `B`, the slider on a guide along x through the origin.
+pub const SLIDER_CRANK_JOINTS: &str = "joints:
+  O: {type: revolute, body_i: crank, point_i: O, body_j: ground, point_j: [0, 0]}
+  A: {type: revolute, body_i: crank, point_i: A, body_j: rod, point_j: A}
+  B: {type: revolute, body_i: rod, point_i: B, body_j: slider, point_j: [0, 0]}
+  guide: {type: translational, body_i: ground, point_i: [0, 0], axis_i: [1, 0], body_j: slider, point_j: [0, 0], axis_j: [1, 0]}
+";
+
+/// The text of an example's model file with each `(from, to)` of `changes` made in turn, by
+/// [`patch`].
+pub fn patched_example(name: &str, changes: &[(&str, &str)]) -> String {
+    changes.iter().fold(example_text(name), |text, (from, to)| patch(&text, from, to))
 }
 
 /// Load and run an example's analysis; panics with the engine's message on failure.

@@ -7,7 +7,7 @@
 //! **Partition.** A sparse Gaussian elimination of the constraint Jacobian `Phi_q` (`pivots`:
 //! threshold pivoting, each pivot at least 0.9 times the largest remaining entry and, among
 //! those, of least Markowitz count) picks `r` pivots, `r` the numerical rank (it stops when no
-//! entry above [`crate::analysis::RANK_TOLERANCE`] times the largest of `Phi_q` remains): the
+//! entry above [`crate::linalg::dense::RANK_TOLERANCE`] times the largest of `Phi_q` remains): the
 //! pivot rows are the independent rows (redundant rows are left out, they hold wherever the
 //! others do), the pivot columns the dependent coordinates `q_D`, and the other `n - r` columns
 //! the independent coordinates `q_I`, those with the smallest coupling to the constraints there.
@@ -81,8 +81,8 @@ use super::{
     factor_error, hermite5, roundoff_ratio, step_failure, Dae, DynamicStats, IntegratorKind, IntegratorSettings,
     Outcome, Output, Span, Start,
 };
-use crate::analysis::RANK_TOLERANCE;
 use crate::error::Error;
+use crate::linalg::dense::RANK_TOLERANCE;
 use crate::linalg::Pattern;
 use crate::linalg::SparseLu;
 
@@ -518,13 +518,13 @@ impl Split<'_, '_> {
     /// their new values into `qd`, and return the correction's weighted RMS norm.
     fn correct_dependent(&mut self, positions: bool) -> f64 {
         let x = if positions { &mut self.q } else { &mut self.v };
-        let mut size = 0.0;
+        let size =
+            super::wrms(self.dep.iter().zip(&self.rhs).map(|(&c, &d)| (d, x[c])), self.dep.len(), self.rtol, self.atol);
         for ((&c, &d), out) in self.dep.iter().zip(&self.rhs).zip(self.qd.iter_mut()) {
-            size += (d / (self.atol + self.rtol * x[c].abs())).powi(2);
             x[c] += d;
             *out = x[c];
         }
-        (size / self.dep.len().max(1) as f64).sqrt()
+        size
     }
 
     /// `(t, y) => (q, v)` and, when `yp` is given, `[qddot; lambda]` into `sol` and

@@ -391,10 +391,37 @@ impl Adams {
 mod tests {
     use super::*;
 
-    /// The weighted RMS norm with weights `tol (1 + |y|)` of the solution `y`.
+    /// The integrators' error norm ([`super::super::wrms`]) at `rtol = atol = tol` against the
+    /// solution `y`.
     fn weighted(y: &[f64], tol: f64) -> impl FnMut(&[f64]) -> f64 {
-        let w: Vec<f64> = y.iter().map(|x| tol * (1.0 + x.abs())).collect();
-        move |x: &[f64]| (x.iter().zip(&w).map(|(a, b)| (a / b).powi(2)).sum::<f64>() / x.len() as f64).sqrt()
+        let y = y.to_vec();
+        move |x: &[f64]| super::super::wrms(x.iter().copied().zip(y.iter().copied()), x.len(), tol, tol)
+    }
+
+    /// The Adams core of order up to `kmax` at `t = 0` on `y' = f(t, y)` from `y0`.
+    fn start(f: &impl Fn(f64, &[f64], &mut [f64]), y0: &[f64], kmax: usize) -> Adams {
+        let mut ad = Adams::new(kmax);
+        ad.resize(y0.len());
+        ad.y.copy_from_slice(y0);
+        f(0.0, y0, &mut ad.yp);
+        ad.restart(0.0);
+        ad
+    }
+
+    /// One attempt at a step `h` on `y' = f(t, y)` at the tolerance `tol`, as the driver makes
+    /// it: `Ok` with the next step when it is accepted, `Err` with the smaller step to retry when
+    /// it is rejected.
+    fn step(ad: &mut Adams, f: &impl Fn(f64, &[f64], &mut [f64]), h: f64, tol: f64) -> Result<f64, f64> {
+        let mut norm = weighted(&ad.y, tol);
+        ad.coefficients(h);
+        ad.predict(h);
+        f(ad.x, &ad.p, &mut ad.yp);
+        if ad.error_test(h, &mut norm) > 1.0 {
+            return Err(ad.reject(h));
+        }
+        ad.correct(h);
+        f(ad.x, &ad.yc, &mut ad.yp);
+        Ok(ad.accept(h, &mut norm))
     }
 
     /// Integrate `y' = f(t, y)` with the Adams core alone, as the driver does; returns
@@ -406,29 +433,20 @@ mod tests {
         tol: f64,
         kmax: usize,
     ) -> (Vec<f64>, usize, usize) {
-        let mut ad = Adams::new(kmax);
-        ad.resize(y0.len());
-        ad.y.copy_from_slice(y0);
-        f(0.0, y0, &mut ad.yp);
-        ad.restart(0.0);
+        let mut ad = start(&f, y0, kmax);
         let (mut h, mut steps, mut top) = (1e-3, 0, 0);
         while ad.x < t_end - 1e-12 {
             if ad.x + h > t_end {
                 h = t_end - ad.x;
             }
-            let mut norm = weighted(&ad.y, tol);
-            ad.coefficients(h);
-            ad.predict(h);
-            f(ad.x, &ad.p, &mut ad.yp);
-            if ad.error_test(h, &mut norm) > 1.0 {
-                h = ad.reject(h);
-                continue;
+            match step(&mut ad, &f, h, tol) {
+                Ok(next) => {
+                    h = next;
+                    steps += 1;
+                    top = top.max(ad.kold);
+                }
+                Err(smaller) => h = smaller,
             }
-            ad.correct(h);
-            f(ad.x, &ad.yc, &mut ad.yp);
-            h = ad.accept(h, &mut norm);
-            steps += 1;
-            top = top.max(ad.kold);
         }
         (ad.y.clone(), steps, top)
     }
@@ -494,26 +512,18 @@ mod tests {
     /// INTRP reproduces the solution inside the last step to the tolerance, and its end exactly.
     #[test]
     fn interpolation_follows_the_solution() {
-        let mut ad = Adams::new(MAX_ORDER);
-        ad.resize(2);
-        ad.y.copy_from_slice(&[1.0, 0.0]);
-        oscillator(0.0, &[1.0, 0.0], &mut ad.yp);
-        ad.restart(0.0);
+        let mut ad = start(&oscillator, &[1.0, 0.0], MAX_ORDER);
         let mut h = 1e-3;
         let (mut yo, mut ypo) = ([0.0; 2], [0.0; 2]);
         let mut worst = 0.0f64;
         while ad.x < 3.0 {
-            let mut norm = weighted(&ad.y, 1e-9);
-            ad.coefficients(h);
-            ad.predict(h);
-            oscillator(ad.x, &ad.p, &mut ad.yp);
-            if ad.error_test(h, &mut norm) > 1.0 {
-                h = ad.reject(h);
-                continue;
+            match step(&mut ad, &oscillator, h, 1e-9) {
+                Ok(next) => h = next,
+                Err(smaller) => {
+                    h = smaller;
+                    continue;
+                }
             }
-            ad.correct(h);
-            oscillator(ad.x, &ad.yc, &mut ad.yp);
-            h = ad.accept(h, &mut norm);
             ad.interpolate(ad.x, &mut yo, &mut ypo);
             assert_eq!(yo, [ad.y[0], ad.y[1]]);
             let tm = ad.x - 0.5 * ad.hold;

@@ -159,15 +159,8 @@ impl Bdf<'_, '_> {
     /// The weighted norm of a change `(dq, dv)` against the iterate, velocities weighted by
     /// `vscale` (the step in index 3, 1 in SI2).
     fn norm(&self, dq: impl Fn(usize) -> f64, dv: impl Fn(usize) -> f64, vscale: f64) -> f64 {
-        let (rt, at) = (self.rtol, self.atol);
-        let s: f64 = (0..self.n)
-            .map(|k| {
-                let eq = dq(k) / (at + rt * self.q1[k].abs());
-                let ev = vscale * dv(k) / (at + rt * (vscale * self.v1[k]).abs());
-                eq * eq + ev * ev
-            })
-            .sum();
-        (s / (2 * self.n).max(1) as f64).sqrt()
+        let terms = (0..self.n).flat_map(|k| [(dq(k), self.q1[k]), (vscale * dv(k), vscale * self.v1[k])]);
+        super::wrms(terms, 2 * self.n, self.rtol, self.atol)
     }
 
     /// The error estimate of order `j` for the new point `(t1, q1, v1)`:

@@ -162,7 +162,7 @@ impl<'m> Dae<'m> {
         let entries = sys.entries();
         let forces: Vec<&ForceElement> = forces.iter().map(|&k| &model.forces[k]).collect();
         let force_cols: Vec<&[usize]> = forces.iter().map(|f| f.force.columns()).collect();
-        let applied = forces.iter().map(|f| !matches!(f.kind, "spring_damper" | "rotational_spring_damper")).collect();
+        let applied = forces.iter().map(|f| f.applied).collect();
         let kkt = Kkt::new(n, m, &entries, &force_cols)?;
         let w = force_cols.iter().map(|c| c.len()).max().unwrap_or(0);
         let max_mass = mass.iter().fold(0.0f64, |a, &b| a.max(b));
@@ -294,21 +294,30 @@ impl<'m> Dae<'m> {
     ) {
         dq.fill(0.0);
         dv.fill(0.0);
-        for (f, &applied) in self.forces.iter().zip(&self.applied) {
-            let cols = f.force.columns();
-            let w = cols.len();
-            gather(q, cols, &mut self.fx[..w]);
-            gather(qdot, cols, &mut self.fv[..w]);
-            let (dx, dxv) = (&mut self.fdx[..w * w], &mut self.fdv[..w * w]);
-            derivatives(f.force.as_ref(), &self.fx[..w], &self.fv[..w], t, dx, dxv, &mut self.dual);
-            let scale = if applied { self.external_scale } else { 1.0 };
+        for k in 0..self.forces.len() {
+            let w = self.force_derivatives(k, q, qdot, t);
+            let cols = self.forces[k].force.columns();
+            let scale = if self.applied[k] { self.external_scale } else { 1.0 };
             for (ri, &r) in cols.iter().enumerate() {
                 for (ci, &c) in cols.iter().enumerate() {
-                    dq[(r, c)] += scale * dx[ri * w + ci];
-                    dv[(r, c)] += scale * dxv[ri * w + ci];
+                    dq[(r, c)] += scale * self.fdx[ri * w + ci];
+                    dv[(r, c)] += scale * self.fdv[ri * w + ci];
                 }
             }
         }
+    }
+
+    /// `dQ/dx` and `dQ/dv` of the `k`-th force on its `w` columns at `(q, qdot, t)`, exact (dual
+    /// numbers), into `fdx` and `fdv` (`w x w`, row-major); returns `w`.
+    fn force_derivatives(&mut self, k: usize, q: &[f64], qdot: &[f64], t: f64) -> usize {
+        let f = self.forces[k].force.as_ref();
+        let cols = f.columns();
+        let w = cols.len();
+        gather(q, cols, &mut self.fx[..w]);
+        gather(qdot, cols, &mut self.fv[..w]);
+        let (dx, dv) = (&mut self.fdx[..w * w], &mut self.fdv[..w * w]);
+        derivatives(f, &self.fx[..w], &self.fv[..w], t, dx, dv, &mut self.dual);
+        w
     }
 
     /// Fill and factorise `K(c_v, c_q)` at `(q, qdot, t)`, with `Phi_q` from the last
@@ -316,16 +325,12 @@ impl<'m> Dae<'m> {
     pub fn factor(&mut self, q: &[f64], qdot: &[f64], t: f64, c_v: f64, c_q: f64) -> Result<(), FactorError> {
         self.stats.jacobian_evaluations += 1;
         self.kkt.fill(&self.mass, self.eps, &self.jac);
-        let (_, values) = self.kkt.lu.pattern_and_values();
         if c_v != 0.0 || c_q != 0.0 {
-            for (f, pos) in self.forces.iter().zip(&self.kkt.forces) {
-                let cols = f.force.columns();
-                let w = cols.len();
-                gather(q, cols, &mut self.fx[..w]);
-                gather(qdot, cols, &mut self.fv[..w]);
-                let (dx, dv) = (&mut self.fdx[..w * w], &mut self.fdv[..w * w]);
-                derivatives(f.force.as_ref(), &self.fx[..w], &self.fv[..w], t, dx, dv, &mut self.dual);
-                for ((&p, &a), &b) in pos.iter().zip(dx.iter()).zip(dv.iter()) {
+            for k in 0..self.forces.len() {
+                let w = self.force_derivatives(k, q, qdot, t);
+                let (_, values) = self.kkt.lu.pattern_and_values();
+                let (dx, dv) = (&self.fdx[..w * w], &self.fdv[..w * w]);
+                for ((&p, &a), &b) in self.kkt.forces[k].iter().zip(dx).zip(dv) {
                     values[p] -= c_q * a + c_v * b;
                 }
             }

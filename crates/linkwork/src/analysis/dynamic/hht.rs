@@ -32,7 +32,7 @@
 //! energy), within `[h / 5, 2 h]` and the maximum step. Output by quintic Hermite interpolation
 //! ([`super::hermite5`]) of each accepted step.
 
-use super::{hermite5, step_failure, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Span, Start};
+use super::{hermite5, step_failure, wrms, Dae, DynamicStats, IntegratorSettings, Outcome, Output, Span, Start};
 use crate::error::Error;
 
 /// Newton iterations per attempt. Four: from the extrapolated predictor a converging iteration
@@ -124,16 +124,12 @@ impl Hht<'_, '_> {
         self.dae.load(&self.q, &self.v, self.t, start);
         self.dae.load(q_mid, v_mid, self.t + 0.5 * h, middle);
         self.dae.load(&self.q1, &self.v1, self.t + h, end);
-        let mut sum = 0.0;
-        for k in 0..n {
-            // A massless coordinate's acceleration is set by the constraints, not by its loads.
-            if self.dae.mass[k] > 0.0 {
-                let d = (middle[k] - 0.5 * (start[k] + end[k])) / self.dae.mass[k];
-                let scale = self.atol + self.rtol * self.v[k].abs().max(self.v1[k].abs());
-                sum += (2.0 * h * d / (3.0 * scale)).powi(2);
-            }
-        }
-        (sum / n.max(1) as f64).sqrt()
+        // A massless coordinate's acceleration is set by the constraints, not by its loads.
+        let bumps = (0..n).filter(|&k| self.dae.mass[k] > 0.0).map(|k| {
+            let d = (middle[k] - 0.5 * (start[k] + end[k])) / self.dae.mass[k];
+            (2.0 * h * d / 3.0, self.v[k].abs().max(self.v1[k].abs()))
+        });
+        wrms(bumps, n, self.rtol, self.atol)
     }
 
     /// `(q1, v1)` from `a1` by the Newmark formulas over a step `h`.
@@ -191,10 +187,10 @@ impl Hht<'_, '_> {
             // The corrections of positions and velocities, beta h^2 da and gamma h da, weighted
             // like the error test: both, since a velocity error left by Newton is carried into
             // every later step (see NEWTON_TOL).
-            let dq = wrms_scaled(&self.r[..n], &self.q1, b * h * h, self.rtol, self.atol).max(wrms_scaled(
-                &self.r[..n],
-                &self.v1,
-                self.gamma * h,
+            let (cq, cv, da) = (b * h * h, self.gamma * h, &self.r[..n]);
+            let dq = wrms(da.iter().zip(&self.q1).map(|(e, y)| (cq * e, *y)), n, self.rtol, self.atol).max(wrms(
+                da.iter().zip(&self.v1).map(|(e, y)| (cv * e, *y)),
+                n,
                 self.rtol,
                 self.atol,
             ));
@@ -253,12 +249,6 @@ impl Hht<'_, '_> {
         }
         at_floor
     }
-}
-
-/// `wrms(c v, y)` without a buffer.
-fn wrms_scaled(v: &[f64], y: &[f64], c: f64, rtol: f64, atol: f64) -> f64 {
-    let s: f64 = v.iter().zip(y).map(|(e, x)| (c * e / (atol + rtol * x.abs())).powi(2)).sum();
-    (s / v.len().max(1) as f64).sqrt()
 }
 
 /// How far above the noise Newton left in the positions the error estimate may lie and still be
@@ -429,11 +419,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             for k in 0..n {
                 s.work[k] = c * h * h * (s.a1[k] - s.a[k]);
             }
-            let mut err = {
-                let e: f64 =
-                    (0..n).map(|k| (s.work[k] / (s.atol + s.rtol * s.q1[k].abs().max(s.q[k].abs()))).powi(2)).sum();
-                (e / n.max(1) as f64).sqrt()
-            };
+            let mut err = wrms((0..n).map(|k| (s.work[k], s.q1[k].abs().max(s.q[k].abs()))), n, s.rtol, s.atol);
             let bump = if s.dae.forces.is_empty() { 0.0 } else { s.load_bump(h) };
             let qscale = s.q1.iter().fold(0.0f64, |x, y| x.max(y.abs()));
             // Round-off floor: an estimate at the round-off of the positions

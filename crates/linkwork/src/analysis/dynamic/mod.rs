@@ -34,9 +34,11 @@ pub use crate::model::spec::{Formulation, IntegratorKind};
 pub use dae::{Dae, LinearStats, EPS_REL};
 pub use output::{factor_error, Output, ENERGY_COLUMNS};
 
+use super::setup::{fail, held};
 use super::{assemble, independent_rows};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, RowName};
+use crate::linalg::dense::smallest_singular;
 use crate::model::{Analysis, IntegratorSettings, Model};
 pub use crate::results::DynamicStats;
 use crate::results::{Failure, Residuals, Results, Statistics};
@@ -114,14 +116,15 @@ pub struct Start {
     pub lambda: Vec<f64>,
 }
 
-/// Weighted root-mean-square norm `sqrt(mean((v_k / (atol + rtol |y_k|))^2))` of the error
-/// estimate `v` against the solution `y`, as DASSL and Hairer-Wanner: 1 means "at the tolerance".
-pub fn wrms(v: &[f64], y: &[f64], rtol: f64, atol: f64) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    let s: f64 = v.iter().zip(y).map(|(e, x)| (e / (atol + rtol * x.abs())).powi(2)).sum();
-    (s / v.len() as f64).sqrt()
+/// Weighted root-mean-square norm `sqrt(sum_k (v_k / (atol + rtol |y_k|))^2 / count)` of an
+/// error estimate or correction `v` against the solution `y`, given as the pairs `(v_k, y_k)`,
+/// over `count` components (0 for none), as DASSL and Hairer-Wanner: 1 means "at the tolerance".
+/// The error norm of every integrator's error test and Newton test, and of the starting step;
+/// `count` may exceed the pairs given when some components carry no error (a massless
+/// coordinate's load), which then count as zero in the mean.
+pub fn wrms(terms: impl IntoIterator<Item = (f64, f64)>, count: usize, rtol: f64, atol: f64) -> f64 {
+    let s: f64 = terms.into_iter().map(|(v, y)| (v / (atol + rtol * y.abs())).powi(2)).sum();
+    (s / count.max(1) as f64).sqrt()
 }
 
 /// Units of round-off that a Newton correction cannot get below: the residual of the equations
@@ -155,9 +158,10 @@ pub fn step_bounds(settings: &IntegratorSettings, start: &Start, span: f64) -> (
     let h_max = settings.max_step.unwrap_or(span).min(span);
     let h0 = settings.initial_step.unwrap_or_else(|| {
         let (rt, at) = (settings.rtol, settings.atol);
-        let y: Vec<f64> = start.q.iter().chain(&start.qdot).copied().collect();
-        let dy: Vec<f64> = start.qdot.iter().chain(&start.qddot).copied().collect();
-        let (d0, d1) = (wrms(&y, &y, rt, at), wrms(&dy, &y, rt, at));
+        let y = || start.q.iter().chain(&start.qdot).copied();
+        let dy = start.qdot.iter().chain(&start.qddot).copied();
+        let count = 2 * start.q.len();
+        let (d0, d1) = (wrms(y().zip(y()), count, rt, at), wrms(dy.zip(y()), count, rt, at));
         if d0 < 1e-5 || d1 < 1e-5 {
             1e-6
         } else {
@@ -230,24 +234,13 @@ impl Span {
     }
 }
 
-/// The rows of the smallest singular value of `Phi_q` at `(q, t)` (those with at least a fifth
-/// of the largest component of its left singular vector), and the ratio of the smallest to the
-/// largest singular value: the evidence of a singular position.
+/// The ratio of the smallest to the largest singular value of `Phi_q` at `(q, t)`, and the rows
+/// of the smallest ([`smallest_singular`]): the evidence of a singular position.
 pub fn singular_rows(dae: &mut Dae<'_>, q: &[f64], t: f64) -> (f64, Vec<RowName>) {
-    let (n, m) = (dae.n, dae.m);
-    if m == 0 {
-        return (1.0, vec![]);
-    }
-    let mut jac = Mat::<f64>::zeros(m, n);
+    let mut jac = Mat::<f64>::zeros(dae.m, dae.n);
     dae.sys.jacobian_dense(&ConfigBuf::new(q).view(), t, jac.as_mut());
-    let Ok(svd) = jac.thin_svd() else { return (0.0, vec![]) };
-    let s = svd.S().column_vector();
-    let k = s.nrows() - 1;
-    let ratio = if s[0] > 0.0 { s[k] / s[0] } else { 0.0 };
-    let u = svd.U();
-    let umax = (0..m).map(|i| u[(i, k)].abs()).fold(0.0f64, f64::max);
-    let rows = (0..m).filter(|&i| u[(i, k)].abs() >= 0.2 * umax).map(|i| dae.sys.row_name(i)).collect();
-    (ratio, rows)
+    let (ratio, rows) = smallest_singular(jac.as_ref());
+    (ratio, rows.into_iter().map(|i| dae.sys.row_name(i)).collect())
 }
 
 /// A force that changes by more than this fraction of itself over the step at which an
@@ -288,7 +281,7 @@ pub fn step_failure(dae: &mut Dae<'_>, q: &[f64], t: f64, h: f64, cause: &str) -
         };
     }
     let (ratio, rows) = singular_rows(dae, q, t);
-    if ratio < 1e-6 {
+    if ratio < crate::analysis::SINGULAR_RATIO_DYNAMIC {
         return Error::Singular {
             time: t,
             rows,
@@ -352,7 +345,6 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     // A tighter rtol would ask the error test to resolve round-off (warned in the summary).
     settings.rtol = settings.rtol.max(super::RTOL_FLOOR);
     let n = model.n();
-    let fail = |results: Results, error: Error| Box::new(Failure { error, results });
     let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
         Ok(d) => d,
         Err(e) => return Err(fail(Results::new(model, analysis), factor_error(e, analysis.t_start))),
@@ -360,10 +352,8 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     let m = dae.m;
     let mut out = Output::new(model, analysis, n, m);
     let t0 = analysis.t_start;
-    // Assembly holds what the user marked as given: positions first, then velocities.
-    let given: Vec<bool> = (0..2)
-        .flat_map(|half| model.bodies.iter().flat_map(move |b| b.given[3 * half..3 * half + 3].to_vec()))
-        .collect();
+    // Assembly holds what the user marked as given.
+    let given = held(model, true);
     let assembly = match assemble(&mut dae.sys, &model.q0(), &model.qdot0(), &given, t0, analysis.settings.tolerance) {
         Ok(a) => a,
         Err(e) => return Err(fail(out.results, e)),

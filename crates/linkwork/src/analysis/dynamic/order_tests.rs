@@ -21,25 +21,10 @@
 use crate::analysis::dynamic::{run_dynamic, Formulation, IntegratorKind};
 use crate::Model;
 
-/// `phi_0 = 0.5`, `m = 2`, `J = 0.5`, `d = 0.5`, `k = 4`: `J_O = 1`, `omega = 2`.
+/// The first step of BDF's start-up, s.
 const START: f64 = 1e-6;
-const MODEL: &str = "
-name: pinned bar on a torsion spring
-bodies:
-  bar:
-    mass: 2
-    inertia: 0.5
-    position: [0.43879128094518, 0.23971276930210]   # 0.5 (cos 0.5, sin 0.5)
-    angle: 0.5
-    points: {O: [-0.5, 0]}
-    given: [phi]
-joints:
-  O: {type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}
-forces:
-  spring: {type: rotational_spring_damper, body_i: bar, body_j: ground, stiffness: 4, free_angle: 0}
-analyses:
-  dynamics: {type: dynamic, t_end: 2, step: 0.1}
-";
+/// The pinned bar: `phi_0 = 0.5`, `m = 2`, `J = 0.5`, `d = 0.5`, `k = 4`: `J_O = 1`, `omega = 2`.
+const MODEL: &str = include_str!("../../../tests/models/pinned_bar.yaml");
 
 /// Largest `|phi - 0.5 cos(2 t)|` at the output times of a constant-step run to `t_end`.
 fn error(kind: IntegratorKind, formulation: Formulation, order: usize, h: f64, t_end: f64) -> f64 {

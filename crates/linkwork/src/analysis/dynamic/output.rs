@@ -53,13 +53,8 @@ impl Output {
         names.extend(ENERGY_COLUMNS.map(String::from));
         names.extend(model.measures.iter().map(|m| m.name.clone()));
         results.add_columns(names);
-        let h = analysis.step;
-        let t0 = analysis.t_start;
-        let count = ((analysis.t_end - t0) / h + 1e-9).floor() as usize;
-        let mut times: Vec<f64> = (0..=count).map(|k| t0 + k as f64 * h).collect();
-        if analysis.t_end - times[count] > 1e-9 * h {
-            times.push(analysis.t_end);
-        }
+        let (h, t0) = (analysis.step, analysis.t_start);
+        let times = crate::analysis::setup::output_times(analysis);
         results.reserve(times.len());
         Output {
             times,
