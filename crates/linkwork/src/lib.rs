@@ -1,21 +1,23 @@
 //! Linkwork: a planar multibody kinematics and dynamics engine.
 //!
 //! Data flows one way, and the imports follow it: each module imports only the ones above it
-//! here ([`error`] from anywhere), save that an analysis writes its [`Results`], and `results`
-//! imports nothing of `analysis`.
+//! here ([`error`] and [`progress`] from anywhere), save that an analysis writes its
+//! [`Results`], and `results` imports nothing of `analysis`.
 //!
 //! ```text
 //! expr                      expressions of time and state, differentiated exactly
 //!  -> constraints, forces   joint and driver rows (Phi, Phi_q, nu, gamma); force laws
 //!  -> model                 a file's schema (spec), read with every problem located (parse),
 //!                           compiled into an immutable Model (compile) whose analyses carry
-//!                           the compiled solver: section (settings)
+//!                           the compiled solver: section (settings); its picture (drawing)
 //!  -> system                an analysis' joints and active drivers stacked into one system
 //!  -> analysis              the run entry point (Model::run, Overrides) and every analysis:
 //!                           assembly, checks, kinematic, inverse, static, modes, dynamic
-//!  -> results               columnar time series and their files
+//!  -> results               columnar time series, the typed summary, and their files
 //!
-//! linalg                    sparse patterns and LU, knowing no mechanics, below system
+//! linalg                    sparse patterns and LU, dense SVD helpers (rank, null space,
+//!                           minimum-norm solve), knowing no mechanics, below system
+//! error, progress           errors; a run's progress and stop request (Ctrl-C), per thread
 //! ```
 //!
 //! A model file ([`model::spec`]) is read and validated with every problem located

@@ -3,7 +3,7 @@
 //!
 //! [`Model::run_watched`](crate::Model::run_watched) makes a [`Progress`] the running thread's
 //! own for the length of the run. The analyses report every output time and every step attempt
-//! of an integrator to it ([`reached`]), so that no analysis has to pass it along; once
+//! of an integrator to it (`reached`), so that no analysis has to pass it along; once
 //! [`Progress::stop`] has been called, the next time reached ends the run with
 //! [`Error::Interrupted`], and the results up to there are kept as after any failure.
 //!
