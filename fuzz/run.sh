@@ -28,7 +28,8 @@ log=artifacts/model/fuzz.log
 # largest seed, the 22 KB N-four-bar, whose size only slows parsing and mutation; every other
 # example fits. -rss_limit_mb=2048: libFuzzer's default, written out; an execution takes ~45 MB.
 status=0
-"target/$host/release/model" corpus/model -dict=linkwork.dict -max_total_time="$seconds" -timeout=5 \
+# cargo puts the target under CARGO_TARGET_DIR when that is set, else under fuzz/target.
+"${CARGO_TARGET_DIR:-target}/$host/release/model" corpus/model -dict=linkwork.dict -max_total_time="$seconds" -timeout=5 \
     -max_len=8192 -rss_limit_mb=2048 -artifact_prefix=artifacts/model/ -print_final_stats=1 "$@" \
     >"$log" 2>&1 || status=$?
 grep -E '^#[0-9]+[[:space:]]+(INITED|DONE)|^stat::' "$log" || true
