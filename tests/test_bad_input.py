@@ -74,7 +74,7 @@ CASES = [
         "not numeric",
         broken("position: [0.4, 0]", "position: [0.4, zero]"),
         "bodies.slider.position[1]",
-        "invalid type: string",
+        "unknown name 'zero' (expected a number, a number with a unit, or an expression of parameters)",
     ),
     (
         "expression does not parse",
@@ -152,7 +152,7 @@ SEVERAL_PROBLEMS = [
     ("bodies.crank.inertia", "finite"),
     ("bodies.rocker.colour", "unknown field `colour`"),
     ("bodies.link", "missing field `inertia`"),
-    ("bodies.slider.position[1]", "invalid type: string"),
+    ("bodies.slider.position[1]", "unknown name 'abc'"),
     ("joints.B.body_j", "unknown body 'rokcer'"),
     ("joints.S.axis_i", "zero-length axis"),
     ("joints.crank", "duplicate name"),

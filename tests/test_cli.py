@@ -218,7 +218,7 @@ def test_readme_python_snippet(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, 
 def test_internal_error_exits_1(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from linkwork import Model, _linkwork, cli
 
-    def explode(path: str) -> None:
+    def explode(path: str, parameters: object = None) -> None:
         _linkwork._panic_for_tests()
 
     monkeypatch.setattr(Model, "load", staticmethod(explode))

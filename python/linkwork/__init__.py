@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Mapping
 from typing import Any
 
 from . import _linkwork
@@ -63,18 +64,20 @@ __all__ = [
 ]
 
 
-def load(path: str | os.PathLike[str]) -> Model:
-    """Read and compile the model file at ``path``.
+def load(path: str | os.PathLike[str], parameters: Mapping[str, float | str] | None = None) -> Model:
+    """Read and compile the model file at ``path``, with ``parameters`` over the values of its
+    ``parameters:`` section (a number is SI; a string may carry a unit, ``"300 mm"``).
 
     Raises :class:`ModelError` (with every problem in ``problems``) if the file is invalid, and
     :class:`FileError` (also an :class:`OSError`) if it cannot be read.
     """
-    return Model._wrap(_linkwork.PyModel.load(os.fspath(path)), path=os.fspath(path))
+    return Model.load(path, parameters)
 
 
-def from_yaml(text: str) -> Model:
-    """Compile a model from the text of a model file (YAML)."""
-    return Model._wrap(_linkwork.PyModel.from_yaml(text))
+def from_yaml(text: str, parameters: Mapping[str, float | str] | None = None) -> Model:
+    """Compile a model from the text of a model file (YAML), with ``parameters`` as in
+    :func:`load`."""
+    return Model.from_yaml(text, parameters)
 
 
 def schema() -> dict[str, Any]:

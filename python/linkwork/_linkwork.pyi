@@ -4,7 +4,7 @@ The types of what `crates/linkwork-py/src/` exports; `python -m mypy.stubtest li
 checks them against the built module (`.ci/run`).
 """
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, final
 
 import numpy as np
@@ -35,9 +35,12 @@ __version__: str
 @final
 class PyModel:
     @staticmethod
-    def load(path: str) -> PyModel: ...
+    def load(path: str, parameters: Sequence[tuple[str, str]] = ...) -> PyModel: ...
     @staticmethod
-    def from_yaml(text: str) -> PyModel: ...
+    def from_yaml(text: str, parameters: Sequence[tuple[str, str]] = ...) -> PyModel: ...
+    def with_parameters(self, values: Sequence[tuple[str, str]]) -> PyModel: ...
+    @property
+    def parameters(self) -> list[tuple[str, float]]: ...
     @property
     def source(self) -> str: ...
     @property

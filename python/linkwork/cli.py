@@ -94,6 +94,14 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--atol", type=float, metavar="A", help="absolute error tolerance of a dynamic analysis")
     run.add_argument("--t-end", type=float, metavar="T", help="end time, s")
     run.add_argument("--step", type=float, metavar="H", help="output step, s")
+    run.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        type=_setting,
+        metavar="NAME=VALUE",
+        help="a parameter's value over the file's: a number (SI) or a number with a unit (r=0.12, L='300 mm'); repeatable",
+    )
     run.add_argument("--no-report", action="store_true", help="do not write report.html")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     run.set_defaults(command=_run)
@@ -126,8 +134,17 @@ def _parser() -> argparse.ArgumentParser:
 # --- run -----------------------------------------------------------------------------------------
 
 
+def _setting(text: str) -> tuple[str, str]:
+    """A ``--set NAME=VALUE`` option: the value's text as given (the engine reads a bare number
+    as SI and converts one with a unit)."""
+    name, sep, value = text.partition("=")
+    if not sep or not name.strip() or not value.strip():
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE, such as r=0.12 or L='300 mm', got '{text}'")
+    return name.strip(), value.strip()
+
+
 def _run(args: argparse.Namespace) -> int:
-    model = Model.load(args.model)
+    model = Model.load(args.model, dict(args.set))
     out: Path = args.out if args.out is not None else Path("out") / Path(args.model).stem
     try:
         results = model.run(

@@ -6,7 +6,7 @@ import numbers
 import os
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from tqdm import tqdm
@@ -44,6 +44,17 @@ class ProgressBar:
             self._bar.close()
 
 
+def _parameter_texts(values: Mapping[str, float | str]) -> list[tuple[str, str]]:
+    """Parameter values as the engine reads them: a number as its shortest exact text (SI), a
+    string as written (a number with a unit, or an expression of earlier parameters)."""
+    texts = []
+    for name, value in values.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+            raise TypeError(f"parameter {name}: expected a number or a string such as '300 mm', got {value!r}")
+        texts.append((name, value if isinstance(value, str) else repr(float(value))))
+    return texts
+
+
 class Model:
     """A mechanism read from a model file, compiled and immutable.
 
@@ -67,14 +78,27 @@ class Model:
         return self
 
     @classmethod
-    def load(cls, path: str | os.PathLike[str]) -> Model:
+    def load(cls, path: str | os.PathLike[str], parameters: Mapping[str, float | str] | None = None) -> Model:
         """Read and compile the model file at ``path`` (same as :func:`linkwork.load`)."""
-        return cls._wrap(_linkwork.PyModel.load(os.fspath(path)), path=os.fspath(path))
+        native = _linkwork.PyModel.load(os.fspath(path), _parameter_texts(parameters or {}))
+        return cls._wrap(native, path=os.fspath(path))
 
     @classmethod
-    def from_yaml(cls, text: str) -> Model:
+    def from_yaml(cls, text: str, parameters: Mapping[str, float | str] | None = None) -> Model:
         """Compile a model from the text of a model file (same as :func:`linkwork.from_yaml`)."""
-        return cls._wrap(_linkwork.PyModel.from_yaml(text))
+        return cls._wrap(_linkwork.PyModel.from_yaml(text, _parameter_texts(parameters or {})))
+
+    def with_parameters(self, **values: float | str) -> Model:
+        """A new model: the same file with ``values`` over its parameters (a number is SI, a
+        string may carry a unit: ``model.with_parameters(r=0.12, L="300 mm")``). Parameters
+        computed from others follow them; values given before and not named again stay."""
+        return self._wrap(self._native.with_parameters(_parameter_texts(values)), path=self.path)
+
+    @property
+    def parameters(self) -> dict[str, float]:
+        """The parameters' values used, SI, in file order (``parameters:`` with any values
+        given over them)."""
+        return dict(self._native.parameters)
 
     @property
     def source(self) -> str:

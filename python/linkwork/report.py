@@ -855,7 +855,8 @@ def from_folder(folder: Any) -> Run:
             rows = list(csv.reader(file))
     except (OSError, ValueError) as error:
         raise FileError(f"{folder}: not a results folder of `linkwork run`: {error}") from error
-    model = Model.load(folder / "model.yaml")
+    # The parameters the run used (SI, given over the file's by --set or with_parameters).
+    model = Model.load(folder / "model.yaml", summary.get("parameters") or None)
     header, body = rows[0], rows[1:]
     values = np.array(body, dtype=float).reshape(len(body), len(header))
     columns = {name: values[:, k] for k, name in enumerate(header) if name != "time"}

@@ -57,6 +57,8 @@ class Summary(dict[str, Any]):
     """Number of coordinates, three per body."""
     joints: _Key[list[str]] = _Key()
     """The joints, in file order."""
+    parameters: _Key[dict[str, float]] = _Key()
+    """The parameters' values used, SI, by name (empty when the file has none)."""
     output_points: _Key[int] = _Key()
     """Number of output points written."""
     warnings: _Key[list[str]] = _Key()

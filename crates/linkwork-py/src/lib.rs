@@ -32,18 +32,37 @@ struct PyModel {
 
 #[pymethods]
 impl PyModel {
-    /// Read and compile a model file. Raises `ModelError` listing every problem, or `FileError`.
+    /// Read and compile a model file, with parameter values `(name, text)` over the file's.
+    /// Raises `ModelError` listing every problem, or `FileError`.
     #[staticmethod]
-    fn load(py: Python<'_>, path: PathBuf) -> PyResult<PyModel> {
-        let model = py.detach(|| guard(|| linkwork::Model::load(&path)))?;
+    #[pyo3(signature = (path, parameters=Vec::new()))]
+    fn load(py: Python<'_>, path: PathBuf, parameters: Vec<(String, String)>) -> PyResult<PyModel> {
+        let text = std::fs::read_to_string(&path).map_err(|e| {
+            let error = linkwork::Error::Io { path: path.display().to_string(), message: e.to_string() };
+            to_pyerr(py, error, None)
+        })?;
+        PyModel::from_yaml(py, &text, parameters)
+    }
+
+    /// Compile a model from the text of a model file, with parameter values `(name, text)` over
+    /// the file's.
+    #[staticmethod]
+    #[pyo3(signature = (text, parameters=Vec::new()))]
+    fn from_yaml(py: Python<'_>, text: &str, parameters: Vec<(String, String)>) -> PyResult<PyModel> {
+        let model = py.detach(|| guard(|| linkwork::Model::from_yaml_with(text, &parameters)))?;
         model.map(|model| PyModel { model }).map_err(|e| to_pyerr(py, e, None))
     }
 
-    /// Compile a model from the text of a model file.
-    #[staticmethod]
-    fn from_yaml(py: Python<'_>, text: &str) -> PyResult<PyModel> {
-        let model = py.detach(|| guard(|| linkwork::Model::from_yaml(text)))?;
+    /// The same model file with parameter values `(name, text)` over this model's.
+    fn with_parameters(&self, py: Python<'_>, values: Vec<(String, String)>) -> PyResult<PyModel> {
+        let model = py.detach(|| guard(|| self.model.with_parameters(&values)))?;
         model.map(|model| PyModel { model }).map_err(|e| to_pyerr(py, e, None))
+    }
+
+    /// The parameters' values used, SI, in file order.
+    #[getter]
+    fn parameters(&self) -> Vec<(String, f64)> {
+        self.model.parameters.iter().map(|(n, v)| (n.clone(), *v)).collect()
     }
 
     /// Title of the model.

@@ -7,7 +7,8 @@
 //! ```text
 //! expr                      expressions of time and state, differentiated exactly
 //!  -> constraints, forces   joint and driver rows (Phi, Phi_q, nu, gamma); force laws
-//!  -> model                 a file's schema (spec), read with every problem located (parse),
+//!  -> model                 a file's schema (spec), its parameters and units (params, units),
+//!                           read with every problem located (parse),
 //!                           compiled into an immutable Model (compile) whose analyses carry
 //!                           the compiled solver: section (settings); its picture (drawing)
 //!  -> system                an analysis' joints and active drivers stacked into one system

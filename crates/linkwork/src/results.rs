@@ -69,6 +69,7 @@ impl Results {
             bodies: model.bodies.len(),
             coordinates: model.n(),
             joints: model.joints.iter().map(|j| j.name.clone()).collect(),
+            parameters: model.parameters.clone(),
             ..Summary::default()
         };
         Results { time: Vec::new(), columns: vec![Vec::new(); names.len()], names, summary }

@@ -61,7 +61,7 @@ fn every_problem_is_listed_with_its_path() {
             ("bodies.crank.inertia", "finite"),
             ("bodies.rocker.colour", "unknown field"),
             ("bodies.link", "missing field `inertia`"),
-            ("bodies.slider.position[1]", "invalid type: string"),
+            ("bodies.slider.position[1]", "unknown name 'abc'"),
             ("joints.B.body_j", "unknown body 'rokcer'"),
             ("joints.S.axis_i", "zero-length axis"),
             ("joints.crank", "duplicate name"),
@@ -121,11 +121,11 @@ fn a_number_too_large_for_a_double_is_out_of_range() {
             ("bodies.b.position[1]", "number -2.5e309 is out of range"),
         ],
     );
-    // A string that is a string stays one.
+    // A word that is not a number is read as an expression of parameters, and said to be none.
     has(
         &problems("bodies:\n  a: {mass: heavy, inertia: 1, position: [0, 0], angle: 0}\n"),
         "bodies.a.mass",
-        "invalid type",
+        "unknown name 'heavy' (expected a number, a number with a unit, or an expression of parameters)",
     );
 }
 
@@ -191,7 +191,7 @@ fn bad_points_name_their_field() {
     let cases = [
         ("[0, 0, 0]", "joints.C.point_j", "invalid length 3"),
         ("[1]", "joints.C.point_j", "invalid length 1"),
-        ("[x, 1]", "joints.C.point_j[0]", "expected f64"),
+        ("[x, 1]", "joints.C.point_j[0]", "unknown name 'x'"),
         ("{x: 1}", "joints.C.point_j", "a point: [x, y]"),
     ];
     for (point, path, words) in cases {
@@ -205,7 +205,7 @@ fn bad_points_name_their_field() {
 fn fields_of_joints_and_drivers_keep_their_paths() {
     let base = "bodies:\n  a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n  b: {mass: 1, inertia: 1, position: [1, 0], angle: 0}\n";
     let gear = "joints:\n  G: {type: gear, body_i: a, point_i: [0, 0], radius_i: big, body_j: b, point_j: [0, 0], radius_j: 1}\n";
-    has(&problems(&(base.to_string() + gear)), "joints.G.radius_i", "expected f64");
+    has(&problems(&(base.to_string() + gear)), "joints.G.radius_i", "unknown name 'big'");
     let extra =
         "joints:\n  R: {type: revolute, body_i: a, point_i: [0, 0], body_j: b, point_j: [0, 0], stiffness: 3}\n";
     has(&problems(&(base.to_string() + extra)), "joints.R.stiffness", "unknown field");
@@ -256,7 +256,7 @@ fn dynamics_problems_are_listed_with_their_paths() {
     has_each(
         &p,
         &[
-            ("gravity[1]", "invalid type: string"),
+            ("gravity[1]", "unknown name 'down'"),
             ("bodies.crank.mass", "mass >= 0"),
             ("bodies.crank.inertia", ">= 0"),
             ("forces.drag.torque", "unknown name 'crank.omgea'"),

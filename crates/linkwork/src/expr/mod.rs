@@ -139,7 +139,22 @@ impl Expr {
     /// arguments, an unknown name, an empty expression, or nesting deeper than
     /// [`MAX_DEPTH`].
     pub fn parse(src: &str, resolve: &mut dyn FnMut(&str) -> Result<usize, String>) -> Result<Expr, ExprError> {
-        let c = parse::compile(src, resolve)?;
+        Expr::parse_with(src, &|_| None, resolve)
+    }
+
+    /// As [`Expr::parse`], with named values: a name for which `constants` gives a value (a
+    /// model's parameter) is that number, folded as if written out; it hides a variable of the
+    /// same name, and the built-in `pi` and `e` hide it.
+    ///
+    /// # Errors
+    ///
+    /// As [`Expr::parse`].
+    pub fn parse_with(
+        src: &str,
+        constants: &dyn Fn(&str) -> Option<f64>,
+        resolve: &mut dyn FnMut(&str) -> Result<usize, String>,
+    ) -> Result<Expr, ExprError> {
+        let c = parse::compile(src, constants, resolve)?;
         Ok(Expr { source: src.to_string(), code: c.code, slots: c.slots, max_stack: c.max_stack })
     }
 
@@ -235,7 +250,17 @@ impl TimeFunction {
     /// As [`Expr::parse`]; any other name gives "unknown name '…' (only t (time) may
     /// appear in a driver function)".
     pub fn parse(src: &str) -> Result<TimeFunction, ExprError> {
-        let expr = Expr::parse(src, &mut |name| {
+        TimeFunction::parse_with(src, &|_| None)
+    }
+
+    /// As [`TimeFunction::parse`], with named values (a model's parameters) as in
+    /// [`Expr::parse_with`].
+    ///
+    /// # Errors
+    ///
+    /// As [`TimeFunction::parse`].
+    pub fn parse_with(src: &str, constants: &dyn Fn(&str) -> Option<f64>) -> Result<TimeFunction, ExprError> {
+        let expr = Expr::parse_with(src, constants, &mut |name| {
             if name == "t" {
                 Ok(0)
             } else {

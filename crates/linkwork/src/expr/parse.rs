@@ -163,13 +163,22 @@ pub(crate) struct Compiled {
     pub max_stack: usize,
 }
 
-/// Parses and compiles `src`, resolving variable names with `resolve`.
+/// Parses and compiles `src`: a name is a built-in constant, else a named value of `constants`
+/// (folded like a number), else a variable resolved with `resolve`.
 pub(crate) fn compile(
     src: &str,
+    constants: &dyn Fn(&str) -> Option<f64>,
     resolve: &mut dyn FnMut(&str) -> Result<usize, String>,
 ) -> Result<Compiled, ExprError> {
-    let mut p =
-        Parser { lex: Lexer { src, pos: 0 }, peeked: None, stack: Vec::new(), depth: 0, code: Vec::new(), resolve };
+    let mut p = Parser {
+        lex: Lexer { src, pos: 0 },
+        peeked: None,
+        stack: Vec::new(),
+        depth: 0,
+        code: Vec::new(),
+        constants,
+        resolve,
+    };
     p.parse()?;
 
     let code = p.code;
@@ -407,6 +416,8 @@ struct Parser<'a, 'r> {
     /// Number of frames on `stack` for which [`Frame::nests`] holds.
     depth: usize,
     code: Vec<Op>,
+    /// Named values given by the caller (a model's parameters).
+    constants: &'r dyn Fn(&str) -> Option<f64>,
     resolve: &'r mut dyn FnMut(&str) -> Result<usize, String>,
 }
 
@@ -542,9 +553,11 @@ impl<'a> Parser<'a, '_> {
         }
     }
 
-    /// Emits a name used as an operand: a built-in constant or a resolved variable.
+    /// Emits a name used as an operand: a built-in constant, a named value of the caller's or a
+    /// resolved variable.
     fn name(&mut self, name: &str, start: usize) -> Result<(), ExprError> {
-        if let Some(&(_, v)) = CONSTANTS.iter().find(|(n, _)| *n == name) {
+        let constant = CONSTANTS.iter().find(|(n, _)| *n == name).map(|&(_, v)| v);
+        if let Some(v) = constant.or_else(|| (self.constants)(name)) {
             self.code.push(Op::Const(v));
             return Ok(());
         }

@@ -74,7 +74,19 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec
     let analyses = cx.analyses();
     if cx.problems.is_empty() {
         let name = spec.name.clone().unwrap_or_else(|| "model".into());
-        Ok(Model { name, bodies, joints, drivers, gravity, forces, measures, analyses, source: String::new() })
+        Ok(Model {
+            name,
+            bodies,
+            joints,
+            drivers,
+            gravity,
+            forces,
+            measures,
+            analyses,
+            source: String::new(),
+            parameters: spec.parameters.clone(),
+            set: Vec::new(),
+        })
     } else {
         Err(cx.problems)
     }
@@ -535,7 +547,8 @@ impl Cx<'_> {
                 }
             })
         };
-        let expr = match Expr::parse(src, &mut resolve) {
+        let parameters = |name: &str| self.spec.parameters.get(name).copied();
+        let expr = match Expr::parse_with(src, &parameters, &mut resolve) {
             Ok(e) => e,
             Err(e) => {
                 self.problem(path, format!("cannot read the expression '{src}': {e}"));
@@ -650,7 +663,7 @@ impl Cx<'_> {
     }
 
     fn function(&mut self, path: &str, src: &str) -> Option<TimeFunction> {
-        match TimeFunction::parse(src) {
+        match TimeFunction::parse_with(src, &|name| self.spec.parameters.get(name).copied()) {
             Ok(f) => Some(f),
             Err(e) => {
                 self.problem(path, format!("cannot read the function '{src}': {e}"));

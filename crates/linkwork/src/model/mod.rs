@@ -4,14 +4,16 @@
 
 mod compile;
 mod drawing;
+mod params;
 mod parse;
 mod settings;
 pub mod spec;
+pub mod units;
 
 pub(crate) use compile::revise;
 pub use compile::{compile, compile_partial};
 pub use drawing::{BodyDrawing, Drawing, JointDrawing};
-pub use parse::{parse_partial, parse_spec, Parsed};
+pub use parse::{parse_partial, parse_partial_with, parse_spec, Parsed};
 pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
 
 use crate::constraints::Constraint;
@@ -242,6 +244,11 @@ pub struct Model {
     /// The text of the model file it was compiled from (empty for a model compiled from a
     /// spec): what an output folder keeps as `model.yaml`, to reproduce the run.
     pub source: String,
+    /// The parameters' values used, SI, in file order (the file's, with [`Model::set`] over them).
+    pub parameters: IndexMap<String, f64>,
+    /// Parameter values given from outside (`--set`, [`Model::with_parameters`]) over the file's:
+    /// `(name, text)`, the text a bare number (SI) or a number with a unit.
+    pub set: Vec<(String, String)>,
 }
 
 impl Model {
@@ -255,12 +262,32 @@ impl Model {
 
     /// Compile a model from the text of a model file.
     pub fn from_yaml(text: &str) -> Result<Model> {
-        let parsed = parse_partial(text).map_err(Error::Model)?;
+        Model::from_yaml_with(text, &[])
+    }
+
+    /// Compile a model from the text of a model file with parameter values given from outside,
+    /// `(name, text)`: a bare number is SI whatever unit the file used; a number with a unit is
+    /// converted and must have the dimension of the file's value. A name the file's `parameters:`
+    /// does not define is a model error at `parameters.<name>`.
+    pub fn from_yaml_with(text: &str, set: &[(String, String)]) -> Result<Model> {
+        let parsed = parse_partial_with(text, set).map_err(Error::Model)?;
         match compile_partial(&parsed.spec, &parsed.broken) {
-            Ok(model) if parsed.problems.is_empty() => Ok(Model { source: text.to_string(), ..model }),
+            Ok(model) if parsed.problems.is_empty() => {
+                Ok(Model { source: text.to_string(), set: set.to_vec(), ..model })
+            }
             Ok(_) => Err(Error::Model(parsed.problems)),
             Err(more) => Err(Error::Model(parsed.problems.into_iter().chain(more).collect())),
         }
+    }
+
+    /// The same model file with `values` given over this model's parameters (as
+    /// [`Model::from_yaml_with`]; values given before and not named again stay). Parameters
+    /// computed from others follow them.
+    pub fn with_parameters(&self, values: &[(String, String)]) -> Result<Model> {
+        let mut set: Vec<(String, String)> =
+            self.set.iter().filter(|(n, _)| !values.iter().any(|(m, _)| m == n)).cloned().collect();
+        set.extend(values.iter().cloned());
+        Model::from_yaml_with(&self.source, &set)
     }
 
     /// Number of coordinates, `3 * bodies`.
@@ -294,9 +321,29 @@ impl Model {
         })
     }
 
-    /// The JSON Schema of model files.
+    /// The JSON Schema of model files. Every number may also be written as a string (a number
+    /// with a unit or an expression of parameters, read by `params`), which the Rust types, holding
+    /// the numbers read, do not say: the schema's numeric types are widened here, in one place.
     pub fn json_schema() -> String {
-        let schema = schemars::schema_for!(spec::ModelSpec);
+        fn widen(v: &mut serde_json::Value) {
+            match v {
+                serde_json::Value::Object(map) => {
+                    let numeric = |t: &serde_json::Value| matches!(t.as_str(), Some("number" | "integer"));
+                    match map.get_mut("type") {
+                        Some(t) if numeric(t) => *t = serde_json::json!([t.clone(), "string"]),
+                        Some(serde_json::Value::Array(types)) if types.iter().any(numeric) => {
+                            types.push("string".into())
+                        }
+                        _ => {}
+                    }
+                    map.values_mut().for_each(widen);
+                }
+                serde_json::Value::Array(items) => items.iter_mut().for_each(widen),
+                _ => {}
+            }
+        }
+        let mut schema = serde_json::to_value(schemars::schema_for!(spec::ModelSpec)).expect("a schema is JSON");
+        widen(&mut schema);
         serde_json::to_string_pretty(&schema).expect("a JSON Schema always serializes")
     }
 }

@@ -4,6 +4,7 @@
 //! column); each entry of each section is then deserialized on its own, so that one bad joint does
 //! not hide the problems of the next.
 
+use super::params;
 use super::spec::{
     AnalysisSpec, BodySpec, DriverSpec, ForceSpec, GroundSpec, JointSpec, MeasureSpec, ModelSpec, PointMeasure, Tagged,
 };
@@ -65,6 +66,12 @@ pub fn parse_spec(text: &str) -> Result<ModelSpec, Vec<Problem>> {
 
 /// Parse as much of a model file as can be read; `Err` only when the text is not a YAML mapping.
 pub fn parse_partial(text: &str) -> Result<Parsed, Vec<Problem>> {
+    parse_partial_with(text, &[])
+}
+
+/// As [`parse_partial`], with parameter values given from outside (`(name, text)`) over the
+/// file's (docs/model-format.md, "Parameters and units").
+pub fn parse_partial_with(text: &str, set: &[(String, String)]) -> Result<Parsed, Vec<Problem>> {
     let root: Value = serde_yaml_ng::from_str(text).map_err(|e| {
         let msg = match (e.location(), duplicate(text, &e.to_string())) {
             (_, Some((line, column, message))) => {
@@ -75,10 +82,14 @@ pub fn parse_partial(text: &str) -> Result<Parsed, Vec<Problem>> {
         };
         vec![Problem::new("", msg)]
     })?;
-    let Value::Mapping(map) = root else {
+    let Value::Mapping(mut map) = root else {
         return Err(vec![Problem::new("", "expected a mapping with sections bodies, joints, drivers, analyses")]);
     };
     let mut problems = Vec::new();
+    let parameters = params::evaluate(map.get("parameters"), set, &mut problems);
+    params::resolve(&mut map, &parameters, &mut problems);
+    let of_numbers = problems.len();
+    let parameters = parameters.into_iter().map(|p| (p.name, p.value)).collect();
     let sections = fields::<ModelSpec>();
     for key in map.keys() {
         match key.as_str() {
@@ -104,7 +115,27 @@ pub fn parse_partial(text: &str) -> Result<Parsed, Vec<Problem>> {
     let forces = section("forces", get("forces"), &mut problems, &mut broken, tagged::<ForceSpec>());
     let measures = section("measures", get("measures"), &mut problems, &mut broken, measure);
     let analyses = section("analyses", get("analyses"), &mut problems, &mut broken, entry::<AnalysisSpec>);
-    let spec = ModelSpec { name, description, gravity, ground, bodies, joints, drivers, forces, measures, analyses };
+    // One problem a field: a number that could not be read is not reported again as a string
+    // where a number was expected, nor a field that uses a parameter that could not be read (its
+    // place held by an empty message) at all.
+    let (read, rest) = problems.split_at(of_numbers);
+    let rest: Vec<Problem> = rest.iter().filter(|p| !read.iter().any(|r| r.path == p.path)).cloned().collect();
+    problems.truncate(of_numbers);
+    problems.retain(|p| !p.message.is_empty());
+    problems.extend(rest);
+    let spec = ModelSpec {
+        name,
+        parameters,
+        description,
+        gravity,
+        ground,
+        bodies,
+        joints,
+        drivers,
+        forces,
+        measures,
+        analyses,
+    };
     Ok(Parsed { spec, problems, broken })
 }
 
@@ -221,17 +252,18 @@ fn located(path: &str, e: serde_path_to_error::Error<serde_yaml_ng::Error>) -> P
 /// overflows, and the parser then keeps it as the string "1e400": serde's message would say
 /// "invalid type: string", blaming the user's type rather than the size.
 fn out_of_range(message: String) -> String {
-    let number = message
-        .strip_prefix("invalid type: string \"")
-        .and_then(|rest| rest.split_once('"'))
-        .map(|(text, _)| text)
-        .filter(|text| text.starts_with(|c: char| c.is_ascii_digit() || "+-.".contains(c)))
-        .filter(|text| !text.to_ascii_lowercase().contains("inf"))
-        .filter(|text| text.parse::<f64>().is_ok_and(f64::is_infinite));
-    match number {
-        Some(text) => format!("number {text} is out of range: a double holds sizes up to 1.8e308"),
-        None => message,
-    }
+    let number = message.strip_prefix("invalid type: string \"").and_then(|rest| rest.split_once('"')).map(|(t, _)| t);
+    number.and_then(too_large).unwrap_or(message)
+}
+
+/// "number 1e400 is out of range ..." when `text` is a number written out that a double cannot
+/// hold (not `inf`, which is a name).
+pub(super) fn too_large(text: &str) -> Option<String> {
+    let text = text.trim();
+    let written = text.starts_with(|c: char| c.is_ascii_digit() || "+-.".contains(c))
+        && !text.to_ascii_lowercase().contains("inf")
+        && text.parse::<f64>().is_ok_and(f64::is_infinite);
+    written.then(|| format!("number {text} is out of range: a double holds sizes up to 1.8e308"))
 }
 
 /// A section that maps names to entries; each entry is read on its own by `read`.

@@ -86,6 +86,11 @@ pub struct ModelSpec {
     /// A title for reports.
     #[serde(default)]
     pub name: Option<String>,
+    /// Named values, in order: a number (SI), a number with a unit (`"140 mm"`), or an expression
+    /// of the parameters before it. Every numeric field may be written as an expression of them,
+    /// and expressions of time and the state may use them. After reading: the SI values.
+    #[serde(default)]
+    pub parameters: IndexMap<String, f64>,
     /// Free text.
     #[serde(default)]
     pub description: Option<String>,

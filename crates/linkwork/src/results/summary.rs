@@ -23,6 +23,7 @@
 use crate::error::RowName;
 use crate::model::spec::{AnalysisKind, LinearisePoint};
 use crate::model::{IntegratorSettings, SolverSettings};
+use indexmap::IndexMap;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -38,6 +39,8 @@ pub struct Summary {
     pub coordinates: usize,
     /// The joints, in file order.
     pub joints: Vec<String>,
+    /// The parameters' values used, SI (empty when the file has none).
+    pub parameters: IndexMap<String, f64>,
     /// The analysis run; `None` when the run named no analysis of the model.
     #[serde(flatten)]
     pub analysis: Option<AnalysisHeader>,
@@ -307,6 +310,7 @@ mod tests {
             "bodies",
             "coordinates",
             "joints",
+            "parameters",
             "analysis",
             "type",
             "active_drivers",
@@ -352,6 +356,7 @@ mod tests {
             "joints",
             "model",
             "output_points",
+            "parameters",
             "status",
             "warnings",
         ];

@@ -1,0 +1,371 @@
+//! A model file's `parameters:` and the numbers written with units or as expressions of them.
+//!
+//! The section maps names to values in order: a number (SI), a number with a unit
+//! ([`super::units`]), or an expression of the parameters written before it. Every numeric field
+//! of the file may then be written the same way (`mass: "2.5 kg"`, `inertia: "m * L^2 / 12"`,
+//! `A: ["L/2", 0]`); [`resolve`] replaces each by its SI number before the entries are read, and
+//! checks a unit's dimension against the field's ([`field`]). Expressions of time and the state
+//! (drivers, forces, measures, expression joints) keep their text and see the parameters as
+//! named numbers when they are compiled ([`crate::expr::Expr::parse_with`]).
+
+use super::units::{quantity, Dim};
+use crate::error::Problem;
+use crate::expr::Expr;
+use serde_yaml_ng::{Mapping, Value};
+
+/// A parameter: its name, its value in SI and the dimension of the unit it was written with
+/// (`None` for a bare number or an expression, whose dimension is not inferred).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parameter {
+    pub name: String,
+    pub value: f64,
+    pub dim: Option<Dim>,
+}
+
+/// Names a parameter may not take: time, the built-in constants.
+const RESERVED: &[&str] = &["t", "pi", "e"];
+
+/// The value of a parameter list (names in `params`) as an expression's named constant.
+pub fn lookup(params: &[Parameter]) -> impl Fn(&str) -> Option<f64> + '_ {
+    move |name| params.iter().find(|p| p.name == name).map(|p| p.value)
+}
+
+/// Evaluate the `parameters:` section in order, with `overrides` (name, text) replacing the file's
+/// values: a bare number given from outside is SI whatever unit the file used; one with a unit is
+/// converted and must have the file's dimension. Problems are pushed with their paths.
+pub fn evaluate(
+    section: Option<&Value>,
+    overrides: &[(String, String)],
+    problems: &mut Vec<Problem>,
+) -> Vec<Parameter> {
+    let mut params: Vec<Parameter> = Vec::new();
+    let entries = match section {
+        None | Some(Value::Null) => Mapping::new(),
+        Some(Value::Mapping(m)) => m.clone(),
+        Some(_) => {
+            problems.push(Problem::new("parameters", "expected a mapping from names to values"));
+            Mapping::new()
+        }
+    };
+    let names: Vec<String> = entries.keys().filter_map(|k| k.as_str().map(str::to_string)).collect();
+    for (name, _) in overrides {
+        if !names.contains(name) {
+            let known = if names.is_empty() { "none".to_string() } else { names.join(", ") };
+            problems.push(Problem::new(
+                format!("parameters.{name}"),
+                format!("unknown parameter; the model file defines: {known}"),
+            ));
+        }
+    }
+    for (key, value) in &entries {
+        let Some(name) = key.as_str() else {
+            problems.push(Problem::new("parameters", "parameter names must be strings"));
+            continue;
+        };
+        let path = format!("parameters.{name}");
+        let identifier = name.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+            && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if !identifier || RESERVED.contains(&name) {
+            problems.push(Problem::new(
+                &path,
+                "a parameter's name must be an identifier (letters, digits, _) other than t, pi and e",
+            ));
+            continue;
+        }
+        let given = overrides.iter().rev().find(|(n, _)| n == name).map(|(_, text)| text.as_str());
+        let (value, dim) = match parameter(value, given, &params, name, &names) {
+            Ok(v) => v,
+            Err(e) => {
+                // Kept as not a number, so that what uses it is not reported again.
+                if !e.is_empty() {
+                    problems.push(Problem::new(&path, e));
+                }
+                (f64::NAN, None)
+            }
+        };
+        params.push(Parameter { name: name.to_string(), value, dim });
+    }
+    params
+}
+
+/// One parameter's value and dimension: the file's `value`, or `given` from outside over it (a
+/// bare number SI with the file's dimension; with a unit, of the file's dimension).
+fn parameter(
+    value: &Value,
+    given: Option<&str>,
+    params: &[Parameter],
+    name: &str,
+    names: &[String],
+) -> Result<(f64, Option<Dim>), String> {
+    let (file, dim) = number(value, params, name, names)?;
+    let (v, d) = match given {
+        None => (file, dim),
+        Some(text) => match text.trim().parse::<f64>() {
+            Ok(v) => (v, dim),
+            Err(_) => match number(&Value::String(text.to_string()), params, name, names)? {
+                (_, Some(d)) if dim.is_some_and(|f| f != d) => {
+                    let expected = dim.map_or(String::new(), |f| f.to_string());
+                    return Err(format!("'{text}' is {d}, expected {expected} (the dimension of the file's value)"));
+                }
+                (v, d) => (v, d.or(dim)),
+            },
+        },
+    };
+    if v.is_finite() {
+        Ok((v, d))
+    } else {
+        Err(format!("evaluates to {v}; expected a finite number"))
+    }
+}
+
+/// A value written where a number goes: a number, a number with a unit, or an expression of the
+/// parameters `params` (`own` is the parameter being defined, if any, for the message of a
+/// cycle). The SI value and the unit's dimension.
+fn number(value: &Value, params: &[Parameter], own: &str, names: &[String]) -> Result<(f64, Option<Dim>), String> {
+    match value {
+        Value::Number(n) => n.as_f64().map(|v| (v, None)).ok_or_else(|| format!("expected a number, found {n}")),
+        Value::String(text) => {
+            if let Some(q) = quantity(text) {
+                return q.map(|(v, d)| (v, Some(d)));
+            }
+            if let Some(message) = super::parse::too_large(text) {
+                return Err(message);
+            }
+            let failed = std::cell::Cell::new(false);
+            let known = |name: &str| {
+                let v = lookup(params)(name);
+                failed.set(failed.get() || v.is_some_and(f64::is_nan));
+                v
+            };
+            let expr = Expr::parse_with(text, &known, &mut |name| {
+                Err(if name == own {
+                    "a parameter cannot use itself".to_string()
+                } else if names.iter().any(|n| n == name) {
+                    "a parameter may use only those written before it, so a cycle is refused".to_string()
+                } else if params.is_empty() {
+                    "expected a number, a number with a unit, or an expression of parameters".to_string()
+                } else {
+                    let known: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
+                    format!("expected a parameter: {}", known.join(", "))
+                })
+            })
+            .map_err(|e| format!("'{text}': {e}"))?;
+            let v = expr.constant_value().ok_or_else(|| format!("'{text}' is not a constant"))?;
+            if failed.get() {
+                // It uses a parameter that could not be read, whose problem is reported.
+                return Err(String::new());
+            }
+            // A single name keeps its parameter's dimension: `mass: L` with L in mm is refused.
+            let dim = params.iter().find(|p| p.name == text.trim()).and_then(|p| p.dim);
+            Ok((v, dim))
+        }
+        other => Err(format!("expected a number, a number with a unit or an expression, found {other:?}")),
+    }
+}
+
+/// What a numeric field holds: its dimension, or `Mixed` where one number stands for several
+/// (a tolerance on metres and radians together), which takes a bare number or an expression only.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Field {
+    Dim(Dim),
+    Mixed,
+}
+
+/// The kind of the numeric field `key` of an entry of `section` whose `type` is `kind`; `None` when
+/// the field is not a number (a name, an expression of time and the state, a flag).
+pub fn field(section: &str, kind: Option<&str>, key: &str) -> Option<Field> {
+    use Field::{Dim as D, Mixed};
+    Some(match (section, key) {
+        (_, "points" | "position" | "point" | "point_i" | "point_j") => D(Dim::LENGTH),
+        ("bodies", "mass") => D(Dim::MASS),
+        ("bodies", "inertia") => D(Dim::INERTIA),
+        ("bodies", "angle") => D(Dim::ANGLE),
+        ("bodies", "velocity") => D(Dim::VELOCITY),
+        ("bodies", "omega") => D(Dim::ANGULAR_VELOCITY),
+        ("joints", "axis_i" | "axis_j") => D(Dim::NONE),
+        ("joints", "offset" | "length" | "radius" | "radius_i" | "radius_j") => D(Dim::LENGTH),
+        ("joints", "value") if kind == Some("absolute_angle") => D(Dim::ANGLE),
+        ("joints", "value") => D(Dim::LENGTH),
+        ("forces", "stiffness") if kind == Some("rotational_spring_damper") => D(Dim::ROTATIONAL_STIFFNESS),
+        ("forces", "stiffness") => D(Dim::STIFFNESS),
+        ("forces", "damping") if kind == Some("rotational_spring_damper") => D(Dim::ROTATIONAL_DAMPING),
+        ("forces", "damping") => D(Dim::DAMPING),
+        ("forces", "free_length") => D(Dim::LENGTH),
+        ("forces", "free_angle") => D(Dim::ANGLE),
+        ("analyses", "t_start" | "t_end" | "step") => D(Dim::TIME),
+        ("solver", "max_rotation") => D(Dim::ANGLE),
+        ("solver", "initial_step" | "max_step") => D(Dim::TIME),
+        ("solver", "min_substep" | "singular_condition" | "rtol" | "alpha" | "max_iterations" | "max_order") => {
+            D(Dim::NONE)
+        }
+        ("solver", "max_steps") => D(Dim::NONE),
+        ("solver", "tolerance" | "atol") => Mixed,
+        _ => return None,
+    })
+}
+
+/// Replace every number written with a unit or as an expression of `params` in the numeric fields
+/// of the file's sections (`root`, the whole file) by its SI number; push a problem, with the
+/// field's path, for each that cannot be read or has the wrong dimension.
+pub fn resolve(root: &mut Mapping, params: &[Parameter], problems: &mut Vec<Problem>) {
+    if let Some(g) = root.get_mut("gravity") {
+        numbers("gravity", g, Field::Dim(Dim::ACCELERATION), params, problems);
+    }
+    if let Some(Value::Mapping(ground)) = root.get_mut("ground") {
+        entry("ground", "ground", None, ground, params, problems);
+    }
+    for section in ["bodies", "joints", "drivers", "forces", "measures", "analyses"] {
+        let Some(Value::Mapping(entries)) = root.get_mut(section) else { continue };
+        for (name, value) in entries.iter_mut() {
+            let (Some(name), Value::Mapping(map)) = (name.as_str().map(str::to_string), value) else { continue };
+            let kind = map.get("type").and_then(Value::as_str).map(str::to_string);
+            entry(section, &format!("{section}.{name}"), kind.as_deref(), map, params, problems);
+        }
+    }
+}
+
+/// The numeric fields of one entry (and of its `solver:` and `points:` mappings).
+fn entry(
+    section: &str,
+    path: &str,
+    kind: Option<&str>,
+    map: &mut Mapping,
+    params: &[Parameter],
+    problems: &mut Vec<Problem>,
+) {
+    for (key, value) in map.iter_mut() {
+        let Some(key) = key.as_str() else { continue };
+        let here = format!("{path}.{key}");
+        match (key, value) {
+            ("solver", Value::Mapping(solver)) => entry("solver", &here, None, solver, params, problems),
+            ("points", Value::Mapping(points)) => {
+                for (point, v) in points.iter_mut() {
+                    let at = format!("{here}.{}", point.as_str().unwrap_or("?"));
+                    numbers(&at, v, Field::Dim(Dim::LENGTH), params, problems);
+                }
+            }
+            (_, value) => {
+                if let Some(f) = field(section, kind, key) {
+                    numbers(&here, value, f, params, problems);
+                }
+            }
+        }
+    }
+}
+
+/// A numeric value, or a list of them (a point, an axis), at `path`: strings are read and
+/// replaced; numbers and anything else stay for the schema to judge.
+fn numbers(path: &str, value: &mut Value, f: Field, params: &[Parameter], problems: &mut Vec<Problem>) {
+    match value {
+        Value::Sequence(items) => {
+            for (k, item) in items.iter_mut().enumerate() {
+                numbers(&format!("{path}[{k}]"), item, f, params, problems);
+            }
+        }
+        Value::String(_) => {
+            // A point given by name (`point_i: A`) is a name, not a number.
+            if matches!(path.rsplit('.').next(), Some("point" | "point_i" | "point_j")) {
+                return;
+            }
+            match number(value, params, "", &[]) {
+                Ok((v, dim)) => {
+                    let wrong = match (f, dim) {
+                        (Field::Dim(want), Some(d)) if d != want => Some(format!("is {d}, expected {want}")),
+                        (Field::Mixed, Some(d)) => Some(format!(
+                            "is {d}; this setting applies to lengths and angles alike, so write a bare number (SI)"
+                        )),
+                        _ => None,
+                    };
+                    if let Some(w) = wrong {
+                        let text = value.as_str().unwrap_or_default();
+                        let unit = text.trim().trim_start_matches(|c: char| !c.is_ascii_alphabetic()).trim();
+                        problems.push(Problem::new(path, format!("'{unit}' {w}")));
+                    } else if !v.is_finite() {
+                        problems.push(Problem::new(path, format!("evaluates to {v}; expected a finite number")));
+                    } else {
+                        *value = as_yaml(v);
+                    }
+                }
+                // An empty message holds the place of a problem reported at a parameter.
+                Err(e) => problems.push(Problem::new(path, e)),
+            }
+        }
+        _ => {}
+    }
+}
+
+/// A number as YAML: whole numbers as integers, so that integer settings (`max_order`) read them.
+fn as_yaml(v: f64) -> Value {
+    // 2^53: the largest range in which every whole f64 is exact as an i64.
+    if v.fract() == 0.0 && v.abs() < 9.007_199_254_740_992e15 {
+        Value::Number((v as i64).into())
+    } else {
+        Value::Number(v.into())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params(text: &str, overrides: &[(&str, &str)]) -> (Vec<Parameter>, Vec<Problem>) {
+        let v: Value = serde_yaml_ng::from_str(text).unwrap();
+        let o: Vec<(String, String)> = overrides.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect();
+        let mut problems = Vec::new();
+        (evaluate(Some(&v), &o, &mut problems), problems)
+    }
+
+    #[test]
+    fn parameters_read_numbers_units_and_earlier_parameters() {
+        let (p, problems) = params("{r: 100 mm, L: 0.3, m: 2 kg, I: 'm * L^2 / 12', k: 2*r}", &[]);
+        assert!(problems.is_empty(), "{problems:?}");
+        let v: Vec<f64> = p.iter().map(|p| p.value).collect();
+        assert_eq!(v, vec![0.1, 0.3, 2.0, 2.0 * 0.3 * 0.3 / 12.0, 0.2]);
+        assert_eq!(p[0].dim, Some(Dim::LENGTH));
+        assert_eq!(p[3].dim, None);
+    }
+
+    #[test]
+    fn a_later_parameter_itself_or_an_unknown_name_is_refused_with_its_path() {
+        for (text, path, says) in [
+            ("{a: 2*b, b: 1}", "parameters.a", "written before it"),
+            ("{a: a + 1}", "parameters.a", "cannot use itself"),
+            ("{a: 1, b: 2*c}", "parameters.b", "unknown name 'c'"),
+            ("{t: 1}", "parameters.t", "other than t, pi and e"),
+            ("{a: 1e308, b: a*10}", "parameters.b", "finite"),
+            ("{a: 3 furlongs}", "parameters.a", "unknown unit"),
+        ] {
+            let (_, problems) = params(text, &[]);
+            assert!(problems.iter().any(|p| p.path == path && p.message.contains(says)), "{text}: {problems:?}");
+        }
+    }
+
+    #[test]
+    fn overrides_are_si_or_converted_and_keep_the_dimension() {
+        let (p, problems) = params("{r: 100 mm, d: 2*r}", &[("r", "0.12")]);
+        assert!(problems.is_empty(), "{problems:?}");
+        assert_eq!((p[0].value, p[1].value), (0.12, 0.24));
+        let (p, _) = params("{r: 100 mm}", &[("r", "300 mm")]);
+        assert!((p[0].value - 0.3).abs() < 1e-16);
+        let (_, problems) = params("{r: 100 mm}", &[("r", "3 kg")]);
+        assert!(problems[0].message.contains("is a mass, expected a length"), "{problems:?}");
+        let (_, problems) = params("{r: 100 mm}", &[("s", "1")]);
+        assert!(problems[0].path == "parameters.s" && problems[0].message.contains("defines: r"), "{problems:?}");
+    }
+
+    #[test]
+    fn fields_are_resolved_and_a_wrong_dimension_names_the_field() {
+        let text = "{bodies: {crank: {mass: 40 mm, inertia: 'm*r^2', position: ['r/2', 0], points: {A: [r, 0]}}}}";
+        let mut root: Mapping = serde_yaml_ng::from_str(text).unwrap();
+        let (p, _) = params("{r: 100 mm, m: 2}", &[]);
+        let mut problems = Vec::new();
+        resolve(&mut root, &p, &mut problems);
+        assert_eq!(problems.len(), 1, "{problems:?}");
+        assert_eq!(problems[0].path, "bodies.crank.mass");
+        assert_eq!(problems[0].message, "'mm' is a length, expected a mass");
+        let crank = &root["bodies"]["crank"];
+        assert_eq!(crank["inertia"].as_f64(), Some(2.0 * 0.1 * 0.1));
+        assert_eq!(crank["position"][0].as_f64(), Some(0.05));
+        assert_eq!(crank["points"]["A"][0].as_f64(), Some(0.1));
+    }
+}
