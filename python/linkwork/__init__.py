@@ -38,6 +38,7 @@ from .errors import (
 )
 from .model import Model
 from .results import Results, Summary
+from .sweep import sweep
 
 __version__: str = _linkwork.__version__
 
@@ -61,6 +62,7 @@ __all__ = [
     "from_yaml",
     "load",
     "schema",
+    "sweep",
 ]
 
 

@@ -39,6 +39,13 @@ class PyModel:
     @staticmethod
     def from_yaml(text: str, parameters: Sequence[tuple[str, str]] = ...) -> PyModel: ...
     def with_parameters(self, values: Sequence[tuple[str, str]]) -> PyModel: ...
+    def sweep(
+        self,
+        analysis: str,
+        variants: Sequence[Sequence[tuple[str, str]]],
+        outputs: Sequence[tuple[str, str]],
+        workers: int | None = None,
+    ) -> list[tuple[str, list[float] | None]]: ...
     @property
     def parameters(self) -> list[tuple[str, float]]: ...
     @property

@@ -115,6 +115,38 @@ def _parser() -> argparse.ArgumentParser:
     report.add_argument("folder", metavar="DIR", type=Path, help="a folder written by `linkwork run`")
     report.set_defaults(command=_report)
 
+    sweep = commands.add_parser(
+        "sweep",
+        help="run an analysis over a grid of parameter values and write sweep.parquet",
+        description="Run an analysis of MODEL for every combination of the --grid values, reduce each run to "
+        "the --output expressions, and write DIR/sweep.parquet: one row per variant with its parameters (SI), "
+        "its status (ok, or the error class and message) and its outputs.",
+    )
+    sweep.add_argument("model", metavar="MODEL", help="model file (YAML)")
+    sweep.add_argument("--analysis", "-a", metavar="NAME", help="analysis to run (default: the first in the file)")
+    sweep.add_argument(
+        "--grid",
+        action="append",
+        default=[],
+        type=_grid,
+        required=True,
+        metavar="NAME=START:STOP:COUNT",
+        help="COUNT evenly spaced values (SI) of the parameter NAME, ends included; repeatable (all combinations)",
+    )
+    sweep.add_argument(
+        "--output",
+        action="append",
+        default=[],
+        type=_output,
+        required=True,
+        metavar="NAME=EXPR",
+        help="an output: an expression of max, min, peak, mean, rms, initial, final or at(time, ...) "
+        "of result columns, such as stroke='max(slider.x) - min(slider.x)'; repeatable",
+    )
+    sweep.add_argument("--out", "-o", metavar="DIR", type=Path, help="output folder (default: out/<model file stem>_sweep/)")
+    sweep.add_argument("--workers", "-j", type=int, metavar="K", help="threads (default: every core)")
+    sweep.set_defaults(command=_sweep)
+
     check = commands.add_parser(
         "check",
         help="degrees of freedom, redundant constraints and assembly",
@@ -304,6 +336,40 @@ def _span(results: Results) -> str:
 def _folder(path: Path) -> str:
     text = str(path)
     return text if text.endswith(("/", "\\")) else text + "/"
+
+
+# --- sweep ---------------------------------------------------------------------------------------
+
+
+def _grid(text: str) -> tuple[str, list[float]]:
+    from .sweep import grid_values
+
+    try:
+        return grid_values(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def _output(text: str) -> tuple[str, str]:
+    name, sep, expression = text.partition("=")
+    if not sep or not name.strip() or not expression.strip():
+        raise argparse.ArgumentTypeError(f"expected NAME=EXPR, such as stroke='max(slider.x) - min(slider.x)', got '{text}'")
+    return name.strip(), expression.strip()
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    from .sweep import STATUS, sweep
+
+    model = Model.load(args.model)
+    analysis = args.analysis if args.analysis is not None else model.analyses[0]
+    out: Path = args.out if args.out is not None else Path("out") / (Path(args.model).stem + "_sweep")
+    table = sweep(model, analysis, dict(args.grid), dict(args.output), workers=args.workers)
+    out.mkdir(parents=True, exist_ok=True)
+    table.to_parquet(out / "sweep.parquet", index=False)
+    failed = int((table[STATUS] != "ok").sum())
+    print(f"{model.name}: analysis '{analysis}', {len(table)} variants, {len(table) - failed} ok, {failed} failed")
+    print(f"wrote {out / 'sweep.parquet'}")
+    return EXIT_OK
 
 
 # --- check ---------------------------------------------------------------------------------------

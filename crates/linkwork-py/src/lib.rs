@@ -59,6 +59,44 @@ impl PyModel {
         model.map(|model| PyModel { model }).map_err(|e| to_pyerr(py, e, None))
     }
 
+    /// Run `analysis` for each of `variants` (parameter values `(name, text)`) on `workers`
+    /// threads (every core when `None`), reducing each run to `outputs` (`(name, expression)`).
+    /// One `(status, values)` a variant, in order: `("ok", [...])`, or `("<ErrorClass>: <message>",
+    /// None)`. A bad output expression raises `ModelError` at `outputs.<name>`.
+    #[pyo3(signature = (analysis, variants, outputs, workers=None))]
+    fn sweep(
+        &self,
+        py: Python<'_>,
+        analysis: &str,
+        variants: Vec<Vec<(String, String)>>,
+        outputs: Vec<(String, String)>,
+        workers: Option<usize>,
+    ) -> PyResult<Vec<(String, Option<Vec<f64>>)>> {
+        let parsed: Vec<linkwork::sweep::Output> = outputs
+            .iter()
+            .map(|(name, source)| {
+                linkwork::sweep::Output::parse(name, source).map_err(|message| {
+                    let problem = linkwork::Problem::new(format!("outputs.{name}"), message);
+                    to_pyerr(py, linkwork::Error::Model(vec![problem]), None)
+                })
+            })
+            .collect::<PyResult<_>>()?;
+        let rows = py
+            .detach(|| guard(|| linkwork::sweep::sweep(&self.model, analysis, &variants, &parsed, workers)))?
+            .map_err(|e| to_pyerr(py, e, None))?;
+        Ok(rows
+            .into_iter()
+            .map(|row| match row {
+                Ok(values) => ("ok".to_string(), Some(values)),
+                Err(error) => {
+                    let message = error.to_string();
+                    let class = to_pyerr(py, error, None).get_type(py).name().map(|n| n.to_string());
+                    (format!("{}: {message}", class.unwrap_or_else(|_| "LinkworkError".into())), None)
+                }
+            })
+            .collect())
+    }
+
     /// The parameters' values used, SI, in file order.
     #[getter]
     fn parameters(&self) -> Vec<(String, f64)> {

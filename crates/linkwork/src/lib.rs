@@ -15,6 +15,8 @@
 //!  -> analysis              the run entry point (Model::run, Overrides) and every analysis:
 //!                           assembly, checks, kinematic, inverse, static, modes, dynamic
 //!  -> results               columnar time series, the typed summary, and their files
+//!  -> sweep                 an analysis over many parameter values in parallel, reduced to
+//!                           outputs (aggregations of result columns)
 //!
 //! linalg                    sparse patterns and LU, dense SVD helpers (rank, null space,
 //!                           minimum-norm solve), knowing no mechanics, below system
@@ -44,6 +46,7 @@ pub mod linalg;
 pub mod model;
 pub mod progress;
 pub mod results;
+pub mod sweep;
 pub mod system;
 
 pub use analysis::Overrides;

@@ -1,0 +1,109 @@
+//! Sweeps (linkwork::sweep): the parametrised slider-crank's stroke against `2 r`, each
+//! aggregation against a closed form, failed variants as rows, and the same table on one thread
+//! or two.
+
+mod common;
+
+use common::example;
+use linkwork::sweep::{sweep, Output};
+use linkwork::{Error, Model};
+use std::f64::consts::PI;
+
+fn model() -> Model {
+    Model::load(example("slider_crank_param.yaml")).unwrap()
+}
+
+fn radii(values: &[f64]) -> Vec<Vec<(String, String)>> {
+    values.iter().map(|r| vec![("r".to_string(), format!("{r:?}"))]).collect()
+}
+
+fn outputs(list: &[(&str, &str)]) -> Vec<Output> {
+    list.iter().map(|(n, s)| Output::parse(n, s).unwrap_or_else(|e| panic!("{n}: {e}"))).collect()
+}
+
+/// The Done-when case of the sweep: `--grid r=0.05:0.15:5`, stroke `2 r` to 1e-9 m (the
+/// kinematic solver's tolerance on `Phi` is 1e-10, and the dead centres are output times).
+#[test]
+fn the_stroke_of_each_radius_is_twice_it() {
+    let r = [0.05, 0.075, 0.1, 0.125, 0.15];
+    let rows =
+        sweep(&model(), "kinematics", &radii(&r), &outputs(&[("stroke", "max(slider.x) - min(slider.x)")]), None)
+            .unwrap();
+    for (r, row) in r.iter().zip(&rows) {
+        let stroke = row.as_ref().unwrap()[0];
+        assert!((stroke - 2.0 * r).abs() < 1e-9, "r = {r}: {stroke}");
+    }
+}
+
+/// Each aggregation on the crank angle `phi = 2 pi t` over one second (201 rows), the crank speed
+/// and the slider's start, against closed forms. Tolerances: max, min, mean, peak, at and the
+/// first and last rows are exact for a linear function up to round-off (1e-12); the trapezoidal
+/// rms of `(2 pi t)^2` over steps of h = 5 ms is high by `h^2 / 12 * 2 (2 pi)^2`, 1.25e-5 of the
+/// exact `(2 pi)^2 / 3`, hence 2e-5 relative.
+#[test]
+fn aggregations_match_their_closed_forms() {
+    let list = [
+        ("max", "max(crank.phi)"),
+        ("min", "min(crank.phi)"),
+        ("mean", "mean(crank.phi)"),
+        ("rms", "rms(crank.phi)"),
+        ("peak", "peak(crank.phi - 4)"),
+        ("initial", "initial(slider.x)"),
+        ("final", "final(crank.phi) / (2*pi)"),
+        ("at", "at(0.25, crank.phi)"),
+        ("nested", "max(max(crank.phi, 1) * 2) + 1"),
+        ("omega", "mean(crank.omega)"),
+    ];
+    let rows = sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&list), Some(1)).unwrap();
+    let got = rows[0].as_ref().unwrap();
+    let expected = [2.0 * PI, 0.0, PI, 2.0 * PI / 3f64.sqrt(), 4.0, 0.4, 1.0, PI / 2.0, 4.0 * PI + 1.0, 2.0 * PI];
+    for ((name, _), (g, e)) in list.iter().zip(got.iter().zip(expected)) {
+        let tol = if *name == "rms" { 2e-5 * e } else { 1e-12 * e.abs().max(1.0) };
+        assert!((g - e).abs() <= tol, "{name}: {g} against {e}");
+    }
+}
+
+/// A variant that cannot be run is a row with its error; the others run. Here the crank longer
+/// than the rod (r = 0.35 m, L = 0.3 m) cannot turn.
+#[test]
+fn a_failed_variant_is_a_row() {
+    let rows =
+        sweep(&model(), "kinematics", &radii(&[0.1, 0.35, 0.15]), &outputs(&[("s", "final(slider.x)")]), None).unwrap();
+    assert!(rows[0].is_ok() && rows[2].is_ok(), "{rows:?}");
+    let error = rows[1].as_ref().unwrap_err();
+    assert!(!matches!(error, Error::Model(_)), "{error}");
+    let bad = vec![vec![("r".to_string(), "2 kg".to_string())]];
+    let rows = sweep(&model(), "kinematics", &bad, &outputs(&[("s", "final(slider.x)")]), None).unwrap();
+    assert!(rows[0].as_ref().unwrap_err().to_string().contains("parameters.r"), "{rows:?}");
+}
+
+/// Bad outputs: a column outside an aggregation, a wrong count of arguments (at parse); an
+/// unknown column (on the run, as the row's error at `outputs.<name>`).
+#[test]
+fn bad_outputs_name_what_is_wrong() {
+    let e = Output::parse("s", "slider.x + max(slider.x)").unwrap_err();
+    assert!(e.contains("'slider.x' outside an aggregation"), "{e}");
+    let e = Output::parse("s", "peak(slider.x, 2)").unwrap_err();
+    assert!(e.contains("peak() takes one expression, found 2 arguments"), "{e}");
+    let e = Output::parse("s", "at(t1, slider.x)").unwrap_err();
+    assert!(e.contains("needs a number for time"), "{e}");
+    let rows = sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&[("s", "max(slider.xx)")]), None).unwrap();
+    let message = rows[0].as_ref().unwrap_err().to_string();
+    assert!(message.contains("outputs.s") && message.contains("no result column 'slider.xx'"), "{message}");
+    let rows = sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&[("s", "at(2, slider.x)")]), None).unwrap();
+    assert!(rows[0].as_ref().unwrap_err().to_string().contains("from t = 0 to 1 s"), "{rows:?}");
+    assert!(sweep(&model(), "nonesuch", &radii(&[0.1]), &[], None).is_err());
+}
+
+/// One thread or two: the same rows, bit for bit, in the order of the variants.
+#[test]
+fn threads_do_not_change_the_table() {
+    let r: Vec<f64> = (0..12).map(|k| 0.05 + 0.01 * k as f64).collect();
+    let out = outputs(&[("stroke", "max(slider.x) - min(slider.x)"), ("torque", "peak(motor.effort)")]);
+    let one = sweep(&model(), "inverse", &radii(&r), &out, Some(1)).unwrap();
+    let two = sweep(&model(), "inverse", &radii(&r), &out, Some(2)).unwrap();
+    let bits = |rows: &[linkwork::sweep::Row]| -> Vec<Vec<u64>> {
+        rows.iter().map(|r| r.as_ref().unwrap().iter().map(|v| v.to_bits()).collect()).collect()
+    };
+    assert_eq!(bits(&one), bits(&two));
+}
