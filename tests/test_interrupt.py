@@ -117,8 +117,9 @@ def wait_for_rows(process: subprocess.Popen[bytes], seconds: float) -> None:
     assert process.poll() is None, "the long run ended by itself"
 
 
-def test_ctrl_c_on_the_command_line_writes_the_partial_results_and_exits_130(tmp_path: Path) -> None:
-    out = tmp_path / "out"
+def interrupt_long_run(out: Path) -> tuple[int, bytes]:
+    """Start the long run writing into `out`, send it Ctrl-C after 2 s; its exit status and
+    stderr."""
     process = start_long_run(out, subprocess.PIPE)
     try:
         wait_for_rows(process, 2.0)
@@ -126,7 +127,13 @@ def test_ctrl_c_on_the_command_line_writes_the_partial_results_and_exits_130(tmp
         _, stderr = process.communicate(timeout=120)
     finally:
         process.kill()
-    assert process.returncode == 130, stderr.decode()
+    return process.returncode, stderr
+
+
+def test_ctrl_c_on_the_command_line_writes_the_partial_results_and_exits_130(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    code, stderr = interrupt_long_run(out)
+    assert code == 130, stderr.decode()
     assert "interrupted" in stderr.decode()
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "interrupted"
@@ -177,11 +184,6 @@ def test_the_progress_bar_shows_on_a_terminal_unless_quiet(tmp_path: Path, quiet
 
 
 def test_no_progress_bar_when_stderr_is_not_a_terminal(tmp_path: Path) -> None:
-    process = start_long_run(tmp_path, subprocess.PIPE)
-    try:
-        wait_for_rows(process, 2.0)
-        process.send_signal(signal.SIGINT)
-        _, stderr = process.communicate(timeout=120)
-    finally:
-        process.kill()
+    code, stderr = interrupt_long_run(tmp_path)
+    assert code == 130, stderr.decode()
     assert "steps/s" not in stderr.decode()

@@ -37,11 +37,8 @@ impl PyModel {
     #[staticmethod]
     #[pyo3(signature = (path, parameters=Vec::new()))]
     fn load(py: Python<'_>, path: PathBuf, parameters: Vec<(String, String)>) -> PyResult<PyModel> {
-        let text = std::fs::read_to_string(&path).map_err(|e| {
-            let error = linkwork::Error::Io { path: path.display().to_string(), message: e.to_string() };
-            to_pyerr(py, error, None)
-        })?;
-        PyModel::from_yaml(py, &text, parameters)
+        let model = py.detach(|| guard(|| linkwork::Model::load_with(&path, &parameters)))?;
+        model.map(|model| PyModel { model }).map_err(|e| to_pyerr(py, e, None))
     }
 
     /// Compile a model from the text of a model file, with parameter values `(name, text)` over

@@ -53,8 +53,8 @@ pub struct Output {
     pub name: String,
     /// Its text, as written.
     pub source: String,
-    /// The expression with each aggregation replaced by the name `__aggregate<k>`.
-    outer: String,
+    /// The expression with each aggregation `k` as variable slot `k`, parsed once.
+    outer: Expr,
     aggregates: Vec<Aggregate>,
 }
 
@@ -133,19 +133,15 @@ impl Output {
                 }
             }
         }
-        let output = Output { name: name.to_string(), source: source.to_string(), outer, aggregates };
-        // The expression around the aggregations, checked now: it names nothing else.
-        output.outer_expr().map_err(|e| format!("'{source}': {e}"))?;
-        Ok(output)
-    }
-
-    fn outer_expr(&self) -> Result<Expr, crate::expr::ExprError> {
-        let count = self.aggregates.len();
-        Expr::parse(&self.outer, &mut |n| {
+        // The expression around the aggregations names nothing else.
+        let count = aggregates.len();
+        let outer = Expr::parse(&outer, &mut |n| {
             n.strip_prefix("__aggregate").and_then(|k| k.parse::<usize>().ok()).filter(|&k| k < count).ok_or_else(
                 || format!("'{n}' outside an aggregation; write max({n}), min, peak, mean, rms, initial, final or at(time, {n})"),
             )
         })
+        .map_err(|e| format!("'{source}': {e}"))?;
+        Ok(Output { name: name.to_string(), source: source.to_string(), outer, aggregates })
     }
 
     /// The output's value for one run's results. `Err` names an unknown column or a value that is
@@ -154,8 +150,7 @@ impl Output {
         let time = &results.time;
         let values =
             self.aggregates.iter().map(|a| aggregate(a, results, time)).collect::<Result<Vec<f64>, String>>()?;
-        let outer = self.outer_expr().map_err(|e| format!("'{}': {e}", self.source))?;
-        let v = outer.eval(&values);
+        let v = self.outer.eval(&values);
         if v.is_finite() {
             Ok(v)
         } else {
@@ -256,13 +251,13 @@ fn aggregate(a: &Aggregate, results: &Results, time: &[f64]) -> Result<f64, Stri
             if !(time[0]..=time[n - 1]).contains(&t) {
                 return Err(format!("at({t}, ...): the run's output is from t = {} to {} s", time[0], time[n - 1]));
             }
-            let k = time.partition_point(|&x| x < t).clamp(1, n.max(2) - 1).min(n - 1);
-            if n == 1 || time[k] == time[k - 1] {
-                f[k]
-            } else {
-                let w = (t - time[k - 1]) / (time[k] - time[k - 1]);
-                f[k - 1] + w * (f[k] - f[k - 1])
+            if n == 1 {
+                return Ok(f[0]);
             }
+            // The rows k - 1 and k around t (t at the first row: the first two).
+            let k = time.partition_point(|&x| x < t).clamp(1, n - 1);
+            let w = (t - time[k - 1]) / (time[k] - time[k - 1]);
+            f[k - 1] + w * (f[k] - f[k - 1])
         }
     })
 }

@@ -254,10 +254,16 @@ pub struct Model {
 impl Model {
     /// Read and compile a model file.
     pub fn load(path: impl AsRef<Path>) -> Result<Model> {
+        Model::load_with(path, &[])
+    }
+
+    /// Read and compile a model file with parameter values given from outside, as
+    /// [`Model::from_yaml_with`].
+    pub fn load_with(path: impl AsRef<Path>, set: &[(String, String)]) -> Result<Model> {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path)
             .map_err(|e| Error::Io { path: path.display().to_string(), message: e.to_string() })?;
-        Model::from_yaml(&text)
+        Model::from_yaml_with(&text, set)
     }
 
     /// Compile a model from the text of a model file.
