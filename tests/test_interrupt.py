@@ -1,6 +1,6 @@
-"""Progress and interruption: Ctrl-C stops a run within 0.2 s and keeps its results, in Python
-and on the command line; other Python threads run while the engine does; the progress bar shows
-on a terminal and nowhere else.
+"""Progress and interruption: Ctrl-C stops a run or a sweep within 0.2 s and keeps its results,
+in Python and on the command line; other Python threads run while the engine does; the progress
+bar shows on a terminal and nowhere else.
 
 The long run is the IFToMM N-four-bar (123 bodies) run to 1000 s, which takes minutes: every test
 stops it long before its end.
@@ -22,6 +22,7 @@ import threading
 import time
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
 import linkwork
@@ -29,6 +30,13 @@ from conftest import EXAMPLES, linkwork_command
 
 LONG = EXAMPLES / "iftomm_a02_nfourbar.yaml"
 LONG_END = 1000.0
+
+# A sweep of many short runs: the parametrised slider-crank's kinematics (under a millisecond a
+# variant) for 20,000 crank radii takes about 10 s on one thread; every test stops it long before.
+SWEEP_MODEL = EXAMPLES / "slider_crank_param.yaml"
+SWEEP_VARIANTS = 20_000
+SWEEP_GRID = f"r=0.05:0.15:{SWEEP_VARIANTS}"
+SWEEP_OUTPUT = "stroke=max(slider.x) - min(slider.x)"
 
 # The issue's bar for Ctrl-C. The engine looks every 50 ms and stops at its next step (about a
 # millisecond here), so this leaves three quarters of it to a loaded machine.
@@ -162,12 +170,19 @@ def read_terminal(fd: int, process: subprocess.Popen[bytes]) -> str:
 
 
 @pytest.mark.parametrize("quiet", [False, True])
-def test_the_progress_bar_shows_on_a_terminal_unless_quiet(tmp_path: Path, quiet: bool) -> None:
+@pytest.mark.parametrize("command", ["run", "sweep"])
+def test_the_progress_bar_shows_on_a_terminal_unless_quiet(tmp_path: Path, quiet: bool, command: str) -> None:
     master, slave = pty.openpty()
     # A terminal 100 columns wide, as a window is (a new pseudo-terminal has none, and tqdm
     # draws a bar as wide as the terminal).
     fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))
-    args = [*linkwork_command(), "run", str(LONG), "-a", "dynamics", "--t-end", str(LONG_END), "--out", str(tmp_path)]
+    if command == "run":
+        args = [*linkwork_command(), "run", str(LONG), "-a", "dynamics", "--t-end", str(LONG_END)]
+        bar = ["steps/s", f"of {LONG_END:.4g} s"]
+    else:
+        args = [*linkwork_command(), "sweep", str(SWEEP_MODEL), "--grid", SWEEP_GRID, "--output", SWEEP_OUTPUT, "-j", "1"]
+        bar = ["variant/s", f"/{SWEEP_VARIANTS}"]
+    args += ["--out", str(tmp_path)]
     process = subprocess.Popen([*args, *(["--quiet"] if quiet else [])], stdout=subprocess.DEVNULL, stderr=slave)
     os.close(slave)
     try:
@@ -179,7 +194,7 @@ def test_the_progress_bar_shows_on_a_terminal_unless_quiet(tmp_path: Path, quiet
         process.kill()
         os.close(master)
     assert process.returncode == 130
-    shown = "steps/s" in screen and f"of {LONG_END:.4g} s" in screen
+    shown = all(text in screen for text in bar)
     assert shown != quiet, screen
 
 
@@ -187,3 +202,77 @@ def test_no_progress_bar_when_stderr_is_not_a_terminal(tmp_path: Path) -> None:
     code, stderr = interrupt_long_run(tmp_path)
     assert code == 130, stderr.decode()
     assert "steps/s" not in stderr.decode()
+
+
+
+def long_sweep(**options: object) -> pd.DataFrame:
+    radii = [0.05 + 0.1 * k / (SWEEP_VARIANTS - 1) for k in range(SWEEP_VARIANTS)]
+    return linkwork.sweep(
+        SWEEP_MODEL, "kinematics", grid={"r": radii}, outputs=dict([SWEEP_OUTPUT.split("=", 1)]), workers=1,
+        **options,  # type: ignore[arg-type]
+    )
+
+
+def interrupted_rows(table: pd.DataFrame) -> pd.Series[bool]:
+    return table["status"].str.startswith("KeyboardInterrupt")
+
+
+def test_ctrl_c_stops_a_sweep_within_0_2_s_with_every_row() -> None:
+    sent: list[float] = []
+
+    def ctrl_c() -> None:
+        sent.append(time.monotonic())
+        _thread.interrupt_main()
+
+    timer = threading.Timer(0.5, ctrl_c)
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt) as caught:
+            long_sweep()
+        stopped = time.monotonic()
+    finally:
+        timer.cancel()
+    assert sent and stopped - sent[0] < STOP_WITHIN, f"stopped {stopped - sent[0]:.3f} s after Ctrl-C"
+    table = caught.value.table  # type: ignore[attr-defined]
+    assert len(table) == SWEEP_VARIANTS
+    done = table[~interrupted_rows(table)]
+    # The variants finished before Ctrl-C are whole rows; the others have no outputs.
+    assert 0 < len(done) < SWEEP_VARIANTS and (done["status"] == "ok").all()
+    assert table["stroke"][interrupted_rows(table)].isna().all()
+
+
+def test_a_sweep_reports_the_variants_finished_and_an_exception_from_progress_stops_it() -> None:
+    seen: list[tuple[int, int]] = []
+
+    class Enough(Exception):
+        pass
+
+    def progress(finished: int, total: int) -> None:
+        seen.append((finished, total))
+        if len(seen) == 3:
+            raise Enough
+
+    with pytest.raises(Enough) as caught:
+        long_sweep(progress=progress)
+    assert len(seen) == 3 and all(total == SWEEP_VARIANTS for _, total in seen)
+    finished = [f for f, _ in seen]
+    assert finished == sorted(finished) and 0 < finished[-1] < SWEEP_VARIANTS
+    table = caught.value.table  # type: ignore[attr-defined]
+    assert (~interrupted_rows(table)).sum() >= finished[-1]
+
+
+def test_ctrl_c_on_a_cli_sweep_writes_the_rows_and_exits_130(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    args = ["sweep", str(SWEEP_MODEL), "-a", "kinematics", "--grid", SWEEP_GRID, "--output", SWEEP_OUTPUT, "-j", "1"]
+    process = subprocess.Popen([*linkwork_command(), *args, "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        wait_for_rows(process, 2.0)
+        process.send_signal(signal.SIGINT)
+        _, stderr = process.communicate(timeout=120)
+    finally:
+        process.kill()
+    assert process.returncode == 130, stderr.decode()
+    assert "interrupted:" in stderr.decode() and "variants finished" in stderr.decode()
+    table = pd.read_parquet(out / "sweep.parquet")
+    assert len(table) == SWEEP_VARIANTS
+    assert 0 < (~interrupted_rows(table)).sum() < SWEEP_VARIANTS

@@ -7,6 +7,10 @@
         [--integrator bdf|hht|abam] [--rtol R] [--atol A] [--t-end T] [--step H]
                                                        change the analysis for this run
     linkwork report DIR                                rebuild DIR/report.html from the files of a run
+    linkwork sweep MODEL --output NAME=EXPR ...         an analysis over many parameter values, reduced to
+        (--grid NAME=START:STOP:COUNT ... |             outputs: DIR/sweep.parquet, one row a variant
+         --sample N --range NAME=LOW:HIGH ... [--seed S])
+        [--workers K | --dask ADDRESS] [--set NAME=VALUE]
     linkwork check MODEL [--json]                      degrees of freedom, redundant rows, assembly
     linkwork schema                                    the JSON Schema of model files
 
@@ -26,7 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from . import _linkwork
-from .errors import AssemblyError, FileError, InternalError, LinkworkError, ModelError, SolverError
+from .errors import AssemblyError, FileError, InternalError, LinkworkError, ModelError, SolverError, model_error
 from .model import Model
 from .results import Results, Summary
 
@@ -36,6 +40,10 @@ EXIT_MODEL = 2
 EXIT_SOLVER = 3
 # 128 + SIGINT, as a shell reports a process that Ctrl-C ended.
 EXIT_INTERRUPTED = 130
+
+# Seconds to wait for a Dask scheduler to answer: a scheduler on a network answers in
+# milliseconds; a wrong address should fail while the user is still looking.
+DASK_CONNECT_TIMEOUT = 10
 
 # The coordinates of one body, in the engine's order.
 COORDINATES = ("x", "y", "phi")
@@ -94,14 +102,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--atol", type=float, metavar="A", help="absolute error tolerance of a dynamic analysis")
     run.add_argument("--t-end", type=float, metavar="T", help="end time, s")
     run.add_argument("--step", type=float, metavar="H", help="output step, s")
-    run.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        type=_setting,
-        metavar="NAME=VALUE",
-        help="a parameter's value over the file's: a number (SI) or a number with a unit (r=0.12, L='300 mm'); repeatable",
-    )
+    _add_set(run)
     run.add_argument("--no-report", action="store_true", help="do not write report.html")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     run.set_defaults(command=_run)
@@ -117,10 +118,12 @@ def _parser() -> argparse.ArgumentParser:
 
     sweep = commands.add_parser(
         "sweep",
-        help="run an analysis over a grid of parameter values and write sweep.parquet",
-        description="Run an analysis of MODEL for every combination of the --grid values, reduce each run to "
-        "the --output expressions, and write DIR/sweep.parquet: one row per variant with its parameters (SI), "
-        "its status (ok, or the error class and message) and its outputs.",
+        help="run an analysis over many parameter values and write sweep.parquet",
+        description="Run an analysis of MODEL for every combination of the --grid values (or for --sample "
+        "points of a Latin hypercube over the --range intervals), reduce each run to the --output expressions, "
+        "and write DIR/sweep.parquet: one row per variant with its parameters (SI), its status (ok, or the "
+        "error class and message) and its outputs. The variants run on this machine's cores, or on a Dask "
+        "cluster (--dask).",
     )
     sweep.add_argument("model", metavar="MODEL", help="model file (YAML)")
     sweep.add_argument("--analysis", "-a", metavar="NAME", help="analysis to run (default: the first in the file)")
@@ -129,10 +132,19 @@ def _parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         type=_grid,
-        required=True,
         metavar="NAME=START:STOP:COUNT",
         help="COUNT evenly spaced values (SI) of the parameter NAME, ends included; repeatable (all combinations)",
     )
+    sweep.add_argument("--sample", type=int, metavar="N", help="N points of a Latin hypercube over the --range intervals")
+    sweep.add_argument(
+        "--range",
+        action="append",
+        default=[],
+        type=_range,
+        metavar="NAME=LOW:HIGH",
+        help="the interval (SI) of the parameter NAME for --sample; repeatable",
+    )
+    sweep.add_argument("--seed", type=int, metavar="S", help="seed of the --sample (default: a fresh one, printed)")
     sweep.add_argument(
         "--output",
         action="append",
@@ -145,6 +157,13 @@ def _parser() -> argparse.ArgumentParser:
     )
     sweep.add_argument("--out", "-o", metavar="DIR", type=Path, help="output folder (default: out/<model file stem>_sweep/)")
     sweep.add_argument("--workers", "-j", type=int, metavar="K", help="threads (default: every core)")
+    sweep.add_argument(
+        "--dask",
+        metavar="ADDRESS",
+        help="run on the Dask cluster whose scheduler is at ADDRESS (tcp://host:8786; pip install 'linkwork[dask]')",
+    )
+    _add_set(sweep)
+    sweep.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     sweep.set_defaults(command=_sweep)
 
     check = commands.add_parser(
@@ -164,6 +183,17 @@ def _parser() -> argparse.ArgumentParser:
 
 
 # --- run -----------------------------------------------------------------------------------------
+
+
+def _add_set(command: argparse.ArgumentParser) -> None:
+    command.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        type=_setting,
+        metavar="NAME=VALUE",
+        help="a parameter's value over the file's: a number (SI) or a number with a unit (r=0.12, L='300 mm'); repeatable",
+    )
 
 
 def _setting(text: str) -> tuple[str, str]:
@@ -350,6 +380,15 @@ def _grid(text: str) -> tuple[str, list[float]]:
         raise argparse.ArgumentTypeError(str(error)) from None
 
 
+def _range(text: str) -> tuple[str, tuple[float, float]]:
+    from .sweep import range_values
+
+    try:
+        return range_values(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
 def _output(text: str) -> tuple[str, str]:
     name, sep, expression = text.partition("=")
     if not sep or not name.strip() or not expression.strip():
@@ -360,16 +399,54 @@ def _output(text: str) -> tuple[str, str]:
 def _sweep(args: argparse.Namespace) -> int:
     from .sweep import STATUS, sweep
 
-    model = Model.load(args.model)
+    if bool(args.grid) == (args.sample is not None or bool(args.range)):
+        _err("error: give --grid, or --sample with --range, not both")
+        return EXIT_MODEL
+    if (args.sample is None) != (not args.range) or (args.seed is not None and args.sample is None):
+        _err("error: --sample, --range and --seed go together (--seed is optional)")
+        return EXIT_MODEL
+    model = Model.load(args.model, dict(args.set))
     analysis = args.analysis if args.analysis is not None else model.analyses[0]
     out: Path = args.out if args.out is not None else Path("out") / (Path(args.model).stem + "_sweep")
-    table = sweep(model, analysis, dict(args.grid), dict(args.output), workers=args.workers)
+    client = _dask_client(args.dask) if args.dask is not None else None
+    try:
+        table = sweep(
+            model, analysis, dict(args.grid) if args.grid else None, dict(args.output),
+            sample=args.sample, ranges=dict(args.range) if args.range else None, seed=args.seed,
+            workers=args.workers, client=client, progress=sys.stderr.isatty() and not args.quiet,
+        )
+    except KeyboardInterrupt as interrupt:
+        partial = getattr(interrupt, "table", None)
+        if partial is None:
+            raise
+        out.mkdir(parents=True, exist_ok=True)
+        partial.to_parquet(out / "sweep.parquet", index=False)
+        done = int((~partial[STATUS].str.startswith("KeyboardInterrupt")).sum())
+        _err(f"interrupted: {done} of {len(partial)} variants finished, written to {out / 'sweep.parquet'}")
+        return EXIT_INTERRUPTED
+    finally:
+        if client is not None:
+            client.close()
     out.mkdir(parents=True, exist_ok=True)
     table.to_parquet(out / "sweep.parquet", index=False)
     failed = int((table[STATUS] != "ok").sum())
     print(f"{model.name}: analysis '{analysis}', {len(table)} variants, {len(table) - failed} ok, {failed} failed")
+    if "seed" in table.attrs:
+        print(f"Latin hypercube seed {table.attrs['seed']} (--seed {table.attrs['seed']} draws the same sample)")
     print(f"wrote {out / 'sweep.parquet'}")
     return EXIT_OK
+
+
+def _dask_client(address: str) -> Any:
+    """A Dask client of the scheduler at ``address``."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise model_error("--dask", "needs Dask's distributed package: pip install 'linkwork[dask]'") from None
+    try:
+        return Client(address, timeout=DASK_CONNECT_TIMEOUT)
+    except OSError as error:
+        raise model_error("--dask", f"no Dask scheduler answered at {address}: {error}") from None
 
 
 # --- check ---------------------------------------------------------------------------------------

@@ -24,6 +24,42 @@ use std::time::Duration;
 /// microseconds.
 const POLL: Duration = Duration::from_millis(50);
 
+/// Run `work` on a thread of its own with the GIL released. This thread wakes every [`POLL`] to
+/// let Python handle its signals (Ctrl-C) and to call `report`; the first exception from either
+/// stops `watch` (the work ends at its next step) and is returned beside the work's outcome.
+fn watched<T: Send>(
+    py: Python<'_>,
+    watch: &Progress,
+    work: impl FnOnce() -> T + Send,
+    mut report: impl FnMut(Python<'_>) -> PyResult<()> + Send,
+) -> (PyResult<T>, Option<PyErr>) {
+    let mut stopped_by: Option<PyErr> = None;
+    let outcome = py.detach(|| {
+        std::thread::scope(|scope| {
+            let (done, finished) = std::sync::mpsc::channel();
+            let worker = scope.spawn(move || {
+                let outcome = guard(work);
+                // The receiver waits below for as long as this thread runs.
+                let _ = done.send(());
+                outcome
+            });
+            while let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(POLL) {
+                if stopped_by.is_some() {
+                    continue;
+                }
+                Python::attach(|py| {
+                    if let Err(e) = py.check_signals().and_then(|()| report(py)) {
+                        watch.stop();
+                        stopped_by = Some(e);
+                    }
+                });
+            }
+            worker.join().unwrap_or_else(|_| Err(errors::internal("the analysis thread panicked")))
+        })
+    });
+    (outcome, stopped_by)
+}
+
 /// A compiled mechanism (immutable).
 #[pyclass(name = "PyModel", module = "linkwork._linkwork", frozen)]
 struct PyModel {
@@ -60,7 +96,12 @@ impl PyModel {
     /// threads (every core when `None`), reducing each run to `outputs` (`(name, expression)`).
     /// One `(status, values)` a variant, in order: `("ok", [...])`, or `("<ErrorClass>: <message>",
     /// None)`. A bad output expression raises `ModelError` at `outputs.<name>`.
-    #[pyo3(signature = (analysis, variants, outputs, workers=None))]
+    ///
+    /// Watched as [`PyModel::run`]: `progress(finished)` is called with the variants finished;
+    /// Ctrl-C (or an exception from `progress`) ends the variants not finished as interrupted
+    /// and raises, with the rows as the attribute `rows`.
+    #[pyo3(signature = (analysis, variants, outputs, workers=None, progress=None))]
+    #[allow(clippy::too_many_arguments)]
     fn sweep(
         &self,
         py: Python<'_>,
@@ -68,6 +109,7 @@ impl PyModel {
         variants: Vec<Vec<(String, String)>>,
         outputs: Vec<(String, String)>,
         workers: Option<usize>,
+        progress: Option<Py<PyAny>>,
     ) -> PyResult<Vec<(String, Option<Vec<f64>>)>> {
         let parsed: Vec<linkwork::sweep::Output> = outputs
             .iter()
@@ -78,26 +120,53 @@ impl PyModel {
                 })
             })
             .collect::<PyResult<_>>()?;
-        let rows = py
-            .detach(|| guard(|| linkwork::sweep::sweep(&self.model, analysis, &variants, &parsed, workers)))?
-            .map_err(|e| to_pyerr(py, e, None))?;
-        Ok(rows
+        let watch = Progress::new();
+        let (outcome, stopped_by) = watched(
+            py,
+            &watch,
+            || linkwork::sweep::sweep(&self.model, analysis, &variants, &parsed, workers, &watch),
+            |py| match &progress {
+                Some(f) => f.call1(py, (watch.finished(),)).map(drop),
+                None => Ok(()),
+            },
+        );
+        let mut classes = std::collections::HashMap::new();
+        let rows: Vec<_> = outcome?
+            .map_err(|e| to_pyerr(py, e, None))?
             .into_iter()
             .map(|row| match row {
                 Ok(values) => ("ok".to_string(), Some(values)),
                 Err(error) => {
                     let message = error.to_string();
-                    let class = to_pyerr(py, error, None).get_type(py).name().map(|n| n.to_string());
-                    (format!("{}: {message}", class.unwrap_or_else(|_| "LinkworkError".into())), None)
+                    // The class of each kind of error found once: making an exception takes tens
+                    // of microseconds, and a stopped sweep has a row for every variant not run.
+                    let class = classes.entry(std::mem::discriminant(&error)).or_insert_with(|| {
+                        let class = to_pyerr(py, error, None).get_type(py).name().map(|n| n.to_string());
+                        class.unwrap_or_else(|_| "LinkworkError".into())
+                    });
+                    (format!("{class}: {message}"), None)
                 }
             })
-            .collect())
+            .collect();
+        match stopped_by {
+            Some(e) => {
+                e.value(py).setattr("rows", rows)?;
+                Err(e)
+            }
+            None => Ok(rows),
+        }
     }
 
     /// The parameters' values used, SI, in file order.
     #[getter]
     fn parameters(&self) -> Vec<(String, f64)> {
         self.model.parameters.iter().map(|(n, v)| (n.clone(), *v)).collect()
+    }
+
+    /// The parameter values given over the file's (`(name, text)`), as `from_yaml` takes them.
+    #[getter]
+    fn set(&self) -> Vec<(String, String)> {
+        self.model.set.clone()
     }
 
     /// Title of the model.
@@ -188,38 +257,19 @@ impl PyModel {
         };
         let overrides = linkwork::Overrides { integrator, rtol, atol, t_end, step };
         let watch = Progress::new();
-        // The exception that stopped the run from this side: Ctrl-C, or one from `progress`.
-        let mut stopped_by: Option<PyErr> = None;
-        let outcome = py.detach(|| {
-            std::thread::scope(|scope| {
-                let (done, finished) = std::sync::mpsc::channel();
-                let (model, overrides, watch) = (&self.model, &overrides, &watch);
-                let worker = scope.spawn(move || {
-                    let outcome = guard(|| model.run_watched(analysis, overrides, watch));
-                    // The receiver waits below for as long as this thread runs.
-                    let _ = done.send(());
-                    outcome
-                });
-                while let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(POLL) {
-                    if stopped_by.is_some() {
-                        continue;
-                    }
-                    Python::attach(|py| {
-                        let (t0, t1) = watch.span();
-                        let signalled = py.check_signals().and_then(|()| match &progress {
-                            Some(f) => f.call1(py, (watch.time(), t0, t1, watch.steps())).map(drop),
-                            None => Ok(()),
-                        });
-                        if let Err(e) = signalled {
-                            watch.stop();
-                            stopped_by = Some(e);
-                        }
-                    });
+        let (outcome, stopped_by) = watched(
+            py,
+            &watch,
+            || self.model.run_watched(analysis, &overrides, &watch),
+            |py| match &progress {
+                Some(f) => {
+                    let (t0, t1) = watch.span();
+                    f.call1(py, (watch.time(), t0, t1, watch.steps())).map(drop)
                 }
-                worker.join().unwrap_or_else(|_| Err(errors::internal("the analysis thread panicked")))
-            })
-        })?;
-        match outcome {
+                None => Ok(()),
+            },
+        );
+        match outcome? {
             Ok(results) => Ok(PyResults { results, error: None }),
             Err(failure) => {
                 let linkwork::Failure { error, results } = *failure;

@@ -6,6 +6,9 @@
 //! of an integrator to it (`reached`), so that no analysis has to pass it along; once
 //! [`Progress::stop`] has been called, the next time reached ends the run with
 //! [`Error::Interrupted`], and the results up to there are kept as after any failure.
+//! A sweep watches its variants through one [`Progress`]: each variant's run has a
+//! [`Progress::part`] of it, which shares its request to stop, and the whole counts the
+//! variants finished.
 //!
 //! The cost is an atomic store and load per output point and step: nothing beside a step's
 //! factorization.
@@ -25,7 +28,10 @@ pub struct Progress {
     end: AtomicU64,
     /// Output points and step attempts so far.
     steps: AtomicU64,
-    stop: AtomicBool,
+    /// Parts finished: the variants of a sweep.
+    finished: AtomicU64,
+    /// The request to stop, shared with the parts ([`Progress::part`]).
+    stop: Arc<AtomicBool>,
 }
 
 impl Progress {
@@ -34,7 +40,28 @@ impl Progress {
         Arc::new(Progress::default())
     }
 
-    /// Ask the run to stop at the next time it reaches.
+    /// The progress of one part of this work (one variant of a sweep): its own time and steps,
+    /// and this one's request to stop, so that a stop asked here stops every part running.
+    pub fn part(&self) -> Arc<Progress> {
+        Arc::new(Progress { stop: Arc::clone(&self.stop), ..Progress::default() })
+    }
+
+    /// Parts finished so far (the variants of a sweep).
+    pub fn finished(&self) -> u64 {
+        self.finished.load(Ordering::Relaxed)
+    }
+
+    /// One more part is finished.
+    pub(crate) fn finish_part(&self) {
+        self.finished.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Whether a stop has been asked.
+    pub fn stopped(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
+    }
+
+    /// Ask the run (and every part of it) to stop at the next time it reaches.
     pub fn stop(&self) {
         self.stop.store(true, Ordering::Relaxed);
     }
@@ -87,7 +114,7 @@ pub(crate) fn reached(t: f64) -> Result<(), Error> {
         Some(p) => {
             p.time.store(t.to_bits(), Ordering::Relaxed);
             p.steps.fetch_add(1, Ordering::Relaxed);
-            if p.stop.load(Ordering::Relaxed) {
+            if p.stopped() {
                 Err(Error::Interrupted { time: t })
             } else {
                 Ok(())
@@ -114,5 +141,20 @@ mod tests {
         // Outside the scope nothing watches: a stop asked of another run changes nothing.
         assert!(reached(1.0).is_ok());
         assert_eq!(progress.steps(), 2);
+    }
+
+    #[test]
+    fn a_stop_asked_of_the_whole_stops_its_parts() {
+        let whole = Progress::new();
+        let part = whole.part();
+        scope(&part, || {
+            assert!(reached(0.1).is_ok());
+            whole.stop();
+            assert!(matches!(reached(0.2), Err(Error::Interrupted { .. })));
+        });
+        // The part keeps its own time and steps; the whole counts parts finished.
+        assert_eq!((part.time(), part.steps(), whole.steps()), (0.2, 2, 0));
+        whole.finish_part();
+        assert_eq!(whole.finished(), 1);
     }
 }

@@ -20,8 +20,10 @@
 
 use crate::error::{Error, Problem};
 use crate::expr::Expr;
-use crate::{Model, Results};
+use crate::progress::Progress;
+use crate::{Model, Overrides, Results};
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// The aggregations, by name.
 const AGGREGATIONS: &[&str] = &["max", "min", "peak", "mean", "rms", "initial", "final", "at"];
@@ -269,23 +271,36 @@ pub type Row = Result<Vec<f64>, Error>;
 /// [`Model::with_parameters`] takes them) on `workers` threads (all cores when `None`), each run
 /// reduced to `outputs`. A variant that fails is an `Err` row, not the end of the sweep; an
 /// output that cannot be evaluated on a run is a model error at `outputs.<name>`. Rows are in the
-/// order of `variants` whatever the threads.
+/// order of `variants` whatever the threads. `watch` counts the variants finished
+/// ([`Progress::finished`]); once it is stopped, the variants running end as
+/// [`Error::Interrupted`] at their next step, and so does every later one at its first.
 pub fn sweep(
     model: &Model,
     analysis: &str,
     variants: &[Vec<(String, String)>],
     outputs: &[Output],
     workers: Option<usize>,
+    watch: &Arc<Progress>,
 ) -> Result<Vec<Row>, Error> {
-    model.analysis(analysis)?;
+    let t_start = model.analysis(analysis)?.t_start;
     let one = |values: &Vec<(String, String)>| -> Row {
-        let results = model.with_parameters(values)?.run(analysis).map_err(|f| f.error)?;
-        outputs
-            .iter()
-            .map(|o| {
-                o.evaluate(&results).map_err(|e| Error::Model(vec![Problem::new(format!("outputs.{}", o.name), e)]))
-            })
-            .collect()
+        let run = || -> Row {
+            // Stopped before this variant began: not compiled, not run.
+            if watch.stopped() {
+                return Err(Error::Interrupted { time: t_start });
+            }
+            let variant = model.with_parameters(values)?;
+            let results = variant.run_watched(analysis, &Overrides::default(), &watch.part()).map_err(|f| f.error)?;
+            outputs
+                .iter()
+                .map(|o| {
+                    o.evaluate(&results).map_err(|e| Error::Model(vec![Problem::new(format!("outputs.{}", o.name), e)]))
+                })
+                .collect()
+        };
+        let row = run();
+        watch.finish_part();
+        row
     };
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(k) = workers {

@@ -5,6 +5,7 @@
 mod common;
 
 use common::example;
+use linkwork::progress::Progress;
 use linkwork::sweep::{sweep, Output};
 use linkwork::{Error, Model};
 use std::f64::consts::PI;
@@ -26,9 +27,15 @@ fn outputs(list: &[(&str, &str)]) -> Vec<Output> {
 #[test]
 fn the_stroke_of_each_radius_is_twice_it() {
     let r = [0.05, 0.075, 0.1, 0.125, 0.15];
-    let rows =
-        sweep(&model(), "kinematics", &radii(&r), &outputs(&[("stroke", "max(slider.x) - min(slider.x)")]), None)
-            .unwrap();
+    let rows = sweep(
+        &model(),
+        "kinematics",
+        &radii(&r),
+        &outputs(&[("stroke", "max(slider.x) - min(slider.x)")]),
+        None,
+        &Progress::new(),
+    )
+    .unwrap();
     for (r, row) in r.iter().zip(&rows) {
         let stroke = row.as_ref().unwrap()[0];
         assert!((stroke - 2.0 * r).abs() < 1e-9, "r = {r}: {stroke}");
@@ -54,7 +61,7 @@ fn aggregations_match_their_closed_forms() {
         ("nested", "max(max(crank.phi, 1) * 2) + 1"),
         ("omega", "mean(crank.omega)"),
     ];
-    let rows = sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&list), Some(1)).unwrap();
+    let rows = sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&list), Some(1), &Progress::new()).unwrap();
     let got = rows[0].as_ref().unwrap();
     let expected = [2.0 * PI, 0.0, PI, 2.0 * PI / 3f64.sqrt(), 4.0, 0.4, 1.0, PI / 2.0, 4.0 * PI + 1.0, 2.0 * PI];
     for ((name, _), (g, e)) in list.iter().zip(got.iter().zip(expected)) {
@@ -67,13 +74,21 @@ fn aggregations_match_their_closed_forms() {
 /// than the rod (r = 0.35 m, L = 0.3 m) cannot turn.
 #[test]
 fn a_failed_variant_is_a_row() {
-    let rows =
-        sweep(&model(), "kinematics", &radii(&[0.1, 0.35, 0.15]), &outputs(&[("s", "final(slider.x)")]), None).unwrap();
+    let rows = sweep(
+        &model(),
+        "kinematics",
+        &radii(&[0.1, 0.35, 0.15]),
+        &outputs(&[("s", "final(slider.x)")]),
+        None,
+        &Progress::new(),
+    )
+    .unwrap();
     assert!(rows[0].is_ok() && rows[2].is_ok(), "{rows:?}");
     let error = rows[1].as_ref().unwrap_err();
     assert!(!matches!(error, Error::Model(_)), "{error}");
     let bad = vec![vec![("r".to_string(), "2 kg".to_string())]];
-    let rows = sweep(&model(), "kinematics", &bad, &outputs(&[("s", "final(slider.x)")]), None).unwrap();
+    let rows =
+        sweep(&model(), "kinematics", &bad, &outputs(&[("s", "final(slider.x)")]), None, &Progress::new()).unwrap();
     assert!(rows[0].as_ref().unwrap_err().to_string().contains("parameters.r"), "{rows:?}");
 }
 
@@ -87,12 +102,16 @@ fn bad_outputs_name_what_is_wrong() {
     assert!(e.contains("peak() takes one expression, found 2 arguments"), "{e}");
     let e = Output::parse("s", "at(t1, slider.x)").unwrap_err();
     assert!(e.contains("needs a number for time"), "{e}");
-    let rows = sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&[("s", "max(slider.xx)")]), None).unwrap();
+    let rows =
+        sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&[("s", "max(slider.xx)")]), None, &Progress::new())
+            .unwrap();
     let message = rows[0].as_ref().unwrap_err().to_string();
     assert!(message.contains("outputs.s") && message.contains("no result column 'slider.xx'"), "{message}");
-    let rows = sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&[("s", "at(2, slider.x)")]), None).unwrap();
+    let rows =
+        sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&[("s", "at(2, slider.x)")]), None, &Progress::new())
+            .unwrap();
     assert!(rows[0].as_ref().unwrap_err().to_string().contains("from t = 0 to 1 s"), "{rows:?}");
-    assert!(sweep(&model(), "nonesuch", &radii(&[0.1]), &[], None).is_err());
+    assert!(sweep(&model(), "nonesuch", &radii(&[0.1]), &[], None, &Progress::new()).is_err());
 }
 
 /// One thread or two: the same rows, bit for bit, in the order of the variants.
@@ -100,10 +119,27 @@ fn bad_outputs_name_what_is_wrong() {
 fn threads_do_not_change_the_table() {
     let r: Vec<f64> = (0..12).map(|k| 0.05 + 0.01 * k as f64).collect();
     let out = outputs(&[("stroke", "max(slider.x) - min(slider.x)"), ("torque", "peak(motor.effort)")]);
-    let one = sweep(&model(), "inverse", &radii(&r), &out, Some(1)).unwrap();
-    let two = sweep(&model(), "inverse", &radii(&r), &out, Some(2)).unwrap();
+    let one = sweep(&model(), "inverse", &radii(&r), &out, Some(1), &Progress::new()).unwrap();
+    let two = sweep(&model(), "inverse", &radii(&r), &out, Some(2), &Progress::new()).unwrap();
     let bits = |rows: &[linkwork::sweep::Row]| -> Vec<Vec<u64>> {
         rows.iter().map(|r| r.as_ref().unwrap().iter().map(|v| v.to_bits()).collect()).collect()
     };
     assert_eq!(bits(&one), bits(&two));
+}
+
+/// A sweep counts its variants as they finish, and a stop asked of it ends every variant not
+/// finished as interrupted while the sweep still returns one row a variant.
+#[test]
+fn a_stopped_sweep_ends_its_variants_as_interrupted() {
+    let out = outputs(&[("s", "final(slider.x)")]);
+    let watch = Progress::new();
+    let rows = sweep(&model(), "kinematics", &radii(&[0.1, 0.12]), &out, Some(1), &watch).unwrap();
+    assert!(rows.iter().all(Result::is_ok));
+    assert_eq!(watch.finished(), 2);
+    let stopped = Progress::new();
+    stopped.stop();
+    let rows = sweep(&model(), "kinematics", &radii(&[0.1, 0.12, 0.14]), &out, Some(2), &stopped).unwrap();
+    assert_eq!(rows.len(), 3);
+    assert!(rows.iter().all(|r| matches!(r, Err(Error::Interrupted { .. }))), "{rows:?}");
+    assert_eq!(stopped.finished(), 3);
 }
