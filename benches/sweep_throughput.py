@@ -1,10 +1,12 @@
-"""Sweep throughput: runs per second for 1,000 variants of the parametrised slider-crank's
-kinematic and inverse analyses (crank radius r from 50 to 150 mm), with 1 and 2 worker threads.
+"""Sweep throughput: runs per second for 1,000 variants of an analysis, with 1 and 2 worker
+threads, for the quick-return mechanism (crank length 1.35 to 1.65 m; its kinematic analysis and
+its dynamic one, the free motion over 2 s with `bdf`) and the parametrised slider-crank (crank radius 50 to
+150 mm; kinematic and inverse).
 
     python benches/sweep_throughput.py
 
 Each figure is the best of three sweeps (wall time, the whole sweep: compiling each variant from
-the file's text, running it and reducing it to its output). docs/performance.md records them.
+the file's text, running it and reducing it to its outputs). docs/performance.md records them.
 """
 
 from __future__ import annotations
@@ -14,24 +16,37 @@ from pathlib import Path
 
 import linkwork
 
-MODEL = Path(__file__).resolve().parent.parent / "examples" / "slider_crank_param.yaml"
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 VARIANTS = 1000
+REPEATS = 3
+
+# (model file, parameter, low, high, analysis, outputs)
+CASES = [
+    ("quick_return_a.yaml", "crank", 1.35, 1.65, "kinematics", {"stroke": "max(slider_d.x) - min(slider_d.x)"}),
+    (
+        "quick_return_a.yaml", "crank", 1.35, 1.65, "dynamics",
+        {"omega": "peak(rocker.omega)", "load": "max(sqrt(A.fx^2 + A.fy^2))"},
+    ),
+    ("slider_crank_param.yaml", "r", 0.05, 0.15, "kinematics", {"stroke": "max(slider.x) - min(slider.x)"}),
+    (
+        "slider_crank_param.yaml", "r", 0.05, 0.15, "inverse",
+        {"stroke": "max(slider.x) - min(slider.x)", "torque": "peak(motor.effort)"},
+    ),
+]
 
 
 def main() -> None:
-    model = linkwork.load(MODEL)
-    radii = [0.05 + 0.1 * k / (VARIANTS - 1) for k in range(VARIANTS)]
-    outputs = {"stroke": "max(slider.x) - min(slider.x)", "torque": "peak(motor.effort)"}
-    for analysis in ("kinematics", "inverse"):
-        used = outputs if analysis == "inverse" else {"stroke": outputs["stroke"]}
+    for file, name, low, high, analysis, outputs in CASES:
+        model = linkwork.load(EXAMPLES / file)
+        values = [low + (high - low) * k / (VARIANTS - 1) for k in range(VARIANTS)]
         for workers in (1, 2):
             best = float("inf")
-            for _ in range(3):
+            for _ in range(REPEATS):
                 start = time.perf_counter()
-                table = linkwork.sweep(model, analysis, grid={"r": radii}, outputs=used, workers=workers)
+                table = linkwork.sweep(model, analysis, grid={name: values}, outputs=outputs, workers=workers)
                 best = min(best, time.perf_counter() - start)
             ok = int((table["status"] == "ok").sum())
-            print(f"{analysis:10s} workers={workers}: {VARIANTS / best:7.0f} runs/s ({best:.2f} s, {ok} ok)")
+            print(f"{file:24s} {analysis:16s} workers={workers}: {VARIANTS / best:7.0f} runs/s ({best:.2f} s, {ok} ok)")
 
 
 if __name__ == "__main__":

@@ -283,13 +283,15 @@ pub fn sweep(
     watch: &Arc<Progress>,
 ) -> Result<Vec<Row>, Error> {
     let t_start = model.analysis(analysis)?.t_start;
+    // The file's text parsed once; each variant reads its parameters from the document.
+    let document = model.document()?;
     let one = |values: &Vec<(String, String)>| -> Row {
         let run = || -> Row {
             // Stopped before this variant began: not compiled, not run.
             if watch.stopped() {
                 return Err(Error::Interrupted { time: t_start });
             }
-            let variant = model.with_parameters(values)?;
+            let variant = model.with_parameters_in(&document, values)?;
             let results = variant.run_watched(analysis, &Overrides::default(), &watch.part()).map_err(|f| f.error)?;
             outputs
                 .iter()

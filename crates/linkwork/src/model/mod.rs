@@ -276,7 +276,12 @@ impl Model {
     /// converted and must have the dimension of the file's value. A name the file's `parameters:`
     /// does not define is a model error at `parameters.<name>`.
     pub fn from_yaml_with(text: &str, set: &[(String, String)]) -> Result<Model> {
-        let parsed = parse_partial_with(text, set).map_err(Error::Model)?;
+        Model::from_document(text, parse::parse_document(text).map_err(Error::Model)?, set)
+    }
+
+    /// The model of `text`, whose YAML document is `document`, with the values `set`.
+    fn from_document(text: &str, document: serde_yaml_ng::Value, set: &[(String, String)]) -> Result<Model> {
+        let parsed = parse::parse_document_with(document, set).map_err(Error::Model)?;
         match compile_partial(&parsed.spec, &parsed.broken) {
             Ok(model) if parsed.problems.is_empty() => {
                 Ok(Model { source: text.to_string(), set: set.to_vec(), ..model })
@@ -290,10 +295,30 @@ impl Model {
     /// [`Model::from_yaml_with`]; values given before and not named again stay). Parameters
     /// computed from others follow them.
     pub fn with_parameters(&self, values: &[(String, String)]) -> Result<Model> {
+        Model::from_yaml_with(&self.source, &self.given_with(values))
+    }
+
+    /// As [`Model::with_parameters`], with this model's text already parsed into `document`
+    /// ([`Model::document`]): a sweep parses the text once, not once a variant.
+    pub(crate) fn with_parameters_in(
+        &self,
+        document: &serde_yaml_ng::Value,
+        values: &[(String, String)],
+    ) -> Result<Model> {
+        Model::from_document(&self.source, document.clone(), &self.given_with(values))
+    }
+
+    /// The YAML document of this model's text, for [`Model::with_parameters_in`].
+    pub(crate) fn document(&self) -> Result<serde_yaml_ng::Value> {
+        parse::parse_document(&self.source).map_err(Error::Model)
+    }
+
+    /// The values given over the file's: this model's, with `values` over them.
+    fn given_with(&self, values: &[(String, String)]) -> Vec<(String, String)> {
         let mut set: Vec<(String, String)> =
             self.set.iter().filter(|(n, _)| !values.iter().any(|(m, _)| m == n)).cloned().collect();
         set.extend(values.iter().cloned());
-        Model::from_yaml_with(&self.source, &set)
+        set
     }
 
     /// Number of coordinates, `3 * bodies`.

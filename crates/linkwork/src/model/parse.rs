@@ -72,7 +72,13 @@ pub fn parse_partial(text: &str) -> Result<Parsed, Vec<Problem>> {
 /// As [`parse_partial`], with parameter values given from outside (`(name, text)`) over the
 /// file's (docs/model-format.md, "Parameters and units").
 pub fn parse_partial_with(text: &str, set: &[(String, String)]) -> Result<Parsed, Vec<Problem>> {
-    let root: Value = serde_yaml_ng::from_str(text).map_err(|e| {
+    parse_document_with(parse_document(text)?, set)
+}
+
+/// The YAML document of a model file's text, before any of it is read as a model: what
+/// [`parse_document_with`] reads, so that a text compiled many times (a sweep) is parsed once.
+pub(crate) fn parse_document(text: &str) -> Result<Value, Vec<Problem>> {
+    serde_yaml_ng::from_str(text).map_err(|e| {
         let msg = match (e.location(), duplicate(text, &e.to_string())) {
             (_, Some((line, column, message))) => {
                 format!("YAML syntax error at line {line}, column {column}: {message}")
@@ -81,7 +87,11 @@ pub fn parse_partial_with(text: &str, set: &[(String, String)]) -> Result<Parsed
             (None, None) => format!("YAML syntax error: {e}"),
         };
         vec![Problem::new("", msg)]
-    })?;
+    })
+}
+
+/// As [`parse_partial_with`], from the file's YAML document ([`parse_document`]).
+pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Result<Parsed, Vec<Problem>> {
     let Value::Mapping(mut map) = root else {
         return Err(vec![Problem::new("", "expected a mapping with sections bodies, joints, drivers, analyses")]);
     };
