@@ -3,17 +3,17 @@
 //! `Phi_q qdot = nu`, again with the least change and the given velocities held.
 //!
 //! Each Newton step is the minimum-norm solution of `Phi_q,F dq_F = -Phi` over the free
-//! coordinates `F` (Gauss-Newton on an underdetermined system, Haug 1989 section 4.6), computed by
-//! the SVD so that redundant rows and remaining freedom are both handled; a backtracking line
-//! search on `|Phi|_2` keeps a rough guess from diverging.
+//! coordinates `F` (Gauss-Newton on an underdetermined system, Haug 1989 section 4.6), computed
+//! so that redundant rows and remaining freedom are both handled (by the SVD for a small
+//! mechanism, over the independent rows by the Gram matrix for a large one:
+//! [`crate::linalg::rows`]); a backtracking line search on `|Phi|_2` keeps a rough guess from
+//! diverging.
 
-use super::{residual_floor, select_columns};
+use super::{residual_floor, row_space};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Result};
-use crate::linalg::dense::min_norm_solve;
 use crate::results::AssemblyReport;
 use crate::system::System;
-use faer::Mat;
 
 /// Newton iterations allowed from a rough guess.
 const MAX_ITERATIONS: usize = 60;
@@ -66,7 +66,6 @@ pub fn assemble(
     let free: Vec<usize> = (0..n).filter(|&k| !given[k]).collect();
     let mut q = q0.to_vec();
     let mut phi = vec![0.0; m];
-    let mut jac = Mat::<f64>::zeros(m, n);
     sys.phi(&ConfigBuf::new(&q).view(), t, &mut phi);
     // A driver that is NaN or infinite at `t` (`sqrt(t - 1)` at 0) is the cause, not the guess;
     // and a NaN must not pass the tolerance test below (`max` skips NaN).
@@ -85,10 +84,9 @@ pub fn assemble(
             return Err(fail(sys, &phi, iterations, "the initial guess may be too far from an assembled configuration, or the joints, drivers and given coordinates cannot all hold at once (check lengths, points and given values)"));
         }
         iterations += 1;
-        sys.jacobian_dense(&ConfigBuf::new(&q).view(), t, jac.as_mut());
-        let jf = select_columns(jac.as_ref(), &free);
+        let jf = sys.jacobian(&ConfigBuf::new(&q).view(), t).columns(&free);
         let rhs: Vec<f64> = phi.iter().map(|x| -x).collect();
-        let Some(dq) = min_norm_solve(jf.as_ref(), &rhs) else {
+        let Some(dq) = row_space(&jf, t)?.min_norm_solve(&rhs) else {
             return Err(fail(sys, &phi, iterations, "the Jacobian is not finite at the guess"));
         };
         let before = norm2(&phi);
@@ -113,7 +111,7 @@ pub fn assemble(
     let residual = maxabs(&phi);
     // Velocities: least change from the guess, given ones held.
     let config = ConfigBuf::new(&q);
-    sys.jacobian_dense(&config.view(), t, jac.as_mut());
+    let jac = sys.jacobian(&config.view(), t);
     let mut nu = vec![0.0; m];
     sys.nu(&config.view(), t, &mut nu);
     if let Some(e) = sys.non_finite(&nu, t) {
@@ -121,14 +119,14 @@ pub fn assemble(
     }
     let mut qdot = qdot0.to_vec();
     let free_v: Vec<usize> = (0..n).filter(|&k| !given[n + k]).collect();
-    let r: Vec<f64> = (0..m).map(|i| nu[i] - (0..n).map(|j| jac[(i, j)] * qdot[j]).sum::<f64>()).collect();
-    let jf = select_columns(jac.as_ref(), &free_v);
-    let dv =
-        min_norm_solve(jf.as_ref(), &r).ok_or_else(|| fail(sys, &phi, iterations, "the Jacobian is not finite"))?;
+    let r: Vec<f64> = jac.times(&qdot).iter().zip(&nu).map(|(jv, nu)| nu - jv).collect();
+    let dv = row_space(&jac.columns(&free_v), t)?
+        .min_norm_solve(&r)
+        .ok_or_else(|| fail(sys, &phi, iterations, "the Jacobian is not finite"))?;
     for (k, &c) in free_v.iter().enumerate() {
         qdot[c] += dv[k];
     }
-    let vres: Vec<f64> = (0..m).map(|i| (0..n).map(|j| jac[(i, j)] * qdot[j]).sum::<f64>() - nu[i]).collect();
+    let vres: Vec<f64> = jac.times(&qdot).iter().zip(&nu).map(|(jv, nu)| jv - nu).collect();
     let velocity_residual = maxabs(&vres);
     let scale = 1.0 + maxabs(&qdot);
     if velocity_residual > VELOCITY_TOLERANCE * scale {

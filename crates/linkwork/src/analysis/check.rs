@@ -9,11 +9,9 @@ use super::setup::{coordinate_names, held, unmet_freedom};
 use super::{assemble, Assembly};
 use crate::constraints::ConfigBuf;
 use crate::error::{Result, RowName};
-use crate::linalg::dense::independent_rows;
 use crate::model::spec::AnalysisKind;
 use crate::model::Model;
 use crate::system::System;
-use faer::Mat;
 use indexmap::IndexMap;
 
 /// Degrees of freedom and redundancy of one set of active constraints.
@@ -77,9 +75,9 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
     let given = held(model, hold_given);
     let assembly =
         assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t, crate::model::SolverSettings::default().tolerance)?;
-    let mut jac = Mat::<f64>::zeros(sys.m, n);
-    sys.jacobian_dense(&ConfigBuf::new(&assembly.q).view(), t, jac.as_mut());
-    let (keep, drop) = independent_rows(jac.as_ref());
+    let jac = sys.jacobian(&ConfigBuf::new(&assembly.q).view(), t);
+    let mut rows = super::row_space(&jac, t)?;
+    let (keep, drop) = rows.independent_rows();
     Ok(SystemCheck {
         drivers: drivers.iter().map(|&d| model.drivers[d].name.clone()).collect(),
         equations: sys.m,
@@ -87,7 +85,7 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
         rank: keep.len(),
         dof: n - keep.len(),
         redundant: drop.iter().map(|&r| sys.row_name(r)).collect(),
-        indeterminate: super::element_names(&sys, &super::indeterminate_rows(jac.as_ref())),
+        indeterminate: super::element_names(&sys, &rows.dependent_rows()),
         assembly,
     })
 }
@@ -95,9 +93,8 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
 /// The massless motion of a dynamic analysis ([`super::massless_motion`]) at its assembled `q`.
 fn massless(model: &Model, drivers: &[usize], q: &[f64], t: f64) -> Option<String> {
     let mut sys = System::new(model, drivers);
-    let mut jac = Mat::<f64>::zeros(sys.m, model.n());
-    sys.jacobian_dense(&ConfigBuf::new(q).view(), t, jac.as_mut());
-    super::massless_motion(model, jac.as_ref()).map(|p| p.to_string())
+    let jac = sys.jacobian(&ConfigBuf::new(q).view(), t);
+    super::massless_motion(model, &jac).map(|p| p.to_string())
 }
 
 /// Check the mechanism alone (given coordinates held) and with each analysis's drivers. Fails

@@ -9,18 +9,18 @@
 //!
 //! Joint reactions and driver efforts follow from `lambda` as in dynamics
 //! ([`Dae::reactions`]). With redundant rows (`m > rank`) `lambda` is not unique: the
-//! minimum-norm solution (SVD) is taken, and the joints that share a load in a way rigid bodies
-//! leave open are named in the summary (`indeterminate_joints`). The solve is dense, `O(n m^2)`
-//! per output time: the inverse analyses of machines (tens of bodies) take milliseconds.
+//! minimum-norm solution is taken, and the joints that share a load in a way rigid bodies
+//! leave open are named in the summary (`indeterminate_joints`). The solve is by the dense SVD
+//! for a small mechanism and by the sparse Gram matrix `Phi_q Phi_q^T` for a large one
+//! ([`crate::linalg::rows`]), so its cost per output time grows linearly with a chain's bodies.
 
 use super::dynamic::{factor_error, Dae};
 use super::kinematic::run_driven;
-use super::{element_names, indeterminate_rows};
+use super::{element_names, row_space};
 use crate::error::Error;
-use crate::linalg::dense::min_norm_solve;
+use crate::linalg::{ColMatrix, Pattern};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
-use faer::Mat;
 
 /// The largest force or moment left unbalanced by the multipliers, relative to the largest
 /// load or inertia force, before the position counts as singular: `1e-5`. A backward-stable
@@ -49,7 +49,7 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     let mut rhs = vec![0.0; n];
     let mut nu = vec![0.0; m];
     let mut react = Vec::new();
-    let mut jac = Mat::<f64>::zeros(m, n);
+    let pattern = Pattern::new(m, n, dae.jacobian_entries().0.iter().map(|&e| Some(e)));
     let mut indeterminate: Option<Vec<String>> = None;
     let outcome = run_driven(model, analysis, names, |t, q, qdot, qddot, extra| {
         dae.positions(q, t);
@@ -59,8 +59,9 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
             size = size.max(rhs[k].abs()).max((dae.mass[k] * qddot[k]).abs());
             rhs[k] -= dae.mass[k] * qddot[k];
         }
-        dae.jacobian_dense(jac.as_mut());
-        let lambda = min_norm_solve(jac.transpose(), &rhs).ok_or_else(|| Error::Singular {
+        let jac = ColMatrix::from_entries(&pattern, dae.jacobian_entries().1);
+        let mut space = row_space(&jac, t)?;
+        let lambda = space.min_norm_transpose_solve(&rhs).ok_or_else(|| Error::Singular {
             time: t,
             rows: vec![],
             detail: "the singular value decomposition of the constraint Jacobian failed (a non-finite entry)".into(),
@@ -69,20 +70,19 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         // the directions whose singular values are below RANK_TOLERANCE while the kinematics,
         // whose limit is `singular_condition`, still goes on: the load along such a direction is
         // then carried by nothing.
-        let unbalanced = (0..n)
-            .map(|k| ((0..m).map(|i| jac[(i, k)] * lambda[i]).sum::<f64>() - rhs[k]).abs())
-            .fold(0.0f64, f64::max);
+        let unbalanced =
+            jac.transpose_times(&lambda).iter().zip(&rhs).map(|(a, b)| (a - b).abs()).fold(0.0f64, f64::max);
         if unbalanced > BALANCE_TOLERANCE * size {
             return Err(Error::Singular {
                 time: t,
-                rows: indeterminate_rows(jac.as_ref()).into_iter().map(|r| dae.sys.row_name(r)).collect(),
+                rows: space.dependent_rows().into_iter().map(|r| dae.sys.row_name(r)).collect(),
                 detail: format!(
                     "the joints and drivers cannot hold the loads here: the reactions leave {unbalanced:.3e} (N or N m) of loads of {size:.3e} that do not balance (a position next to a singular one, where the reactions grow without bound)"
                 ),
             });
         }
         if indeterminate.is_none() {
-            indeterminate = Some(element_names(&dae.sys, &indeterminate_rows(jac.as_ref())));
+            indeterminate = Some(element_names(&dae.sys, &space.dependent_rows()));
         }
         dae.reactions(q, &lambda, &mut react);
         extra.clear();

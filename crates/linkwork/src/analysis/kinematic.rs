@@ -13,15 +13,13 @@
 //! loop except the growth of the output columns, reserved up front.
 
 use super::setup::{fail, held, output_times, unmet_freedom};
-use super::{assemble, independent_rows, residual_floor, Assembly, SINGULAR_RATIO_KINEMATIC};
+use super::{assemble, residual_floor, Assembly, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::{Config, ConfigBuf};
 use crate::error::{Error, Problem, RowName};
-use crate::linalg::dense::smallest_singular;
-use crate::linalg::{FactorError, SparseLu};
+use crate::linalg::{ColMatrix, FactorError, SparseLu};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, KinematicStats, Results, Statistics};
 use crate::system::System;
-use faer::Mat;
 
 /// Sub-steps between two output times beyond which the motion is too fast to follow: 100,000,
 /// a body turning up to 35,000 rad (5,600 turns, at the default `max_rotation`) between two
@@ -144,13 +142,13 @@ impl Solver<'_> {
     }
 
     /// The ratio of the smallest to the largest singular value of the driven Jacobian at `q`,
-    /// and the rows of the smallest ([`smallest_singular`]).
+    /// and the rows of the smallest ([`RowSpace::smallest_singular`](crate::linalg::rows::RowSpace::smallest_singular)).
     fn diagnose(&mut self) -> (f64, Vec<RowName>) {
-        let n = self.sys.n;
-        let mut jac = Mat::<f64>::zeros(self.sys.m, n);
-        self.sys.jacobian_dense(&Config::new(&self.q, &self.rot_q), self.t, jac.as_mut());
-        let sq = Mat::from_fn(self.rows.len(), n, |i, j| jac[(self.rows[i], j)]);
-        let (ratio, rows) = smallest_singular(sq.as_ref());
+        let pattern = self.sys.pattern(&self.rows);
+        let mut values = vec![0.0; pattern.row_idx.len()];
+        self.sys.fill_jacobian(&pattern, &Config::new(&self.q, &self.rot_q), self.t, &mut values);
+        let Ok(mut space) = super::row_space(&ColMatrix::new(&pattern, values), self.t) else { return (0.0, vec![]) };
+        let (ratio, rows) = space.smallest_singular();
         (ratio, rows.into_iter().map(|i| self.sys.row_name(self.rows[i])).collect())
     }
 }
@@ -205,9 +203,11 @@ pub(crate) fn run_driven(
         Ok(a) => a,
         Err(e) => return Err(fail(results, e)),
     };
-    let mut jac = Mat::<f64>::zeros(sys.m, n);
-    sys.jacobian_dense(&ConfigBuf::new(&assembly.q).view(), t0, jac.as_mut());
-    let (rows, redundant) = independent_rows(jac.as_ref());
+    let jac = sys.jacobian(&ConfigBuf::new(&assembly.q).view(), t0);
+    let (rows, redundant) = match super::row_space(&jac, t0) {
+        Ok(space) => space.independent_rows(),
+        Err(e) => return Err(fail(results, e)),
+    };
     if let Some(message) = unmet_freedom(model, analysis, sys.m, rows.len()) {
         let problem = Problem::new(format!("analyses.{}.drivers", analysis.name), message);
         return Err(fail(results, Error::Model(vec![problem])));

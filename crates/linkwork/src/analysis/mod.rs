@@ -13,7 +13,6 @@ mod run;
 mod setup;
 mod statics;
 
-pub use crate::linalg::dense::independent_rows;
 pub use assembly::{assemble, Assembly};
 pub use check::{check, AnalysisCheck, CheckReport, SystemCheck};
 pub(crate) use inverse::reaction_columns;
@@ -24,7 +23,9 @@ pub use run::Overrides;
 pub use statics::run_static;
 
 use crate::linalg::dense::null_space;
-use faer::{Mat, MatRef};
+use crate::linalg::rows::RowSpace;
+use crate::linalg::ColMatrix;
+use faer::Mat;
 
 /// Units of round-off in a constraint residual: each row of `Phi` adds a few products of
 /// coordinates, rotations and point offsets, each rounded to half a unit of the largest; 64
@@ -87,16 +88,12 @@ pub(crate) const SINGULAR_RATIO_KINEMATIC: f64 = 1e-3;
 /// ([`SINGULAR_RATIO_KINEMATIC`]). `1e-6` keeps three orders of magnitude from each.
 pub(crate) const SINGULAR_RATIO_DYNAMIC: f64 = 1e-6;
 
-/// The columns `cols` of `a`, as a new matrix.
-pub(crate) fn select_columns(a: MatRef<'_, f64>, cols: &[usize]) -> Mat<f64> {
-    Mat::from_fn(a.nrows(), cols.len(), |i, j| a[(i, cols[j])])
-}
-
 /// Rows of `jac (m x n)` whose multipliers `Phi_q^T lambda = g` does not determine: those in a
 /// linear dependence among the rows (one per redundant row). Their joints share a load in a way
 /// rigid bodies leave open; the minimum-norm multipliers are one choice. Empty when the rows are
 /// independent.
 pub(crate) use crate::linalg::dense::dependent_rows as indeterminate_rows;
+pub(crate) use crate::linalg::dense::independent_rows;
 
 /// The names of the elements (joints, drivers) of `rows`, each once, in row order.
 pub(crate) fn element_names(sys: &crate::system::System<'_>, rows: &[usize]) -> Vec<String> {
@@ -110,34 +107,46 @@ pub(crate) fn element_names(sys: &crate::system::System<'_>, rows: &[usize]) -> 
     names
 }
 
-/// The smallest eigenvalue of the mass reduced to the free motions, as a fraction of the largest,
-/// below which a motion has no mass: `1e-12`. Mass ratios within one mechanism are far above it,
-/// and the round-off of the null-space basis leaves a massless motion at `~eps` of the largest.
+/// A coordinate whose mass (or inertia) is below this fraction of the largest counts as having
+/// none: `1e-12`, far below the mass ratios within one mechanism and far above rounding.
 const MASSLESS: f64 = 1e-12;
 
-/// A motion the joints allow at `q` (`jac`, the dense `Phi_q` there) that no mass or inertia
-/// resists: the mass matrix reduced to the null space of `Phi_q`, `N^T M N`, is singular, and so
-/// are the equations of motion (their accelerations are not determined). A massless body is
-/// fine where the joints carry it along (a massless connecting rod between massive ones); a
-/// massless wheel turning freely on its axle is not. `Some` problem at the mass or inertia field
-/// of the first body in that motion, naming its coordinates.
-pub(crate) fn massless_motion(model: &crate::model::Model, jac: MatRef<'_, f64>) -> Option<crate::Problem> {
-    let basis = null_space(jac);
-    let f = basis.ncols();
-    if f == 0 {
-        return None;
-    }
+/// A motion the joints allow at `q` (`jac`, `Phi_q` there) that no mass or inertia resists: the
+/// mass matrix reduced to the null space of `Phi_q` is singular, and so are the equations of
+/// motion (their accelerations are not determined). A massless body is fine where the joints
+/// carry it along (a massless connecting rod between massive ones); a massless wheel turning
+/// freely on its axle is not. `Some` problem at the mass or inertia field of the first body in
+/// that motion, naming its coordinates.
+///
+/// The mass matrix is diagonal (each body's mass twice and its inertia), so a motion without
+/// mass moves only the massless coordinates: it is a null vector of `Phi_q`'s columns of those
+/// coordinates, over the rows that touch them. That small dense matrix is all the SVD sees,
+/// whatever the size of the mechanism.
+pub(crate) fn massless_motion(model: &crate::model::Model, jac: &ColMatrix) -> Option<crate::Problem> {
     let mass: Vec<f64> = model.bodies.iter().flat_map(|b| [b.mass, b.mass, b.inertia]).collect();
-    let reduced =
-        Mat::<f64>::from_fn(f, f, |i, j| (0..mass.len()).map(|k| basis[(k, i)] * mass[k] * basis[(k, j)]).sum());
-    let eig = reduced.self_adjoint_eigen(faer::Side::Lower).ok()?;
-    let s = eig.S().column_vector();
-    let largest = (0..f).fold(0.0f64, |a, k| a.max(s[k].abs()));
-    // Eigenvalues ascend: the first is the least massive motion.
-    if s[0] > MASSLESS * largest {
+    let largest = mass.iter().fold(0.0f64, |a, &m| a.max(m));
+    let light: Vec<usize> = (0..mass.len()).filter(|&k| mass[k] <= MASSLESS * largest).collect();
+    if light.is_empty() {
         return None;
     }
-    let motion: Vec<f64> = (0..mass.len()).map(|k| (0..f).map(|j| basis[(k, j)] * eig.U()[(j, 0)]).sum()).collect();
+    let sub = jac.columns(&light);
+    let mut rows = sub.row_idx.clone();
+    rows.sort_unstable();
+    rows.dedup();
+    let mut dense = Mat::<f64>::zeros(rows.len(), light.len());
+    for (c, w) in sub.col_ptr.windows(2).enumerate() {
+        for (&r, &v) in sub.row_idx[w[0]..w[1]].iter().zip(&sub.values[w[0]..w[1]]) {
+            dense[(rows.binary_search(&r).ok()?, c)] += v;
+        }
+    }
+    let basis = null_space(dense.as_ref());
+    if basis.ncols() == 0 {
+        return None;
+    }
+    let mut motion = vec![0.0; mass.len()];
+    for (k, &c) in light.iter().enumerate() {
+        motion[c] = basis[(k, 0)];
+    }
     let coordinates = statics::coordinates_of(model, &motion);
     let first = coordinates.first()?;
     let (body, coordinate) = first.rsplit_once('.')?;
@@ -150,4 +159,11 @@ pub(crate) fn massless_motion(model: &crate::model::Model, jac: MatRef<'_, f64>)
             coordinates.join(", ")
         ),
     ))
+}
+
+/// The row space of `Phi_q` (`jac`) at time `t` ([`RowSpace`]: dense for a small mechanism, the
+/// Gram factorization for a large one).
+pub(crate) fn row_space(jac: &ColMatrix, t: f64) -> crate::error::Result<RowSpace> {
+    RowSpace::new(jac.as_ref())
+        .map_err(|_| crate::Error::OutOfMemory { time: t, what: "in the rank of the constraint Jacobian".into() })
 }

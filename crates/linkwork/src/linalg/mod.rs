@@ -3,9 +3,12 @@
 //! analysis (faer's COLAMD ordering and elimination structure), numeric factorization per
 //! matrix, and a 1-norm condition estimate from the factors (Hager 1984, Higham 1988) to detect
 //! singular positions. [`dense`]: rank, null space, minimum-norm solutions and the smallest
-//! singular value of small dense matrices by the SVD.
+//! singular value of small dense matrices by the SVD. [`rows`]: the same questions of the rows
+//! of a sparse matrix of any size (the SVD when small, the Cholesky factorization of `A A^T`
+//! when large). [`ColMatrix`]: an owned compressed-column matrix.
 
 pub mod dense;
+pub mod rows;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::factor::PartialPivLuParams;
@@ -60,6 +63,80 @@ impl Pattern {
             col_ptr[c + 1] += col_ptr[c];
         }
         Pattern { col_ptr, row_idx, map, nrows }
+    }
+}
+
+/// An owned matrix in compressed columns (each column's rows ascending, each entry once).
+#[derive(Debug, Clone)]
+pub struct ColMatrix {
+    /// Number of rows.
+    pub nrows: usize,
+    /// (columns + 1) column pointers.
+    pub col_ptr: Vec<usize>,
+    /// (nnz) row index of each value.
+    pub row_idx: Vec<usize>,
+    /// (nnz) values.
+    pub values: Vec<f64>,
+}
+
+impl ColMatrix {
+    /// The matrix of `pattern` with `values`.
+    pub fn new(pattern: &Pattern, values: Vec<f64>) -> ColMatrix {
+        ColMatrix { nrows: pattern.nrows, col_ptr: pattern.col_ptr.clone(), row_idx: pattern.row_idx.clone(), values }
+    }
+
+    /// The matrix of `pattern` whose entries, in the order the pattern was built from, have
+    /// `entry_values` (repeated entries added up).
+    pub fn from_entries(pattern: &Pattern, entry_values: &[f64]) -> ColMatrix {
+        let mut values = vec![0.0; pattern.row_idx.len()];
+        for (&pos, v) in pattern.map.iter().zip(entry_values) {
+            if pos != usize::MAX {
+                values[pos] += v;
+            }
+        }
+        ColMatrix::new(pattern, values)
+    }
+
+    /// Number of columns.
+    pub fn ncols(&self) -> usize {
+        self.col_ptr.len() - 1
+    }
+
+    /// The columns `cols` of this matrix, in that order.
+    pub fn columns(&self, cols: &[usize]) -> ColMatrix {
+        let mut out = ColMatrix { nrows: self.nrows, col_ptr: vec![0], row_idx: Vec::new(), values: Vec::new() };
+        for &c in cols {
+            let range = self.col_ptr[c]..self.col_ptr[c + 1];
+            out.row_idx.extend_from_slice(&self.row_idx[range.clone()]);
+            out.values.extend_from_slice(&self.values[range]);
+            out.col_ptr.push(out.row_idx.len());
+        }
+        out
+    }
+
+    /// `A x`, `x: (columns)`.
+    pub fn times(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; self.nrows];
+        for (w, xc) in self.col_ptr.windows(2).zip(x) {
+            for (&i, v) in self.row_idx[w[0]..w[1]].iter().zip(&self.values[w[0]..w[1]]) {
+                y[i] += v * xc;
+            }
+        }
+        y
+    }
+
+    /// `A^T y`, `y: (rows)`.
+    pub fn transpose_times(&self, y: &[f64]) -> Vec<f64> {
+        self.col_ptr
+            .windows(2)
+            .map(|w| self.row_idx[w[0]..w[1]].iter().zip(&self.values[w[0]..w[1]]).map(|(&i, v)| v * y[i]).sum())
+            .collect()
+    }
+
+    /// A view for faer.
+    pub fn as_ref(&self) -> SparseColMatRef<'_, usize, f64> {
+        let sym = SymbolicSparseColMatRef::new_checked(self.nrows, self.ncols(), &self.col_ptr, None, &self.row_idx);
+        SparseColMatRef::new(sym, &self.values)
     }
 }
 

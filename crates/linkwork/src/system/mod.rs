@@ -4,7 +4,7 @@
 
 use crate::constraints::{Config, Constraint};
 use crate::error::{Error, RowName};
-use crate::linalg::Pattern;
+use crate::linalg::{ColMatrix, Pattern};
 use crate::model::{Element, Model};
 use faer::MatMut;
 
@@ -143,6 +143,16 @@ impl<'m> System<'m> {
         }
         let entries = self.entries().into_iter().map(|(row, col)| local[row].map(|r| (r, col)));
         Pattern::new(selected.len(), self.n, entries)
+    }
+
+    /// `(q, t) => Phi_q`, every row, compressed by columns; its pattern is built anew each call
+    /// (for the setup of an analysis and its diagnoses, not for its steps).
+    pub fn jacobian(&mut self, q: &Config<'_>, t: f64) -> ColMatrix {
+        let all: Vec<usize> = (0..self.m).collect();
+        let pattern = self.pattern(&all);
+        let mut values = vec![0.0; pattern.row_idx.len()];
+        self.fill_jacobian(&pattern, q, t, &mut values);
+        ColMatrix::new(&pattern, values)
     }
 
     /// `(q, t) => Phi_q` values in `pattern` (from [`System::pattern`]), `values: (nnz)`.

@@ -34,15 +34,13 @@ pub use crate::model::spec::{Formulation, IntegratorKind};
 pub use dae::{Dae, LinearStats, EPS_REL};
 pub use output::{factor_error, Output, ENERGY_COLUMNS};
 
+use super::assemble;
 use super::setup::{fail, held};
-use super::{assemble, independent_rows};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, RowName};
-use crate::linalg::dense::smallest_singular;
 use crate::model::{Analysis, IntegratorSettings, Model};
 pub use crate::results::DynamicStats;
 use crate::results::{Failure, Residuals, Results, Statistics};
-use faer::Mat;
 
 /// The smallest step an integrator may take at `t` in a run of length `span`, s: 16 units of
 /// round-off of the time, below which `t + h` no longer differs from `t` in a useful way.
@@ -235,11 +233,12 @@ impl Span {
 }
 
 /// The ratio of the smallest to the largest singular value of `Phi_q` at `(q, t)`, and the rows
-/// of the smallest ([`smallest_singular`]): the evidence of a singular position.
+/// of the smallest ([`RowSpace::smallest_singular`](crate::linalg::rows::RowSpace::smallest_singular)):
+/// the evidence of a singular position.
 pub fn singular_rows(dae: &mut Dae<'_>, q: &[f64], t: f64) -> (f64, Vec<RowName>) {
-    let mut jac = Mat::<f64>::zeros(dae.m, dae.n);
-    dae.sys.jacobian_dense(&ConfigBuf::new(q).view(), t, jac.as_mut());
-    let (ratio, rows) = smallest_singular(jac.as_ref());
+    let jac = dae.sys.jacobian(&ConfigBuf::new(q).view(), t);
+    let Ok(mut space) = crate::analysis::row_space(&jac, t) else { return (0.0, vec![]) };
+    let (ratio, rows) = space.smallest_singular();
     (ratio, rows.into_iter().map(|i| dae.sys.row_name(i)).collect())
 }
 
@@ -358,12 +357,15 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         Ok(a) => a,
         Err(e) => return Err(fail(out.results, e)),
     };
-    let mut jac = Mat::<f64>::zeros(m, n);
-    dae.sys.jacobian_dense(&ConfigBuf::new(&assembly.q).view(), t0, jac.as_mut());
-    let (independent, redundant) = independent_rows(jac.as_ref());
+    let jac = dae.sys.jacobian(&ConfigBuf::new(&assembly.q).view(), t0);
+    let mut rows = match crate::analysis::row_space(&jac, t0) {
+        Ok(rows) => rows,
+        Err(e) => return Err(fail(out.results, e)),
+    };
+    let (independent, redundant) = rows.independent_rows();
     let redundant_rows: Vec<RowName> = redundant.iter().map(|&r| dae.sys.row_name(r)).collect();
-    let indeterminate = crate::analysis::element_names(&dae.sys, &crate::analysis::indeterminate_rows(jac.as_ref()));
-    if let Some(problem) = crate::analysis::massless_motion(model, jac.as_ref()) {
+    let indeterminate = crate::analysis::element_names(&dae.sys, &rows.dependent_rows());
+    if let Some(problem) = crate::analysis::massless_motion(model, &jac) {
         return Err(fail(out.results, Error::Model(vec![problem])));
     }
     let mut sol = vec![0.0; n + m];
