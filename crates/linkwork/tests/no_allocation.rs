@@ -1,26 +1,33 @@
-//! The kinematic time loop allocates nothing: a run of 2001 output points makes exactly as many
-//! heap allocations as a run of 41 (setup is the same; only the loop is longer). Counted with a
-//! global allocator in this test binary only, on the test's own thread: the test harness's main
-//! thread allocates now and then while it waits (more often on a loaded machine), and the engine
-//! runs on the calling thread.
+//! The time loops allocate nothing: a kinematic run of 2001 output points makes exactly as many
+//! heap allocations as a run of 41, and a dynamic run of ten times the motion as many as the
+//! shorter one, with each integrator (setup is the same; only the loop is longer). Counted with a
+//! global allocator in this test binary only, per thread: the test harness's main thread
+//! allocates now and then while it waits, tests run side by side, and the engine runs on the
+//! calling thread.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 struct Counting;
 
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
 thread_local! {
-    /// Whether allocations on this thread are counted (a const initialiser: no allocation).
-    static COUNTED: Cell<bool> = const { Cell::new(false) };
+    /// The allocations counted on this thread, when it counts them (a const initialiser: no
+    /// allocation). Each test counts on its own thread, so tests running side by side do not
+    /// see each other's.
+    static ALLOCATIONS: Cell<Option<usize>> = const { Cell::new(None) };
 }
 
 fn count() {
-    if COUNTED.try_with(Cell::get).unwrap_or(false) {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-    }
+    let _ = ALLOCATIONS.try_with(|c| c.set(c.get().map(|n| n + 1)));
+}
+
+/// Allocations counted on this thread so far (counting starts at the first call).
+fn allocations() -> usize {
+    ALLOCATIONS.with(|c| {
+        let n = c.get().unwrap_or(0);
+        c.set(Some(n));
+        n
+    })
 }
 
 // SAFETY: forwards to the system allocator unchanged, only counting calls.
@@ -43,14 +50,14 @@ static GLOBAL: Counting = Counting;
 
 #[test]
 fn time_loop_allocates_nothing() {
-    COUNTED.with(|c| c.set(true));
+    allocations();
     let path = format!("{}/../../examples/quick_return_a.yaml", env!("CARGO_MANIFEST_DIR"));
     let mut model = linkwork::Model::load(path).unwrap();
     let mut count = |t_end: f64| {
         model.analyses[0].t_end = t_end;
-        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        let before = allocations();
         let r = model.run("kinematics").unwrap();
-        (ALLOCATIONS.load(Ordering::Relaxed) - before, r.len())
+        (allocations() - before, r.len())
     };
     let (short, n_short) = count(2.0);
     let (long, n_long) = count(100.0);
@@ -62,4 +69,40 @@ fn time_loop_allocates_nothing() {
         "the 2001-point run allocated {} more times than the 41-point run",
         long as i64 - short as i64
     );
+}
+
+/// The dynamic step allocates nothing either: a run of ten times the motion (ten times the
+/// steps, Newton iterations and factorizations) makes as many allocations, with each integrator,
+/// on the double pendulum and on the quick-return coasting. The results' columns are sized for
+/// the output times at the start. A new partition of `abam` (a new dependent block: its pattern
+/// and symbolic factorization) is a new setup and allocates: the quick-return re-partitions
+/// about five times a second under `abam`, so there it is left out; the double pendulum keeps
+/// its first partition throughout.
+#[test]
+fn dynamic_steps_allocate_nothing() {
+    use linkwork::analysis::dynamic::IntegratorKind;
+    allocations();
+    for (file, t_end, integrators) in
+        [("double_pendulum.yaml", 1.0, IntegratorKind::NAMES), ("quick_return_a.yaml", 2.0, &["bdf", "hht"][..])]
+    {
+        let path = format!("{}/../../examples/{file}", env!("CARGO_MANIFEST_DIR"));
+        let model = linkwork::Model::load(path).unwrap();
+        for name in integrators {
+            let count = |t_end: f64| {
+                let integrator = IntegratorKind::from_name(name);
+                let overrides = linkwork::Overrides { integrator, t_end: Some(t_end), ..Default::default() };
+                let before = allocations();
+                let r = model.run_with("dynamics", &overrides).unwrap();
+                (allocations() - before, r.len())
+            };
+            let ((short, rows_short), (long, rows_long)) = (count(t_end), count(10.0 * t_end));
+            assert!(rows_long > 9 * rows_short, "{file} {name}: {rows_short} and {rows_long} output rows");
+            assert_eq!(
+                short,
+                long,
+                "{file} {name}: ten times the motion allocated {} more times",
+                long as i64 - short as i64
+            );
+        }
+    }
 }

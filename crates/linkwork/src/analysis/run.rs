@@ -99,10 +99,11 @@ impl Model {
             Err(f) => &mut f.results,
         };
         // The first output's positions (the assembled start), else the file's guess.
+        let by_name = results.columns_by_name();
         let q = self
             .bodies
             .iter()
-            .flat_map(|b| ["x", "y", "phi"].map(|c| results.column(&format!("{}.{c}", b.name))?.first().copied()))
+            .flat_map(|b| ["x", "y", "phi"].map(|c| by_name.get(format!("{}.{c}", b.name).as_str())?.first().copied()))
             .collect::<Option<Vec<f64>>>()
             .unwrap_or_else(|| self.q0());
         // The analysis's own warnings (a dynamic run's) follow the tolerances'.

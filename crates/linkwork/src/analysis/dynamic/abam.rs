@@ -247,6 +247,10 @@ struct Split<'a, 'm> {
     block_factorizations: usize,
     /// The values of `Phi_q`'s entries that `B`'s current factors were made from.
     factored: Vec<f64>,
+    /// The state [`Split::noise_dominates`] restores (positions, velocities, solution, factored
+    /// entries) and its sample of the noise: kept here so that a step allocates nothing.
+    saved: [Vec<f64>; 4],
+    sample: Vec<f64>,
     /// (r) right-hand side and solution; (r) the dependent positions of a Newton iterate.
     rhs: Vec<f64>,
     qd: Vec<f64>,
@@ -448,7 +452,13 @@ impl Split<'_, '_> {
             return false;
         }
         let p = self.ind.len();
-        let (q0, v0, s0, factored) = (self.q.clone(), self.v.clone(), self.sol.clone(), self.factored.clone());
+        let [mut q0, mut v0, mut s0, mut factored] = std::mem::take(&mut self.saved);
+        for (to, from) in
+            [(&mut q0, &self.q), (&mut v0, &self.v), (&mut s0, &self.sol), (&mut factored, &self.factored)]
+        {
+            to.clear();
+            to.extend_from_slice(from);
+        }
         self.dae.positions(&self.q, t);
         for (b, &row) in self.rhs.iter_mut().zip(&self.rows) {
             *b = -self.dae.phi[row];
@@ -478,7 +488,9 @@ impl Split<'_, '_> {
             }
             ok = self.dae.accelerations(&self.q, &self.v, t, &mut self.sol).is_ok();
         }
-        let mut sample = vec![0.0; 2 * p];
+        let mut sample = std::mem::take(&mut self.sample);
+        sample.clear();
+        sample.resize(2 * p, 0.0);
         for (j, &c) in self.ind.iter().enumerate() {
             sample[p + j] = self.sol[c] - s0[c];
         }
@@ -489,9 +501,12 @@ impl Split<'_, '_> {
         if let Some(b) = self.block.as_mut() {
             b.factor(&factored);
         }
-        self.factored = factored;
+        std::mem::swap(&mut self.factored, &mut factored);
         self.dae.positions(&self.q, t);
-        ok && self.norm(d) <= NOISE_MARGIN * self.norm(&sample)
+        let dominates = ok && self.norm(d) <= NOISE_MARGIN * self.norm(&sample);
+        self.saved = [q0, v0, s0, factored];
+        self.sample = sample;
+        dominates
     }
 
     /// Resume at `(t, q, v)`, reached by another method: the accelerations and multipliers
@@ -869,6 +884,8 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         partition_work: 0,
         block_factorizations: 0,
         factored: vec![],
+        saved: [vec![], vec![], vec![], vec![]],
+        sample: vec![],
         rhs: vec![],
         qd: vec![],
         phiv: vec![0.0; m],
