@@ -327,3 +327,28 @@ def test_a_panic_becomes_internal_error() -> None:
     pyo3's PanicException (a BaseException) or a crash."""
     with pytest.raises(linkwork.InternalError, match="internal error in the Linkwork engine .*deliberate panic"):
         linkwork._linkwork._panic_for_tests()
+
+
+def test_outputs_keep_the_columns_named_and_the_report_draws_the_bodies_kept(tmp_path: Path) -> None:
+    text = (EXAMPLES / "quick_return_a.yaml").read_text()
+    line = "  kinematics: {type: kinematic, drivers: [crank_drive], t_end: 2.0, step: 0.05}"
+    assert text.count(line) == 1
+    chosen = text.replace(
+        line, line[:-1] + ", outputs: {bodies: [crank, rocker], joints: [A], columns: [slider_d.x]}}"
+    )
+    some = linkwork.from_yaml(chosen).run("kinematics")
+    every = linkwork.load(EXAMPLES / "quick_return_a.yaml").run("kinematics")
+    assert set(some.columns) == {
+        *(f"{b}.{q}" for b in ("crank", "rocker") for q in ("x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha")),
+        "slider_d.x",
+    }, "a kinematic analysis has no reactions: A's columns are not there to keep"
+    for name in some.columns:
+        assert some[name].tolist() == every[name].tolist(), name
+    some.write(tmp_path / "out")
+    header = (tmp_path / "out" / "results.csv").read_text().splitlines()[0].split(",")
+    assert header == ["time", *some.columns]
+    # The report draws the crank and the rocker, and the joints between them and the ground.
+    run = some._run()
+    assert [b["name"] for b in run.drawing["bodies"]] == ["crank", "rocker"]
+    assert [j["name"] for j in run.drawing["joints"]] == ["O", "A"]
+    assert (tmp_path / "out" / "report.html").stat().st_size > 0

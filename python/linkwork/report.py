@@ -71,6 +71,21 @@ class Run:
     summary: Summary
     title: str = ""
 
+    def __post_init__(self) -> None:
+        # An analysis that keeps only some columns (`outputs:`) draws the bodies whose
+        # positions it kept, and the joints between them and the ground.
+        kept = {
+            b["name"] for b in self.drawing["bodies"] if all(f"{b['name']}.{c}" in self.columns for c in ("x", "y", "phi"))
+        }
+        if len(kept) < len(self.drawing["bodies"]):
+            on = kept | {"ground"}
+            drawing = {
+                **self.drawing,
+                "bodies": [b for b in self.drawing["bodies"] if b["name"] in kept],
+                "joints": [j for j in self.drawing["joints"] if j["body_i"] in on and j["body_j"] in on],
+            }
+            object.__setattr__(self, "drawing", drawing)
+
 
 # --- numbers -------------------------------------------------------------------------------------
 

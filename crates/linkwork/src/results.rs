@@ -12,7 +12,8 @@ pub use summary::{
     Residuals, StaticStats, Statistics, Summary,
 };
 
-use crate::error::Error;
+use crate::error::{Error, Problem};
+use crate::model::spec::OutputsSpec;
 use crate::model::{Analysis, Model};
 use serde::Serialize;
 use serde_json::Value;
@@ -23,6 +24,10 @@ use std::path::{Path, PathBuf};
 
 /// The quantities written per body, in column order.
 pub const BODY_QUANTITIES: [&str; 9] = ["x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha"];
+
+/// The reaction columns of each joint, `<joint>.<quantity>`: the force on its first body in the
+/// global frame, N, and the torque, N m.
+pub const REACTION_QUANTITIES: [&str; 3] = ["fx", "fy", "torque"];
 
 /// Results of one analysis: one column per quantity, one row per output time.
 #[derive(Debug, Clone)]
@@ -35,6 +40,23 @@ pub struct Results {
     pub columns: Vec<Vec<f64>>,
     /// Everything `summary.json` says besides `output_points`, the status and the error.
     pub summary: Summary,
+    /// The analysis's choice of columns, applied once they are all named ([`Results::reserve`]
+    /// or the first [`Results::push`]).
+    selection: Selection,
+}
+
+/// Which columns of the rows pushed are kept.
+#[derive(Debug, Clone, Default)]
+enum Selection {
+    /// Every column.
+    #[default]
+    All,
+    /// The analysis `.0` keeps the columns `.1`, to be applied.
+    Pending(String, OutputsSpec),
+    /// Applied: every column's name as pushed, and whether it is kept.
+    Applied { names: Vec<String>, keep: Vec<bool> },
+    /// A column it names does not exist: the error the first push returns.
+    Failed(Error),
 }
 
 /// A failed analysis: the error and every result computed before it.
@@ -50,6 +72,9 @@ impl Results {
     /// Empty results with the columns of `model` for `analysis`.
     pub fn new(model: &Model, analysis: &Analysis) -> Results {
         let mut results = Results::of_model(model);
+        if let Some(outputs) = &analysis.outputs {
+            results.selection = Selection::Pending(analysis.name.clone(), outputs.clone());
+        }
         results.summary.analysis = Some(AnalysisHeader {
             analysis: analysis.name.clone(),
             kind: analysis.kind,
@@ -72,7 +97,7 @@ impl Results {
             parameters: model.parameters.clone(),
             ..Summary::default()
         };
-        Results { time: Vec::new(), columns: vec![Vec::new(); names.len()], names, summary }
+        Results { time: Vec::new(), columns: vec![Vec::new(); names.len()], names, summary, selection: Selection::All }
     }
 
     /// Number of output points.
@@ -95,6 +120,7 @@ impl Results {
     }
 
     pub(crate) fn reserve(&mut self, rows: usize) {
+        self.select();
         self.time.reserve(rows);
         self.columns.iter_mut().for_each(|c| c.reserve(rows));
     }
@@ -106,23 +132,77 @@ impl Results {
     /// Every output time is reported to the run's [`progress`](crate::progress), which may stop
     /// the run there (after the row is kept).
     pub(crate) fn push(&mut self, t: f64, q: &[f64], qdot: &[f64], qddot: &[f64], extra: &[f64]) -> Result<(), Error> {
+        self.select();
         let bodies = q.len() / 3;
-        debug_assert_eq!(self.columns.len(), 9 * bodies + extra.len(), "one extra value per extra column");
         // In column order: each body's `x, y, phi, vx, vy, omega, ax, ay, alpha`, then `extra`.
         let values = || {
             (0..bodies)
                 .flat_map(|b| [q, qdot, qddot].into_iter().flat_map(move |v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]]))
                 .chain(extra.iter().copied())
         };
+        let (names, keep) = match &self.selection {
+            Selection::Failed(e) => return Err(e.clone()),
+            Selection::Applied { names, keep } => (names, Some(keep)),
+            _ => (&self.names, None),
+        };
+        debug_assert_eq!(names.len(), 9 * bodies + extra.len(), "one extra value per extra column");
         if let Some((k, value)) = values().enumerate().find(|(_, v)| !v.is_finite()) {
-            let element = self.names[k].clone();
+            let element = names[k].clone();
             return Err(Error::NonFinite { time: t, element, expression: String::new(), value });
         }
         self.time.push(t);
-        for (c, v) in self.columns.iter_mut().zip(values()) {
-            c.push(v);
+        match keep {
+            Some(keep) => {
+                let kept = values().zip(keep).filter(|(_, &k)| k).map(|(v, _)| v);
+                self.columns.iter_mut().zip(kept).for_each(|(c, v)| c.push(v));
+            }
+            None => self.columns.iter_mut().zip(values()).for_each(|(c, v)| c.push(v)),
         }
         crate::progress::reached(t)
+    }
+
+    /// Apply a pending choice of columns, once every column is named: keep each body's nine
+    /// columns, each joint's reactions and each column the analysis's `outputs` name; a named
+    /// column that does not exist fails the first push, at `analyses.<name>.outputs.columns[k]`.
+    fn select(&mut self) {
+        if !matches!(self.selection, Selection::Pending(..)) {
+            return;
+        }
+        let Selection::Pending(analysis, outputs) = std::mem::take(&mut self.selection) else {
+            unreachable!("matched above")
+        };
+        let bodies: std::collections::HashSet<&str> = outputs.bodies.iter().map(String::as_str).collect();
+        let joints: std::collections::HashSet<&str> = outputs.joints.iter().map(String::as_str).collect();
+        let columns: std::collections::HashSet<&str> = outputs.columns.iter().map(String::as_str).collect();
+        let known: std::collections::HashSet<&str> = self.names.iter().map(String::as_str).collect();
+        if let Some((k, missing)) = outputs.columns.iter().enumerate().find(|(_, c)| !known.contains(c.as_str())) {
+            let problem = Problem::new(
+                format!("analyses.{analysis}.outputs.columns[{k}]"),
+                format!("no result column '{missing}' in this analysis (bodies and joints go in outputs.bodies and outputs.joints)"),
+            );
+            self.selection = Selection::Failed(Error::Model(vec![problem]));
+            return;
+        }
+        let keep: Vec<bool> = self
+            .names
+            .iter()
+            .map(|name| {
+                columns.contains(name.as_str())
+                    || name.rsplit_once('.').is_some_and(|(owner, quantity)| {
+                        (bodies.contains(owner) && BODY_QUANTITIES.contains(&quantity))
+                            || (joints.contains(owner) && REACTION_QUANTITIES.contains(&quantity))
+                    })
+            })
+            .collect();
+        let all = std::mem::take(&mut self.names);
+        let columns = std::mem::take(&mut self.columns);
+        for ((name, column), &k) in all.iter().zip(columns).zip(&keep) {
+            if k {
+                self.names.push(name.clone());
+                self.columns.push(column);
+            }
+        }
+        self.selection = Selection::Applied { names: all, keep };
     }
 
     /// Add to the summary of an analysis with reactions: `reaction_bodies` (the body each joint's
@@ -363,6 +443,7 @@ mod tests {
             names: vec!["a.x".into()],
             columns: vec![vec![value, value]],
             summary: Summary::default(),
+            selection: Selection::All,
         }
     }
 

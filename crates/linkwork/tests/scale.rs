@@ -87,3 +87,35 @@ fn a_large_chain_with_a_redundant_link_runs_and_keeps_its_energy() {
     // rtol 1e-6 of an energy of ~100 J over 0.5 s.
     assert!(drift < 1e-3 * total[0].abs().max(1.0), "energy drift {drift} of {}", total[0]);
 }
+
+/// `outputs:` keeps `time` and the columns it names (a body's nine, a joint's reactions, any
+/// other by name), each equal bit for bit to the same column of a run that keeps all; a name
+/// that is not there is a model error at its path.
+#[test]
+fn outputs_keep_the_columns_named() {
+    let full_text = nfourbar(60, false);
+    let chosen = full_text.replace(
+        "dynamics: {type: dynamic, t_end: 0.5, step: 0.05}",
+        "dynamics: {type: dynamic, t_end: 0.5, step: 0.05, outputs: {bodies: [c60], joints: [A0], columns: [kinetic_energy, r1.phi]}}",
+    );
+    assert_ne!(chosen, full_text, "the analysis line was found");
+    let (all, some) = (Model::from_yaml(&full_text).unwrap(), Model::from_yaml(&chosen).unwrap());
+    let (all, some) = (all.run("dynamics").unwrap(), some.run("dynamics").unwrap());
+    let mut expected: Vec<String> = linkwork::results::BODY_QUANTITIES.iter().map(|q| format!("c60.{q}")).collect();
+    expected.extend(["r1.phi".to_string()]);
+    expected.extend(["A0.fx", "A0.fy", "A0.torque", "kinetic_energy"].map(String::from));
+    let mut names = some.names.clone();
+    names.sort();
+    expected.sort();
+    assert_eq!(names, expected);
+    assert_eq!(some.time, all.time);
+    for name in &some.names {
+        assert_eq!(some.column(name), all.column(name), "{name}");
+    }
+    let unknown = chosen.replace("columns: [kinetic_energy, r1.phi]", "columns: [kinetic_energy, r1.psi]");
+    let error = Model::from_yaml(&unknown).unwrap().run("dynamics").unwrap_err().error;
+    assert!(error.to_string().contains("analyses.dynamics.outputs.columns[1]: no result column 'r1.psi'"), "{error}");
+    let unknown_body = chosen.replace("bodies: [c60]", "bodies: [c61]");
+    let error = Model::from_yaml(&unknown_body).unwrap_err();
+    assert!(error.to_string().contains("analyses.dynamics.outputs.bodies[0]: unknown body 'c61'"), "{error}");
+}

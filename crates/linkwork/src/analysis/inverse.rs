@@ -115,7 +115,7 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
 pub(crate) fn reaction_columns(model: &Model, analysis: &Analysis) -> Vec<String> {
     let mut names = Vec::new();
     for j in &model.joints {
-        names.extend(["fx", "fy", "torque"].map(|q| format!("{}.{q}", j.name)));
+        names.extend(crate::results::REACTION_QUANTITIES.map(|q| format!("{}.{q}", j.name)));
     }
     names.extend(analysis.drivers.iter().map(|&d| format!("{}.effort", model.drivers[d].name)));
     names

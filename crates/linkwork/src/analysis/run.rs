@@ -40,6 +40,7 @@ impl Overrides {
             about: None,
             integrator: self.integrator,
             solver: SolverSpec { rtol: self.rtol, atol: self.atol, ..Default::default() },
+            outputs: None,
         };
         revise(analysis, &changes)
             .map_err(|problems| Error::Model(problems.into_iter().map(|p| self.at_option(&analysis.name, p)).collect()))

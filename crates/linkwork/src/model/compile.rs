@@ -723,6 +723,13 @@ impl Cx<'_> {
                 self.problem(format!("{path}.about"), "only a modes analysis has a point to linearise about");
                 continue;
             }
+            if let Some(o) = &a.outputs {
+                let path = format!("{path}.outputs");
+                let body_names: Vec<&str> = spec.bodies.keys().map(String::as_str).collect();
+                self.selection(&path, "bodies", "body", &body_names, Some(&o.bodies));
+                let joint_names: Vec<&str> = spec.joints.keys().map(String::as_str).collect();
+                self.selection(&path, "joints", "joint", &joint_names, Some(&o.joints));
+            }
             let Some(Timing { t_start, t_end, step, settings, integrator }) = timing else { continue };
             out.insert(
                 name.clone(),
@@ -737,6 +744,7 @@ impl Cx<'_> {
                     settings,
                     integrator,
                     about: a.about.unwrap_or_default(),
+                    outputs: a.outputs.clone(),
                 },
             );
         }

@@ -220,6 +220,8 @@ pub struct Analysis {
     pub integrator: IntegratorSettings,
     /// Where a modes analysis linearises.
     pub about: spec::LinearisePoint,
+    /// The result columns kept (`None`: all), their bodies and joints known to the model.
+    pub outputs: Option<spec::OutputsSpec>,
 }
 
 /// A compiled mechanism: bodies with coordinate offsets, constraints built, names resolved.

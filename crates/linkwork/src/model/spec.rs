@@ -728,6 +728,25 @@ pub struct AnalysisSpec {
     /// Solver settings; every field has a default.
     #[serde(default)]
     pub solver: SolverSpec,
+    /// The result columns to keep (default: all of them), for a large mechanism whose every
+    /// column would fill memory and disk.
+    #[serde(default)]
+    pub outputs: Option<OutputsSpec>,
+}
+
+/// The result columns an analysis keeps: `time`, and only those named here.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct OutputsSpec {
+    /// Bodies whose nine columns (`x, y, phi, vx, vy, omega, ax, ay, alpha`) are kept.
+    #[serde(default)]
+    pub bodies: Vec<String>,
+    /// Joints whose reaction columns (`fx, fy, torque`) are kept.
+    #[serde(default)]
+    pub joints: Vec<String>,
+    /// Other columns kept, by name: `kinetic_energy`, `motor.effort`, a measure, `crank.phi`.
+    #[serde(default)]
+    pub columns: Vec<String>,
 }
 
 named! {
