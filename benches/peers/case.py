@@ -99,7 +99,10 @@ def linkwork_case(problem, target, repeats):
     met = bool(candidates)
     if not met:
         # No tolerance reached the target: the smallest error found is shown, and said so.
-        best = min((t for t in tried if not isinstance(t[2], str)), key=lambda t: t[2])
+        finished = [t for t in tried if not isinstance(t[2], str)]
+        if not finished:
+            raise RuntimeError(f"no Linkwork run finished: {tried}")
+        best = min(finished, key=lambda t: t[2])
         candidates.append((best[0], best[1]))
     integrator, tol = candidates[0]
     cpus = []

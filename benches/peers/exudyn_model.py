@@ -2,7 +2,8 @@
 
 Every body becomes an Exudyn `NodeRigidBody2D` + `ObjectRigidBody2D` (x, y, phi of its centre
 of mass) started from the state Linkwork assembles for the analysis (`Model.check()`: positions
-and velocities that satisfy the joints to rounding), so both engines integrate the same initial
+and velocities that satisfy the joints to rounding), or, with `assembled=False`, from the state
+the file writes when that is consistent as written; so both engines integrate the same initial
 value problem. Joints, their points resolved by Linkwork (`Model.drawing()`, parameters and named
 points substituted), and masses, gravity and forces from the model file:
 
@@ -165,7 +166,13 @@ class ExudynModel:
         """Assemble and integrate with the generalised-alpha solver (Exudyn's default settings
         but the step, end time and linear solver); the solver's iteration data."""
         self.mbs.Assemble()
-        self.mbs.SolveDynamic(self.settings)
+        try:
+            self.mbs.SolveDynamic(self.settings)
+        except exu.SolverError:
+            it = self.mbs.sys["dynamicSolver"].it
+            raise RuntimeError(
+                f"SolveDynamic failed at t = {it.currentTime:.4g} s, its step cut to {it.currentStepSize:.0e} s"
+            ) from None
         return self.mbs.sys["dynamicSolver"].it
 
     def columns(self):

@@ -25,6 +25,7 @@ import platform
 import subprocess
 import sys
 import tempfile
+import textwrap
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -53,7 +54,7 @@ def run_case(args, timeout):
             return {"status": f"timeout (> {timeout:g} s)"}
         if done.returncode != 0:
             lines = done.stderr.strip().splitlines() or [f"exit status {done.returncode}"]
-            return {"status": f"failed: {lines[-1]}"}
+            return {"status": f"failed: {textwrap.shorten(lines[-1], 240)}"}
         return {"status": "ok", **json.loads(out.read_text())}
 
 
@@ -157,18 +158,18 @@ def plot(rows):
             if r["status"] == "ok":
                 points.append((problem.n, r["cpu"] / problem.t_end))
             else:
-                missing.append(f"{engine} N = {problem.n}: {r['status']}")
+                missing.append(f"{engine} N = {problem.n}: {r['status'].split(':')[0]}")
         if points:
             ax.loglog(*zip(*points), marker=marker, label=engine)
-    ax.set_xlabel("N (four-bar loops; 3N + 2 bodies with ground)")
+    ax.set_xlabel("N (four-bar loops: 2N + 1 bodies)")
     ax.set_ylabel("CPU s per simulated second")
     span = next(row[0].t_end for row in rows if row[0].key == "nfourbar")
     ax.set_title(f"N-four-bar, {span:g} s simulated, Linkwork at Exudyn's error or better", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     if missing:
-        fig.text(0.01, 0.01, "not shown: " + "; ".join(missing), fontsize=7)
-    fig.tight_layout(rect=(0, 0.04 if missing else 0, 1, 1))
+        fig.text(0.01, 0.01, "\n".join(textwrap.wrap("not shown (see the table): " + "; ".join(missing), 110)), fontsize=7)
+    fig.tight_layout(rect=(0, 0.06 if missing else 0, 1, 1))
     fig.savefig(PLOT, format="svg", metadata={"Date": None})
     plt.close(fig)
 
