@@ -1,0 +1,274 @@
+"""Linkwork against Exudyn on the same problems: error against a stated reference, CPU time,
+steps and Newton iterations of each engine, Linkwork at the loosest tolerance whose error is at
+most Exudyn's.
+
+    pip install -e '.[bench]'
+    python benches/peers/run.py                  # every problem, N = 10, 100, 1000, 10000
+    python benches/peers/run.py --quick          # the small problems, one repeat
+    python benches/peers/run.py --problems nfourbar --n 10,100 --timeout 120 --no-write
+
+Each engine's run of each problem is a subprocess (benches/peers/case.py) stopped after
+--timeout seconds and reported as a timeout. The table, with the machine and the versions, goes
+between `<!-- peers:begin -->` and `<!-- peers:end -->` in docs/performance.md (section
+"Against Exudyn", added at the end the first time), and the N-four-bar's cost against N to
+docs/peers-nfourbar.svg.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import importlib.metadata
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import textwrap
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import problems  # noqa: E402
+
+ROOT = problems.ROOT
+DOC = ROOT / "docs" / "performance.md"
+PLOT = ROOT / "docs" / "peers-nfourbar.svg"
+BEGIN, END = "<!-- peers:begin -->", "<!-- peers:end -->"
+CASE = Path(__file__).resolve().parent / "case.py"
+FULL_N = (10, 100, 1000, 10000)
+QUICK = ("pendulum", "slider-crank", "quick-return", "andrews", "nfourbar")
+QUICK_N = (10, 100)
+
+
+def run_case(args, timeout):
+    """case.py with `args` in a subprocess: its JSON, or `{"status": ...}` on a timeout or failure."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "case.json"
+        try:
+            done = subprocess.run(
+                [sys.executable, str(CASE), *args, "--out", str(out)], capture_output=True, text=True, timeout=timeout
+            )
+        except subprocess.TimeoutExpired:
+            return {"status": f"timeout (> {timeout:g} s)"}
+        if done.returncode != 0:
+            lines = done.stderr.strip().splitlines() or [f"exit status {done.returncode}"]
+            return {"status": f"failed: {textwrap.shorten(lines[-1], 240)}"}
+        return {"status": "ok", **json.loads(out.read_text())}
+
+
+def machine():
+    """CPU model and cores, and the versions that ran."""
+    model = "unknown CPU"
+    cpuinfo = Path("/proc/cpuinfo")
+    if cpuinfo.exists():
+        for line in cpuinfo.read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run(
+        ["git", "-C", str(ROOT), "status", "--porcelain", "--", "crates", "python"], capture_output=True, text=True
+    ).stdout.strip()
+    return {
+        "cpu": model,
+        "cores": os.cpu_count(),
+        "linkwork": importlib.metadata.version("linkwork"),
+        "commit": commit + (" with local changes to crates/ or python/" if dirty else ""),
+        "exudyn": importlib.metadata.version("exudyn"),
+        "python": platform.python_version(),
+        "date": datetime.date.today().isoformat(),
+    }
+
+
+def number(x, digits=3):
+    return f"{x:.{digits}g}" if x >= 1e-3 else f"{x:.{digits - 1}e}"
+
+
+def table(rows):
+    lines = [
+        "| problem | reference | engine | settings | error | CPU s | steps | Newton iterations | Exudyn CPU / Linkwork CPU |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for problem, exudyn, linkwork in rows:
+        first = f"{problem.label} | {problem.reference}"
+        for engine, r in (("Exudyn", exudyn), ("Linkwork", linkwork)):
+            if r["status"] != "ok":
+                lines.append(f"| {first} | {engine} | {r.get('settings', '')} | {r['status']} | | | | |")
+            else:
+                settings = r["settings"]
+                if engine == "Linkwork" and not r["met"]:
+                    settings += " (no tolerance tried reached Exudyn's error)"
+                elif engine == "Linkwork" and exudyn["status"] != "ok":
+                    settings += " (no Exudyn error to match)"
+                ratio = ""
+                if engine == "Linkwork" and exudyn["status"] == "ok":
+                    ratio = f"{exudyn['cpu'] / r['cpu']:.1f}"
+                error = f"{r['error']:.2e} {problem.unit}"
+                lines.append(
+                    f"| {first} | {engine} | {settings} | {error} | {number(r['cpu'])} | {r['steps']:,} | {r['newton']:,} | {ratio} |"
+                )
+            first = " | "
+    return "\n".join(lines)
+
+
+def findings(rows):
+    """What the table says about the 10-times aim, read from it."""
+    slower, short, timeouts = [], [], []
+    for problem, exudyn, linkwork in rows:
+        name = f"{problem.label} ({exudyn.get('settings', 'Exudyn')})"
+        for engine, r in (("Exudyn", exudyn), ("Linkwork", linkwork)):
+            if r["status"] != "ok":
+                timeouts.append(f"{engine} on {name}: {r['status']}")
+        if exudyn["status"] == "ok" and linkwork["status"] == "ok":
+            ratio = exudyn["cpu"] / linkwork["cpu"]
+            if ratio < 1:
+                slower.append(f"{name}: {ratio:.2f}")
+            elif ratio < 10:
+                short.append(f"{name}: {ratio:.1f}")
+    out = []
+    if short:
+        out.append("- Linkwork is faster, but **not 10 times faster**, on " + "; ".join(short) + ".")
+    if slower:
+        out.append("- Linkwork is **slower** than Exudyn on " + "; ".join(slower) + ".")
+    if timeouts:
+        out.append("- Not measured within the time limit, or failed: " + "; ".join(timeouts) + ".")
+    if not out:
+        out.append("- Linkwork is at least 10 times faster than Exudyn on every problem measured.")
+    return "\n".join(out)
+
+
+def plot(rows):
+    """CPU seconds per simulated second against N for the N-four-bar, both engines (SVG)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.rcParams["svg.hashsalt"] = "linkwork-peers"
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    missing = []
+    for engine, index, marker in (("Exudyn", 1, "s"), ("Linkwork", 2, "o")):
+        points = []
+        for row in rows:
+            problem, r = row[0], row[index]
+            if problem.key != "nfourbar":
+                continue
+            if r["status"] == "ok":
+                points.append((problem.n, r["cpu"] / problem.t_end))
+            else:
+                missing.append(f"{engine} N = {problem.n}: {r['status'].split(':')[0]}")
+        if points:
+            ax.loglog(*zip(*points), marker=marker, label=engine)
+    ax.set_xlabel("N (four-bar loops: 2N + 1 bodies)")
+    ax.set_ylabel("CPU s per simulated second")
+    span = next(row[0].t_end for row in rows if row[0].key == "nfourbar")
+    ax.set_title(f"N-four-bar, {span:g} s simulated, Linkwork at Exudyn's error or better", fontsize=10)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    if missing:
+        fig.text(0.01, 0.01, "\n".join(textwrap.wrap("not shown (see the table): " + "; ".join(missing), 110)), fontsize=7)
+    fig.tight_layout(rect=(0, 0.06 if missing else 0, 1, 1))
+    fig.savefig(PLOT, format="svg", metadata={"Date": None})
+    plt.close(fig)
+
+
+def section(rows, info, command, with_plot):
+    exudyn_steps = sorted({r[1]["step"] for r in rows if r[1]["status"] == "ok"})
+    lines = [
+        f"Measured {info['date']} with `{command}` on {info['cpu']} ({info['cores']} cores): Linkwork "
+        f"{info['linkwork']} at commit `{info['commit']}`, Exudyn {info['exudyn']}, Python {info['python']}.",
+        "",
+        "The same problems in both engines (`benches/peers/`): each Linkwork model file, and its Exudyn twin built "
+        "from it by `benches/peers/exudyn_model.py` (`NodeRigidBody2D` bodies, `RevoluteJoint2D`, `PrismaticJoint2D`, "
+        "mass-proportional gravity, torque and force loads, `ConnectorSpringDamper`), started from the same consistent "
+        "state. Both write the same output times (every 0.01 s; Andrews every 0.001 s), and the error is measured there.",
+        "",
+        "- **Exudyn**: `SolveDynamic` with its defaults (generalised-alpha, index 3, spectral radius 0.9, modified "
+        "Newton at relative tolerance 1e-8) at the fixed step h of the table"
+        + (f" ({', '.join(f'{h:g}' for h in exudyn_steps)} s)" if exudyn_steps else "")
+        + "; its dense LU (the default) for the small models, `EigenSparse` for the N-four-bar. Steps: "
+        "`it.currentStepIndex - 1`; Newton iterations: `it.newtonStepsCount`.",
+        "- **Linkwork**: for `bdf` and `abam`, the loosest `rtol = atol` of 1e-4, 1e-5, ..., 1e-12 whose error is at "
+        "most Exudyn's; the one of the two whose search run was cheaper is timed. Steps and Newton iterations: "
+        "`results.summary.statistics`.",
+        "- **CPU s**: `time.process_time()` (all threads), median of the runs; Linkwork's `Model.run()` (assembly, "
+        "integration, every output column), Exudyn's `Assemble()` + `SolveDynamic()` (with the sensors of the compared "
+        "outputs); building the model is not timed in either.",
+        "- **References** (the error is the largest over the output times unless said otherwise):",
+        "  - pendulum, A01: the exact solution in Jacobi's `sn`; the mass's x, y (m).",
+        "  - slider-crank, quick-return A (free and under its constant crank torque): the one-degree-of-freedom "
+        "energy equation `I(theta) theta'^2 / 2 = E0 + T (theta - theta0)` by quadrature, `I(theta)` and the body "
+        "positions from the model's kinematic analysis (Linkwork's position solver at 1e-12, no integrator); every "
+        "body's x, y (m) and phi (rad).",
+        "  - N-four-bar and A02: every rocker at the angle of the one-degree-of-freedom equation "
+        "`((N + 1)/3 + N) psi'' = -g ((N + 1)/2 + N) cos psi`, RK4 at 1e-4 s (error about 1e-13); point B0's x, y (m).",
+        "  - Andrews: its end state at 0.03 s from the test set's own equations by SciPy's DOP853 "
+        "(`benches/andrews_reference.py`, good to about 11.5 digits); the largest relative error of the seven "
+        "angles at 0.03 s.",
+        "",
+        table(rows),
+        "",
+        findings(rows),
+    ]
+    if with_plot:
+        lines += ["", "![CPU s per simulated second against N, N-four-bar](peers-nfourbar.svg)"]
+    return "\n".join(lines)
+
+
+def write(text):
+    doc = DOC.read_text()
+    if BEGIN not in doc:
+        doc = doc.rstrip("\n") + f"\n\n## Against Exudyn\n\n{BEGIN}\n{END}\n"
+    head, rest = doc.split(BEGIN, 1)
+    _, tail = rest.split(END, 1)
+    DOC.write_text(f"{head}{BEGIN}\n{text}\n{END}{tail}")
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help=f"only {', '.join(QUICK)} (N = 10, 100), one repeat")
+    parser.add_argument("--problems", help=f"comma-separated, of {', '.join(problems.PROBLEMS)}")
+    parser.add_argument("--n", help="the N-four-bar's N, comma-separated (default 10,100,1000,10000)")
+    parser.add_argument("--timeout", type=float, default=600.0, help="seconds for each engine on each problem")
+    parser.add_argument("--repeats", type=int, help="timed runs per case (default 3, --quick 1)")
+    parser.add_argument("--no-write", action="store_true", help="print the table only")
+    args = parser.parse_args(argv)
+    keys = args.problems.split(",") if args.problems else list(QUICK if args.quick else problems.PROBLEMS)
+    for key in keys:
+        if key not in problems.PROBLEMS:
+            parser.error(f"unknown problem {key!r}")
+    ns = [int(n) for n in args.n.split(",")] if args.n else list(QUICK_N if args.quick else FULL_N)
+    repeats = args.repeats or (1 if args.quick else 3)
+    command = " ".join(["python benches/peers/run.py", *(argv if argv is not None else sys.argv[1:])])
+
+    rows = []
+    for key in keys:
+        for n in ns if key == "nfourbar" else [0]:
+            problem = problems.problem(key, n)
+            base = [problem.key, "--n", str(n), "--repeats", str(repeats)]
+            for step in problem.exudyn_steps:
+                print(f"{problem.label}: Exudyn h = {step:g} ...", flush=True)
+                exudyn = run_case(["exudyn", *base, "--step", repr(step)], args.timeout)
+                exudyn.setdefault("settings", f"generalised-alpha, h = {step:g}")
+                exudyn.setdefault("step", step)
+                print(f"  {exudyn['status']} {exudyn.get('error', '')} {exudyn.get('cpu', '')}", flush=True)
+                target = ["--target", repr(exudyn["error"])] if exudyn["status"] == "ok" else []
+                print(f"{problem.label}: Linkwork ...", flush=True)
+                linkwork = run_case(["linkwork", *base, *target], args.timeout)
+                print(f"  {linkwork['status']} {linkwork.get('settings', '')} {linkwork.get('error', '')} {linkwork.get('cpu', '')}", flush=True)
+                rows.append((problem, exudyn, linkwork))
+
+    with_plot = "nfourbar" in keys
+    text = section(rows, machine(), command, with_plot)
+    print(text)
+    if not args.no_write:
+        if with_plot:
+            plot(rows)
+        write(text)
+        print(f"written to {DOC}" + (f" and {PLOT}" if with_plot else ""))
+
+
+if __name__ == "__main__":
+    main()
