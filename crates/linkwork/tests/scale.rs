@@ -119,3 +119,21 @@ fn outputs_keep_the_columns_named() {
     let error = Model::from_yaml(&unknown_body).unwrap_err();
     assert!(error.to_string().contains("analyses.dynamics.outputs.bodies[0]: unknown body 'c61'"), "{error}");
 }
+
+/// A static or modes analysis of a chain too large for their dense solvers is refused up front
+/// with the reason, at the analysis's type, not run for hours nor failed in an allocation.
+#[test]
+fn static_and_modes_analyses_refuse_a_chain_too_large_for_them() {
+    let text = nfourbar(400, false).replace(
+        "  dynamics: {type: dynamic, t_end: 0.5, step: 0.05}\n",
+        "  dynamics: {type: dynamic, t_end: 0.5, step: 0.05}\n  rest: {type: static, forces: []}\n  vibration: {type: modes}\n",
+    );
+    let model = Model::from_yaml(&text).unwrap();
+    for name in ["rest", "vibration"] {
+        let error = model.run(name).unwrap_err().error;
+        assert!(
+            error.to_string().contains(&format!("analyses.{name}.type: a ")) && error.to_string().contains("2402 x 2403"),
+            "{error}"
+        );
+    }
+}

@@ -95,6 +95,32 @@ pub(crate) const SINGULAR_RATIO_DYNAMIC: f64 = 1e-6;
 pub(crate) use crate::linalg::dense::dependent_rows as indeterminate_rows;
 pub(crate) use crate::linalg::dense::independent_rows;
 
+/// Entries `m n` of `Phi_q` above which a static or modes analysis refuses to start:
+/// `4,000,000` (a mechanism of about 700 bodies). Their solvers are still dense (the SVD of
+/// `Phi_q` and its null space at every iteration, docs/performance.md, "Scale"): a matrix of that
+/// size takes 32 MB a copy and tens of seconds a decomposition, and one of a 10,000-body chain
+/// would ask for 29 GB. Refused up front with the reason, rather than running for hours or
+/// failing an allocation.
+pub(crate) const DENSE_ANALYSIS_MAX_ENTRIES: usize = 4_000_000;
+
+/// `Err` when `analysis` (static or modes) is too large for its dense solvers
+/// ([`DENSE_ANALYSIS_MAX_ENTRIES`]), at `analyses.<name>.type`.
+pub(crate) fn dense_size(analysis: &crate::model::Analysis, m: usize, n: usize) -> crate::error::Result<()> {
+    if m * n <= DENSE_ANALYSIS_MAX_ENTRIES {
+        return Ok(());
+    }
+    Err(crate::Error::Model(vec![crate::Problem::new(
+        format!("analyses.{}.type", analysis.name),
+        format!(
+            "a {} analysis solves with dense matrices, up to {DENSE_ANALYSIS_MAX_ENTRIES} entries of the constraint \
+             Jacobian; this model has {m} x {n} = {}: run a dynamic analysis instead (to rest, with damping, for an \
+             equilibrium)",
+            analysis.kind.name(),
+            m * n
+        ),
+    )]))
+}
+
 /// The names of the elements (joints, drivers) of `rows`, each once, in row order.
 pub(crate) fn element_names(sys: &crate::system::System<'_>, rows: &[usize]) -> Vec<String> {
     let mut names: Vec<String> = Vec::new();

@@ -43,6 +43,9 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
     };
     let n = dae.n;
     let mut results = Results::new(model, analysis);
+    if let Err(e) = super::dense_size(analysis, dae.m, n) {
+        return Err(fail(results, e));
+    }
     results.add_columns(model.measures.iter().map(|m| m.name.clone()));
     let path = format!("analyses.{}", analysis.name);
     let equilibrium = analysis.about == LinearisePoint::Equilibrium;

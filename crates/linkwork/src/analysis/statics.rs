@@ -617,6 +617,9 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
     };
     let n = dae.n;
     let mut results = Results::new(model, analysis);
+    if let Err(e) = super::dense_size(analysis, dae.m, n) {
+        return Err(fail(results, e));
+    }
     let mut names = super::reaction_columns(model, analysis);
     names.push("potential_energy".into());
     names.extend(model.measures.iter().map(|m| m.name.clone()));
