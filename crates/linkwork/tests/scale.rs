@@ -132,7 +132,8 @@ fn static_and_modes_analyses_refuse_a_chain_too_large_for_them() {
     for name in ["rest", "vibration"] {
         let error = model.run(name).unwrap_err().error;
         assert!(
-            error.to_string().contains(&format!("analyses.{name}.type: a ")) && error.to_string().contains("2402 x 2403"),
+            error.to_string().contains(&format!("analyses.{name}.type: a "))
+                && error.to_string().contains("2402 x 2403"),
             "{error}"
         );
     }
