@@ -98,11 +98,14 @@ def sweep(
     bar = _VariantBar(len(variants)) if progress is True else None
     report = bar.update if bar is not None else progress if callable(progress) else None
 
+    # The SI value the engine reads of each grid value: a bare number is itself; a value with a
+    # unit is converted, once for each distinct one (it compiles the model).
+    si = {(name, v): _si(model, name, v) for k, name in enumerate(names) for v in {c[k] for c in combinations}}
+
     def table(rows: list[Row]) -> pandas.DataFrame:
         data: dict[str, object] = {}
         for k, name in enumerate(names):
-            # The SI value the engine read: a bare number is itself; a value with a unit, converted.
-            data[name] = [_si(model, name, values[k]) for values in combinations]
+            data[name] = [si[name, values[k]] for values in combinations]
         data[STATUS] = [status for status, _ in rows]
         for j, (name, _) in enumerate(output_list):
             data[name] = pd.array([None if values is None else values[j] for _, values in rows], dtype="Float64")
