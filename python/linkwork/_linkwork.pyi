@@ -5,7 +5,7 @@ checks them against the built module (`.ci/run`).
 """
 
 from collections.abc import Callable, Sequence
-from typing import Any, final
+from typing import Any, Protocol, final
 
 import numpy as np
 import numpy.typing as npt
@@ -74,7 +74,16 @@ class PyModel:
         t_end: float | None = None,
         step: float | None = None,
         progress: Callable[[float, float, float, int], object] | None = None,
+        stream: str | _Sink | None = None,
     ) -> PyResults: ...
+
+class _Sink(Protocol):
+    """What a streamed run's rows go to (`linkwork.stream.ParquetSink`)."""
+
+    path: str
+    def begin(self, names: list[str]) -> None: ...
+    def write(self, time: npt.NDArray[np.float64], values: npt.NDArray[np.float64]) -> None: ...
+    def finish(self) -> None: ...
 
 @final
 class PyResults:
@@ -88,6 +97,8 @@ class PyResults:
     def summary(self) -> dict[str, Any]: ...
     @property
     def ok(self) -> bool: ...
+    @property
+    def streamed(self) -> bool: ...
     def write(self, directory: str) -> None: ...
 
 def schema() -> str: ...

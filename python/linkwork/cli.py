@@ -6,6 +6,7 @@
         [--no-report]                                  model.yaml and report.html (not with --no-report)
         [--integrator bdf|hht|abam] [--rtol R] [--atol A] [--t-end T] [--step H]
                                                        change the analysis for this run
+        [--stream [csv|parquet]]                       write the rows as they are computed
     linkwork report DIR                                rebuild DIR/report.html from the files of a run
     linkwork sweep MODEL --output NAME=EXPR ...         an analysis over many parameter values, reduced to
         (--grid NAME=START:STOP:COUNT ... |             outputs: DIR/sweep.parquet, one row a variant
@@ -103,6 +104,14 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--t-end", type=float, metavar="T", help="end time, s")
     run.add_argument("--step", type=float, metavar="H", help="output step, s")
     _add_set(run)
+    run.add_argument(
+        "--stream",
+        nargs="?",
+        const="csv",
+        choices=("csv", "parquet"),
+        help="write results.csv (or results.parquet) as the rows are computed, holding only a chunk of them "
+        "in memory (for long runs of large models; the report reads the file back)",
+    )
     run.add_argument("--no-report", action="store_true", help="do not write report.html")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     run.set_defaults(command=_run)
@@ -208,6 +217,17 @@ def _setting(text: str) -> tuple[str, str]:
 def _run(args: argparse.Namespace) -> int:
     model = Model.load(args.model, dict(args.set))
     out: Path = args.out if args.out is not None else Path("out") / Path(args.model).stem
+    stream = out / f"results.{args.stream}" if args.stream else None
+    if args.stream == "parquet":
+        try:
+            import pyarrow  # noqa: F401
+        except ImportError:
+            raise model_error("--stream", "parquet needs pyarrow: pip install 'linkwork[parquet]'") from None
+    if stream is not None:
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise FileError(f"{out}: cannot create the output folder: {error}") from error
     try:
         results = model.run(
             args.analysis,
@@ -218,6 +238,7 @@ def _run(args: argparse.Namespace) -> int:
             step=args.step,
             # On a terminal only: a bar in a log file is noise.
             progress=sys.stderr.isatty() and not args.quiet,
+            stream=stream,
         )
     except KeyboardInterrupt as interrupt:
         partial = getattr(interrupt, "results", None)
@@ -239,7 +260,7 @@ def _run(args: argparse.Namespace) -> int:
         return EXIT_SOLVER
     results.write(out, report=not args.no_report)
     _print_summary(results)
-    files = ["results.csv", "summary.json", *(["modes.csv"] if results.modes else []), "model.yaml"]
+    files = [stream.name if stream is not None else "results.csv", "summary.json", *(["modes.csv"] if results.modes else []), "model.yaml"]
     files += [] if args.no_report else ["report.html"]
     print(f"wrote {_folder(out)}{', '.join(files[:-1])} and {files[-1]}")
     return EXIT_OK

@@ -6,12 +6,14 @@ import numbers
 import os
 import sys
 import time
+from pathlib import Path
 from collections.abc import Callable, Mapping
 from typing import Any
 
 from tqdm import tqdm
 
 from . import _linkwork
+from . import stream as stream_
 from .errors import AssemblyError, SolverError, model_error
 from .results import Results
 
@@ -177,6 +179,7 @@ class Model:
         t_end: float | None = None,
         step: float | None = None,
         progress: bool | Callable[[float, float, float, int], object] = False,
+        stream: str | os.PathLike[str] | None = None,
     ) -> Results:
         """Run the analysis called ``analysis`` (default: the first one in the file).
 
@@ -188,6 +191,12 @@ class Model:
         total, steps a second, time left. A callable is called instead, about 20 times a second,
         as ``progress(time, t_start, t_end, steps)``; an exception it raises stops the run and is
         raised.
+
+        ``stream``: a path ending in ``.csv`` or ``.parquet`` that the rows are written to as
+        they are computed, so that memory holds a chunk of rows (about 16 MB) rather than the
+        run; the file is that of ``results.csv`` (CSV) or the same columns (Parquet, needs
+        pyarrow). The results returned then hold no row (:attr:`Results.streamed_to`). After a
+        failure the file has every row up to it.
 
         On a solver failure the exception (:class:`SolverError`, :class:`AssemblyError`) has
         ``results``: the :class:`Results` computed before the failure. Ctrl-C stops the run at
@@ -208,14 +217,22 @@ class Model:
                 raise model_error(option, f"expected a number, found {value} (a bool)")
             if value is not None and not isinstance(value, numbers.Real):
                 raise model_error(option, f"expected a number, found {value!r} ({type(value).__name__})")
+        sink: str | stream_.ParquetSink | None = None
+        if stream is not None:
+            try:
+                sink = stream_.sink(stream)
+            except ValueError as error:
+                raise model_error("stream", str(error)) from None
+        streamed_to = Path(stream) if stream is not None else None
         bar = ProgressBar() if progress is True else None
         report = bar.update if bar is not None else progress if callable(progress) else None
         try:
-            return Results(self._native.run(analysis, integrator, rtol, atol, t_end, step, report), self)
+            native = self._native.run(analysis, integrator, rtol, atol, t_end, step, report, sink)
+            return Results(native, self, streamed_to)
         except (SolverError, AssemblyError, KeyboardInterrupt) as error:
             partial = getattr(error, "results", None)
             if isinstance(partial, _linkwork.PyResults):
-                error.results = Results(partial, self)  # type: ignore[union-attr]
+                error.results = Results(partial, self, streamed_to)  # type: ignore[union-attr]
             raise
         finally:
             if bar is not None:

@@ -855,27 +855,26 @@ def plotly_js() -> str:
 
 def from_folder(folder: Any) -> Run:
     """The run whose files ``linkwork run`` wrote into ``folder``: ``model.yaml`` (for the
-    drawing), ``results.csv`` and ``summary.json``. A missing or unreadable file is a
-    :class:`linkwork.FileError` naming it."""
-    import csv
+    drawing), ``results.csv`` (or ``results.parquet`` of a run streamed to Parquet) and
+    ``summary.json``. A missing or unreadable file is a :class:`linkwork.FileError` naming it."""
     from pathlib import Path
 
+    from . import stream
     from .errors import FileError
     from .model import Model
 
     folder = Path(folder)
+    table = folder / "results.csv"
+    if not table.exists() and (folder / "results.parquet").exists():
+        table = folder / "results.parquet"
     try:
         summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
-        with open(folder / "results.csv", encoding="utf-8", newline="") as file:
-            rows = list(csv.reader(file))
+        time, columns = stream.read(table)
     except (OSError, ValueError) as error:
         raise FileError(f"{folder}: not a results folder of `linkwork run`: {error}") from error
     # The parameters the run used (SI, given over the file's by --set or with_parameters).
     model = Model.load(folder / "model.yaml", summary.get("parameters") or None)
-    header, body = rows[0], rows[1:]
-    values = np.array(body, dtype=float).reshape(len(body), len(header))
-    columns = {name: values[:, k] for k, name in enumerate(header) if name != "time"}
-    return Run(model.drawing(), values[:, header.index("time")], columns, Summary(summary))
+    return Run(model.drawing(), time, columns, Summary(summary))
 
 
 def write(path: Any, run: Run) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast, overload
@@ -124,14 +125,21 @@ class Results:
     linearised about) and its modes in :attr:`modes`.
     """
 
-    __slots__ = ("_columns", "_index", "_native", "_time", "_values", "model")
+    __slots__ = ("_columns", "_index", "_native", "_time", "_values", "model", "streamed_to")
 
     model: Model
     """The model that was run."""
 
-    def __init__(self, native: _linkwork.PyResults, model: Model) -> None:
+    streamed_to: Path | None
+    """The file the rows went to as they were computed (``Model.run(stream=...)``), else
+    ``None``. A streamed run's results hold no row: :attr:`time` and :attr:`values` are empty,
+    ``summary.output_points`` counts the rows in the file, and :func:`linkwork.stream.read`
+    reads them back."""
+
+    def __init__(self, native: _linkwork.PyResults, model: Model, streamed_to: Path | None = None) -> None:
         self._native = native
         self.model = model
+        self.streamed_to = streamed_to if native.streamed else None
         self._columns: list[str] = native.names
         self._index = {name: k for k, name in enumerate(self._columns)}
         # Copied out of the engine once; read-only so that every view stays true to the run.
@@ -195,7 +203,8 @@ class Results:
         return iter(["time", *self._columns])
 
     def __len__(self) -> int:
-        """Number of output points."""
+        """Number of output points held (none for a streamed run: ``summary.output_points``
+        counts the rows in its file)."""
         return len(self._time)
 
     def reaction(self, joint: str, frame: str = "global") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -230,17 +239,27 @@ class Results:
         """Write ``results.csv``, ``summary.json`` (and ``modes.csv`` for a modes analysis) and
         ``model.yaml`` (the model file as run) into ``out_dir`` (created if missing), in the
         engine's format, and ``report.html`` unless ``report`` is false: the same files as
-        ``linkwork run``."""
+        ``linkwork run``. The rows of a streamed run are its file, copied there as
+        ``results.csv`` or ``results.parquet`` unless it is already that file; its report reads
+        them back."""
         from . import report as reports
 
         self._native.write(os.fspath(out_dir))
+        if self.streamed_to is not None:
+            table = Path(out_dir) / f"results{self.streamed_to.suffix}"
+            if not table.exists() or not table.samefile(self.streamed_to):
+                shutil.copyfile(self.streamed_to, table)
         reports.write_text(Path(out_dir) / "model.yaml", self.model.source)
         if report:
             reports.write(Path(out_dir) / "report.html", self._run())
 
     def _run(self) -> Any:
+        from . import stream
         from .report import Run
 
+        if self.streamed_to is not None:
+            time, columns = stream.read(self.streamed_to)
+            return Run(self.model.drawing(), time, columns, self.summary)
         columns = {name: self._values[:, k] for k, name in enumerate(self._columns)}
         return Run(self.model.drawing(), self._time, columns, self.summary)
 
@@ -269,6 +288,11 @@ class Results:
 
     def __repr__(self) -> str:
         summary = self.summary
+        if self.streamed_to is not None:
+            return (
+                f"<linkwork.Results {summary.analysis or ''!r} ({summary.status}): {summary.output_points} points "
+                f"streamed to {self.streamed_to}, {len(self._columns)} columns>"
+            )
         span = f"t = {self._time[0]:g} .. {self._time[-1]:g} s" if len(self) else "no output"
         return (
             f"<linkwork.Results {summary.analysis or ''!r} ({summary.status}): {len(self)} points, {span}, "

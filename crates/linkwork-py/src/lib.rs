@@ -10,6 +10,7 @@ mod json;
 use errors::{guard, to_pyerr};
 use linkwork::analysis::check;
 use linkwork::progress::Progress;
+use linkwork::results::stream::{CsvSink, RowSink};
 use linkwork::{Error, Results};
 use numpy::ndarray::{Array2, ShapeBuilder};
 use numpy::{PyArray1, PyArray2};
@@ -228,7 +229,11 @@ impl PyModel {
     /// [`POLL`] to let Python handle its signals (Ctrl-C stops the run at its next step and
     /// raises `KeyboardInterrupt` with `results`) and to call `progress(time, t_start, t_end,
     /// steps)` if given (an exception from it stops the run and is raised).
-    #[pyo3(signature = (analysis, integrator=None, rtol=None, atol=None, t_end=None, step=None, progress=None))]
+    ///
+    /// `stream`: the rows go, as they are computed, to the CSV file at this path (a `str`), or
+    /// to an object with `begin(names)`, `write(time, values)`, `finish()` and `path` (the
+    /// Python package's Parquet writer); the results returned then hold no row.
+    #[pyo3(signature = (analysis, integrator=None, rtol=None, atol=None, t_end=None, step=None, progress=None, stream=None))]
     #[allow(clippy::too_many_arguments)]
     fn run(
         &self,
@@ -240,8 +245,19 @@ impl PyModel {
         t_end: Option<f64>,
         step: Option<f64>,
         progress: Option<Py<PyAny>>,
+        stream: Option<Bound<'_, PyAny>>,
     ) -> PyResult<PyResults> {
         use linkwork::analysis::dynamic::IntegratorKind;
+        let sink: Option<Box<dyn RowSink>> = match stream {
+            None => None,
+            Some(s) => match s.extract::<PathBuf>() {
+                Ok(path) => Some(Box::new(CsvSink::create(&path).map_err(|e| to_pyerr(py, e, None))?)),
+                Err(_) => {
+                    let path = s.getattr("path")?.str()?.to_string();
+                    Some(Box::new(PySink { sink: s.unbind(), path }))
+                }
+            },
+        };
         let integrator = match integrator.map(|name| (name, IntegratorKind::from_name(name))) {
             None => None,
             Some((_, Some(kind))) => Some(kind),
@@ -260,7 +276,10 @@ impl PyModel {
         let (outcome, stopped_by) = watched(
             py,
             &watch,
-            || self.model.run_watched(analysis, &overrides, &watch),
+            || match sink {
+                Some(sink) => self.model.run_streamed(analysis, &overrides, &watch, sink),
+                None => self.model.run_watched(analysis, &overrides, &watch),
+            },
             |py| match &progress {
                 Some(f) => {
                     let (t0, t1) = watch.span();
@@ -284,6 +303,49 @@ impl PyModel {
             }
         }
     }
+}
+
+/// A Python object the rows of a streamed run go to (`begin(names)`, `write(time, values)`,
+/// `finish()`), called from the run's thread with the GIL taken for each call; an exception it
+/// raises fails the run as a file that cannot be written does.
+struct PySink {
+    sink: Py<PyAny>,
+    path: String,
+}
+
+impl PySink {
+    fn call(&self, f: impl FnOnce(Python<'_>, &Py<PyAny>) -> PyResult<Py<PyAny>>) -> std::io::Result<()> {
+        Python::attach(|py| f(py, &self.sink).map(drop).map_err(|e| std::io::Error::other(e.to_string())))
+    }
+}
+
+impl RowSink for PySink {
+    fn begin(&mut self, names: &[String]) -> std::io::Result<()> {
+        self.call(|py, s| s.call_method1(py, "begin", (names.to_vec(),)))
+    }
+
+    fn write(&mut self, time: &[f64], columns: &[Vec<f64>]) -> std::io::Result<()> {
+        self.call(|py, s| {
+            let values = column_matrix(py, time.len(), columns)?;
+            s.call_method1(py, "write", (PyArray1::from_slice(py, time), values))
+        })
+    }
+
+    fn finish(&mut self) -> std::io::Result<()> {
+        self.call(|py, s| s.call_method0(py, "finish"))
+    }
+
+    fn path(&self) -> String {
+        self.path.clone()
+    }
+}
+
+/// `(rows x columns)` in Fortran order, so that each column is contiguous.
+fn column_matrix<'py>(py: Python<'py>, rows: usize, columns: &[Vec<f64>]) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let flat: Vec<f64> = columns.iter().flatten().copied().collect();
+    let array = Array2::from_shape_vec((rows, columns.len()).f(), flat)
+        .map_err(|e| errors::internal(&format!("results columns of unequal length: {e}")))?;
+    Ok(PyArray2::from_owned_array(py, array))
 }
 
 /// Output of one analysis (complete, or up to a failure).
@@ -312,11 +374,13 @@ impl PyResults {
     /// (rows x columns) values in Fortran order, so that each column is contiguous.
     #[getter]
     fn values<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let (rows, cols) = (self.results.time.len(), self.results.columns.len());
-        let flat: Vec<f64> = self.results.columns.iter().flatten().copied().collect();
-        let array = Array2::from_shape_vec((rows, cols).f(), flat)
-            .map_err(|e| errors::internal(&format!("results columns of unequal length: {e}")))?;
-        Ok(PyArray2::from_owned_array(py, array))
+        column_matrix(py, self.results.time.len(), &self.results.columns)
+    }
+
+    /// True when the rows went to a file as they were computed (`time` and `values` hold none).
+    #[getter]
+    fn streamed(&self) -> bool {
+        self.results.is_streamed()
     }
 
     /// `summary.json` as a dict: sizes, solver statistics, `status` and the error if any.

@@ -5,6 +5,7 @@
 //! `summary.json` ([`Summary`], with `output_points`, `status` and the error if there is one:
 //! the same header and the same shape of each fact for every analysis, see [`summary`]).
 
+pub mod stream;
 pub mod summary;
 
 pub use summary::{
@@ -30,7 +31,7 @@ pub const BODY_QUANTITIES: [&str; 9] = ["x", "y", "phi", "vx", "vy", "omega", "a
 pub const REACTION_QUANTITIES: [&str; 3] = ["fx", "fy", "torque"];
 
 /// Results of one analysis: one column per quantity, one row per output time.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct Results {
     /// (rows) output times, s.
     pub time: Vec<f64>,
@@ -43,6 +44,30 @@ pub struct Results {
     /// The analysis's choice of columns, applied once they are all named ([`Results::reserve`]
     /// or the first [`Results::push`]).
     selection: Selection,
+    /// The running peaks of the reactions and efforts ([`Results::insert_reaction_summary`]).
+    peaks: Peaks,
+    /// (9 bodies + extra columns) the row being pushed, every column.
+    row: Vec<f64>,
+    /// (3 bodies) the positions of the first output point.
+    first_positions: Vec<f64>,
+    /// The sink the rows go to when the run is streamed ([`stream`]), claimed at the start.
+    stream: Option<stream::Stream>,
+    /// Whether [`Results::start`] ran.
+    started: bool,
+}
+
+/// The largest reaction of each joint and effort of each active driver, kept as rows are pushed
+/// (so that a streamed run, which keeps no column, has them too).
+#[derive(Debug, Clone, Default)]
+enum Peaks {
+    /// Nothing to watch (results of no analysis).
+    #[default]
+    None,
+    /// The joints and the active drivers' effort columns, to be found among the columns.
+    Pending { joints: Vec<String>, efforts: Vec<String> },
+    /// Each peak's key in the summary, the row positions of its one or two components (two: the
+    /// resultant of a force), and the largest value so far with its time.
+    Watching(Vec<(String, [usize; 2], Peak)>),
 }
 
 /// Which columns of the rows pushed are kept.
@@ -60,7 +85,7 @@ enum Selection {
 }
 
 /// A failed analysis: the error and every result computed before it.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct Failure {
     /// What went wrong, where and when.
     pub error: Error,
@@ -72,6 +97,10 @@ impl Results {
     /// Empty results with the columns of `model` for `analysis`.
     pub fn new(model: &Model, analysis: &Analysis) -> Results {
         let mut results = Results::of_model(model);
+        results.peaks = Peaks::Pending {
+            joints: model.joints.iter().map(|j| j.name.clone()).collect(),
+            efforts: analysis.drivers.iter().map(|&d| format!("{}.effort", model.drivers[d].name)).collect(),
+        };
         if let Some(outputs) = &analysis.outputs {
             results.selection = Selection::Pending(analysis.name.clone(), outputs.clone());
         }
@@ -97,17 +126,39 @@ impl Results {
             parameters: model.parameters.clone(),
             ..Summary::default()
         };
-        Results { time: Vec::new(), columns: vec![Vec::new(); names.len()], names, summary, selection: Selection::All }
+        Results {
+            time: Vec::new(),
+            columns: vec![Vec::new(); names.len()],
+            names,
+            summary,
+            selection: Selection::All,
+            peaks: Peaks::None,
+            row: Vec::new(),
+            first_positions: Vec::new(),
+            stream: None,
+            started: false,
+        }
     }
 
-    /// Number of output points.
+    /// Number of output points (those streamed to a file included).
     pub fn len(&self) -> usize {
-        self.time.len()
+        self.time.len() + self.stream.as_ref().map_or(0, |s| s.rows)
     }
 
     /// True when no output point was computed.
     pub fn is_empty(&self) -> bool {
-        self.time.is_empty()
+        self.len() == 0
+    }
+
+    /// Whether the rows went to a file as they were computed (then `time` and `columns` hold
+    /// none of them; [`Results::len`] counts them).
+    pub fn is_streamed(&self) -> bool {
+        self.stream.is_some()
+    }
+
+    /// The positions `(x, y, phi)` of every body at the first output point, if there is one.
+    pub fn first_positions(&self) -> Option<&[f64]> {
+        (!self.first_positions.is_empty()).then_some(self.first_positions.as_slice())
     }
 
     /// Append columns after the body quantities (filled by the `extra` values of
@@ -119,8 +170,10 @@ impl Results {
         }
     }
 
+    /// Room for `rows` output points (a chunk's at most, when streamed).
     pub(crate) fn reserve(&mut self, rows: usize) {
-        self.select();
+        self.start();
+        let rows = self.stream.as_ref().map_or(rows, |s| rows.min(s.chunk));
         self.time.reserve(rows);
         self.columns.iter_mut().for_each(|c| c.reserve(rows));
     }
@@ -132,33 +185,118 @@ impl Results {
     /// Every output time is reported to the run's [`progress`](crate::progress), which may stop
     /// the run there (after the row is kept).
     pub(crate) fn push(&mut self, t: f64, q: &[f64], qdot: &[f64], qddot: &[f64], extra: &[f64]) -> Result<(), Error> {
-        self.select();
+        self.start();
         let bodies = q.len() / 3;
         // In column order: each body's `x, y, phi, vx, vy, omega, ax, ay, alpha`, then `extra`.
-        let values = || {
+        self.row.clear();
+        self.row.extend(
             (0..bodies)
                 .flat_map(|b| [q, qdot, qddot].into_iter().flat_map(move |v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]]))
-                .chain(extra.iter().copied())
-        };
+                .chain(extra.iter().copied()),
+        );
         let (names, keep) = match &self.selection {
             Selection::Failed(e) => return Err(e.clone()),
             Selection::Applied { names, keep } => (names, Some(keep)),
             _ => (&self.names, None),
         };
-        debug_assert_eq!(names.len(), 9 * bodies + extra.len(), "one extra value per extra column");
-        if let Some((k, value)) = values().enumerate().find(|(_, v)| !v.is_finite()) {
+        debug_assert_eq!(names.len(), self.row.len(), "one extra value per extra column");
+        if let Some((k, &value)) = self.row.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             let element = names[k].clone();
             return Err(Error::NonFinite { time: t, element, expression: String::new(), value });
+        }
+        if self.is_empty() {
+            self.first_positions = (0..bodies).flat_map(|b| [q[3 * b], q[3 * b + 1], q[3 * b + 2]]).collect();
+        }
+        if let Peaks::Watching(peaks) = &mut self.peaks {
+            for (_, [a, b], peak) in peaks {
+                let v = if *b == usize::MAX { self.row[*a].abs() } else { self.row[*a].hypot(self.row[*b]) };
+                if v >= peak.max_abs || peak.time.is_none() {
+                    *peak = Peak { max_abs: v, time: Some(t) };
+                }
+            }
         }
         self.time.push(t);
         match keep {
             Some(keep) => {
-                let kept = values().zip(keep).filter(|(_, &k)| k).map(|(v, _)| v);
-                self.columns.iter_mut().zip(kept).for_each(|(c, v)| c.push(v));
+                let kept = self.row.iter().zip(keep).filter(|(_, &k)| k).map(|(v, _)| v);
+                self.columns.iter_mut().zip(kept).for_each(|(c, &v)| c.push(v));
             }
-            None => self.columns.iter_mut().zip(values()).for_each(|(c, v)| c.push(v)),
+            None => self.columns.iter_mut().zip(&self.row).for_each(|(c, &v)| c.push(v)),
+        }
+        if let Some(s) = &mut self.stream {
+            if self.time.len() >= s.chunk {
+                s.flush(&self.names, &mut self.time, &mut self.columns)?;
+            }
         }
         crate::progress::reached(t)
+    }
+
+    /// Once every column is named (the first [`Results::reserve`] or [`Results::push`]): apply
+    /// the choice of columns, find the peaks' columns, and take the run's sink if it has one
+    /// ([`stream`]).
+    fn start(&mut self) {
+        if self.started {
+            return;
+        }
+        self.started = true;
+        self.select();
+        self.watch_peaks();
+        self.stream = stream::claim();
+        if let Some(s) = &mut self.stream {
+            s.set_columns(self.columns.len());
+        }
+    }
+
+    /// Find the columns of the peaks to watch among those kept: each joint's `fx, fy, torque`
+    /// (when all three are kept) and each active driver's effort.
+    fn watch_peaks(&mut self) {
+        if !matches!(self.peaks, Peaks::Pending { .. }) {
+            return;
+        }
+        let Peaks::Pending { joints, efforts } = std::mem::take(&mut self.peaks) else { unreachable!("matched above") };
+        self.select();
+        let (names, keep) = match &self.selection {
+            Selection::Applied { names, keep } => (names, Some(keep)),
+            _ => (&self.names, None),
+        };
+        let position: std::collections::HashMap<&str, usize> = names
+            .iter()
+            .enumerate()
+            .filter(|&(k, _)| keep.is_none_or(|keep| keep[k]))
+            .map(|(k, n)| (n.as_str(), k))
+            .collect();
+        let find = |name: String| position.get(name.as_str()).copied();
+        let none = Peak { max_abs: 0.0, time: None };
+        let mut watching = Vec::new();
+        for j in &joints {
+            let (Some(fx), Some(fy), Some(m)) =
+                (find(format!("{j}.fx")), find(format!("{j}.fy")), find(format!("{j}.torque")))
+            else {
+                continue;
+            };
+            watching.push((format!("{j}.force"), [fx, fy], none.clone()));
+            watching.push((format!("{j}.torque"), [m, usize::MAX], none.clone()));
+        }
+        for e in efforts {
+            if let Some(k) = find(e.clone()) {
+                watching.push((e, [k, usize::MAX], none.clone()));
+            }
+        }
+        self.peaks = Peaks::Watching(watching);
+    }
+
+    /// Close the stream of a streamed run: the rows still held go to its sink, which is then
+    /// finished. `unclaimed` is the run's sink when no row claimed it (a run that failed before
+    /// its first output point): it gets the header. A no-op for results that are not streamed.
+    pub(crate) fn finish_stream(&mut self, unclaimed: Option<stream::Stream>) -> Result<(), Error> {
+        if let Some(s) = unclaimed {
+            self.select();
+            self.stream = Some(s);
+        }
+        match &mut self.stream {
+            Some(s) => s.finish(&self.names, &mut self.time, &mut self.columns),
+            None => Ok(()),
+        }
     }
 
     /// Apply a pending choice of columns, once every column is named: keep each body's nine
@@ -209,7 +347,7 @@ impl Results {
     /// reaction acts on, its first, for reactions in that body's frame) and `peaks` (for every
     /// joint the largest resultant force `|(fx, fy)|` and the largest `|torque|`, for every
     /// active driver the largest `|effort|`, each with its time, for sizing bearings and motors).
-    pub(crate) fn insert_reaction_summary(&mut self, model: &Model, analysis: &Analysis) {
+    pub(crate) fn insert_reaction_summary(&mut self, model: &Model) {
         let reaction_bodies = model
             .joints
             .iter()
@@ -218,35 +356,11 @@ impl Results {
                 (j.name.clone(), body.to_string())
             })
             .collect();
-        let peak = |values: &mut dyn Iterator<Item = f64>| -> Peak {
-            let (mut best, mut at) = (0.0f64, None);
-            for (k, v) in values.enumerate() {
-                if v.abs() >= best || at.is_none() {
-                    (best, at) = (v.abs(), Some(k));
-                }
-            }
-            Peak { max_abs: best, time: at.map(|k| self.time[k]) }
+        self.watch_peaks();
+        let peaks = match &self.peaks {
+            Peaks::Watching(watching) => watching.iter().map(|(key, _, peak)| (key.clone(), peak.clone())).collect(),
+            _ => BTreeMap::new(),
         };
-        let by_name = self.columns_by_name();
-        let column = |name: String| by_name.get(name.as_str()).copied();
-        let mut peaks = BTreeMap::new();
-        for j in &model.joints {
-            let (Some(fx), Some(fy), Some(m)) = (
-                column(format!("{}.fx", j.name)),
-                column(format!("{}.fy", j.name)),
-                column(format!("{}.torque", j.name)),
-            ) else {
-                continue;
-            };
-            peaks.insert(format!("{}.force", j.name), peak(&mut fx.iter().zip(fy).map(|(a, b)| a.hypot(*b))));
-            peaks.insert(format!("{}.torque", j.name), peak(&mut m.iter().copied()));
-        }
-        for &d in &analysis.drivers {
-            let name = format!("{}.effort", model.drivers[d].name);
-            if let Some(e) = column(name.clone()) {
-                peaks.insert(name, peak(&mut e.iter().copied()));
-            }
-        }
         self.summary.reactions = Some(Reactions { reaction_bodies, peaks });
     }
 
@@ -273,19 +387,8 @@ impl Results {
 
     fn stage_csv(&self, path: &Path) -> Result<Staged, Error> {
         Staged::write(path, |w| {
-            write!(w, "time")?;
-            for n in &self.names {
-                write!(w, ",{n}")?;
-            }
-            writeln!(w)?;
-            for (r, t) in self.time.iter().enumerate() {
-                write!(w, "{t:?}")?;
-                for c in &self.columns {
-                    write!(w, ",{:?}", c[r])?;
-                }
-                writeln!(w)?;
-            }
-            Ok(())
+            stream::write_header(w, &self.names)?;
+            stream::write_rows(w, &self.time, &self.columns)
         })
     }
 
@@ -385,11 +488,12 @@ impl Results {
     pub fn write(&self, dir: &Path, error: Option<&Error>) -> Result<(), Error> {
         let io = |e: std::io::Error| Error::Io { path: dir.display().to_string(), message: e.to_string() };
         std::fs::create_dir_all(dir).map_err(io)?;
-        let csv = self.stage_csv(&dir.join("results.csv"))?;
+        // A streamed run's rows are in the file it streamed to.
+        let csv = if self.is_streamed() { None } else { Some(self.stage_csv(&dir.join("results.csv"))?) };
         let modes = self.stage_modes_csv(&dir.join("modes.csv"))?;
         let text = serde_json::to_string_pretty(&self.summary_json(error)).unwrap_or_default();
         let summary = Staged::write(&dir.join("summary.json"), |w| writeln!(w, "{text}"))?;
-        csv.commit()?;
+        csv.map_or(Ok(()), Staged::commit)?;
         modes.map_or(Ok(()), Staged::commit)?;
         summary.commit()
     }
@@ -444,6 +548,11 @@ mod tests {
             columns: vec![vec![value, value]],
             summary: Summary::default(),
             selection: Selection::All,
+            peaks: Peaks::None,
+            row: Vec::new(),
+            first_positions: Vec::new(),
+            stream: None,
+            started: false,
         }
     }
 

@@ -97,7 +97,7 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     });
     let finish = |results: &mut Results| {
         results.summary.indeterminate_joints = Some(indeterminate.clone().unwrap_or_default());
-        results.insert_reaction_summary(model, analysis);
+        results.insert_reaction_summary(model);
     };
     match outcome {
         Ok(mut results) => {

@@ -7,6 +7,7 @@ use crate::error::{Error, Problem};
 use crate::model::spec::{AnalysisKind, AnalysisSpec, IntegratorKind, SolverSpec};
 use crate::model::{revise, Analysis, Model};
 use crate::progress::{self, Progress};
+use crate::results::stream::{self, RowSink};
 use crate::results::{Failure, Results};
 use std::sync::Arc;
 
@@ -100,17 +101,33 @@ impl Model {
             Err(f) => &mut f.results,
         };
         // The first output's positions (the assembled start), else the file's guess.
-        let by_name = results.columns_by_name();
-        let q = self
-            .bodies
-            .iter()
-            .flat_map(|b| ["x", "y", "phi"].map(|c| by_name.get(format!("{}.{c}", b.name).as_str())?.first().copied()))
-            .collect::<Option<Vec<f64>>>()
-            .unwrap_or_else(|| self.q0());
+        let q = results.first_positions().map_or_else(|| self.q0(), <[f64]>::to_vec);
         // The analysis's own warnings (a dynamic run's) follow the tolerances'.
         let mut warnings = tolerance_warnings(&analysis, &q);
         warnings.append(&mut results.summary.warnings);
         results.summary.warnings = warnings;
         outcome
+    }
+
+    /// Run as [`Model::run_watched`] does, with the rows going to `sink` as they are computed
+    /// ([`stream`]): the results returned hold none of them (their summary is complete). After a
+    /// failure the sink has every row up to it. A sink that cannot be written fails the run
+    /// with [`Error::Io`] naming its file.
+    pub fn run_streamed(
+        &self,
+        name: &str,
+        overrides: &Overrides,
+        progress: &Arc<Progress>,
+        sink: Box<dyn RowSink>,
+    ) -> Result<Results, Box<Failure>> {
+        let (mut outcome, unclaimed) = stream::scope(sink, || self.run_watched(name, overrides, progress));
+        let results = match &mut outcome {
+            Ok(r) => r,
+            Err(f) => &mut f.results,
+        };
+        match (results.finish_stream(unclaimed), outcome) {
+            (Err(error), Ok(results)) => Err(Box::new(Failure { error, results })),
+            (_, outcome) => outcome,
+        }
     }
 }

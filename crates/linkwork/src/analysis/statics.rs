@@ -687,7 +687,7 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
     s.stable = Some(stable);
     s.equilibrium = Some(EquilibriumReport { index, min_reduced_stiffness: min_stiffness });
     s.indeterminate_joints = Some(indeterminate.unwrap_or_default());
-    results.insert_reaction_summary(model, analysis);
+    results.insert_reaction_summary(model);
     match error {
         None => Ok(results),
         Some(e) => Err(fail(results, e)),

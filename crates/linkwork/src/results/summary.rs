@@ -154,7 +154,7 @@ pub struct Reactions {
 pub struct Peak {
     /// Largest absolute value, N or N m.
     pub max_abs: f64,
-    /// Its (first) time, s; `None` without an output point.
+    /// Its time, s (the last, if it is reached more than once); `None` without an output point.
     pub time: Option<f64>,
 }
 

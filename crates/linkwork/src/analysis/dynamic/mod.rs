@@ -406,7 +406,7 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         ));
     }
     s.statistics = Some(Statistics::Dynamic(stats));
-    results.insert_reaction_summary(model, analysis);
+    results.insert_reaction_summary(model);
     match error {
         None => Ok(results),
         Some(e) => Err(fail(results, e)),

@@ -1,0 +1,185 @@
+//! Results streamed to a file as they are computed, instead of held in memory.
+//!
+//! [`Model::run_streamed`](crate::Model::run_streamed) makes a [`RowSink`] the running thread's
+//! own for the length of the run (as [`crate::progress`] does with the watcher, so that no
+//! analysis has to pass it along). The [`Results`](super::Results) that pushes the run's first
+//! output point claims it; from then on its rows go to the sink in chunks of about
+//! [`CHUNK_BYTES`], and only the chunk being filled is in memory. The run's summary is the same
+//! as without a sink: the reaction peaks are kept as the rows go by, and `output_points` counts
+//! the rows written.
+//!
+//! [`CsvSink`] writes `results.csv` exactly as [`Results::write_csv`](super::Results::write_csv)
+//! does (the same bytes); the Python package adds Parquet through the same trait.
+
+use crate::error::Error;
+use std::cell::RefCell;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Bytes of output values held before a chunk goes to the sink: 16 MB. Large enough that a
+/// sink's per-call cost (a Parquet row group, a Python call) is spread over many rows of a small
+/// mechanism (26,000 rows of the quick-return's 80 columns), small against the memory of a large
+/// one (9 rows of a 10,000-body chain's 210,000 columns, beside its 350 MB of solver state).
+pub const CHUNK_BYTES: usize = 16 << 20;
+
+/// Where the rows of a streamed run go (`Sync`, as the results that keep it may be shared).
+pub trait RowSink: Send + Sync {
+    /// Before the first chunk: the names of the columns after `time`.
+    fn begin(&mut self, names: &[String]) -> std::io::Result<()>;
+    /// A chunk of rows: their times, and each column's values at them.
+    fn write(&mut self, time: &[f64], columns: &[Vec<f64>]) -> std::io::Result<()>;
+    /// After the last chunk (also after a failed run, whose rows up to the failure were written).
+    fn finish(&mut self) -> std::io::Result<()>;
+    /// The file written, for error messages.
+    fn path(&self) -> String;
+    /// Bytes of output values to hold before a chunk is written.
+    fn chunk_bytes(&self) -> usize {
+        CHUNK_BYTES
+    }
+}
+
+/// `results.csv` written as the rows come: a header, then one line per output time, numbers in
+/// the shortest form that reads back to the same double.
+pub struct CsvSink {
+    path: PathBuf,
+    out: BufWriter<File>,
+}
+
+impl CsvSink {
+    /// Create (or truncate) the file at `path`.
+    pub fn create(path: &Path) -> Result<CsvSink, Error> {
+        let file =
+            File::create(path).map_err(|e| Error::Io { path: path.display().to_string(), message: e.to_string() })?;
+        Ok(CsvSink { path: path.to_path_buf(), out: BufWriter::new(file) })
+    }
+}
+
+/// The header line of `results.csv`.
+pub(crate) fn write_header(w: &mut impl Write, names: &[String]) -> std::io::Result<()> {
+    write!(w, "time")?;
+    for n in names {
+        write!(w, ",{n}")?;
+    }
+    writeln!(w)
+}
+
+/// The lines of `results.csv` for rows of `time` and `columns`.
+pub(crate) fn write_rows(w: &mut impl Write, time: &[f64], columns: &[Vec<f64>]) -> std::io::Result<()> {
+    for (r, t) in time.iter().enumerate() {
+        write!(w, "{t:?}")?;
+        for c in columns {
+            write!(w, ",{:?}", c[r])?;
+        }
+        writeln!(w)?;
+    }
+    Ok(())
+}
+
+impl RowSink for CsvSink {
+    fn begin(&mut self, names: &[String]) -> std::io::Result<()> {
+        write_header(&mut self.out, names)
+    }
+
+    fn write(&mut self, time: &[f64], columns: &[Vec<f64>]) -> std::io::Result<()> {
+        write_rows(&mut self.out, time, columns)
+    }
+
+    fn finish(&mut self) -> std::io::Result<()> {
+        self.out.flush()?;
+        self.out.get_ref().sync_all()
+    }
+
+    fn path(&self) -> String {
+        self.path.display().to_string()
+    }
+}
+
+/// A sink being written: how many rows it has, and the rows per chunk.
+pub(crate) struct Stream {
+    sink: Box<dyn RowSink>,
+    /// Rows already given to the sink.
+    pub(crate) rows: usize,
+    /// Rows per chunk.
+    pub(crate) chunk: usize,
+    begun: bool,
+    finished: bool,
+}
+
+impl std::fmt::Debug for Stream {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Stream").field("path", &self.sink.path()).field("rows", &self.rows).finish()
+    }
+}
+
+impl Stream {
+    /// The rows per chunk for rows of `columns` values and their time.
+    pub(crate) fn set_columns(&mut self, columns: usize) {
+        self.chunk = (self.sink.chunk_bytes() / (8 * (columns + 1))).max(1);
+    }
+
+    fn io(&self, e: std::io::Error) -> Error {
+        Error::Io { path: self.sink.path(), message: e.to_string() }
+    }
+
+    /// Give the sink the rows held (its header first), and empty them.
+    pub(crate) fn flush(
+        &mut self,
+        names: &[String],
+        time: &mut Vec<f64>,
+        columns: &mut [Vec<f64>],
+    ) -> Result<(), Error> {
+        if !self.begun {
+            self.begun = true;
+            self.sink.begin(names).map_err(|e| self.io(e))?;
+        }
+        if !time.is_empty() {
+            self.sink.write(time, columns).map_err(|e| self.io(e))?;
+            self.rows += time.len();
+            time.clear();
+            columns.iter_mut().for_each(Vec::clear);
+        }
+        Ok(())
+    }
+
+    /// Flush what is held and close the sink (once).
+    pub(crate) fn finish(
+        &mut self,
+        names: &[String],
+        time: &mut Vec<f64>,
+        columns: &mut [Vec<f64>],
+    ) -> Result<(), Error> {
+        if self.finished {
+            return Ok(());
+        }
+        self.finished = true;
+        self.flush(names, time, columns)?;
+        self.sink.finish().map_err(|e| self.io(e))
+    }
+}
+
+thread_local! {
+    /// The sink of the run on this thread not yet claimed by its results.
+    static PENDING: RefCell<Option<Stream>> = const { RefCell::new(None) };
+}
+
+/// Run `f` with `sink` waiting for the run's results on this thread; returns `f`'s value and the
+/// sink if no results claimed it (the run pushed no row). The slot is emptied afterwards, also
+/// when `f` panics.
+pub(crate) fn scope<T>(sink: Box<dyn RowSink>, f: impl FnOnce() -> T) -> (T, Option<Stream>) {
+    struct Clear;
+    impl Drop for Clear {
+        fn drop(&mut self) {
+            PENDING.set(None);
+        }
+    }
+    let _clear = Clear;
+    PENDING.set(Some(Stream { sink, rows: 0, chunk: 1, begun: false, finished: false }));
+    let value = f();
+    (value, PENDING.take())
+}
+
+/// The sink waiting on this thread, if any: the first results to push a row take it.
+pub(crate) fn claim() -> Option<Stream> {
+    PENDING.take()
+}

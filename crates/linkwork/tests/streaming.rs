@@ -1,0 +1,147 @@
+//! Results streamed to a file as they are computed (`Model::run_streamed`): the file is the one a
+//! run held in memory writes, byte for byte, whatever the chunks; the summary is the same; a
+//! failed run's file has every row up to the failure; a file that cannot be written fails the
+//! run naming it.
+
+use linkwork::progress::Progress;
+use linkwork::results::stream::{CsvSink, RowSink};
+use linkwork::{Error, Model, Overrides};
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+fn example(name: &str) -> String {
+    format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("linkwork-stream-{}-{name}", std::process::id()))
+}
+
+/// A [`CsvSink`] that writes a chunk every `rows_per_chunk` rows of `columns` columns, and
+/// counts its chunks.
+struct Chunked {
+    csv: CsvSink,
+    bytes: usize,
+    chunks: Arc<Mutex<usize>>,
+}
+
+impl RowSink for Chunked {
+    fn begin(&mut self, names: &[String]) -> std::io::Result<()> {
+        self.csv.begin(names)
+    }
+    fn write(&mut self, time: &[f64], columns: &[Vec<f64>]) -> std::io::Result<()> {
+        *self.chunks.lock().unwrap() += 1;
+        self.csv.write(time, columns)
+    }
+    fn finish(&mut self) -> std::io::Result<()> {
+        self.csv.finish()
+    }
+    fn path(&self) -> String {
+        self.csv.path()
+    }
+    fn chunk_bytes(&self) -> usize {
+        self.bytes
+    }
+}
+
+/// Every analysis type of the quick-return (and the dynamic one with its reactions and efforts),
+/// streamed whole and in chunks of 7 rows: the file and the summary are those of the run held in
+/// memory, and the results returned hold no row but count them all.
+#[test]
+fn a_streamed_file_is_the_file_a_run_in_memory_writes() {
+    let model = Model::load(example("quick_return_a.yaml")).unwrap();
+    for analysis in ["kinematics", "dynamics_loaded", "inverse"] {
+        let held = model.run(analysis).unwrap();
+        if analysis != "kinematics" {
+            // The peaks kept as the rows go by are those of the columns: every joint's largest
+            // resultant force.
+            let peaks = &held.summary_json(None)["peaks"];
+            for joint in &model.joints {
+                let (fx, fy) = (held.column(&format!("{}.fx", joint.name)), held.column(&format!("{}.fy", joint.name)));
+                let largest = fx.unwrap().iter().zip(fy.unwrap()).fold(0.0f64, |a, (x, y)| a.max(x.hypot(*y)));
+                assert_eq!(peaks[format!("{}.force", joint.name)]["max_abs"].as_f64(), Some(largest), "{analysis}");
+            }
+        }
+        let reference = temp(&format!("{analysis}-held.csv"));
+        held.write_csv(&reference).unwrap();
+        let expected = std::fs::read(&reference).unwrap();
+        let columns = std::fs::read_to_string(&reference).unwrap().lines().next().unwrap().split(',').count();
+        for rows_per_chunk in [None, Some(7)] {
+            let path = temp(&format!("{analysis}-streamed.csv"));
+            let chunks = Arc::new(Mutex::new(0));
+            let bytes = rows_per_chunk.map_or(linkwork::results::stream::CHUNK_BYTES, |r| 8 * columns * r);
+            let sink = Chunked { csv: CsvSink::create(&path).unwrap(), bytes, chunks: Arc::clone(&chunks) };
+            let streamed =
+                model.run_streamed(analysis, &Overrides::default(), &Progress::new(), Box::new(sink)).unwrap();
+            assert!(std::fs::read(&path).unwrap() == expected, "{analysis} {rows_per_chunk:?}: the files differ");
+            assert!(streamed.is_streamed() && streamed.time.is_empty(), "{analysis}: no row held");
+            assert_eq!(streamed.len(), held.len());
+            assert_eq!(streamed.summary_json(None), held.summary_json(None), "{analysis}");
+            let want = rows_per_chunk.map_or(1, |r| held.len().div_ceil(r));
+            assert_eq!(*chunks.lock().unwrap(), want, "{analysis} {rows_per_chunk:?}: chunks");
+            std::fs::remove_file(&path).unwrap();
+        }
+        std::fs::remove_file(&reference).unwrap();
+    }
+}
+
+/// A torque that is NaN past t = 0.503 s (tests/dynamics.rs): the streamed run fails as the run
+/// in memory does, and its file has the same 51 rows, those up to 0.5 s.
+#[test]
+fn a_failed_streamed_run_keeps_its_rows() {
+    let text = "
+gravity: [0, -9.81]
+bodies:
+  bar: {mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {O: [-0.5, 0]}}
+joints:
+  O: {type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}
+forces:
+  kick: {type: torque, body: bar, torque: \"sqrt(0.503-t)\"}
+analyses:
+  dynamics: {type: dynamic, t_end: 1, step: 0.01}
+";
+    let model = Model::from_yaml(text).unwrap();
+    let held = model.run("dynamics").unwrap_err();
+    let reference = temp("failed-held.csv");
+    held.results.write_csv(&reference).unwrap();
+    let path = temp("failed-streamed.csv");
+    let sink = Box::new(CsvSink::create(&path).unwrap());
+    let streamed = model.run_streamed("dynamics", &Overrides::default(), &Progress::new(), sink).unwrap_err();
+    assert_eq!(streamed.error.to_string(), held.error.to_string());
+    assert_eq!(streamed.results.len(), 51);
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), std::fs::read_to_string(&reference).unwrap());
+    for p in [path, reference] {
+        std::fs::remove_file(p).unwrap();
+    }
+}
+
+/// A sink whose writes fail (a full disk) fails the run with `Error::Io` naming its file.
+#[test]
+fn a_sink_that_cannot_be_written_fails_the_run_naming_it() {
+    struct Full;
+    impl RowSink for Full {
+        fn begin(&mut self, _: &[String]) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn write(&mut self, _: &[f64], _: &[Vec<f64>]) -> std::io::Result<()> {
+            Err(std::io::Error::other("no space left on device"))
+        }
+        fn finish(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn path(&self) -> String {
+            "/full/results.csv".into()
+        }
+        fn chunk_bytes(&self) -> usize {
+            1
+        }
+    }
+    let model = Model::load(example("quick_return_a.yaml")).unwrap();
+    let failure =
+        model.run_streamed("kinematics", &Overrides::default(), &Progress::new(), Box::new(Full)).unwrap_err();
+    assert!(
+        matches!(&failure.error, Error::Io { path, message } if path == "/full/results.csv" && message.contains("no space")),
+        "{}",
+        failure.error
+    );
+}
