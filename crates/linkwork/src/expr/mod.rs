@@ -19,7 +19,11 @@
 //!   `**`, right associative and tighter than unary minus, so `2^3^2 = 512` and
 //!   `-2^2 = -4`); parentheses.
 //! * Functions: `sin cos tan asin acos atan atan2(y, x) sinh cosh tanh exp log`
-//!   (natural) `sqrt abs min(a, b) max(a, b) sign pow(a, b)`.
+//!   (natural) `sqrt abs min(a, b) max(a, b) sign pow(a, b)`; the motion laws
+//!   `step step5 poly345 cycloidal harmonic modified_trapezoid`, each `(x, x0, h0, x1, h1)`
+//!   ([`laws`]); `if(c, a, b)`, `a` where `c` is not 0, else `b`.
+//! * Comparisons `< > <= >= == !=`, looser than every other operator, give 1 or 0 (no
+//!   derivative).
 //!
 //! A power with a constant exponent (`x^2`, `pow(x, 3)`, `x^(1/2)`) is evaluated with
 //! an integer or real power rule, so `x^2` is exact at `x = 0` (value 0, derivative 0,
@@ -48,6 +52,7 @@
 //! assert_eq!((v, dv, ddv), (0.0, 1.2, 0.0));
 //! ```
 
+pub mod laws;
 mod parse;
 mod scalar;
 
@@ -218,6 +223,11 @@ impl Expr {
                 Op::Binary(b) => {
                     sp -= 1;
                     stack[sp - 1] = Binary::apply(b, stack[sp - 1], stack[sp]);
+                }
+                Op::Nary(n) => {
+                    let arity = n.arity();
+                    sp -= arity - 1;
+                    stack[sp - 1] = n.apply(&stack[sp - 1..sp - 1 + arity]);
                 }
             }
         }

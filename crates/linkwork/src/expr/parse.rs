@@ -22,6 +22,7 @@
 //! to [`MAX_DEPTH`] levels, which bounds the parser's memory and the evaluation stack.
 //! Nothing recurses, so hostile input cannot overflow the call stack.
 
+use super::laws::Law;
 use super::scalar::Scalar;
 use super::ExprError;
 
@@ -95,6 +96,13 @@ pub(crate) enum Binary {
     Atan2,
     Min,
     Max,
+    /// Comparisons: 1 when true, 0 when false, derivatives 0.
+    Lt,
+    Gt,
+    Le,
+    Ge,
+    Eq,
+    Ne,
 }
 
 impl Binary {
@@ -109,6 +117,50 @@ impl Binary {
             Binary::Atan2 => a.atan2(b),
             Binary::Min => a.min(b),
             Binary::Max => a.max(b),
+            Binary::Lt => truth(a.value() < b.value()),
+            Binary::Gt => truth(a.value() > b.value()),
+            Binary::Le => truth(a.value() <= b.value()),
+            Binary::Ge => truth(a.value() >= b.value()),
+            Binary::Eq => truth(a.value() == b.value()),
+            Binary::Ne => truth(a.value() != b.value()),
+        }
+    }
+}
+
+/// A comparison's value: 1 or 0, a constant.
+fn truth<S: Scalar>(holds: bool) -> S {
+    S::constant(if holds { 1.0 } else { 0.0 })
+}
+
+/// Operations of more than two arguments, the arguments pushed in order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Nary {
+    /// `if(c, a, b)`: `a` where `c` is not 0, else `b` (each with its own derivatives).
+    If,
+    /// A motion law `law(x, x0, h0, x1, h1)` ([`super::laws`]).
+    Law(super::laws::Law),
+}
+
+impl Nary {
+    /// Number of arguments.
+    pub(crate) fn arity(self) -> usize {
+        match self {
+            Nary::If => 3,
+            Nary::Law(_) => 5,
+        }
+    }
+
+    #[inline(always)]
+    pub(crate) fn apply<S: Scalar>(self, args: &[S]) -> S {
+        match self {
+            Nary::If => {
+                if args[0].value() != 0.0 {
+                    args[1]
+                } else {
+                    args[2]
+                }
+            }
+            Nary::Law(law) => law.apply(args[0], args[1], args[2], args[3], args[4]),
         }
     }
 }
@@ -124,6 +176,8 @@ pub(crate) enum Op {
     Unary(Unary),
     /// Pop `b`, pop `a`, push `a op b`.
     Binary(Binary),
+    /// Pop the operation's arguments (the last pushed last), push its value.
+    Nary(Nary),
 }
 
 /// Built-in functions: name, number of arguments, operation.
@@ -146,6 +200,13 @@ pub(crate) const FUNCTIONS: &[(&str, usize, Op)] = &[
     ("max", 2, Op::Binary(Binary::Max)),
     ("sign", 1, Op::Unary(Unary::Sign)),
     ("pow", 2, Op::Binary(Binary::Pow)),
+    ("if", 3, Op::Nary(Nary::If)),
+    ("step", 5, Op::Nary(Nary::Law(Law::Step))),
+    ("step5", 5, Op::Nary(Nary::Law(Law::Step5))),
+    ("poly345", 5, Op::Nary(Nary::Law(Law::Step5))),
+    ("cycloidal", 5, Op::Nary(Nary::Law(Law::Cycloidal))),
+    ("harmonic", 5, Op::Nary(Nary::Law(Law::Harmonic))),
+    ("modified_trapezoid", 5, Op::Nary(Nary::Law(Law::ModifiedTrapezoid))),
 ];
 
 /// Built-in constants.
@@ -194,6 +255,7 @@ pub(crate) fn compile(
             }
             Op::Unary(_) => {}
             Op::Binary(_) => depth -= 1,
+            Op::Nary(n) => depth -= n.arity() - 1,
         }
         max_stack = max_stack.max(depth);
     }
@@ -218,6 +280,8 @@ enum Tok<'a> {
     LParen,
     RParen,
     Comma,
+    /// A comparison operator.
+    Cmp(Binary),
     End,
 }
 
@@ -272,6 +336,22 @@ impl<'a> Lexer<'a> {
             b'(' => single(Tok::LParen),
             b')' => single(Tok::RParen),
             b',' => single(Tok::Comma),
+            b'<' | b'>' | b'=' | b'!' => {
+                let equals = self.byte(start + 1) == Some(b'=');
+                let op = match (c, equals) {
+                    (b'<', false) => Binary::Lt,
+                    (b'>', false) => Binary::Gt,
+                    (b'<', true) => Binary::Le,
+                    (b'>', true) => Binary::Ge,
+                    (b'=', true) => Binary::Eq,
+                    (b'!', true) => Binary::Ne,
+                    _ => {
+                        let hint = if c == b'=' { " (a comparison is written '==')" } else { "" };
+                        return Err(ExprError::new(format!("unexpected character '{}'{hint}", c as char), start));
+                    }
+                };
+                Token { tok: Tok::Cmp(op), start, end: start + 1 + usize::from(equals) }
+            }
             b'*' if self.byte(start + 1) == Some(b'*') => Token { tok: Tok::Caret, start, end: start + 2 },
             b'*' => single(Tok::Star),
             b'0'..=b'9' => return self.number(),
@@ -335,6 +415,8 @@ impl<'a> Lexer<'a> {
 /// Infix operators.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Infix {
+    /// A comparison (loosest of all: `t - 1 > 0` compares `t - 1`).
+    Cmp(Binary),
     Add,
     Sub,
     Mul,
@@ -346,14 +428,16 @@ impl Infix {
     /// Binding power; unary minus sits between `* /` and `^` (see [`NEG_PREC`]).
     fn prec(self) -> u8 {
         match self {
-            Infix::Add | Infix::Sub => 1,
-            Infix::Mul | Infix::Div => 2,
-            Infix::Pow => 4,
+            Infix::Cmp(_) => 1,
+            Infix::Add | Infix::Sub => 2,
+            Infix::Mul | Infix::Div => 3,
+            Infix::Pow => 5,
         }
     }
 
     fn binary(self) -> Binary {
         match self {
+            Infix::Cmp(b) => b,
             Infix::Add => Binary::Add,
             Infix::Sub => Binary::Sub,
             Infix::Mul => Binary::Mul,
@@ -365,7 +449,7 @@ impl Infix {
 
 /// Binding power of unary minus: tighter than `*` and `/`, looser than `^`, so
 /// `-x*y = (-x)*y` and `-x^2 = -(x^2)`.
-const NEG_PREC: u8 = 3;
+const NEG_PREC: u8 = 4;
 
 /// An entry of the parser's explicit operator stack.
 #[derive(Debug, Clone, Copy)]
@@ -463,8 +547,9 @@ impl<'a> Parser<'a, '_> {
                 continue;
             }
             match t.tok {
-                Tok::Plus | Tok::Minus | Tok::Star | Tok::Slash | Tok::Caret => {
+                Tok::Plus | Tok::Minus | Tok::Star | Tok::Slash | Tok::Caret | Tok::Cmp(_) => {
                     let op = match t.tok {
+                        Tok::Cmp(b) => Infix::Cmp(b),
                         Tok::Plus => Infix::Add,
                         Tok::Minus => Infix::Sub,
                         Tok::Star => Infix::Mul,
@@ -654,6 +739,7 @@ impl<'a> Parser<'a, '_> {
         match op {
             Op::Unary(u) => self.emit_unary(u),
             Op::Binary(b) => self.emit_binary(b),
+            Op::Nary(n) => self.emit_nary(n),
             Op::Const(_) | Op::Var(_) => unreachable!("FUNCTIONS holds only operations"),
         }
         Ok(())
@@ -666,6 +752,25 @@ impl<'a> Parser<'a, '_> {
         } else {
             self.code.push(Op::Unary(u));
         }
+    }
+
+    /// Emits an operation of more than two arguments, folded when they are all constants (the
+    /// last `arity` instructions are then the arguments, as in [`Self::emit_binary`]).
+    fn emit_nary(&mut self, op: Nary) {
+        let arity = op.arity();
+        let n = self.code.len();
+        if n >= arity {
+            let args: Vec<f64> = self.code[n - arity..]
+                .iter()
+                .map_while(|o| if let Op::Const(c) = o { Some(*c) } else { None })
+                .collect();
+            if args.len() == arity {
+                self.code.truncate(n - arity);
+                self.code.push(Op::Const(op.apply(&args)));
+                return;
+            }
+        }
+        self.code.push(Op::Nary(op));
     }
 
     /// Emits a binary operation, folding constant operands and turning powers with a

@@ -223,11 +223,114 @@ struct Case {
     d2: fn(f64) -> f64,
 }
 
+/// The motion laws' cases below: `law(x, 0.2, 1, 1.2, 3)`, so `u = x - 0.2` and the rise is 2.
+fn rise(x: f64, s: fn(f64) -> f64) -> f64 {
+    let u = x - 0.2;
+    if u <= 0.0 {
+        1.0
+    } else if u >= 1.0 {
+        3.0
+    } else {
+        1.0 + 2.0 * s(u)
+    }
+}
+
+/// A derivative of a rise, 0 outside it.
+fn rise_rate(x: f64, s: fn(f64) -> f64) -> f64 {
+    let u = x - 0.2;
+    if u <= 0.0 || u >= 1.0 {
+        0.0
+    } else {
+        2.0 * s(u)
+    }
+}
+
+/// The modified trapezoid's acceleration by its definition (Rothbart): sine ramps of period
+/// 1/2 to and from the constant levels `+-A`, `A = 8 pi / (2 + pi)`.
+fn trapezoid_acceleration(u: f64) -> f64 {
+    let a = 8.0 * PI / (2.0 + PI);
+    match u {
+        u if u <= 0.125 => a * (4.0 * PI * u).sin(),
+        u if u <= 0.375 => a,
+        u if u <= 0.625 => a * (4.0 * PI * (u - 0.375)).cos(),
+        u if u <= 0.875 => -a,
+        u => -a * (4.0 * PI * (u - 0.875)).cos(),
+    }
+}
+
+/// `int_0^u w(u, v) a(v) dv` by Simpson's rule on each smooth piece of the acceleration (10,000
+/// panels of at most `2.5e-5`: error about `1e-16`): the velocity (`w = 1`) and the rise
+/// (`w = u - v`, Cauchy's formula for the double integral), independent of the closed forms.
+fn trapezoid_integral(u: f64, weight: fn(f64, f64) -> f64) -> f64 {
+    let mut total = 0.0;
+    for piece in [0.0, 0.125, 0.375, 0.625, 0.875, 1.0].windows(2) {
+        let (a, b) = (piece[0].min(u), piece[1].min(u));
+        if b <= a {
+            continue;
+        }
+        let panels = 10_000;
+        let h = (b - a) / panels as f64;
+        let f = |v: f64| weight(u, v) * trapezoid_acceleration(v);
+        let mut sum = f(a) + f(b);
+        for i in 1..panels {
+            sum += f(a + i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 };
+        }
+        total += sum * h / 3.0;
+    }
+    total
+}
+
 fn cases() -> Vec<Case> {
     fn sq(x: f64) -> f64 {
         x * x
     }
     vec![
+        // Motion laws (closed forms of the normalized rise s(u) and its derivatives; the
+        // modified trapezoid's from its acceleration's definition, integrated numerically).
+        // Points before, inside and after the rise, away from its ends and from the
+        // trapezoid's joints at u = 1/8, 3/8, 5/8, 7/8.
+        Case {
+            src: "step(x, 0.2, 1, 1.2, 3)",
+            points: &[0.0, 0.5, 0.9, 1.5],
+            f: |x| rise(x, |u| u * u * (3.0 - 2.0 * u)),
+            d1: |x| rise_rate(x, |u| 6.0 * u - 6.0 * u * u),
+            d2: |x| rise_rate(x, |u| 6.0 - 12.0 * u),
+        },
+        Case {
+            src: "step5(x, 0.2, 1, 1.2, 3) + poly345(x, 0.2, 1, 1.2, 3)",
+            points: &[0.0, 0.5, 0.9, 1.5],
+            f: |x| 2.0 * rise(x, |u| u.powi(3) * (10.0 - 15.0 * u + 6.0 * u * u)),
+            d1: |x| 2.0 * rise_rate(x, |u| 30.0 * u * u - 60.0 * u.powi(3) + 30.0 * u.powi(4)),
+            d2: |x| 2.0 * rise_rate(x, |u| 60.0 * u - 180.0 * u * u + 120.0 * u.powi(3)),
+        },
+        Case {
+            src: "cycloidal(x, 0.2, 1, 1.2, 3)",
+            points: &[0.0, 0.5, 0.9, 1.5],
+            f: |x| rise(x, |u| u - (2.0 * PI * u).sin() / (2.0 * PI)),
+            d1: |x| rise_rate(x, |u| 1.0 - (2.0 * PI * u).cos()),
+            d2: |x| rise_rate(x, |u| 2.0 * PI * (2.0 * PI * u).sin()),
+        },
+        Case {
+            src: "harmonic(x, 0.2, 1, 1.2, 3)",
+            points: &[0.0, 0.5, 0.9, 1.5],
+            f: |x| rise(x, |u| (1.0 - (PI * u).cos()) / 2.0),
+            d1: |x| rise_rate(x, |u| PI * (PI * u).sin() / 2.0),
+            d2: |x| rise_rate(x, |u| PI * PI * (PI * u).cos() / 2.0),
+        },
+        Case {
+            src: "modified_trapezoid(x, 0.2, 1, 1.2, 3)",
+            points: &[0.0, 0.25, 0.4, 0.6, 0.7, 0.9, 1.0, 1.15, 1.5],
+            f: |x| rise(x, |u| trapezoid_integral(u, |u, v| u - v)),
+            d1: |x| rise_rate(x, |u| trapezoid_integral(u, |_, _| 1.0)),
+            d2: |x| rise_rate(x, trapezoid_acceleration),
+        },
+        Case {
+            src: "if(x >= 0.5, 3*x, x^2) + if(x < 0.5, 1, 0)",
+            points: &[0.2, 0.9],
+            f: |x| if x >= 0.5 { 3.0 * x } else { x * x + 1.0 },
+            d1: |x| if x >= 0.5 { 3.0 } else { 2.0 * x },
+            d2: |x| if x >= 0.5 { 0.0 } else { 2.0 },
+        },
         Case { src: "sin(x)", points: &[-2.0, 0.0, 0.7, 3.0], f: f64::sin, d1: f64::cos, d2: |x| -x.sin() },
         Case {
             src: "sin(4*x)",
@@ -810,4 +913,65 @@ fn garbage_input_never_panics() {
         }
     }
     assert!(ok > 0);
+}
+
+// ---------------------------------------------------------------- motion laws and comparisons
+
+/// Each law's largest normalized acceleration, the figure cam designers compare them by (Norton,
+/// *Cam Design and Manufacturing Handbook*, table 3-2: 6 for the cubic, 5.777 for 3-4-5 (exactly
+/// `10/sqrt(3)`), 2 pi for the cycloidal, pi^2/2 for the harmonic, 4.888 for the modified
+/// trapezoid), sampled at 100,001 points; and
+/// every law rises from 0 to 1, through 1/2 at the middle.
+#[test]
+fn motion_laws_have_their_textbook_peaks() {
+    let peaks = [
+        ("step", 6.0),
+        ("step5", 10.0 / 3f64.sqrt()),
+        ("poly345", 10.0 / 3f64.sqrt()),
+        ("cycloidal", 2.0 * PI),
+        ("harmonic", PI * PI / 2.0),
+        ("modified_trapezoid", 8.0 * PI / (2.0 + PI)),
+    ];
+    for (law, peak) in peaks {
+        let e = parse(&format!("{law}(x, 0, 0, 1, 1)"));
+        let largest = (0..=100_000)
+            .map(|k| e.eval(&[HyperDual::variable(k as f64 / 100_000.0)]).e12.abs())
+            .fold(0.0f64, f64::max);
+        // The cubic's peak is at its ends, where its acceleration falls at 12 per unit: the
+        // samples nearest them, 1e-5 inside, see 6 (1 - 2e-5). The others' peaks are flat.
+        let tol = if law == "step" { 3e-5 } else { 1e-8 };
+        assert_close(&format!("{law}: peak acceleration"), largest, peak, tol);
+        assert_close(&format!("{law}(0.5)"), e.eval(&[0.5]), 0.5, 1e-15);
+        assert_eq!((e.eval(&[-1.0]), e.eval(&[0.0]), e.eval(&[1.0]), e.eval(&[2.0])), (0.0, 0.0, 1.0, 1.0), "{law}");
+    }
+    // A law with no rise (x1 <= x0) is NaN, which an analysis names as non-finite.
+    assert!(val("step(0.5, 1, 0, 1, 2)").is_nan() && val("cycloidal(0.5, 2, 0, 1, 2)").is_nan());
+    // Its ends may be expressions: d/dh1 of step at u = 1/2 is s(1/2) = 1/2.
+    let e = parse("step(0.5, 0, 0, 1, x)");
+    assert_close("d step / d h1", e.eval(&[Dual::variable(3.0)]).d, 0.5, 1e-15);
+}
+
+/// Comparisons are the loosest operators (`t - 1 > 0` compares `t - 1`), give 1 or 0 with no
+/// derivative, and fold when constant; `=` alone and `!` alone are errors that say what to write.
+#[test]
+fn comparisons() {
+    for (src, want) in [
+        ("1 + 2 > 2", 1.0),
+        ("2 < 1", 0.0),
+        ("1 <= 1", 1.0),
+        ("1 >= 2", 0.0),
+        ("2 == 2", 1.0),
+        ("2 != 2", 0.0),
+        ("-1 < 0", 1.0),
+        ("2 * 3 > 5 + 0.5", 1.0),
+    ] {
+        assert_eq!(val(src), want, "{src}");
+    }
+    let e = parse("x - 1 > 0");
+    assert_eq!((e.eval(&[0.5]), e.eval(&[1.5])), (0.0, 1.0));
+    assert_eq!(e.eval(&[Dual::variable(1.5)]).d, 0.0);
+    assert!(parse("1 < 2").is_constant());
+    assert!(parse_err("x = 1").message.contains("'=='"), "{}", parse_err("x = 1").message);
+    assert_eq!(parse_err("x ! 1").offset, 2);
+    assert!(parse_err("if(x, 1)").message.contains("takes 3 arguments"));
 }
