@@ -174,6 +174,20 @@ def test_check_names_redundant_rows_by_joint_and_equation(linkwork: RunLinkwork)
     assert re.search(r"degrees of freedom\s+1\b", done.stdout)
 
 
+def test_check_lists_what_was_placed_from_global_coordinates(linkwork: RunLinkwork) -> None:
+    done = linkwork("check", EXAMPLES / "fourbar_placed.yaml")
+    assert done.code == 0, done.output
+    placed = done.stdout.split("placed from global coordinates", 1)[1].split("\n\n", 1)[0]
+    # The crank's A is 0.05 m along +x from its centre M; the pin O2 on ground is the global origin.
+    assert re.search(r"bodies\.crank\.points\.A\s+\[0\.05, 0\]", placed), placed
+    assert re.search(r"joints\.O2\.point_j\s+\[0, 0\]", placed), placed
+    assert len(placed.strip().splitlines()) == 1 + 9 + 8
+    report = json.loads(linkwork("check", EXAMPLES / "fourbar_placed.yaml", "--json").stdout)
+    assert report["placed"]["bodies.rocker.points.O4"][0] == pytest.approx(0.015625, abs=1e-15)
+    # A model placed in body frames places nothing, and says nothing about it.
+    assert "placed from" not in linkwork("check", EXAMPLES / "fourbar.yaml").stdout
+
+
 def test_check_json(linkwork: RunLinkwork) -> None:
     done = linkwork("check", EXAMPLES / "parallelogram.yaml", "--json")
     assert done.code == 0, done.output

@@ -483,6 +483,11 @@ def _check(args: argparse.Namespace) -> int:
     bodies: list[str] = report["bodies"]
     print(report["model"] or Path(args.model).name)
     print(f"bodies: {', '.join(bodies)} ({len(bodies)} bodies, {report['coordinates']} coordinates)")
+    if report["placed"]:
+        # Twelve digits: enough to paste back into the file, few enough to read.
+        print("placed from global coordinates, in body frames (points in m, axes as directions):")
+        for path, (x, y) in report["placed"].items():
+            print(f"  {path:<32} [{x:.12g}, {y:.12g}]")
     print()
     _print_system("mechanism (joints only; coordinates marked given held)", report["mechanism"], bodies)
     for name, system in report["analyses"].items():

@@ -66,6 +66,8 @@ pub struct CheckReport {
     pub mechanism: SystemCheck,
     /// Each analysis by name, with its drivers.
     pub analyses: IndexMap<String, AnalysisCheck>,
+    /// What the file placed from global coordinates, in body frames ([`Model::placed`]).
+    pub placed: IndexMap<String, [f64; 2]>,
 }
 
 /// Assemble the model with the joints and the given drivers and examine its Jacobian there.
@@ -129,5 +131,6 @@ pub fn check(model: &Model) -> Result<CheckReport> {
         coordinate_names: coordinate_names(model),
         mechanism,
         analyses,
+        placed: model.placed.clone(),
     })
 }

@@ -40,7 +40,8 @@ pub fn compile(spec: &ModelSpec) -> Result<Model, Vec<Problem>> {
 /// Build the model from the entries that were read; `broken` names (`section.name`) the entries
 /// that were not: they are taken as existing, so that only their own problems are reported.
 pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec<Problem>> {
-    let mut cx = Cx { spec, problems: Vec::new(), q0: Vec::new(), broken };
+    let mut cx =
+        Cx { spec, points: IndexMap::new(), placed: IndexMap::new(), problems: Vec::new(), q0: Vec::new(), broken };
     let bodies = cx.bodies();
     cx.q0 = bodies.iter().flat_map(|b| b.q0).collect();
     cx.unique_names();
@@ -86,6 +87,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec
             source: String::new(),
             parameters: spec.parameters.clone(),
             set: Vec::new(),
+            placed: cx.placed,
         })
     } else {
         Err(cx.problems)
@@ -99,8 +101,19 @@ const QUANTITIES: [&str; 9] = ["x", "y", "phi", "vx", "vy", "omega", "ax", "ay",
 /// A body and a point of it, body frame.
 type End = (BodyIx, [f64; 2]);
 
+/// The global point `g` in the frame of a body at `(x, y, phi)`: `R(-phi) (g - (x, y))`.
+fn to_body_frame([x, y, phi]: [f64; 3], g: [f64; 2]) -> [f64; 2] {
+    let (s, c) = phi.sin_cos();
+    let (dx, dy) = (g[0] - x, g[1] - y);
+    [c * dx + s * dy, -s * dx + c * dy]
+}
+
 struct Cx<'s> {
     spec: &'s ModelSpec,
+    /// Each body's named points in its frame: `points`, and `points_global` placed.
+    points: IndexMap<String, IndexMap<String, [f64; 2]>>,
+    /// What was placed from global coordinates ([`Model::placed`]).
+    placed: IndexMap<String, [f64; 2]>,
     problems: Vec<Problem>,
     /// (3 * bodies) initial guess, for constants that default to their initial value.
     q0: Vec<f64>,
@@ -211,13 +224,26 @@ impl Cx<'_> {
                         );
                     }
                 }
-                let pos = self.vec2(&format!("{path}.position"), b.position).unwrap_or([0.0; 2]);
+                let pos = self.position(&path, b).unwrap_or([0.0; 2]);
                 let angle = self.finite(&format!("{path}.angle"), b.angle).unwrap_or(0.0);
                 let vel = self.vec2(&format!("{path}.velocity"), b.velocity).unwrap_or([0.0; 2]);
                 let omega = self.finite(&format!("{path}.omega"), b.omega).unwrap_or(0.0);
                 for (p, v) in &b.points {
                     self.vec2(&format!("{path}.points.{p}"), *v);
                 }
+                let mut points = b.points.clone();
+                for (p, v) in &b.points_global {
+                    let here = format!("{path}.points_global.{p}");
+                    let Some(v) = self.vec2(&here, *v) else { continue };
+                    if points.contains_key(p) {
+                        self.problem(here, format!("'{p}' is also in points: name each point once"));
+                        continue;
+                    }
+                    let local = to_body_frame([pos[0], pos[1], angle], v);
+                    self.placed.insert(format!("{path}.points.{p}"), local);
+                    points.insert(p.clone(), local);
+                }
+                self.points.insert(name.clone(), points.clone());
                 let mut given = [false; 6];
                 for g in &b.given {
                     given[*g as usize] = true;
@@ -227,7 +253,7 @@ impl Cx<'_> {
                     index: k,
                     mass: b.mass,
                     inertia: b.inertia,
-                    points: b.points.clone(),
+                    points,
                     q0: [pos[0], pos[1], angle],
                     v0: [vel[0], vel[1], omega],
                     given,
@@ -287,7 +313,7 @@ impl Cx<'_> {
                 let points = if body == "ground" {
                     Some(self.spec.ground.as_ref().map_or(&no_points, |g| &g.points))
                 } else {
-                    self.spec.bodies.get(body).map(|b| &b.points)
+                    self.points.get(body)
                 };
                 match points.map(|ps| (ps.get(n), ps)) {
                     Some((Some(v), _)) => Some(*v),
@@ -307,6 +333,110 @@ impl Cx<'_> {
                     // The body itself is unknown: reported where the body is named.
                     None => None,
                 }
+            }
+        }
+    }
+
+    /// The centre of mass of body `b` at `path`: `position` as coordinates, or the point of
+    /// `points_global` it names.
+    fn position(&mut self, path: &str, b: &BodySpec) -> Option<[f64; 2]> {
+        let here = format!("{path}.position");
+        match &b.position {
+            PointRef::Coords(v) => self.vec2(&here, *v),
+            PointRef::Name(n) => {
+                match b.points_global.get(n) {
+                    Some(v) => self.vec2(&here, *v),
+                    None => {
+                        let known: Vec<&str> = b.points_global.keys().map(String::as_str).collect();
+                        let list = if known.is_empty() {
+                            "it has none".to_string()
+                        } else {
+                            format!("it has {}", known.join(", "))
+                        };
+                        self.problem(here, format!("unknown point '{n}': a position by name is one of points_global ({list}); or give [x, y]"));
+                        None
+                    }
+                }
+            }
+        }
+    }
+
+    /// Body `name`'s initial `(x, y, phi)` (the identity for ground); `None` for a body that is
+    /// not known (reported where it is named).
+    fn initial_frame(&self, name: &str) -> Option<[f64; 3]> {
+        if name == "ground" {
+            return Some([0.0; 3]);
+        }
+        let k = self.spec.bodies.get_index_of(name)?;
+        self.q0.get(3 * k..3 * k + 3).map(|c| [c[0], c[1], c[2]])
+    }
+
+    /// The two points of a joint at `path` that coincide at the initial position: `point_i` and
+    /// `point_j` as given, or both from `at`, the global point, in each body's frame.
+    fn placed_points(
+        &mut self,
+        path: &str,
+        bodies: [&str; 2],
+        points: [&Option<PointRef>; 2],
+        at: &Option<[f64; 2]>,
+    ) -> Option<(PointRef, PointRef)> {
+        match (at, points) {
+            (Some(_), [Some(_), _] | [_, Some(_)]) => {
+                self.problem(format!("{path}.at"), "give at (global) or point_i and point_j (body frames), not both");
+                None
+            }
+            (Some(at), _) => {
+                let at = self.vec2(&format!("{path}.at"), *at)?;
+                // An unknown body is reported where the joint names it (`ends`).
+                let [pi, pj] = bodies.map(|b| self.initial_frame(b).map_or([0.0; 2], |f| to_body_frame(f, at)));
+                self.placed.insert(format!("{path}.point_i"), pi);
+                self.placed.insert(format!("{path}.point_j"), pj);
+                Some((PointRef::Coords(pi), PointRef::Coords(pj)))
+            }
+            (None, [Some(pi), Some(pj)]) => Some((pi.clone(), pj.clone())),
+            (None, [pi, _]) => {
+                let field = if pi.is_none() { "point_i" } else { "point_j" };
+                self.problem(
+                    format!("{path}.{field}"),
+                    "missing: give point_i and point_j (body frames), or at: [x, y] (the global point)",
+                );
+                None
+            }
+        }
+    }
+
+    /// The directions of a joint at `path`, each `(field, body, value)`: as given, or all from
+    /// `axis`, the global direction at the initial position, in each body's frame.
+    fn placed_axes<const N: usize>(
+        &mut self,
+        path: &str,
+        fields: [(&str, &str, &Option<[f64; 2]>); N],
+        axis: &Option<[f64; 2]>,
+    ) -> Option<[[f64; 2]; N]> {
+        let names = fields.map(|(f, _, _)| f).join(" and ");
+        match axis {
+            Some(_) if fields.iter().any(|(_, _, v)| v.is_some()) => {
+                self.problem(format!("{path}.axis"), format!("give axis (global) or {names} (body frames), not both"));
+                None
+            }
+            Some(a) => {
+                let a = self.axis(&format!("{path}.axis"), *a)?;
+                // An unknown body is reported where the joint names it.
+                let local =
+                    fields.map(|(_, b, _)| to_body_frame([0.0, 0.0, self.initial_frame(b).map_or(0.0, |f| f[2])], a));
+                for ((field, _, _), v) in fields.iter().zip(&local) {
+                    self.placed.insert(format!("{path}.{field}"), *v);
+                }
+                Some(local)
+            }
+            None => {
+                if let Some((field, _, _)) = fields.iter().find(|(_, _, v)| v.is_none()) {
+                    let message =
+                        format!("missing: give {names} (body frames), or axis: [x, y] (the global direction)");
+                    self.problem(format!("{path}.{field}"), message);
+                    return None;
+                }
+                Some(fields.map(|(_, _, v)| v.unwrap_or_default()))
             }
         }
     }
@@ -359,20 +489,27 @@ impl Cx<'_> {
     fn joint(&mut self, path: &str, j: &JointSpec) -> Option<Box<dyn Constraint>> {
         use JointSpec as J;
         let c: Box<dyn Constraint> = match j {
-            J::Revolute(RevoluteJoint { body_i, point_i, body_j, point_j }) => {
-                let [(i, sp), (j, sq)] = self.ends(path, body_i, point_i, body_j, point_j)?;
+            J::Revolute(RevoluteJoint { body_i, point_i, body_j, point_j, at }) => {
+                let (pi, pj) = self.placed_points(path, [body_i, body_j], [point_i, point_j], at)?;
+                let [(i, sp), (j, sq)] = self.ends(path, body_i, &pi, body_j, &pj)?;
                 Box::new(Revolute::new(i, sp, j, sq))
             }
-            J::Translational(TranslationalJoint { body_i, point_i, axis_i, body_j, point_j, axis_j }) => {
-                let ends = self.ends(path, body_i, point_i, body_j, point_j);
-                let vi = self.axis(&format!("{path}.axis_i"), *axis_i);
-                let vj = self.axis(&format!("{path}.axis_j"), *axis_j);
+            J::Translational(TranslationalJoint { body_i, point_i, axis_i, body_j, point_j, axis_j, at, axis }) => {
+                let points = self.placed_points(path, [body_i, body_j], [point_i, point_j], at);
+                let axes = self.placed_axes(path, [("axis_i", body_i, axis_i), ("axis_j", body_j, axis_j)], axis);
+                let ((pi, pj), [ai, aj]) = (points?, axes?);
+                let ends = self.ends(path, body_i, &pi, body_j, &pj);
+                let vi = self.axis(&format!("{path}.axis_i"), ai);
+                let vj = self.axis(&format!("{path}.axis_j"), aj);
                 let ([(i, sp), (j, sq)], vi, vj) = (ends?, vi?, vj?);
                 let relative = i.coords(&self.q0)[2] - j.coords(&self.q0)[2];
                 Box::new(Translational::new(i, sp, vi, j, sq, vj).near(relative))
             }
-            J::PointOnLine(PointOnLineJoint { body_i, point_i, axis_i, body_j, point_j }) => {
-                let ([(i, sp), (j, sq)], vi) = self.line_and_point(path, body_i, point_i, axis_i, body_j, point_j)?;
+            J::PointOnLine(PointOnLineJoint { body_i, point_i, axis_i, body_j, point_j, at, axis }) => {
+                let points = self.placed_points(path, [body_i, body_j], [point_i, point_j], at);
+                let axes = self.placed_axes(path, [("axis_i", body_i, axis_i)], axis);
+                let ((pi, pj), [ai]) = (points?, axes?);
+                let ([(i, sp), (j, sq)], vi) = self.line_and_point(path, body_i, &pi, &ai, body_j, &pj)?;
                 Box::new(PointOnLine::new(i, sp, vi, j, sq, 0.0))
             }
             J::RevoluteTranslational(RevoluteTranslationalJoint {

@@ -251,6 +251,10 @@ pub struct Model {
     /// Parameter values given from outside (`--set`, [`Model::with_parameters`]) over the file's:
     /// `(name, text)`, the text a bare number (SI) or a number with a unit.
     pub set: Vec<(String, String)>,
+    /// What was placed from global coordinates, in body frames: each point of a body's
+    /// `points_global` (`bodies.<body>.points.<point>`), and each joint point and axis given
+    /// by `at` and `axis` (`joints.<joint>.point_i`, `.axis_j`, ...), in file order.
+    pub placed: IndexMap<String, [f64; 2]>,
 }
 
 impl Model {
@@ -289,7 +293,13 @@ impl Model {
                 Ok(Model { source: text.to_string(), set: set.to_vec(), ..model })
             }
             Ok(_) => Err(Error::Model(parsed.problems)),
-            Err(more) => Err(Error::Model(parsed.problems.into_iter().chain(more).collect())),
+            // A field the reading already found wrong is not reported again by the compilation
+            // (a missing `bodies:` section is also an empty one).
+            Err(more) => {
+                let again = |p: &crate::error::Problem| parsed.problems.iter().any(|r| r.path == p.path);
+                let more: Vec<_> = more.into_iter().filter(|p| !again(p)).collect();
+                Err(Error::Model(parsed.problems.into_iter().chain(more).collect()))
+            }
         }
     }
 

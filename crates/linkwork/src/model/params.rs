@@ -182,7 +182,8 @@ pub fn field(section: &str, kind: Option<&str>, key: &str) -> Option<Field> {
         ("bodies", "angle") => D(Dim::ANGLE),
         ("bodies", "velocity") => D(Dim::VELOCITY),
         ("bodies", "omega") => D(Dim::ANGULAR_VELOCITY),
-        ("joints", "axis_i" | "axis_j") => D(Dim::NONE),
+        ("joints", "axis_i" | "axis_j" | "axis") => D(Dim::NONE),
+        ("joints", "at") => D(Dim::LENGTH),
         ("joints", "offset" | "length" | "radius" | "radius_i" | "radius_j") => D(Dim::LENGTH),
         ("joints", "value") if kind == Some("absolute_angle") => D(Dim::ANGLE),
         ("joints", "value") => D(Dim::LENGTH),
@@ -224,7 +225,7 @@ pub fn resolve(root: &mut Mapping, params: &[Parameter], problems: &mut Vec<Prob
     }
 }
 
-/// The numeric fields of one entry (and of its `solver:` and `points:` mappings).
+/// The numeric fields of one entry (and of its `solver:`, `points:` and `points_global:` mappings).
 fn entry(
     section: &str,
     path: &str,
@@ -238,7 +239,7 @@ fn entry(
         let here = format!("{path}.{key}");
         match (key, value) {
             ("solver", Value::Mapping(solver)) => entry("solver", &here, None, solver, params, problems),
-            ("points", Value::Mapping(points)) => {
+            ("points" | "points_global", Value::Mapping(points)) => {
                 for (point, v) in points.iter_mut() {
                     let at = format!("{here}.{}", point.as_str().unwrap_or("?"));
                     numbers(&at, v, Field::Dim(Dim::LENGTH), params, problems);
@@ -263,8 +264,8 @@ fn numbers(path: &str, value: &mut Value, f: Field, params: &[Parameter], proble
             }
         }
         Value::String(_) => {
-            // A point given by name (`point_i: A`) is a name, not a number.
-            if matches!(path.rsplit('.').next(), Some("point" | "point_i" | "point_j")) {
+            // A point given by name (`point_i: A`, `position: O`) is a name, not a number.
+            if matches!(path.rsplit('.').next(), Some("point" | "point_i" | "point_j" | "position")) {
                 return;
             }
             match number(value, params, "", &[]) {

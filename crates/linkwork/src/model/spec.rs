@@ -334,9 +334,12 @@ pub struct BodySpec {
     pub mass: f64,
     /// Moment of inertia about the centre of mass, kg m^2.
     pub inertia: f64,
-    /// Initial (guessed) position of the centre of mass, m, global frame.
-    pub position: [f64; 2],
-    /// Initial (guessed) angle of the body frame, rad.
+    /// Initial (guessed) position of the centre of mass, m, global frame: `[x, y]`, or the name of
+    /// one of `points_global`.
+    pub position: PointRef,
+    /// Initial (guessed) angle of the body frame, rad. Default: 0, the body frame parallel to the
+    /// global one.
+    #[serde(default)]
     pub angle: f64,
     /// Initial velocity of the centre of mass, m/s. Default: zero.
     #[serde(default)]
@@ -347,6 +350,10 @@ pub struct BodySpec {
     /// Named points in the body frame, m, for joints and drawing.
     #[serde(default)]
     pub points: IndexMap<String, [f64; 2]>,
+    /// Named points in the global frame at the initial position, m, as a drawing gives them:
+    /// each becomes a body-frame point through `position` and `angle`.
+    #[serde(default)]
+    pub points_global: IndexMap<String, [f64; 2]>,
     /// Initial values that assembly must keep (for example `[phi, omega]` for a crank whose angle
     /// and speed are known); the others may change. Default: none.
     #[serde(default)]
@@ -465,12 +472,17 @@ named! {
 pub struct RevoluteJoint {
     /// First body.
     pub body_i: String,
-    /// Pin location on the first body.
-    pub point_i: PointRef,
+    /// Pin location on the first body (or `at`).
+    #[serde(default)]
+    pub point_i: Option<PointRef>,
     /// Second body.
     pub body_j: String,
-    /// Pin location on the second body.
-    pub point_j: PointRef,
+    /// Pin location on the second body (or `at`).
+    #[serde(default)]
+    pub point_j: Option<PointRef>,
+    /// The pin's global position at the initial position, m, instead of `point_i` and `point_j`.
+    #[serde(default)]
+    pub at: Option<[f64; 2]>,
 }
 
 /// Prismatic: `point_j` of `body_j` slides on the line of `body_i` through `point_i` along
@@ -481,16 +493,26 @@ pub struct RevoluteJoint {
 pub struct TranslationalJoint {
     /// Body carrying the line.
     pub body_i: String,
-    /// A point of the line, body i frame.
-    pub point_i: PointRef,
-    /// Direction of the line, body i frame (any non-zero length).
-    pub axis_i: [f64; 2],
+    /// A point of the line, body i frame (or `at`).
+    #[serde(default)]
+    pub point_i: Option<PointRef>,
+    /// Direction of the line, body i frame, any non-zero length (or `axis`).
+    #[serde(default)]
+    pub axis_i: Option<[f64; 2]>,
     /// The sliding body.
     pub body_j: String,
-    /// The point of body j that stays on the line.
-    pub point_j: PointRef,
-    /// Direction in body j that stays parallel to `axis_i`.
-    pub axis_j: [f64; 2],
+    /// The point of body j that stays on the line (or `at`).
+    #[serde(default)]
+    pub point_j: Option<PointRef>,
+    /// Direction in body j that stays parallel to `axis_i` (or `axis`).
+    #[serde(default)]
+    pub axis_j: Option<[f64; 2]>,
+    /// A global point of the line at the initial position, m, instead of `point_i` and `point_j`.
+    #[serde(default)]
+    pub at: Option<[f64; 2]>,
+    /// The line's global direction at the initial position, instead of `axis_i` and `axis_j`.
+    #[serde(default)]
+    pub axis: Option<[f64; 2]>,
 }
 
 /// Pin in slot: `point_j` of `body_j` stays on the line of `body_i` through `point_i` along
@@ -500,14 +522,24 @@ pub struct TranslationalJoint {
 pub struct PointOnLineJoint {
     /// Body carrying the slot (line).
     pub body_i: String,
-    /// A point of the line, body i frame.
-    pub point_i: PointRef,
-    /// Direction of the line, body i frame.
-    pub axis_i: [f64; 2],
+    /// A point of the line, body i frame (or `at`).
+    #[serde(default)]
+    pub point_i: Option<PointRef>,
+    /// Direction of the line, body i frame (or `axis`).
+    #[serde(default)]
+    pub axis_i: Option<[f64; 2]>,
     /// Body carrying the pin.
     pub body_j: String,
-    /// The pin, body j frame.
-    pub point_j: PointRef,
+    /// The pin, body j frame (or `at`).
+    #[serde(default)]
+    pub point_j: Option<PointRef>,
+    /// The pin's global position at the initial position, m (on the line), instead of `point_i`
+    /// and `point_j`.
+    #[serde(default)]
+    pub at: Option<[f64; 2]>,
+    /// The line's global direction at the initial position, instead of `axis_i`.
+    #[serde(default)]
+    pub axis: Option<[f64; 2]>,
 }
 
 /// Revolute-translational composite: `point_j` of `body_j` keeps a constant signed distance
