@@ -36,6 +36,7 @@ from .errors import (
     SingularError,
     SolverError,
 )
+from .builder import Body, Mechanism
 from .model import Model
 from .results import Results, Summary
 from .sweep import sweep
@@ -44,12 +45,14 @@ __version__: str = _linkwork.__version__
 
 __all__ = [
     "AssemblyError",
+    "Body",
     "ConvergenceError",
     "EquilibriumError",
     "FileError",
     "IntegrationError",
     "InternalError",
     "LinkworkError",
+    "Mechanism",
     "Model",
     "ModelError",
     "NonFiniteError",

@@ -1,0 +1,291 @@
+"""A model built in Python, by name, as a model file would write it.
+
+::
+
+    m = linkwork.Mechanism("four-bar")
+    crank = m.body("crank", mass=0.5, inertia=5e-4, position="M",
+                   points_global={"O2": (0, 0), "A": (0.1, 0), "M": (0.05, 0)})
+    m.revolute("O2", crank, "ground", at=(0, 0))
+    ...
+    m.driver("motor", "angle", body=crank, function="2*t")
+    m.analysis("kinematics", "kinematic", drivers=["motor"], t_end=6.3, step=0.02)
+    results = m.build().run()
+    print(m.to_yaml())
+
+Every entry is what the model file holds (docs/model-format.md): a number is SI, or text with a
+unit (``"40 mm"``) or an expression of the parameters (``"r/2"``); a point is ``(x, y)``; a body is
+its name or the :class:`Body` that :meth:`Mechanism.body` returns. The typed methods cover the
+common joints; :meth:`Mechanism.joint`, :meth:`driver`, :meth:`force` and :meth:`analysis` take
+any type with its fields as keywords, so the builder expresses whatever the file format does.
+The engine checks the model when it is built (:meth:`Mechanism.build`), each problem at its path
+in the file (``joints.A.body_j: unknown body 'coupler'``); the builder itself refuses only what
+a file could not hold: a name used twice, a number that is not finite, a value of no YAML kind.
+
+:meth:`Mechanism.to_yaml` writes the model file: ``linkwork.from_yaml(m.to_yaml())`` is the model
+:meth:`Mechanism.build` gives (every number written in the shortest form that reads back to the
+same double).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import numbers
+import re
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any, Union
+
+import numpy as np
+
+from .model import Model
+
+Number = Union[float, str]
+"""A number in SI units, or text: a number with a unit (``"40 mm"``) or an expression of the
+parameters (``"r/2"``)."""
+
+Point = Union[tuple[Number, Number], Sequence[Number], "np.ndarray[Any, Any]"]
+"""``(x, y)``, m (or text with a unit); a numpy array of two numbers too."""
+
+_SECTIONS = ("name", "gravity", "parameters", "ground", "bodies", "joints", "drivers", "forces", "measures", "analyses")
+_NAMED = ("parameters", "bodies", "joints", "drivers", "forces", "measures", "analyses")
+# Bodies, joints, drivers, forces and measures share one space of names (they label the results'
+# columns); parameters and analyses have their own.
+_SHARED = ("bodies", "joints", "drivers", "forces", "measures")
+_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+
+
+class Body(str):
+    """A body's name, as :meth:`Mechanism.body` returns it: pass it wherever a body is named."""
+
+
+class Mechanism:
+    """A model under construction: bodies, joints, drivers, forces, measures and analyses, by
+    name, in the order they are added (the order of the file, and of the results' columns)."""
+
+    def __init__(self, name: str | None = None, *, gravity: Point | None = None) -> None:
+        """``name``: the model's title. ``gravity``: ``(gx, gy)``, m/s^2 (default: none)."""
+        self._doc: dict[str, Any] = {}
+        if name is not None:
+            self._doc["name"] = name
+        if gravity is not None:
+            self._doc["gravity"] = _value("gravity", gravity)
+
+    # --- entries -------------------------------------------------------------------------------
+
+    def parameter(self, name: str, value: Number) -> None:
+        """A named value the model's numbers and expressions may use: SI, or text with a unit
+        (``"120 mm"``) or an expression of earlier parameters."""
+        self._add("parameters", name, _value(f"parameters.{name}", value))
+
+    def ground_point(self, name: str, point: Point) -> None:
+        """A named point of ground, global frame, m."""
+        ground = self._doc.setdefault("ground", {"points": {}})
+        if name in ground["points"]:
+            raise ValueError(f"ground.points.{name}: the name is already used")
+        ground["points"][name] = _value(f"ground.points.{name}", point)
+
+    def body(
+        self,
+        name: str,
+        *,
+        mass: Number,
+        inertia: Number,
+        position: Point | str,
+        angle: Number | None = None,
+        points: Mapping[str, Point] | None = None,
+        points_global: Mapping[str, Point] | None = None,
+        velocity: Point | None = None,
+        omega: Number | None = None,
+        given: Iterable[str] | None = None,
+    ) -> Body:
+        """A rigid body, its frame at its centre of mass.
+
+        ``mass`` kg; ``inertia`` kg m^2 about the centre of mass; ``position`` the centre's
+        initial (guessed) global position, m, or the name of one of ``points_global``; ``angle``
+        the frame's initial angle, rad (default 0: parallel to the global frame);
+        ``points`` named points in the body frame, m; ``points_global`` named points where they
+        are at the initial position, global frame, m; ``velocity`` m/s and ``omega`` rad/s
+        initially (default 0); ``given`` the initial values assembly must hold (``"x"``, ``"y"``,
+        ``"phi"``, ``"vx"``, ``"vy"``, ``"omega"``).
+        """
+        fields: dict[str, Any] = {"mass": mass, "inertia": inertia, "position": position, "angle": angle}
+        fields.update(points=points, points_global=points_global, velocity=velocity, omega=omega)
+        fields["given"] = list(given) if given is not None else None
+        self._add("bodies", name, _entry(f"bodies.{name}", fields))
+        return Body(name)
+
+    def joint(self, name: str, type: str, **fields: Any) -> str:
+        """A joint of any ``type`` of the model format, with its fields (docs/model-format.md,
+        "Joints"): ``m.joint("g", "gear", body_i=a, point_i="O", radius_i=0.05, ...)``."""
+        self._add("joints", name, _entry(f"joints.{name}", {"type": type, **fields}))
+        return name
+
+    def revolute(
+        self,
+        name: str,
+        body_i: str,
+        body_j: str,
+        *,
+        at: Point | None = None,
+        point_i: Point | str | None = None,
+        point_j: Point | str | None = None,
+    ) -> str:
+        """A pin: ``point_i`` of ``body_i`` on ``point_j`` of ``body_j`` (body frames, m, or point
+        names), or both at the global point ``at`` of the initial position."""
+        return self.joint(name, "revolute", body_i=body_i, body_j=body_j, at=at, point_i=point_i, point_j=point_j)
+
+    def translational(
+        self,
+        name: str,
+        body_i: str,
+        body_j: str,
+        *,
+        at: Point | None = None,
+        axis: Point | None = None,
+        point_i: Point | str | None = None,
+        axis_i: Point | None = None,
+        point_j: Point | str | None = None,
+        axis_j: Point | None = None,
+    ) -> str:
+        """A slider: ``body_j`` slides without turning along the line of ``body_i``, given in body
+        frames (``point_i``, ``axis_i``, ``point_j``, ``axis_j``) or by a global point of the line
+        ``at`` and its global direction ``axis`` at the initial position."""
+        fields = {"at": at, "axis": axis, "point_i": point_i, "axis_i": axis_i, "point_j": point_j, "axis_j": axis_j}
+        return self.joint(name, "translational", body_i=body_i, body_j=body_j, **fields)
+
+    def point_on_line(
+        self,
+        name: str,
+        body_i: str,
+        body_j: str,
+        *,
+        at: Point | None = None,
+        axis: Point | None = None,
+        point_i: Point | str | None = None,
+        axis_i: Point | None = None,
+        point_j: Point | str | None = None,
+    ) -> str:
+        """A pin in a slot: ``point_j`` of ``body_j`` stays on the line of ``body_i``, given in body
+        frames or by ``at`` (the pin's global position) and ``axis`` (the slot's direction)."""
+        fields = {"at": at, "axis": axis, "point_i": point_i, "axis_i": axis_i, "point_j": point_j}
+        return self.joint(name, "point_on_line", body_i=body_i, body_j=body_j, **fields)
+
+    def distance(
+        self, name: str, body_i: str, point_i: Point | str, body_j: str, point_j: Point | str, length: Number | None = None
+    ) -> str:
+        """A link of ``length`` m between two body points (default: their initial distance)."""
+        fields = {"point_i": point_i, "point_j": point_j, "length": length}
+        return self.joint(name, "distance", body_i=body_i, body_j=body_j, **fields)
+
+    def driver(self, name: str, type: str, **fields: Any) -> str:
+        """A driver (``"angle"``, ``"relative_angle"``, ``"distance"``, ``"x"``, ``"y"``) with its
+        fields: ``m.driver("motor", "angle", body=crank, function="2*pi*t")``; ``function`` an
+        expression of ``t`` (motion laws included, docs/model-format.md)."""
+        self._add("drivers", name, _entry(f"drivers.{name}", {"type": type, **fields}))
+        return name
+
+    def force(self, name: str, type: str, **fields: Any) -> str:
+        """A force or force element (``"force"``, ``"torque"``, ``"spring_damper"``,
+        ``"rotational_spring_damper"``) with its fields, N, N m, N/m, N s/m."""
+        self._add("forces", name, _entry(f"forces.{name}", {"type": type, **fields}))
+        return name
+
+    def measure(self, name: str, expression: str | None = None, **fields: Any) -> str:
+        """A named output: an expression (``"slider_d.x + 4"``), or a body point's quantity
+        (``body=, point=, component=``)."""
+        if expression is not None and fields:
+            raise ValueError(f"measures.{name}: give an expression or body, point and component, not both")
+        value = _value(f"measures.{name}", expression) if expression is not None else _entry(f"measures.{name}", fields)
+        self._add("measures", name, value)
+        return name
+
+    def analysis(self, name: str, type: str, **fields: Any) -> str:
+        """An analysis (``"kinematic"``, ``"dynamic"``, ``"inverse"``, ``"static"``, ``"modes"``)
+        with its fields: ``drivers``, ``forces``, ``t_end`` and ``step`` s, ``integrator``,
+        ``solver`` settings, ``outputs``."""
+        self._add("analyses", name, _entry(f"analyses.{name}", {"type": type, **fields}))
+        return name
+
+    # --- out -----------------------------------------------------------------------------------
+
+    def to_dict(self) -> dict[str, Any]:
+        """The model file's document: sections in the file's order, entries in the order added."""
+        return {key: self._doc[key] for key in _SECTIONS if key in self._doc}
+
+    def to_yaml(self) -> str:
+        """The model file: one line per entry, as the examples are written."""
+        lines = []
+        for key, value in self.to_dict().items():
+            if key in _NAMED or key == "ground":
+                lines.append(f"{key}:")
+                lines.extend(f"  {_key(name)}: {_flow(entry)}" for name, entry in value.items())
+            else:
+                lines.append(f"{key}: {_flow(value)}")
+        return "\n".join(lines) + "\n"
+
+    def build(self, parameters: Mapping[str, float | str] | None = None) -> Model:
+        """The compiled model (as ``linkwork.from_yaml(self.to_yaml(), parameters)``); a
+        :class:`linkwork.ModelError` lists every problem, each at its path in the file."""
+        return Model.from_yaml(self.to_yaml(), parameters)
+
+    def _add(self, section: str, name: str, value: Any) -> None:
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"{section}: a name must be a non-empty string, found {name!r}")
+        sections = _SHARED if section in _SHARED else (section,)
+        used = next((s for s in sections if name in self._doc.get(s, {})), None)
+        if used is not None:
+            raise ValueError(f"{section}.{name}: the name is already used in {used}")
+        self._doc.setdefault(section, {})[name] = value
+
+
+def _entry(path: str, fields: Mapping[str, Any]) -> dict[str, Any]:
+    """An entry's fields, those left at ``None`` out, each checked (``path.field``)."""
+    return {key: _value(f"{path}.{key}", v) for key, v in fields.items() if v is not None}
+
+
+def _value(path: str, value: Any) -> Any:
+    """``value`` as the file holds it (tuples as lists, numpy numbers as Python ones), or a
+    ``ValueError`` naming ``path`` for what no file could hold."""
+    if isinstance(value, bool) or value is None or isinstance(value, str):
+        return value
+    if isinstance(value, numbers.Integral):
+        return int(value)
+    if isinstance(value, numbers.Real):
+        v = float(value)
+        if not math.isfinite(v):
+            raise ValueError(f"{path}: expected a finite number, found {v}")
+        return v
+    if isinstance(value, Mapping):
+        return {str(k): _value(f"{path}.{k}", v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)) or hasattr(value, "tolist"):
+        items = value.tolist() if hasattr(value, "tolist") else value
+        return [_value(f"{path}[{k}]", v) for k, v in enumerate(items)]
+    raise ValueError(f"{path}: expected a number, text, a list or a mapping, found {type(value).__name__}")
+
+
+# Words YAML reads as something other than text, in any case (1.1's booleans too, which some
+# readers still apply): never written plain.
+_YAML_WORDS = {"true", "false", "null", "yes", "no", "on", "off", "y", "n"}
+
+
+def _key(name: str) -> str:
+    """A name or a word of text: plain when it is an identifier YAML reads as text, else in
+    double quotes (JSON's escapes are YAML's)."""
+    plain = _IDENTIFIER.match(name) and name.lower() not in _YAML_WORDS
+    return name if plain else json.dumps(name, ensure_ascii=False)
+
+
+def _flow(value: Any) -> str:
+    """``value`` in YAML's flow style: numbers in their shortest exact form (``repr``), text as
+    :func:`_key` writes it, mappings ``{a: 1}``, lists ``[1, 2]``."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return _key(value)
+    if isinstance(value, Mapping):
+        return "{" + ", ".join(f"{_key(k)}: {_flow(v)}" for k, v in value.items()) + "}"
+    return "[" + ", ".join(_flow(v) for v in value) + "]"
