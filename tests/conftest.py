@@ -19,6 +19,23 @@ ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
 
 
+def pendulum_with_torque(torque: str, step: float, name: str = "kick") -> str:
+    """A 1 m bar pinned at its end, under gravity and the torque `torque` (an expression of t),
+    run 1 s by `dynamics` with output step `step`: the model of the non-finite-value tests."""
+    return f"""
+name: pendulum with a torque
+gravity: [0, -9.81]
+bodies:
+  bar: {{mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {{O: [-0.5, 0]}}}}
+joints:
+  O: {{type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}}
+forces:
+  {name}: {{type: torque, body: bar, torque: "{torque}"}}
+analyses:
+  dynamics: {{type: dynamic, t_end: 1, step: {step}}}
+"""
+
+
 def patch(text: str, old: str, new: str) -> str:
     """`text` with `old` replaced by `new`; fails unless `old` occurs exactly once, so that a test
     whose file changed under it fails instead of running the file unchanged."""

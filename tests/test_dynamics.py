@@ -10,7 +10,7 @@ import pytest
 
 import linkwork
 import linkwork as linkwork_module
-from conftest import EXAMPLES, RunLinkwork
+from conftest import EXAMPLES, RunLinkwork, pendulum_with_torque
 
 
 def test_overrides_change_the_run() -> None:
@@ -79,18 +79,7 @@ def test_cli_overrides_and_dynamic_summary(linkwork: RunLinkwork, tmp_path: Path
     assert "only a dynamic analysis" in kin.stderr
 
 
-SWITCHING_TORQUE = """
-name: pendulum with a switching torque
-gravity: [0, -9.81]
-bodies:
-  bar: {mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {O: [-0.5, 0]}}
-joints:
-  O: {type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}
-forces:
-  flip: {type: torque, body: bar, torque: "(t-0.5)/abs(t-0.5)"}
-analyses:
-  dynamics: {type: dynamic, t_end: 1, step: 0.1}
-"""
+SWITCHING_TORQUE = pendulum_with_torque("(t-0.5)/abs(t-0.5)", 0.1, name="flip")
 
 
 def test_a_nan_torque_is_a_non_finite_error(linkwork: RunLinkwork, tmp_path: Path) -> None:

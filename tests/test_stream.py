@@ -11,23 +11,13 @@ import numpy as np
 import pytest
 
 import linkwork
-from conftest import EXAMPLES, RunLinkwork, WriteModel
+from conftest import EXAMPLES, RunLinkwork, WriteModel, pendulum_with_torque
 from linkwork import stream
 
 QUICK_RETURN = EXAMPLES / "quick_return_a.yaml"
 
 # A torque that is NaN past t = 0.503 s: every integrator stops there, after the rows 0 .. 0.5 s.
-NAN_TORQUE = """
-    gravity: [0, -9.81]
-    bodies:
-      bar: {mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {O: [-0.5, 0]}}
-    joints:
-      O: {type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}
-    forces:
-      kick: {type: torque, body: bar, torque: "sqrt(0.503-t)"}
-    analyses:
-      dynamics: {type: dynamic, t_end: 1, step: 0.01}
-"""
+NAN_TORQUE = pendulum_with_torque("sqrt(0.503-t)", 0.01)
 
 
 @pytest.mark.parametrize("analysis", ["kinematics", "dynamics_loaded", "inverse"])

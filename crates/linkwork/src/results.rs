@@ -126,6 +126,11 @@ impl Results {
             parameters: model.parameters.clone(),
             ..Summary::default()
         };
+        Results::with_columns(names, summary)
+    }
+
+    /// Empty results with the columns `names` and `summary`.
+    fn with_columns(names: Vec<String>, summary: Summary) -> Results {
         Results {
             time: Vec::new(),
             columns: vec![Vec::new(); names.len()],
@@ -542,18 +547,10 @@ mod tests {
     use super::*;
 
     fn results(value: f64) -> Results {
-        Results {
-            time: vec![0.0, 1.0],
-            names: vec!["a.x".into()],
-            columns: vec![vec![value, value]],
-            summary: Summary::default(),
-            selection: Selection::All,
-            peaks: Peaks::None,
-            row: Vec::new(),
-            first_positions: Vec::new(),
-            stream: None,
-            started: false,
-        }
+        let mut r = Results::with_columns(vec!["a.x".into()], Summary::default());
+        r.time = vec![0.0, 1.0];
+        r.columns = vec![vec![value, value]];
+        r
     }
 
     /// A write that fails part-way (here: `summary.json`'s temporary name is taken by a

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{col, energy_drift, integrators, patch};
+use common::{col, energy_drift, integrators, patch, pendulum_with_torque};
 use linkwork::analysis::dynamic::IntegratorKind;
 
 /// The double pendulum's energy (about 15 J of motion) over 5 s at the default tolerances
@@ -218,25 +218,6 @@ fn a_vanishing_step_stops_the_run() {
         }
         other => panic!("expected an integration error, got {other}"),
     }
-}
-
-/// A bar pinned at one end under gravity, driven by the torque `name` of expression `torque`,
-/// N m, its dynamics to 1 s output every `step` s.
-fn pendulum_with_torque(name: &str, torque: &str, step: f64) -> linkwork::Model {
-    let text = format!(
-        "
-gravity: [0, -9.81]
-bodies:
-  bar: {{mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {{O: [-0.5, 0]}}}}
-joints:
-  O: {{type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}}
-forces:
-  {name}: {{type: torque, body: bar, torque: \"{torque}\"}}
-analyses:
-  dynamics: {{type: dynamic, t_end: 1, step: {step}}}
-"
-    );
-    linkwork::Model::from_yaml(&text).unwrap()
 }
 
 /// `model`'s `dynamics` run with each integrator, each of which must stop (`why`): the

@@ -3,15 +3,14 @@
 //! failed run's file has every row up to the failure; a file that cannot be written fails the
 //! run naming it.
 
+mod common;
+
+use common::{example, pendulum_with_torque};
 use linkwork::progress::Progress;
 use linkwork::results::stream::{CsvSink, RowSink};
 use linkwork::{Error, Model, Overrides};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
-
-fn example(name: &str) -> String {
-    format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))
-}
 
 fn temp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("linkwork-stream-{}-{name}", std::process::id()))
@@ -89,18 +88,7 @@ fn a_streamed_file_is_the_file_a_run_in_memory_writes() {
 /// in memory does, and its file has the same 51 rows, those up to 0.5 s.
 #[test]
 fn a_failed_streamed_run_keeps_its_rows() {
-    let text = "
-gravity: [0, -9.81]
-bodies:
-  bar: {mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {O: [-0.5, 0]}}
-joints:
-  O: {type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}
-forces:
-  kick: {type: torque, body: bar, torque: \"sqrt(0.503-t)\"}
-analyses:
-  dynamics: {type: dynamic, t_end: 1, step: 0.01}
-";
-    let model = Model::from_yaml(text).unwrap();
+    let model = pendulum_with_torque("kick", "sqrt(0.503-t)", 0.01);
     let held = model.run("dynamics").unwrap_err();
     let reference = temp("failed-held.csv");
     held.results.write_csv(&reference).unwrap();

@@ -121,3 +121,22 @@ pub fn sq<S: Scalar>(x: S) -> S {
 pub fn c<S: Scalar>(v: f64) -> S {
     S::constant(v)
 }
+
+/// A bar pinned at one end under gravity, driven by the torque `name` of expression `torque`,
+/// N m, its dynamics to 1 s output every `step` s.
+pub fn pendulum_with_torque(name: &str, torque: &str, step: f64) -> linkwork::Model {
+    let text = format!(
+        "
+gravity: [0, -9.81]
+bodies:
+  bar: {{mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {{O: [-0.5, 0]}}}}
+joints:
+  O: {{type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}}
+forces:
+  {name}: {{type: torque, body: bar, torque: \"{torque}\"}}
+analyses:
+  dynamics: {{type: dynamic, t_end: 1, step: {step}}}
+"
+    );
+    linkwork::Model::from_yaml(&text).unwrap()
+}
