@@ -82,6 +82,10 @@ def test_to_yaml_writes_every_number_and_text_exactly() -> None:
     assert model.name == 'a "quoted" name: é, [x]'
     assert model.parameters == {"r": 0.30000000000000004, "tiny": 1e-300, "length": 0.3}
     assert "r: 0.30000000000000004" in m.to_yaml()
+    # Characters YAML refuses unescaped in quotes (DEL, C1 controls, a byte-order mark).
+    odd = linkwork.Mechanism("a\x7fb\x85c\x9fd\ufeffe")
+    odd.body("bar", mass=1, inertia=1, position=(0, 0))
+    assert odd.build().name == "a\x7fb\x85c\x9fd\ufeffe"
     # A word YAML would read as a boolean stays text.
     word = linkwork.Mechanism("yes")
     word.body("no", mass=1, inertia=1, position=(0, 0))

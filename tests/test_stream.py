@@ -55,6 +55,22 @@ def test_a_parquet_stream_has_the_columns_of_a_run_in_memory(tmp_path: Path) -> 
     assert np.array_equal(run.time, held.time)
 
 
+def test_a_parquet_stream_replaces_an_earlier_csv(linkwork: RunLinkwork, tmp_path: Path) -> None:
+    """A folder that held a run's results.csv gets a streamed run's results.parquet: the old CSV
+    goes, so that the report (and `linkwork report`) read the new rows."""
+    assert linkwork("run", QUICK_RETURN, "-a", "dynamics", "-o", "out", "--no-report").code == 0
+    done = linkwork("run", QUICK_RETURN, "-a", "kinematics", "-o", "out", "--stream", "parquet")
+    assert done.code == 0, done.output
+    assert "41 output points, streamed" in done.stdout
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [
+        "model.yaml",
+        "report.html",
+        "results.parquet",
+        "summary.json",
+    ]
+    assert linkwork("report", "out").code == 0
+
+
 def test_a_failed_streamed_run_keeps_its_rows(write_model: WriteModel, tmp_path: Path) -> None:
     model = linkwork.Model.load(write_model(NAN_TORQUE))
     with pytest.raises(linkwork.NonFiniteError) as held:

@@ -272,7 +272,8 @@ def _key(name: str) -> str:
     """A name or a word of text: plain when it is an identifier YAML reads as text, else in
     double quotes (JSON's escapes are YAML's)."""
     plain = _IDENTIFIER.match(name) and name.lower() not in _YAML_WORDS
-    return name if plain else json.dumps(name, ensure_ascii=False)
+    # ASCII escapes (\uXXXX): YAML refuses some characters unescaped in quotes (DEL, C1 controls).
+    return name if plain else json.dumps(name)
 
 
 def _flow(value: Any) -> str:

@@ -379,6 +379,9 @@ def _print_failure(error: SolverError | AssemblyError) -> None:
 
 
 def _span(results: Results) -> str:
+    if results.streamed_to is not None:
+        # The rows are in the file, not in memory: their count is the summary's.
+        return f"{results.summary.output_points} output points, streamed"
     if len(results) == 0:
         return "no output points"
     return f"{len(results)} output points, t = {results.time[0]:g} .. {results.time[-1]:g} s"

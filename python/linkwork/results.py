@@ -249,6 +249,9 @@ class Results:
             table = Path(out_dir) / f"results{self.streamed_to.suffix}"
             if not table.exists() or not table.samefile(self.streamed_to):
                 shutil.copyfile(self.streamed_to, table)
+            if table.suffix != ".csv":
+                # A results.csv of an earlier run would be read in place of these rows.
+                (Path(out_dir) / "results.csv").unlink(missing_ok=True)
         reports.write_text(Path(out_dir) / "model.yaml", self.model.source)
         if report:
             reports.write(Path(out_dir) / "report.html", self._run())

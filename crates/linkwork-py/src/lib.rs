@@ -251,7 +251,7 @@ impl PyModel {
         let sink: Option<Box<dyn RowSink>> = match stream {
             None => None,
             Some(s) => match s.extract::<PathBuf>() {
-                Ok(path) => Some(Box::new(CsvSink::create(&path).map_err(|e| to_pyerr(py, e, None))?)),
+                Ok(path) => Some(Box::new(CsvSink::at(&path))),
                 Err(_) => {
                     let path = s.getattr("path")?.str()?.to_string();
                     Some(Box::new(PySink { sink: s.unbind(), path }))

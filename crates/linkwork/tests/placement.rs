@@ -107,6 +107,15 @@ joints:
             "zero-length axis",
         ),
     ];
+    // A joint whose points cannot be placed still has its bodies checked.
+    let typo = problems(&model("[0, 0]", "{}", "{type: revolute, body_i: bra, body_j: ground}"));
+    for (path, part) in [("joints.pin.point_i", "missing"), ("joints.pin.body_i", "unknown body 'bra'")] {
+        assert!(typo.iter().any(|(p, m)| p == path && m.contains(part)), "{path}: {typo:?}");
+    }
+    // A centre named after a point whose value is not finite: one problem, at the point.
+    let bad = problems(&model("O", "{O: [.inf, 0]}", pin));
+    assert_eq!(bad.iter().filter(|(p, _)| p.starts_with("bodies.bar")).count(), 1, "{bad:?}");
+    assert!(bad.iter().any(|(p, _)| p == "bodies.bar.points_global.O[0]"), "{bad:?}");
     for (text, path, part) in cases {
         let found = problems(&text);
         assert!(

@@ -69,7 +69,7 @@ fn a_streamed_file_is_the_file_a_run_in_memory_writes() {
             let path = temp(&format!("{analysis}-streamed.csv"));
             let chunks = Arc::new(Mutex::new(0));
             let bytes = rows_per_chunk.map_or(linkwork::results::stream::CHUNK_BYTES, |r| 8 * columns * r);
-            let sink = Chunked { csv: CsvSink::create(&path).unwrap(), bytes, chunks: Arc::clone(&chunks) };
+            let sink = Chunked { csv: CsvSink::at(&path), bytes, chunks: Arc::clone(&chunks) };
             let streamed =
                 model.run_streamed(analysis, &Overrides::default(), &Progress::new(), Box::new(sink)).unwrap();
             assert!(std::fs::read(&path).unwrap() == expected, "{analysis} {rows_per_chunk:?}: the files differ");
@@ -93,7 +93,7 @@ fn a_failed_streamed_run_keeps_its_rows() {
     let reference = temp("failed-held.csv");
     held.results.write_csv(&reference).unwrap();
     let path = temp("failed-streamed.csv");
-    let sink = Box::new(CsvSink::create(&path).unwrap());
+    let sink = Box::new(CsvSink::at(&path));
     let streamed = model.run_streamed("dynamics", &Overrides::default(), &Progress::new(), sink).unwrap_err();
     assert_eq!(streamed.error.to_string(), held.error.to_string());
     assert_eq!(streamed.results.len(), 51);
@@ -101,6 +101,20 @@ fn a_failed_streamed_run_keeps_its_rows() {
     for p in [path, reference] {
         std::fs::remove_file(p).unwrap();
     }
+}
+
+/// A run that cannot start (an analysis that does not exist) leaves the file it would have
+/// streamed to as it was.
+#[test]
+fn a_run_that_cannot_start_leaves_the_file_alone() {
+    let path = temp("keep.csv");
+    std::fs::write(&path, "kept\n").unwrap();
+    let model = Model::load(example("quick_return_a.yaml")).unwrap();
+    let sink = Box::new(CsvSink::at(&path));
+    let failure = model.run_streamed("kinematcs", &Overrides::default(), &Progress::new(), sink).unwrap_err();
+    assert!(failure.error.to_string().contains("kinematcs"), "{}", failure.error);
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), "kept\n");
+    std::fs::remove_file(path).unwrap();
 }
 
 /// A sink whose writes fail (a full disk) fails the run with `Error::Io` naming its file.

@@ -120,6 +120,11 @@ impl Model {
         progress: &Arc<Progress>,
         sink: Box<dyn RowSink>,
     ) -> Result<Results, Box<Failure>> {
+        // An analysis that does not exist, or changes it cannot take, are refused before the
+        // sink is touched: the file a user named is not emptied for a typo.
+        if self.analysis(name).and_then(|a| overrides.apply(a)).is_err() {
+            return self.run_watched(name, overrides, progress);
+        }
         let (mut outcome, unclaimed) = stream::scope(sink, || self.run_watched(name, overrides, progress));
         let results = match &mut outcome {
             Ok(r) => r,

@@ -345,7 +345,8 @@ impl Cx<'_> {
             PointRef::Coords(v) => self.vec2(&here, *v),
             PointRef::Name(n) => {
                 match b.points_global.get(n) {
-                    Some(v) => self.vec2(&here, *v),
+                    // A value that is not finite is reported at the point itself.
+                    Some(v) => v.iter().all(|x| x.is_finite()).then_some(*v),
                     None => {
                         let known: Vec<&str> = b.points_global.keys().map(String::as_str).collect();
                         let list = if known.is_empty() {
@@ -490,26 +491,31 @@ impl Cx<'_> {
         use JointSpec as J;
         let c: Box<dyn Constraint> = match j {
             J::Revolute(RevoluteJoint { body_i, point_i, body_j, point_j, at }) => {
-                let (pi, pj) = self.placed_points(path, [body_i, body_j], [point_i, point_j], at)?;
-                let [(i, sp), (j, sq)] = self.ends(path, body_i, &pi, body_j, &pj)?;
+                let points = self.placed_points(path, [body_i, body_j], [point_i, point_j], at);
+                // The bodies are checked (`ends`) whether or not the points could be placed.
+                let (pi, pj) = points.clone().unwrap_or_default();
+                let ends = self.ends(path, body_i, &pi, body_j, &pj);
+                let (_, [(i, sp), (j, sq)]) = (points?, ends?);
                 Box::new(Revolute::new(i, sp, j, sq))
             }
             J::Translational(TranslationalJoint { body_i, point_i, axis_i, body_j, point_j, axis_j, at, axis }) => {
                 let points = self.placed_points(path, [body_i, body_j], [point_i, point_j], at);
                 let axes = self.placed_axes(path, [("axis_i", body_i, axis_i), ("axis_j", body_j, axis_j)], axis);
-                let ((pi, pj), [ai, aj]) = (points?, axes?);
+                let (pi, pj) = points.clone().unwrap_or_default();
                 let ends = self.ends(path, body_i, &pi, body_j, &pj);
-                let vi = self.axis(&format!("{path}.axis_i"), ai);
-                let vj = self.axis(&format!("{path}.axis_j"), aj);
-                let ([(i, sp), (j, sq)], vi, vj) = (ends?, vi?, vj?);
+                let vi = axes.and_then(|[ai, _]| self.axis(&format!("{path}.axis_i"), ai));
+                let vj = axes.and_then(|[_, aj]| self.axis(&format!("{path}.axis_j"), aj));
+                let (_, [(i, sp), (j, sq)], vi, vj) = (points?, ends?, vi?, vj?);
                 let relative = i.coords(&self.q0)[2] - j.coords(&self.q0)[2];
                 Box::new(Translational::new(i, sp, vi, j, sq, vj).near(relative))
             }
             J::PointOnLine(PointOnLineJoint { body_i, point_i, axis_i, body_j, point_j, at, axis }) => {
                 let points = self.placed_points(path, [body_i, body_j], [point_i, point_j], at);
                 let axes = self.placed_axes(path, [("axis_i", body_i, axis_i)], axis);
-                let ((pi, pj), [ai]) = (points?, axes?);
-                let ([(i, sp), (j, sq)], vi) = self.line_and_point(path, body_i, &pi, &ai, body_j, &pj)?;
+                let (pi, pj) = points.clone().unwrap_or_default();
+                let ends = self.ends(path, body_i, &pi, body_j, &pj);
+                let vi = axes.and_then(|[ai]| self.axis(&format!("{path}.axis_i"), ai));
+                let (_, [(i, sp), (j, sq)], vi) = (points?, ends?, vi?);
                 Box::new(PointOnLine::new(i, sp, vi, j, sq, 0.0))
             }
             J::RevoluteTranslational(RevoluteTranslationalJoint {

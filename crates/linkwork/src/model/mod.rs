@@ -293,10 +293,12 @@ impl Model {
                 Ok(Model { source: text.to_string(), set: set.to_vec(), ..model })
             }
             Ok(_) => Err(Error::Model(parsed.problems)),
-            // A field the reading already found wrong is not reported again by the compilation
+            // A problem the reading already reported is not reported again by the compilation
             // (a missing `bodies:` section is also an empty one).
             Err(more) => {
-                let again = |p: &crate::error::Problem| parsed.problems.iter().any(|r| r.path == p.path);
+                let again = |p: &crate::error::Problem| {
+                    parsed.problems.iter().any(|r| r.path == p.path && r.message.contains(&p.message))
+                };
                 let more: Vec<_> = more.into_iter().filter(|p| !again(p)).collect();
                 Err(Error::Model(parsed.problems.into_iter().chain(more).collect()))
             }

@@ -17,10 +17,11 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// Bytes of output values held before a chunk goes to the sink: 16 MB. Large enough that a
+/// Bytes of output values held before a chunk goes to the sink: 16 MiB. Large enough that a
 /// sink's per-call cost (a Parquet row group, a Python call) is spread over many rows of a small
-/// mechanism (26,000 rows of the quick-return's 80 columns), small against the memory of a large
-/// one (9 rows of a 10,000-body chain's 210,000 columns, beside its 350 MB of solver state).
+/// mechanism (29,000 rows of the loaded quick-return's 71 columns and time), small against the
+/// memory of a large one (11 rows of a 10,000-body chain's 180,009 columns, beside its 350 MB
+/// of solver state).
 pub const CHUNK_BYTES: usize = 16 << 20;
 
 /// Where the rows of a streamed run go (`Sync`, as the results that keep it may be shared).
@@ -40,18 +41,24 @@ pub trait RowSink: Send + Sync {
 }
 
 /// `results.csv` written as the rows come: a header, then one line per output time, numbers in
-/// the shortest form that reads back to the same double.
+/// the shortest form that reads back to the same double. The file is created (or truncated)
+/// when the run begins to write it, not before.
 pub struct CsvSink {
     path: PathBuf,
-    out: BufWriter<File>,
+    out: Option<BufWriter<File>>,
 }
 
 impl CsvSink {
-    /// Create (or truncate) the file at `path`.
-    pub fn create(path: &Path) -> Result<CsvSink, Error> {
-        let file =
-            File::create(path).map_err(|e| Error::Io { path: path.display().to_string(), message: e.to_string() })?;
-        Ok(CsvSink { path: path.to_path_buf(), out: BufWriter::new(file) })
+    /// A sink for the file at `path`.
+    pub fn at(path: &Path) -> CsvSink {
+        CsvSink { path: path.to_path_buf(), out: None }
+    }
+
+    fn out(&mut self) -> std::io::Result<&mut BufWriter<File>> {
+        if self.out.is_none() {
+            self.out = Some(BufWriter::new(File::create(&self.path)?));
+        }
+        Ok(self.out.as_mut().expect("opened above"))
     }
 }
 
@@ -78,16 +85,17 @@ pub(crate) fn write_rows(w: &mut impl Write, time: &[f64], columns: &[Vec<f64>])
 
 impl RowSink for CsvSink {
     fn begin(&mut self, names: &[String]) -> std::io::Result<()> {
-        write_header(&mut self.out, names)
+        write_header(self.out()?, names)
     }
 
     fn write(&mut self, time: &[f64], columns: &[Vec<f64>]) -> std::io::Result<()> {
-        write_rows(&mut self.out, time, columns)
+        write_rows(self.out()?, time, columns)
     }
 
     fn finish(&mut self) -> std::io::Result<()> {
-        self.out.flush()?;
-        self.out.get_ref().sync_all()
+        let out = self.out()?;
+        out.flush()?;
+        out.get_ref().sync_all()
     }
 
     fn path(&self) -> String {
@@ -153,8 +161,11 @@ impl Stream {
             return Ok(());
         }
         self.finished = true;
-        self.flush(names, time, columns)?;
-        self.sink.finish().map_err(|e| self.io(e))
+        // The sink is finished even when the last rows could not be written (a Parquet file
+        // then still gets its footer, and holds the rows before).
+        let flushed = self.flush(names, time, columns);
+        let finished = self.sink.finish().map_err(|e| self.io(e));
+        flushed.and(finished)
     }
 }
 
