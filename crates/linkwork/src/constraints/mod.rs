@@ -233,7 +233,10 @@ impl Frame {
     }
     /// The frame from a bare coordinate vector (computes the rotation), outside the hot loops.
     pub fn of_slice(body: BodyIx, q: &[f64]) -> Frame {
-        let [x, y, phi] = body.coords(q);
+        Frame::at(body.coords(q))
+    }
+    /// The frame at `(x, y, phi)` (computes the rotation), outside the hot loops.
+    pub fn at([x, y, phi]: [f64; 3]) -> Frame {
         let (s, c) = phi.sin_cos();
         Frame { x, y, phi, c, s }
     }
@@ -252,6 +255,14 @@ impl Frame {
     pub fn point(&self, v: [f64; 2]) -> [f64; 2] {
         let a = self.rotate(v);
         [self.x + a[0], self.y + a[1]]
+    }
+    /// `A^T v`: a global vector in the body frame.
+    pub fn unrotate(&self, v: [f64; 2]) -> [f64; 2] {
+        [self.c * v[0] + self.s * v[1], -self.s * v[0] + self.c * v[1]]
+    }
+    /// `A^T (p - r)`: a global point in the body frame.
+    pub fn local(&self, p: [f64; 2]) -> [f64; 2] {
+        self.unrotate([p[0] - self.x, p[1] - self.y])
     }
 }
 

@@ -101,13 +101,6 @@ const QUANTITIES: [&str; 9] = ["x", "y", "phi", "vx", "vy", "omega", "ax", "ay",
 /// A body and a point of it, body frame.
 type End = (BodyIx, [f64; 2]);
 
-/// The global point `g` in the frame of a body at `(x, y, phi)`: `R(-phi) (g - (x, y))`.
-fn to_body_frame([x, y, phi]: [f64; 3], g: [f64; 2]) -> [f64; 2] {
-    let (s, c) = phi.sin_cos();
-    let (dx, dy) = (g[0] - x, g[1] - y);
-    [c * dx + s * dy, -s * dx + c * dy]
-}
-
 struct Cx<'s> {
     spec: &'s ModelSpec,
     /// Each body's named points in its frame: `points`, and `points_global` placed.
@@ -239,7 +232,7 @@ impl Cx<'_> {
                         self.problem(here, format!("'{p}' is also in points: name each point once"));
                         continue;
                     }
-                    let local = to_body_frame([pos[0], pos[1], angle], v);
+                    let local = Frame::at([pos[0], pos[1], angle]).local(v);
                     self.placed.insert(format!("{path}.points.{p}"), local);
                     points.insert(p.clone(), local);
                 }
@@ -362,14 +355,14 @@ impl Cx<'_> {
         }
     }
 
-    /// Body `name`'s initial `(x, y, phi)` (the identity for ground); `None` for a body that is
-    /// not known (reported where it is named).
-    fn initial_frame(&self, name: &str) -> Option<[f64; 3]> {
+    /// Body `name`'s frame at its initial position (ground's is the global one); `None` for a
+    /// body that is not known (reported where it is named).
+    fn initial_frame(&self, name: &str) -> Option<Frame> {
         if name == "ground" {
-            return Some([0.0; 3]);
+            return Some(Frame::of_slice(BodyIx::GROUND, &self.q0));
         }
         let k = self.spec.bodies.get_index_of(name)?;
-        self.q0.get(3 * k..3 * k + 3).map(|c| [c[0], c[1], c[2]])
+        (self.q0.len() >= 3 * k + 3).then(|| Frame::of_slice(BodyIx(Some(3 * k)), &self.q0))
     }
 
     /// The two points of a joint at `path` that coincide at the initial position: `point_i` and
@@ -389,7 +382,7 @@ impl Cx<'_> {
             (Some(at), _) => {
                 let at = self.vec2(&format!("{path}.at"), *at)?;
                 // An unknown body is reported where the joint names it (`ends`).
-                let [pi, pj] = bodies.map(|b| self.initial_frame(b).map_or([0.0; 2], |f| to_body_frame(f, at)));
+                let [pi, pj] = bodies.map(|b| self.initial_frame(b).map_or([0.0; 2], |f| f.local(at)));
                 self.placed.insert(format!("{path}.point_i"), pi);
                 self.placed.insert(format!("{path}.point_j"), pj);
                 Some((PointRef::Coords(pi), PointRef::Coords(pj)))
@@ -423,8 +416,7 @@ impl Cx<'_> {
             Some(a) => {
                 let a = self.axis(&format!("{path}.axis"), *a)?;
                 // An unknown body is reported where the joint names it.
-                let local =
-                    fields.map(|(_, b, _)| to_body_frame([0.0, 0.0, self.initial_frame(b).map_or(0.0, |f| f[2])], a));
+                let local = fields.map(|(_, b, _)| self.initial_frame(b).map_or(a, |f| f.unrotate(a)));
                 for ((field, _, _), v) in fields.iter().zip(&local) {
                     self.placed.insert(format!("{path}.{field}"), *v);
                 }
