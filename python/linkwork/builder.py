@@ -46,8 +46,10 @@ parameters (``"r/2"``)."""
 Point = Union[tuple[Number, Number], Sequence[Number], "np.ndarray[Any, Any]"]
 """``(x, y)``, m (or text with a unit); a numpy array of two numbers too."""
 
-_SECTIONS = ("name", "gravity", "parameters", "ground", "bodies", "joints", "drivers", "forces", "measures", "analyses")
-_NAMED = ("parameters", "bodies", "joints", "drivers", "forces", "measures", "analyses")
+_SECTIONS = (
+    "name", "gravity", "parameters", "tables", "ground", "bodies", "joints", "drivers", "forces", "measures", "analyses"
+)
+_NAMED = ("parameters", "tables", "bodies", "joints", "drivers", "forces", "measures", "analyses")
 # Bodies, joints, drivers, forces and measures share one space of names (they label the results'
 # columns); parameters and analyses have their own.
 _SHARED = ("bodies", "joints", "drivers", "forces", "measures")
@@ -197,6 +199,25 @@ class Mechanism:
             raise ValueError(f"measures.{name}: give an expression or body, point and component, not both")
         value = _value(f"measures.{name}", expression) if expression is not None else _entry(f"measures.{name}", fields)
         self._add("measures", name, value)
+        return name
+
+    def table(
+        self,
+        name: str,
+        x: Sequence[float] | str,
+        y: Sequence[float] | str,
+        *,
+        method: str | None = None,
+        file: str | None = None,
+    ) -> str:
+        """A tabulated function for ``spline(name, x)`` in any expression (drivers, joints,
+        forces, measures): the points ``x`` (strictly increasing) and ``y``, in whatever SI
+        units they tabulate; or, with ``file`` (a CSV file whose first row names its columns,
+        relative to the model file's folder, or to the working folder for :meth:`build`), the
+        names of two of its columns. ``method``: ``"not_a_knot"`` (the default cubic spline),
+        ``"periodic"`` (first and last ``y`` equal; repeats outside) or ``"akima"``."""
+        fields = {"file": file, "x": x if isinstance(x, str) else list(x), "y": y if isinstance(y, str) else list(y)}
+        self._add("tables", name, _entry(f"tables.{name}", {**fields, "method": method}))
         return name
 
     def analysis(self, name: str, type: str, **fields: Any) -> str:

@@ -238,10 +238,11 @@ class Model:
             if bar is not None:
                 bar.close()
 
-    def __reduce__(self) -> tuple[Callable[[str, list[tuple[str, str]], str | None], Model], tuple[object, ...]]:
-        """Pickled as its file's text and the parameter values given over it, and compiled again
-        where it is unpickled (a Dask worker, another process)."""
-        return (_compiled, (self.source, self._native.set, self.path))
+    def __reduce__(self) -> tuple[Callable[[str, list[tuple[str, str]], str | None, str], Model], tuple[object, ...]]:
+        """Pickled as its file's text, the parameter values given over it and the folder its
+        tables' files are read from, and compiled again where it is unpickled (a Dask worker,
+        another process)."""
+        return (_compiled, (self.source, self._native.set, self.path, os.fspath(self._native.folder)))
 
     def __repr__(self) -> str:
         source = f" from {self.path!r}" if self.path else ""
@@ -251,9 +252,10 @@ class Model:
         )
 
 
-def _compiled(source: str, given: list[tuple[str, str]], path: str | None) -> Model:
-    """The model of ``source`` with the parameter values ``given``: an unpickled Model."""
-    return Model._wrap(_linkwork.PyModel.from_yaml(source, given), path=path)
+def _compiled(source: str, given: list[tuple[str, str]], path: str | None, folder: str) -> Model:
+    """The model of ``source`` with the parameter values ``given``, its tables' files in
+    ``folder``: an unpickled Model."""
+    return Model._wrap(_linkwork.PyModel.from_yaml(source, given, folder), path=path)
 
 
 def assembly_coordinates(bodies: list[str]) -> list[str]:

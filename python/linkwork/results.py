@@ -253,8 +253,26 @@ class Results:
                 # A results.csv of an earlier run would be read in place of these rows.
                 (Path(out_dir) / "results.csv").unlink(missing_ok=True)
         reports.write_text(Path(out_dir) / "model.yaml", self.model.source)
+        self._copy_tables(Path(out_dir))
         if report:
             reports.write(Path(out_dir) / "report.html", self._run())
+
+    def _copy_tables(self, out_dir: Path) -> None:
+        """Copy each table's file that the model names by a path inside its folder to the same
+        path inside ``out_dir``, so that ``model.yaml`` there runs again (the report is rebuilt
+        from it). A table named by an absolute path is read where it is; one outside the model's
+        folder (``../data.csv``) is not copied, and the folder's ``model.yaml`` finds it only
+        where it was found."""
+        folder = Path(self.model._native.folder)
+        for name in self.model._native.table_files:
+            written = Path(name)
+            if written.is_absolute() or ".." in written.parts:
+                continue
+            source, copy = folder / written, out_dir / written
+            if copy.exists() and copy.samefile(source):
+                continue
+            copy.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(source, copy)
 
     def _run(self) -> Any:
         from . import stream

@@ -79,11 +79,11 @@ impl PyModel {
     }
 
     /// Compile a model from the text of a model file, with parameter values `(name, text)` over
-    /// the file's.
+    /// the file's; a table's `file:` is read from `folder` (default: the working folder).
     #[staticmethod]
-    #[pyo3(signature = (text, parameters=Vec::new()))]
-    fn from_yaml(py: Python<'_>, text: &str, parameters: Vec<(String, String)>) -> PyResult<PyModel> {
-        let model = py.detach(|| guard(|| linkwork::Model::from_yaml_with(text, &parameters)))?;
+    #[pyo3(signature = (text, parameters=Vec::new(), folder=PathBuf::new()))]
+    fn from_yaml(py: Python<'_>, text: &str, parameters: Vec<(String, String)>, folder: PathBuf) -> PyResult<PyModel> {
+        let model = py.detach(|| guard(|| linkwork::Model::from_yaml_in(text, &parameters, folder)))?;
         model.map(|model| PyModel { model }).map_err(|e| to_pyerr(py, e, None))
     }
 
@@ -168,6 +168,18 @@ impl PyModel {
     #[getter]
     fn set(&self) -> Vec<(String, String)> {
         self.model.set.clone()
+    }
+
+    /// The folder a table's `file:` is read from (empty: the working folder).
+    #[getter]
+    fn folder(&self) -> PathBuf {
+        self.model.folder.clone()
+    }
+
+    /// Each table's `file:` as written, in file order.
+    #[getter]
+    fn table_files(&self) -> Vec<String> {
+        self.model.table_files.clone()
     }
 
     /// Title of the model.

@@ -19,9 +19,10 @@
 //!   `**`, right associative and tighter than unary minus, so `2^3^2 = 512` and
 //!   `-2^2 = -4`); parentheses.
 //! * Functions: `sin cos tan asin acos atan atan2(y, x) sinh cosh tanh exp log`
-//!   (natural) `sqrt abs min(a, b) max(a, b) sign pow(a, b)`; the motion laws
+//!   (natural) `sqrt abs min(a, b) max(a, b) sign pow(a, b) hypot(a, b)`; the motion laws
 //!   `step step5 poly345 cycloidal harmonic modified_trapezoid`, each `(x, x0, h0, x1, h1)`
-//!   ([`laws`]); `if(c, a, b)`, `a` where `c` is not 0, else `b`.
+//!   ([`laws`]); `if(c, a, b)`, `a` where `c` is not 0, else `b`; `spline(name, x)`, the
+//!   table `name` at `x` ([`spline`]; the caller names the tables, [`Names`]).
 //! * Comparisons `< > <= >= == !=`, looser than every other operator, give 1 or 0 (no
 //!   derivative).
 //!
@@ -55,17 +56,44 @@
 pub mod laws;
 mod parse;
 mod scalar;
+pub mod spline;
 
 #[cfg(test)]
 mod tests;
 
 use std::fmt;
 use std::str::FromStr;
+use std::sync::Arc;
 
 use parse::{Binary, Op, MAX_STACK};
 
 pub use parse::MAX_DEPTH;
 pub use scalar::{Dual, HyperDual, Scalar};
+pub use spline::Spline;
+
+/// What a model names besides an expression's variables: values folded as numbers (its
+/// parameters) and tables for `spline(name, x)`. A closure `Fn(&str) -> Option<f64>` names
+/// values and no tables.
+pub trait Names {
+    /// The value named `name`, if any.
+    fn constant(&self, name: &str) -> Option<f64>;
+
+    /// The table named `name`, if any.
+    fn table(&self, _name: &str) -> Option<Arc<Spline>> {
+        None
+    }
+}
+
+impl<F: Fn(&str) -> Option<f64>> Names for F {
+    fn constant(&self, name: &str) -> Option<f64> {
+        self(name)
+    }
+}
+
+/// Names nothing.
+fn nothing(_: &str) -> Option<f64> {
+    None
+}
 
 /// A parse error: what is wrong and the byte offset in the source where it was found.
 ///
@@ -127,6 +155,8 @@ pub struct Expr {
     code: Vec<Op>,
     slots: Vec<usize>,
     max_stack: usize,
+    /// The tables of `spline(name, x)`, shared with the model.
+    tables: Vec<Arc<Spline>>,
 }
 
 impl Expr {
@@ -144,23 +174,24 @@ impl Expr {
     /// arguments, an unknown name, an empty expression, or nesting deeper than
     /// [`MAX_DEPTH`].
     pub fn parse(src: &str, resolve: &mut dyn FnMut(&str) -> Result<usize, String>) -> Result<Expr, ExprError> {
-        Expr::parse_with(src, &|_| None, resolve)
+        Expr::parse_with(src, &nothing, resolve)
     }
 
-    /// As [`Expr::parse`], with named values: a name for which `constants` gives a value (a
-    /// model's parameter) is that number, folded as if written out; it hides a variable of the
-    /// same name, and the built-in `pi` and `e` hide it.
+    /// As [`Expr::parse`], with named values and tables: a name for which `names` gives a value
+    /// (a model's parameter) is that number, folded as if written out; it hides a variable of
+    /// the same name, and the built-in `pi` and `e` hide it. `spline(name, x)` is the table
+    /// `names` gives for `name` at `x`, with its exact derivatives ([`Spline::eval`]).
     ///
     /// # Errors
     ///
     /// As [`Expr::parse`].
     pub fn parse_with(
         src: &str,
-        constants: &dyn Fn(&str) -> Option<f64>,
+        names: &dyn Names,
         resolve: &mut dyn FnMut(&str) -> Result<usize, String>,
     ) -> Result<Expr, ExprError> {
-        let c = parse::compile(src, constants, resolve)?;
-        Ok(Expr { source: src.to_string(), code: c.code, slots: c.slots, max_stack: c.max_stack })
+        let c = parse::compile(src, names, resolve)?;
+        Ok(Expr { source: src.to_string(), code: c.code, slots: c.slots, max_stack: c.max_stack, tables: c.tables })
     }
 
     /// The source text the expression was parsed from.
@@ -229,6 +260,11 @@ impl Expr {
                     sp -= arity - 1;
                     stack[sp - 1] = n.apply(&stack[sp - 1..sp - 1 + arity]);
                 }
+                Op::Table(i) => {
+                    let a = stack[sp - 1];
+                    let (f0, f1, f2) = self.tables[i].eval(a.value());
+                    stack[sp - 1] = a.lift(f0, f1, f2);
+                }
             }
         }
         stack[0]
@@ -260,17 +296,17 @@ impl TimeFunction {
     /// As [`Expr::parse`]; any other name gives "unknown name '…' (only t (time) may
     /// appear in a driver function)".
     pub fn parse(src: &str) -> Result<TimeFunction, ExprError> {
-        TimeFunction::parse_with(src, &|_| None)
+        TimeFunction::parse_with(src, &nothing)
     }
 
-    /// As [`TimeFunction::parse`], with named values (a model's parameters) as in
-    /// [`Expr::parse_with`].
+    /// As [`TimeFunction::parse`], with named values and tables (a model's parameters and
+    /// tables) as in [`Expr::parse_with`].
     ///
     /// # Errors
     ///
     /// As [`TimeFunction::parse`].
-    pub fn parse_with(src: &str, constants: &dyn Fn(&str) -> Option<f64>) -> Result<TimeFunction, ExprError> {
-        let expr = Expr::parse_with(src, constants, &mut |name| {
+    pub fn parse_with(src: &str, names: &dyn Names) -> Result<TimeFunction, ExprError> {
+        let expr = Expr::parse_with(src, names, &mut |name| {
             if name == "t" {
                 Ok(0)
             } else {

@@ -24,7 +24,9 @@
 
 use super::laws::Law;
 use super::scalar::Scalar;
-use super::ExprError;
+use super::spline::Spline;
+use super::{ExprError, Names};
+use std::sync::Arc;
 
 /// Maximum nesting depth accepted by the parser.
 pub const MAX_DEPTH: usize = 200;
@@ -94,6 +96,7 @@ pub(crate) enum Binary {
     /// General power `a^b = exp(b ln a)` (only emitted for non-constant exponents).
     Pow,
     Atan2,
+    Hypot,
     Min,
     Max,
     /// Comparisons: 1 when true, 0 when false, derivatives 0.
@@ -115,6 +118,7 @@ impl Binary {
             Binary::Div => a / b,
             Binary::Pow => a.pow(b),
             Binary::Atan2 => a.atan2(b),
+            Binary::Hypot => a.hypot(b),
             Binary::Min => a.min(b),
             Binary::Max => a.max(b),
             Binary::Lt => truth(a.value() < b.value()),
@@ -178,6 +182,9 @@ pub(crate) enum Op {
     Binary(Binary),
     /// Pop the operation's arguments (the last pushed last), push its value.
     Nary(Nary),
+    /// Replace the top of the stack by the value of the expression's table of this index
+    /// (`spline(name, x)`).
+    Table(usize),
 }
 
 /// Built-in functions: name, number of arguments, operation.
@@ -189,6 +196,7 @@ pub(crate) const FUNCTIONS: &[(&str, usize, Op)] = &[
     ("acos", 1, Op::Unary(Unary::Acos)),
     ("atan", 1, Op::Unary(Unary::Atan)),
     ("atan2", 2, Op::Binary(Binary::Atan2)),
+    ("hypot", 2, Op::Binary(Binary::Hypot)),
     ("sinh", 1, Op::Unary(Unary::Sinh)),
     ("cosh", 1, Op::Unary(Unary::Cosh)),
     ("tanh", 1, Op::Unary(Unary::Tanh)),
@@ -209,11 +217,19 @@ pub(crate) const FUNCTIONS: &[(&str, usize, Op)] = &[
     ("modified_trapezoid", 5, Op::Nary(Nary::Law(Law::ModifiedTrapezoid))),
 ];
 
+/// The function whose first argument names a table: `spline(name, x)`.
+const SPLINE: &str = "spline";
+
 /// Built-in constants.
 const CONSTANTS: &[(&str, f64)] = &[("pi", std::f64::consts::PI), ("e", std::f64::consts::E)];
 
 fn function(name: &str) -> Option<(usize, Op)> {
     FUNCTIONS.iter().find(|(n, _, _)| *n == name).map(|&(_, arity, op)| (arity, op))
+}
+
+/// Whether `name` is a function's (so it cannot be a variable's).
+fn is_function(name: &str) -> bool {
+    name == SPLINE || function(name).is_some()
 }
 
 /// The result of compiling a source string.
@@ -222,13 +238,16 @@ pub(crate) struct Compiled {
     pub code: Vec<Op>,
     pub slots: Vec<usize>,
     pub max_stack: usize,
+    /// The tables `Op::Table` indexes.
+    pub tables: Vec<Arc<Spline>>,
 }
 
-/// Parses and compiles `src`: a name is a built-in constant, else a named value of `constants`
-/// (folded like a number), else a variable resolved with `resolve`.
+/// Parses and compiles `src`: a name is a built-in constant, else a named value of `names`
+/// (folded like a number), else a variable resolved with `resolve`; `spline(name, x)` names a
+/// table of `names`.
 pub(crate) fn compile(
     src: &str,
-    constants: &dyn Fn(&str) -> Option<f64>,
+    names: &dyn Names,
     resolve: &mut dyn FnMut(&str) -> Result<usize, String>,
 ) -> Result<Compiled, ExprError> {
     let mut p = Parser {
@@ -237,7 +256,8 @@ pub(crate) fn compile(
         stack: Vec::new(),
         depth: 0,
         code: Vec::new(),
-        constants,
+        names,
+        tables: Vec::new(),
         resolve,
     };
     p.parse()?;
@@ -253,7 +273,7 @@ pub(crate) fn compile(
                 depth += 1;
                 slots.push(s);
             }
-            Op::Unary(_) => {}
+            Op::Unary(_) | Op::Table(_) => {}
             Op::Binary(_) => depth -= 1,
             Op::Nary(n) => depth -= n.arity() - 1,
         }
@@ -265,7 +285,7 @@ pub(crate) fn compile(
     }
     slots.sort_unstable();
     slots.dedup();
-    Ok(Compiled { code, slots, max_stack })
+    Ok(Compiled { code, slots, max_stack, tables: p.tables })
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -500,8 +520,10 @@ struct Parser<'a, 'r> {
     /// Number of frames on `stack` for which [`Frame::nests`] holds.
     depth: usize,
     code: Vec<Op>,
-    /// Named values given by the caller (a model's parameters).
-    constants: &'r dyn Fn(&str) -> Option<f64>,
+    /// Named values and tables given by the caller (a model's parameters and tables).
+    names: &'r dyn Names,
+    /// The tables used, in order of first use.
+    tables: Vec<Arc<Spline>>,
     resolve: &'r mut dyn FnMut(&str) -> Result<usize, String>,
 }
 
@@ -607,6 +629,11 @@ impl<'a> Parser<'a, '_> {
             Tok::Name(name) => {
                 if self.peek()?.tok == Tok::LParen {
                     let open = self.next()?;
+                    if name == SPLINE {
+                        let call = self.table(t.start, open.start)?;
+                        self.push(call, t.start)?;
+                        return Ok(false);
+                    }
                     let Some((arity, op)) = function(name) else {
                         return Err(ExprError::new(format!("unknown function '{name}'"), t.start));
                     };
@@ -642,11 +669,11 @@ impl<'a> Parser<'a, '_> {
     /// resolved variable.
     fn name(&mut self, name: &str, start: usize) -> Result<(), ExprError> {
         let constant = CONSTANTS.iter().find(|(n, _)| *n == name).map(|&(_, v)| v);
-        if let Some(v) = constant.or_else(|| (self.constants)(name)) {
+        if let Some(v) = constant.or_else(|| self.names.constant(name)) {
             self.code.push(Op::Const(v));
             return Ok(());
         }
-        if function(name).is_some() {
+        if is_function(name) {
             return Err(ExprError::new(format!("function '{name}' needs its arguments in parentheses"), start));
         }
         match (self.resolve)(name) {
@@ -663,6 +690,36 @@ impl<'a> Parser<'a, '_> {
                 Err(ExprError::new(message, start))
             }
         }
+    }
+
+    /// Reads `name ,` after `spline(` (at `start`, the `(` at `open`): the call of the table's
+    /// function, its first argument complete.
+    fn table(&mut self, start: usize, open: usize) -> Result<Frame<'a>, ExprError> {
+        let t = self.next()?;
+        let Tok::Name(name) = t.tok else {
+            return Err(ExprError::new(
+                format!("expected a table's name as the first argument of 'spline', found {}", self.describe(t)),
+                t.start,
+            ));
+        };
+        let Some(table) = self.names.table(name) else {
+            return Err(ExprError::new(format!("unknown table '{name}' (tables are defined under tables:)"), t.start));
+        };
+        let comma = self.next()?;
+        if comma.tok != Tok::Comma {
+            return Err(ExprError::new(
+                format!("expected ',' after the table's name in 'spline', found {}", self.describe(comma)),
+                comma.start,
+            ));
+        }
+        let index = match self.tables.iter().position(|u| Arc::ptr_eq(u, &table)) {
+            Some(i) => i,
+            None => {
+                self.tables.push(table);
+                self.tables.len() - 1
+            }
+        };
+        Ok(Frame::Call { name: SPLINE, start, open, arity: 2, op: Op::Table(index), args: 1 })
     }
 
     /// The error for an operand (or `,`) found where an operator was expected.
@@ -740,6 +797,10 @@ impl<'a> Parser<'a, '_> {
             Op::Unary(u) => self.emit_unary(u),
             Op::Binary(b) => self.emit_binary(b),
             Op::Nary(n) => self.emit_nary(n),
+            Op::Table(i) => match self.code.last_mut() {
+                Some(Op::Const(a)) => *a = self.tables[i].eval(*a).0,
+                _ => self.code.push(Op::Table(i)),
+            },
             Op::Const(_) | Op::Var(_) => unreachable!("FUNCTIONS holds only operations"),
         }
         Ok(())

@@ -236,6 +236,18 @@ pub trait Scalar:
         self.lift2(x, f0, [gy, gx], [hyy, hxy, hxx])
     }
 
+    /// `sqrt(self^2 + y^2)` without overflow or underflow on the way ([`f64::hypot`]). At the
+    /// origin, where it has no derivative, the derivatives are taken as 0 (as `abs'(0)`).
+    fn hypot(self, y: Self) -> Self {
+        let (a, b) = (self.value(), y.value());
+        let r = a.hypot(b);
+        if Self::ORDER == 0 || r == 0.0 {
+            return self.lift2(y, r, [0.0; 2], [0.0; 3]);
+        }
+        let (ua, ub) = (a / r, b / r);
+        self.lift2(y, r, [ua, ub], [ub * ub / r, -ua * ub / r, ua * ua / r])
+    }
+
     /// The smaller argument (with its derivatives); `self` on ties. A NaN argument is
     /// ignored, like [`f64::min`].
     fn min(self, other: Self) -> Self {

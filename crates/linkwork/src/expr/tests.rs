@@ -285,6 +285,14 @@ fn cases() -> Vec<Case> {
         x * x
     }
     vec![
+        // hypot(x, 2x - 1) = sqrt(5x^2 - 4x + 1): f' = (5x - 2) / r, f'' = 1 / r^3.
+        Case {
+            src: "hypot(x, 2*x - 1)",
+            points: &[-1.5, 0.1, 0.7, 3.0],
+            f: |x| (5.0 * x * x - 4.0 * x + 1.0).sqrt(),
+            d1: |x| (5.0 * x - 2.0) / (5.0 * x * x - 4.0 * x + 1.0).sqrt(),
+            d2: |x| (5.0 * x * x - 4.0 * x + 1.0).powf(-1.5),
+        },
         // Motion laws (closed forms of the normalized rise s(u) and its derivatives; the
         // modified trapezoid's from its acceleration's definition, integrated numerically).
         // Points before, inside and after the rise, away from its ends and from the
@@ -974,4 +982,74 @@ fn comparisons() {
     assert!(parse_err("x = 1").message.contains("'=='"), "{}", parse_err("x = 1").message);
     assert_eq!(parse_err("x ! 1").offset, 2);
     assert!(parse_err("if(x, 1)").message.contains("takes 3 arguments"));
+}
+
+// ---------------------------------------------------------------- tables
+
+/// A model's names for the table tests: the parameter `k` and the tables `lift` and `ramp`.
+struct Tables {
+    lift: std::sync::Arc<Spline>,
+    ramp: std::sync::Arc<Spline>,
+}
+
+impl Names for Tables {
+    fn constant(&self, name: &str) -> Option<f64> {
+        (name == "k").then_some(2.0)
+    }
+
+    fn table(&self, name: &str) -> Option<std::sync::Arc<Spline>> {
+        match name {
+            "lift" => Some(self.lift.clone()),
+            "ramp" => Some(self.ramp.clone()),
+            _ => None,
+        }
+    }
+}
+
+fn tables() -> Tables {
+    use spline::Method;
+    let x: Vec<f64> = (0..9).map(|i| 0.25 * f64::from(i)).collect();
+    let y = x.iter().map(|x| (2.0 * x).sin()).collect();
+    Tables {
+        lift: std::sync::Arc::new(Spline::new(x, y, Method::NotAKnot).unwrap()),
+        ramp: std::sync::Arc::new(Spline::new(vec![0.0, 1.0, 2.0], vec![0.0, 1.0, 1.0], Method::Akima).unwrap()),
+    }
+}
+
+#[test]
+fn spline_carries_the_tables_derivatives_through_the_chain_rule() {
+    let names = tables();
+    let e = Expr::parse_with("k * spline(lift, x^2) + spline(ramp, x) + spline(lift, 1)", &names, &mut test_resolve)
+        .unwrap();
+    // The constant call is folded, the table used twice is stored once.
+    assert_eq!(e.tables.len(), 2);
+    let (lift, ramp) = (&names.lift, &names.ramp);
+    for x in [0.3, 0.8, 1.1, 1.6] {
+        let (l, l1, l2) = lift.eval(x * x);
+        let (r, r1, r2) = ramp.eval(x);
+        // d/dx s(x^2) = 2x s'(x^2); d2/dx2 = 2 s' + 4x^2 s''.
+        let f = 2.0 * l + r + lift.eval(1.0).0;
+        let d1 = 2.0 * 2.0 * x * l1 + r1;
+        let d2 = 2.0 * (2.0 * l1 + 4.0 * x * x * l2) + r2;
+        let h = e.eval(&[HyperDual::variable(x)]);
+        // Rounding only: the same numbers combined in another order.
+        assert_close("value", h.v, f, 1e-14);
+        assert_close("f'", h.e1, d1, 1e-13);
+        assert_close("f''", h.e12, d2, 1e-13);
+        assert_eq!(e.eval(&[x]), h.v);
+    }
+}
+
+#[test]
+fn spline_needs_a_known_table_by_name() {
+    let names = tables();
+    let err = |src: &str| Expr::parse_with(src, &names, &mut test_resolve).unwrap_err();
+    let e = err("spline(cam, t)");
+    assert_eq!((e.message.as_str(), e.offset), ("unknown table 'cam' (tables are defined under tables:)", 7));
+    assert!(err("spline(2, t)").message.contains("expected a table's name as the first argument of 'spline'"));
+    assert!(err("spline(lift t)").message.contains("expected ',' after the table's name"));
+    assert!(err("spline(lift, t, 1)").message.contains("function 'spline' takes 2 arguments, found 3"));
+    assert!(err("spline + 1").message.contains("function 'spline' needs its arguments"));
+    // Without tables (a bare closure of names) every table is unknown.
+    assert!(parse_err("spline(lift, t)").message.contains("unknown table 'lift'"));
 }

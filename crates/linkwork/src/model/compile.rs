@@ -8,9 +8,11 @@ use crate::constraints::{
     GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc, Translational, Var,
 };
 use crate::error::Problem;
-use crate::expr::{Expr, TimeFunction};
+use crate::expr::{Expr, Names, Spline, TimeFunction};
 use crate::forces::{Force, Load, PointLoad, RotationalSpringDamper, SpringDamper, StateExpr, StateVar, Torque};
 use indexmap::IndexMap;
+use std::path::Path;
+use std::sync::Arc;
 
 /// The most output points one analysis may ask for; more would exhaust memory rather than finish.
 const MAX_OUTPUT_POINTS: f64 = 1e7;
@@ -33,15 +35,33 @@ fn output_step_problem(t0: f64, t1: f64, h: f64) -> Option<String> {
 }
 
 /// Build the model, or list every problem found.
+/// (a table's `file:` relative to the working folder).
 pub fn compile(spec: &ModelSpec) -> Result<Model, Vec<Problem>> {
-    compile_partial(spec, &[])
+    compile_partial(spec, &[], Path::new(""))
 }
 
 /// Build the model from the entries that were read; `broken` names (`section.name`) the entries
-/// that were not: they are taken as existing, so that only their own problems are reported.
-pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec<Problem>> {
-    let mut cx =
-        Cx { spec, points: IndexMap::new(), placed: IndexMap::new(), problems: Vec::new(), q0: Vec::new(), broken };
+/// that were not: they are taken as existing, so that only their own problems are reported. A
+/// table's `file:` is relative to `folder`.
+pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Result<Model, Vec<Problem>> {
+    let mut cx = Cx {
+        spec,
+        points: IndexMap::new(),
+        placed: IndexMap::new(),
+        tables: IndexMap::new(),
+        problems: Vec::new(),
+        q0: Vec::new(),
+        broken,
+    };
+    for (name, table) in &spec.tables {
+        let path = format!("tables.{name}");
+        match super::tables::table(&path, table, folder) {
+            Ok(t) => {
+                cx.tables.insert(name.clone(), Arc::new(t));
+            }
+            Err(problems) => cx.problems.extend(problems),
+        }
+    }
     let bodies = cx.bodies();
     cx.q0 = bodies.iter().flat_map(|b| b.q0).collect();
     cx.unique_names();
@@ -85,6 +105,8 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String]) -> Result<Model, Vec
             measures,
             analyses,
             source: String::new(),
+            folder: folder.to_path_buf(),
+            table_files: spec.tables.values().filter_map(|t| t.file.clone()).collect(),
             parameters: spec.parameters.clone(),
             set: Vec::new(),
             placed: cx.placed,
@@ -107,11 +129,29 @@ struct Cx<'s> {
     points: IndexMap<String, IndexMap<String, [f64; 2]>>,
     /// What was placed from global coordinates ([`Model::placed`]).
     placed: IndexMap<String, [f64; 2]>,
+    /// The tables that could be built, by name.
+    tables: IndexMap<String, Arc<Spline>>,
     problems: Vec<Problem>,
     /// (3 * bodies) initial guess, for constants that default to their initial value.
     q0: Vec<f64>,
     /// `section.name` of entries that exist but could not be read.
     broken: &'s [String],
+}
+
+/// What a model's expressions name besides the state: its parameters and tables.
+struct ModelNames<'a> {
+    parameters: &'a IndexMap<String, f64>,
+    tables: &'a IndexMap<String, Arc<Spline>>,
+}
+
+impl Names for ModelNames<'_> {
+    fn constant(&self, name: &str) -> Option<f64> {
+        self.parameters.get(name).copied()
+    }
+
+    fn table(&self, name: &str) -> Option<Arc<Spline>> {
+        self.tables.get(name).cloned()
+    }
 }
 
 /// Names become CSV column prefixes and expression variables (`crank.phi`): identifiers only.
@@ -682,8 +722,8 @@ impl Cx<'_> {
                 }
             })
         };
-        let parameters = |name: &str| self.spec.parameters.get(name).copied();
-        let expr = match Expr::parse_with(src, &parameters, &mut resolve) {
+        let names = ModelNames { parameters: &self.spec.parameters, tables: &self.tables };
+        let expr = match Expr::parse_with(src, &names, &mut resolve) {
             Ok(e) => e,
             Err(e) => {
                 self.problem(path, format!("cannot read the expression '{src}': {e}"));
@@ -798,7 +838,8 @@ impl Cx<'_> {
     }
 
     fn function(&mut self, path: &str, src: &str) -> Option<TimeFunction> {
-        match TimeFunction::parse_with(src, &|name| self.spec.parameters.get(name).copied()) {
+        let names = ModelNames { parameters: &self.spec.parameters, tables: &self.tables };
+        match TimeFunction::parse_with(src, &names) {
             Ok(f) => Some(f),
             Err(e) => {
                 self.problem(path, format!("cannot read the function '{src}': {e}"));

@@ -8,6 +8,7 @@ mod params;
 mod parse;
 mod settings;
 pub mod spec;
+mod tables;
 pub mod units;
 
 pub(crate) use compile::revise;
@@ -21,7 +22,7 @@ use crate::error::{Error, Result};
 use crate::forces::{Force, StateExpr};
 use indexmap::IndexMap;
 use spec::AnalysisKind;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A moving body.
 #[derive(Debug, Clone)]
@@ -246,6 +247,11 @@ pub struct Model {
     /// The text of the model file it was compiled from (empty for a model compiled from a
     /// spec): what an output folder keeps as `model.yaml`, to reproduce the run.
     pub source: String,
+    /// The folder a table's `file:` is relative to: the model file's (empty, the working
+    /// folder, for a model compiled from text).
+    pub folder: PathBuf,
+    /// Each table's `file:` as written, relative to [`Model::folder`] or absolute, in file order.
+    pub table_files: Vec<String>,
     /// The parameters' values used, SI, in file order (the file's, with [`Model::set`] over them).
     pub parameters: IndexMap<String, f64>,
     /// Parameter values given from outside (`--set`, [`Model::with_parameters`]) over the file's:
@@ -269,7 +275,7 @@ impl Model {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path)
             .map_err(|e| Error::Io { path: path.display().to_string(), message: e.to_string() })?;
-        Model::from_yaml_with(&text, set)
+        Model::from_yaml_in(&text, set, path.parent().unwrap_or(Path::new("")))
     }
 
     /// Compile a model from the text of a model file.
@@ -282,15 +288,26 @@ impl Model {
     /// converted and must have the dimension of the file's value. A name the file's `parameters:`
     /// does not define is a model error at `parameters.<name>`.
     pub fn from_yaml_with(text: &str, set: &[(String, String)]) -> Result<Model> {
-        Model::from_document(text, parse::parse_document(text).map_err(Error::Model)?, set)
+        Model::from_yaml_in(text, set, PathBuf::new())
+    }
+
+    /// As [`Model::from_yaml_with`], for the text of a model file in `folder`: a table's
+    /// `file:` is read from there ([`Model::load_with`] gives the file's folder).
+    pub fn from_yaml_in(text: &str, set: &[(String, String)], folder: impl Into<PathBuf>) -> Result<Model> {
+        Model::from_document(text, parse::parse_document(text).map_err(Error::Model)?, set, folder.into())
     }
 
     /// The model of `text`, whose YAML document is `document`, with the values `set`.
-    fn from_document(text: &str, document: serde_yaml_ng::Value, set: &[(String, String)]) -> Result<Model> {
+    fn from_document(
+        text: &str,
+        document: serde_yaml_ng::Value,
+        set: &[(String, String)],
+        folder: PathBuf,
+    ) -> Result<Model> {
         let parsed = parse::parse_document_with(document, set).map_err(Error::Model)?;
-        match compile_partial(&parsed.spec, &parsed.broken) {
+        match compile_partial(&parsed.spec, &parsed.broken, &folder) {
             Ok(model) if parsed.problems.is_empty() => {
-                Ok(Model { source: text.to_string(), set: set.to_vec(), ..model })
+                Ok(Model { source: text.to_string(), set: set.to_vec(), folder, ..model })
             }
             Ok(_) => Err(Error::Model(parsed.problems)),
             // A problem the reading already reported is not reported again by the compilation
@@ -309,7 +326,8 @@ impl Model {
     /// [`Model::from_yaml_with`]; values given before and not named again stay). Parameters
     /// computed from others follow them.
     pub fn with_parameters(&self, values: &[(String, String)]) -> Result<Model> {
-        Model::from_yaml_with(&self.source, &self.given_with(values))
+        let document = parse::parse_document(&self.source).map_err(Error::Model)?;
+        Model::from_document(&self.source, document, &self.given_with(values), self.folder.clone())
     }
 
     /// As [`Model::with_parameters`], with this model's text already parsed into `document`
@@ -319,7 +337,7 @@ impl Model {
         document: &serde_yaml_ng::Value,
         values: &[(String, String)],
     ) -> Result<Model> {
-        Model::from_document(&self.source, document.clone(), &self.given_with(values))
+        Model::from_document(&self.source, document.clone(), &self.given_with(values), self.folder.clone())
     }
 
     /// The YAML document of this model's text, for [`Model::with_parameters_in`].

@@ -6,7 +6,8 @@
 
 use super::params;
 use super::spec::{
-    AnalysisSpec, BodySpec, DriverSpec, ForceSpec, GroundSpec, JointSpec, MeasureSpec, ModelSpec, PointMeasure, Tagged,
+    AnalysisSpec, BodySpec, DriverSpec, ForceSpec, GroundSpec, JointSpec, MeasureSpec, ModelSpec, PointMeasure,
+    TableSpec, Tagged,
 };
 use crate::error::Problem;
 use indexmap::IndexMap;
@@ -124,6 +125,7 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
     let drivers = section("drivers", get("drivers"), &mut problems, &mut broken, tagged::<DriverSpec>());
     let forces = section("forces", get("forces"), &mut problems, &mut broken, tagged::<ForceSpec>());
     let measures = section("measures", get("measures"), &mut problems, &mut broken, measure);
+    let tables = section("tables", get("tables"), &mut problems, &mut broken, entry::<TableSpec>);
     let analyses = section("analyses", get("analyses"), &mut problems, &mut broken, entry::<AnalysisSpec>);
     // One problem a field: a number that could not be read is not reported again as a string
     // where a number was expected, nor a field that uses a parameter that could not be read (its
@@ -144,6 +146,7 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
         drivers,
         forces,
         measures,
+        tables,
         analyses,
     };
     Ok(Parsed { spec, problems, broken })

@@ -115,6 +115,9 @@ pub struct ModelSpec {
     /// Named output quantities, written as extra columns of `results.csv`.
     #[serde(default)]
     pub measures: IndexMap<String, MeasureSpec>,
+    /// Tabulated functions by name, for `spline(<name>, x)` in any expression.
+    #[serde(default)]
+    pub tables: IndexMap<String, TableSpec>,
     /// Analyses by name.
     #[serde(default)]
     pub analyses: IndexMap<String, AnalysisSpec>,
@@ -284,6 +287,49 @@ pub enum MeasureSpec {
     Expression(String),
     /// A component of a point of a body.
     Point(PointMeasure),
+}
+
+/// A tabulated function `y(x)`, interpolated by a piecewise cubic with exact derivatives
+/// (docs/model-format.md, "Tables"): the points inline, or two columns of a CSV file.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TableSpec {
+    /// A CSV file whose first row names its columns, relative to the model file's folder (the
+    /// working folder for a model given as text). With it, `x` and `y` are column names.
+    #[serde(default)]
+    pub file: Option<String>,
+    /// The abscissae, strictly increasing (or, with `file`, the name of their column).
+    pub x: TableColumn,
+    /// The values (or, with `file`, the name of their column).
+    pub y: TableColumn,
+    /// How the points are joined. Default `not_a_knot`.
+    #[serde(default)]
+    pub method: SplineMethod,
+}
+
+/// A table's column: its numbers, or the name of a column of the table's file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged, expecting = "a list of numbers, or the name of a column of the table's file")]
+pub enum TableColumn {
+    /// The numbers.
+    Values(Vec<f64>),
+    /// A column of the file, by the name in its first row.
+    Column(String),
+}
+
+/// How a table's points are joined.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum SplineMethod {
+    /// The cubic spline with not-a-knot ends: continuous second derivative; a straight line
+    /// continues each end.
+    #[default]
+    NotAKnot,
+    /// The periodic cubic spline (the first and last values equal): repeats outside the table.
+    Periodic,
+    /// Akima's piecewise cubic (Adams' AKISPL): no overshoot at corners; continuous first
+    /// derivative only.
+    Akima,
 }
 
 /// A component of a point of a body, global frame.
