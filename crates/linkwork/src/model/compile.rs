@@ -952,7 +952,7 @@ impl Cx<'_> {
     fn effort(&mut self, path: &str, name: &str) -> Option<Effort> {
         let spec = self.spec;
         if let Some(d) = spec.drivers.get_index_of(name) {
-            return Some(Effort::Driver { driver: d, slot: 3 * spec.joints.len() + d });
+            return Some(Effort::Driver { slot: 3 * spec.joints.len() + d });
         }
         match spec.forces.get_full(name) {
             Some((k, _, ForceSpec::Torque(TorqueSpec { torque, .. }))) => {

@@ -273,8 +273,6 @@ pub enum MeasureKind {
 pub enum Effort {
     /// A driver's effort: entry `slot` of the reactions row.
     Driver {
-        /// Index into [`Model::drivers`].
-        driver: usize,
         /// Its entry in the reactions row.
         slot: usize,
     },
@@ -290,7 +288,7 @@ pub enum Effort {
 impl Effort {
     fn value(&self, q: &[f64], qdot: &[f64], reactions: &[f64], t: f64) -> f64 {
         match self {
-            Effort::Driver { slot, .. } => reactions.get(*slot).copied().unwrap_or(f64::NAN),
+            Effort::Driver { slot } => reactions.get(*slot).copied().unwrap_or(f64::NAN),
             Effort::Torque { torque, .. } => torque.value(q, qdot, t),
         }
     }
@@ -351,7 +349,7 @@ impl Measure {
     /// the entry itself).
     fn reads(&self) -> Vec<(&'static str, Reads)> {
         let effort = |field, e: &Effort| match e {
-            Effort::Driver { slot, .. } => (field, Reads::Reaction(*slot)),
+            Effort::Driver { slot } => (field, Reads::Reaction(*slot)),
             Effort::Torque { force, .. } => (field, Reads::Force(*force)),
         };
         match &self.kind {
