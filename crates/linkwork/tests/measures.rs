@@ -227,7 +227,10 @@ fn a_measure_the_analysis_cannot_compute_is_refused_at_its_path() {
     assert_eq!(p.len(), 3, "mu and vr need only the motion: {p:#?}");
     has_each(
         &run_problems(&text, "modes"),
-        &[("measures.B_load", "which the modes analysis 'modes' does not compute")],
+        &[
+            ("measures.B_load", "which the modes analysis 'modes' does not compute"),
+            ("measures.vr", "a velocity ratio needs velocities, and the modes analysis 'modes' is at rest"),
+        ],
     );
     has_each(
         &run_problems(&text, "unloaded"),

@@ -118,7 +118,7 @@ impl Model {
     /// The measures `analysis` cannot compute, each a problem at the measure (or its field):
     /// a reaction, an effort or a mechanical advantage in an analysis with no reactions
     /// (`kinematic`, `modes`); the effort of a driver it does not hold; a torque it does not
-    /// apply; a velocity ratio in a `static` analysis, which is at rest.
+    /// apply; a velocity ratio at rest (a `static` analysis, a `modes` one about an equilibrium).
     pub fn unavailable_measures(&self, analysis: &Analysis) -> Vec<Problem> {
         let mut problems = Vec::new();
         let drivers = 3 * self.joints.len();
@@ -142,10 +142,12 @@ impl Model {
                 ));
                 continue;
             }
-            if kind == AnalysisKind::Static && matches!(m.kind, MeasureKind::VelocityRatio { .. }) {
+            let at_rest = kind == AnalysisKind::Static
+                || (kind == AnalysisKind::Modes && analysis.about == spec::LinearisePoint::Equilibrium);
+            if at_rest && matches!(m.kind, MeasureKind::VelocityRatio { .. }) {
                 problems.push(Problem::new(
                     path,
-                    format!("a velocity ratio needs velocities, and the static analysis '{name}' is at rest (every velocity 0); expected a kinematic, inverse or dynamic analysis"),
+                    format!("a velocity ratio needs velocities, and the {} analysis '{name}' is at rest (every velocity 0); expected a kinematic, inverse or dynamic analysis", kind.name()),
                 ));
                 continue;
             }
