@@ -106,3 +106,54 @@ def test_bad_input_is_refused_naming_the_field() -> None:
     with pytest.raises(linkwork.ModelError) as error:
         m.build()
     assert any(path == "joints.O.body_j" and "unknown body 'coupler'" in message for path, message in error.value.problems)
+
+
+def measured_four_bar() -> linkwork.Mechanism:
+    """examples/fourbar_measures.yaml, built in Python with the typed measures."""
+    m = linkwork.Mechanism("four-bar with measures")
+    for name, value in [("a", 0.1), ("b", 0.3), ("c", 0.25), ("d", 0.3), ("rho", 5), ("load", 1.5)]:
+        m.parameter(name, value)
+    crank = m.body("crank", mass="rho*a", inertia="rho*a^3/12", position=("a/2", 0), angle=0,
+                   points={"O2": ("-a/2", 0), "A": ("a/2", 0)})
+    coupler = m.body("coupler", mass="rho*b", inertia="rho*b^3/12", position=(0.18, 0.13), angle=0.95,
+                     points={"A": ("-b/2", 0), "B": ("b/2", 0)})
+    rocker = m.body("rocker", mass="rho*c", inertia="rho*c^3/12", position=(0.29, 0.12), angle=1.7,
+                    points={"O4": ("-c/2", 0), "B": ("c/2", 0)})
+    m.ground_point("O2", (0, 0))
+    m.ground_point("O4", ("d", 0))
+    m.revolute("O2", crank, "ground", point_i="O2", point_j="O2")
+    m.revolute("A", crank, coupler, point_i="A", point_j="A")
+    m.revolute("B", coupler, rocker, point_i="B", point_j="B")
+    m.revolute("O4", rocker, "ground", point_i="O4", point_j="O4")
+    m.driver("motor", "angle", body=crank, function="2*t")
+    m.force("brake", "torque", body=rocker, torque="-load")
+    m.transmission_angle("mu", joint="B", coupler_joint="A", rocker_joint="O4")
+    m.velocity_ratio("vr", input=crank, output=rocker)
+    m.mechanical_advantage("ma", input="motor", output="brake")
+    m.measure("B_load", "sqrt(B.fx^2 + B.fy^2)")
+    m.measure("motor_power", "motor.effort * crank.omega")
+    m.analysis("inverse", "inverse", drivers=["motor"], t_end=3.14, step=0.01)
+    return m
+
+
+def test_the_standard_measures_built_run_as_the_example() -> None:
+    """The typed measures write the file's entries (those of the generic `measure(type=...)`),
+    and the model runs as examples/fourbar_measures.yaml, bit for bit, with its masses and
+    massless."""
+    m = measured_four_bar()
+    measures = m.to_dict()["measures"]
+    assert measures["mu"] == {"type": "transmission_angle", "joint": "B", "coupler_joint": "A", "rocker_joint": "O4"}
+    assert measures["vr"] == {"type": "velocity_ratio", "input": "crank", "output": "rocker"}
+    assert measures["ma"] == {"type": "mechanical_advantage", "input": "motor", "output": "brake"}
+    for parameters in [None, {"rho": 0}]:
+        built = m.build(parameters).run("inverse")
+        loaded = linkwork.load(EXAMPLES / "fourbar_measures.yaml", parameters=parameters).run("inverse")
+        assert built.columns == loaded.columns and built.columns[-5:] == ["mu", "vr", "ma", "B_load", "motor_power"]
+        assert np.array_equal(built.values, loaded.values), parameters
+    # A bad name in a typed measure is the engine's problem, at its field.
+    bad = linkwork.Mechanism()
+    bad.body("crank", mass=1, inertia=0.1, position=(0, 0))
+    bad.velocity_ratio("vr", input="crank", output="rockr")
+    with pytest.raises(linkwork.ModelError) as error:
+        bad.build()
+    assert any(path == "measures.vr.output" and "unknown body 'rockr'" in message for path, message in error.value.problems)

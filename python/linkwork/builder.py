@@ -15,8 +15,9 @@
 Every entry is what the model file holds (docs/model-format.md): a number is SI, or text with a
 unit (``"40 mm"``) or an expression of the parameters (``"r/2"``); a point is ``(x, y)``; a body is
 its name or the :class:`Body` that :meth:`Mechanism.body` returns. The typed methods cover the
-common joints; :meth:`Mechanism.joint`, :meth:`driver`, :meth:`force` and :meth:`analysis` take
-any type with its fields as keywords, so the builder expresses whatever the file format does.
+common joints and the standard measures; :meth:`Mechanism.joint`, :meth:`driver`, :meth:`force`,
+:meth:`measure` and :meth:`analysis` take any type with its fields as keywords, so the builder
+expresses whatever the file format does.
 The engine checks the model when it is built (:meth:`Mechanism.build`), each problem at its path
 in the file (``joints.A.body_j: unknown body 'coupler'``); the builder itself refuses only what
 a file could not hold: a name used twice, a number that is not finite, a value of no YAML kind.
@@ -193,10 +194,14 @@ class Mechanism:
         return name
 
     def measure(self, name: str, expression: str | None = None, **fields: Any) -> str:
-        """A named output: an expression (``"slider_d.x + 4"``), or a body point's quantity
-        (``body=, point=, component=``)."""
+        """A named output: an expression (``"slider_d.x + 4"``; where the analysis has them it
+        may read the reaction and effort columns, ``"sqrt(B.fx^2 + B.fy^2)"``), a body point's
+        quantity (``body=, point=, component=``), or a standard measure by its ``type`` with its
+        fields (``type="velocity_ratio", input=crank, output=rocker``; the typed methods below)."""
         if expression is not None and fields:
-            raise ValueError(f"measures.{name}: give an expression or body, point and component, not both")
+            raise ValueError(
+                f"measures.{name}: give an expression or fields (body, point and component, or a type), not both"
+            )
         value = _value(f"measures.{name}", expression) if expression is not None else _entry(f"measures.{name}", fields)
         self._add("measures", name, value)
         return name
@@ -219,6 +224,27 @@ class Mechanism:
         fields = {"file": file, "x": x if isinstance(x, str) else list(x), "y": y if isinstance(y, str) else list(y)}
         self._add("tables", name, _entry(f"tables.{name}", {**fields, "method": method}))
         return name
+
+    def transmission_angle(self, name: str, joint: str, coupler_joint: str, rocker_joint: str) -> str:
+        """The transmission angle ``mu`` at the pin ``joint`` between a coupler and a rocker, rad,
+        in ``[0, pi/2]``: the acute angle between the coupler's line (from ``joint`` to its other
+        pin ``coupler_joint``) and the rocker's (from ``joint`` to its pivot ``rocker_joint``);
+        three revolute joints. 90 degrees transmits best; the usual rule is ``mu >= 40``
+        degrees."""
+        return self.measure(
+            name, type="transmission_angle", joint=joint, coupler_joint=coupler_joint, rocker_joint=rocker_joint
+        )
+
+    def velocity_ratio(self, name: str, input: str, output: str) -> str:
+        """``omega_output / omega_input`` of two moving bodies (rad/s over rad/s), signed."""
+        return self.measure(name, type="velocity_ratio", input=input, output=output)
+
+    def mechanical_advantage(self, name: str, input: str, output: str) -> str:
+        """``-F_output / F_input``: the load at the output over the effort at the input, each the
+        name of a driver (its effort, N m or N) or of a ``torque`` force (N m), the torque or
+        force applied to the mechanism there; ``omega_input / omega_output`` in a frictionless
+        mechanism of negligible inertia. Needs an inverse, static or dynamic analysis."""
+        return self.measure(name, type="mechanical_advantage", input=input, output=output)
 
     def analysis(self, name: str, type: str, **fields: Any) -> str:
         """An analysis (``"kinematic"``, ``"dynamic"``, ``"inverse"``, ``"static"``, ``"modes"``)

@@ -26,9 +26,7 @@ use std::path::{Path, PathBuf};
 /// The quantities written per body, in column order.
 pub const BODY_QUANTITIES: [&str; 9] = ["x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha"];
 
-/// The reaction columns of each joint, `<joint>.<quantity>`: the force on its first body in the
-/// global frame, N, and the torque, N m.
-pub const REACTION_QUANTITIES: [&str; 3] = ["fx", "fy", "torque"];
+pub use crate::model::REACTION_QUANTITIES;
 
 /// Results of one analysis: one column per quantity, one row per output time.
 #[derive(Debug)]

@@ -111,15 +111,18 @@ pub fn check(model: &Model) -> Result<CheckReport> {
             // Dynamics assembles holding the given coordinates, as the mechanism alone does.
             let hold = a.kind == AnalysisKind::Dynamic
                 || (a.kind == AnalysisKind::Modes && a.about == crate::model::spec::LinearisePoint::Initial);
+            // The measures it cannot compute stop it as surely as a missing driver.
+            let unavailable: Vec<String> = model.unavailable_measures(a).iter().map(|p| p.to_string()).collect();
+            let measures = (!unavailable.is_empty()).then(|| unavailable.join("; "));
             let entry = match check_system(model, &a.drivers, hold, a.t_start) {
                 Ok(system) => {
                     let warning = match a.kind {
                         AnalysisKind::Dynamic => massless(model, &a.drivers, &system.assembly.q, a.t_start),
                         _ => unmet_freedom(model, a, system.equations, system.rank),
                     };
-                    AnalysisCheck { kind: a.kind, system: Some(system), error: None, warning }
+                    AnalysisCheck { kind: a.kind, system: Some(system), error: None, warning: warning.or(measures) }
                 }
-                Err(e) => AnalysisCheck { kind: a.kind, system: None, error: Some(e.to_string()), warning: None },
+                Err(e) => AnalysisCheck { kind: a.kind, system: None, error: Some(e.to_string()), warning: measures },
             };
             (a.name.clone(), entry)
         })

@@ -49,6 +49,7 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     let mut rhs = vec![0.0; n];
     let mut nu = vec![0.0; m];
     let mut react = Vec::new();
+    let mut reactions = Vec::new();
     let pattern = Pattern::new(m, n, dae.jacobian_entries().0.iter().map(|&e| Some(e)));
     let mut indeterminate: Option<Vec<String>> = None;
     let outcome = run_driven(model, analysis, names, |t, q, qdot, qddot, extra| {
@@ -85,6 +86,7 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
             indeterminate = Some(element_names(&dae.sys, &space.dependent_rows()));
         }
         dae.reactions(q, &lambda, &mut react);
+        super::measure_reactions(model, &analysis.drivers, &react, &mut reactions);
         extra.clear();
         extra.extend_from_slice(&react);
         let kinetic = dae.kinetic_energy(qdot);
@@ -92,7 +94,7 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         let driver = dae.driver_power(q, t, &lambda, &mut nu);
         let applied = dae.applied_power(q, qdot, t);
         extra.extend([kinetic, potential, driver, applied]);
-        extra.extend(model.measures.iter().map(|m| m.value(q, qdot, qddot, t)));
+        extra.extend(model.measures.iter().map(|m| m.value(q, qdot, qddot, &reactions, t)));
         Ok(())
     });
     let finish = |results: &mut Results| {

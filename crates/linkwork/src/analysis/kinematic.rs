@@ -176,7 +176,7 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
     let names = model.measures.iter().map(|m| m.name.clone()).collect();
     run_driven(model, analysis, names, |t, q, qdot, qddot, extra| {
         extra.clear();
-        extra.extend(model.measures.iter().map(|m| m.value(q, qdot, qddot, t)));
+        extra.extend(model.measures.iter().map(|m| m.value(q, qdot, qddot, &[], t)));
         Ok(())
     })
 }

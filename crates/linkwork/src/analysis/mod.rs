@@ -20,6 +20,7 @@ pub use inverse::run_inverse;
 pub use kinematic::run_kinematic;
 pub use modes::run_modes;
 pub use run::Overrides;
+pub(crate) use setup::measure_reactions;
 pub use statics::run_static;
 
 use crate::linalg::dense::null_space;

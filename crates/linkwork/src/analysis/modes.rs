@@ -105,7 +105,7 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
     });
     let stable = modes.iter().all(|m| m.growth_rate.is_none());
     let zero = vec![0.0; n];
-    let extra: Vec<f64> = model.measures.iter().map(|m| m.value(&q, &qdot, &zero, t)).collect();
+    let extra: Vec<f64> = model.measures.iter().map(|m| m.value(&q, &qdot, &zero, &[], t)).collect();
     if let Err(e) = results.push(t, &q, &qdot, &zero, &extra) {
         return Err(fail(results, e));
     }

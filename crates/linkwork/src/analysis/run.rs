@@ -88,6 +88,10 @@ impl Model {
             Ok(a) => overrides.apply(a).map_err(|error| Box::new(Failure { error, results: Results::new(self, a) }))?,
             Err(error) => return Err(Box::new(Failure { error, results: Results::of_model(self) })),
         };
+        let unavailable = self.unavailable_measures(&analysis);
+        if !unavailable.is_empty() {
+            return Err(Box::new(Failure { error: Error::Model(unavailable), results: Results::new(self, &analysis) }));
+        }
         progress.begin(analysis.t_start, analysis.t_end);
         let mut outcome = progress::scope(progress, || match analysis.kind {
             AnalysisKind::Kinematic => run_kinematic(self, &analysis),

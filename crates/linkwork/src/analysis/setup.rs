@@ -37,6 +37,24 @@ pub(crate) fn output_times(analysis: &Analysis) -> Vec<f64> {
     times
 }
 
+/// The reactions row measures read ([`crate::model::Measure::value`]) from `react`, the result
+/// columns' (each joint's `fx, fy, torque`, then each active driver's effort): every driver of
+/// the model in its place, NaN for those `drivers` does not hold (a measure that reads one is
+/// refused before the run, [`Model::unavailable_measures`]). Nothing when the model has no
+/// measures.
+pub(crate) fn measure_reactions(model: &Model, drivers: &[usize], react: &[f64], out: &mut Vec<f64>) {
+    out.clear();
+    if model.measures.is_empty() {
+        return;
+    }
+    let joints = 3 * model.joints.len();
+    out.extend_from_slice(&react[..joints]);
+    out.resize(joints + model.drivers.len(), f64::NAN);
+    for (k, &d) in drivers.iter().enumerate() {
+        out[joints + d] = react[joints + k];
+    }
+}
+
 /// The initial values assembly holds `(2n)`: with `hold`, each body's `given` positions, then
 /// its given velocities, as the user marked them; without, none (the drivers or the equilibrium
 /// place every coordinate, with the least change from the guess).

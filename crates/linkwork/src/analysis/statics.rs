@@ -640,6 +640,7 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
     let mut st = Statics::new(&mut dae, analysis.settings.tolerance, &assembly.q, t0);
     let zero = vec![0.0; n];
     let mut react = Vec::new();
+    let mut reactions = Vec::new();
     let mut row = Vec::new();
     let mut q = assembly.q.clone();
     let mut min_stiffness: Option<f64> = None;
@@ -660,10 +661,11 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
                     indeterminate = Some(element_names(&st.dae.sys, &indeterminate_rows(st.jac.as_ref())));
                 }
                 st.dae.reactions(&eq.q, &eq.lambda, &mut react);
+                super::measure_reactions(model, &analysis.drivers, &react, &mut reactions);
                 row.clear();
                 row.extend_from_slice(&react);
                 row.push(st.dae.potential_energy(&eq.q));
-                row.extend(model.measures.iter().map(|me| me.value(&eq.q, &zero, &zero, t)));
+                row.extend(model.measures.iter().map(|me| me.value(&eq.q, &zero, &zero, &reactions, t)));
                 if let Err(e) = results.push(t, &eq.q, &zero, &zero, &row) {
                     error = Some(e);
                     break;

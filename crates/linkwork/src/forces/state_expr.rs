@@ -16,6 +16,9 @@ pub enum StateVar {
     Velocity(usize),
     /// `qddot[index]` (measures only).
     Acceleration(usize),
+    /// Entry `index` of the reactions row: every joint's `fx, fy, torque`, then every driver's
+    /// effort, in model order (measures only).
+    Reaction(usize),
     /// The time `t`.
     Time,
 }
@@ -46,14 +49,24 @@ impl StateExpr {
         self.expr.source()
     }
 
-    /// Value from global `q`, `qdot`, `qddot` (the last may be empty when no slot needs it).
-    pub fn eval_global(&self, q: &[f64], qdot: &[f64], qddot: &[f64], t: f64) -> f64 {
+    /// The entries of the reactions row it reads ([`StateVar::Reaction`]).
+    pub fn reactions(&self) -> impl Iterator<Item = usize> + '_ {
+        self.vars.iter().filter_map(|v| match *v {
+            StateVar::Reaction(k) => Some(k),
+            _ => None,
+        })
+    }
+
+    /// Value from global `q`, `qdot`, `qddot` and the reactions row `reactions` (the last two
+    /// may be empty when no slot needs them; an entry that is not there reads as NaN).
+    pub fn eval_global(&self, q: &[f64], qdot: &[f64], qddot: &[f64], reactions: &[f64], t: f64) -> f64 {
         let mut z = [0.0; MAX_SLOTS];
         for (zk, v) in z.iter_mut().zip(&self.vars) {
             *zk = match *v {
                 StateVar::Position(c) => q[c],
                 StateVar::Velocity(c) => qdot[c],
                 StateVar::Acceleration(c) => qddot[c],
+                StateVar::Reaction(k) => reactions.get(k).copied().unwrap_or(f64::NAN),
                 StateVar::Time => t,
             };
         }
@@ -110,7 +123,7 @@ impl Load {
                     *zk = match *var {
                         StateVar::Position(k) => x[k],
                         StateVar::Velocity(k) => v[k],
-                        StateVar::Acceleration(_) => S::constant(f64::NAN),
+                        StateVar::Acceleration(_) | StateVar::Reaction(_) => S::constant(f64::NAN),
                         StateVar::Time => S::constant(t),
                     };
                 }

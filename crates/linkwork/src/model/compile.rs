@@ -2,10 +2,13 @@
 //! resolve names to indices and build each joint's constraint.
 
 use super::spec::*;
-use super::{Analysis, Body, Element, ForceElement, IntegratorSettings, Measure, MeasureKind, Model, SolverSettings};
+use super::{
+    Analysis, Body, Effort, Element, ForceElement, IntegratorSettings, Measure, MeasureKind, Model, SolverSettings,
+    REACTION_QUANTITIES,
+};
 use crate::constraints::{
     Absolute, AbsoluteKind, BodyIx, Constraint, Distance, Driver, DriverKind, Frame, GearKind, GearPair,
-    GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc, Translational, Var,
+    GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc, Shape, Sketch, Translational, Var,
 };
 use crate::error::Problem;
 use crate::expr::{Expr, Names, Spline, TimeFunction};
@@ -76,7 +79,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
         Some(ForceElement { name: name.into(), kind: f.name(), applied, force: cx.force(path, f)? })
     });
     let measures = cx.entries("measures", &spec.measures, |cx, name, path, m| {
-        Some(Measure { name: name.into(), kind: cx.measure(path, m)? })
+        Some(Measure { name: name.into(), kind: cx.measure(path, m, &joints)? })
     });
     let gravity = spec.gravity.and_then(|g| cx.vec2("gravity", g)).unwrap_or([0.0, 0.0]);
     // Each number is a double, but the weight is their product: past 1.8e308 it is infinite,
@@ -659,60 +662,108 @@ impl Cx<'_> {
     /// A general constraint: names are `<body>.x`, `<body>.y`, `<body>.phi` and `t`.
     fn general(&mut self, path: &str, src: &str) -> Option<Box<dyn Constraint>> {
         let var = |v: Option<(usize, usize)>| v.map_or(Var::Time, |(col, _)| Var::Coord(col));
-        let c = self.expression(path, src, 3, var, GeneralConstraint::try_new)?;
+        let c = self.expression(path, src, 3, var, None, GeneralConstraint::try_new)?;
         Some(Box::new(c))
     }
 
-    /// An expression of time and state: `<body>.x, .y, .phi, .vx, .vy, .omega`, with
-    /// `accelerations` also `.ax, .ay, .alpha`, and `t`.
-    fn state_expr(&mut self, path: &str, src: &str, accelerations: bool) -> Option<StateExpr> {
+    /// An expression of time and state: `<body>.x, .y, .phi, .vx, .vy, .omega` and `t`; for a
+    /// `measure` also the accelerations `.ax, .ay, .alpha`, the joints' reactions
+    /// `<joint>.fx, .fy, .torque` and the drivers' efforts `<driver>.effort`.
+    fn state_expr(&mut self, path: &str, src: &str, measure: bool) -> Option<StateExpr> {
         let var = |v: Option<(usize, usize)>| match v {
             None => StateVar::Time,
             Some((col, 0)) => StateVar::Position(col),
             Some((col, 1)) => StateVar::Velocity(col),
             Some((col, _)) => StateVar::Acceleration(col),
         };
-        self.expression(path, src, if accelerations { 9 } else { 6 }, var, StateExpr::try_new)
+        let reaction = measure.then_some(StateVar::Reaction as fn(usize) -> StateVar);
+        self.expression(path, src, if measure { 9 } else { 6 }, var, reaction, StateExpr::try_new)
     }
 
     /// The expression `src` at `path` compiled by `build` from its variables: `t`, and
     /// `<body>.<q>` for `q` among the first `quantities` of [`QUANTITIES`]; `var` makes each
-    /// variable from `None` (time) or `Some((column, order of derivative))`. `None` (with the
-    /// problem recorded, unless it names a body that could not be read) when it cannot be compiled.
+    /// variable from `None` (time) or `Some((column, order of derivative))`. With `reaction`, also
+    /// `<joint>.fx, .fy, .torque` and `<driver>.effort`, made by `reaction` from their entry in
+    /// the reactions row (every joint's three, then every driver's effort, in file order). `None`
+    /// (with the problem recorded, unless it names an entry that could not be read) when it
+    /// cannot be compiled.
     fn expression<V: PartialEq, T>(
         &mut self,
         path: &str,
         src: &str,
         quantities: usize,
         var: impl Fn(Option<(usize, usize)>) -> V,
+        reaction: Option<fn(usize) -> V>,
         build: impl FnOnce(Expr, Vec<V>) -> Result<T, String>,
     ) -> Option<T> {
         let spec = self.spec;
         let known = self.body_names().join(", ");
-        let broken: Vec<&str> = self.broken.iter().filter_map(|b| b.strip_prefix("bodies.")).collect();
+        let all_broken = self.broken;
+        let broken = |section: &str| -> Vec<&str> {
+            all_broken.iter().filter_map(|b| b.strip_prefix(section)?.strip_prefix('.')).collect()
+        };
+        let (broken_bodies, broken_joints, broken_drivers) = (broken("bodies"), broken("joints"), broken("drivers"));
+        let names = |section: Vec<&str>, broken: &[&str]| {
+            section.into_iter().chain(broken.iter().copied()).collect::<Vec<_>>().join(", ")
+        };
+        let joints = names(spec.joints.keys().map(String::as_str).collect(), &broken_joints);
+        let drivers = names(spec.drivers.keys().map(String::as_str).collect(), &broken_drivers);
         let quantities = &QUANTITIES[..quantities];
+        let hint = || {
+            let mut q: Vec<String> = quantities.iter().map(|q| format!("<body>.{q}")).collect();
+            if reaction.is_none() {
+                return format!("expected {} or t, with a body among: {known}", q.join(", "));
+            }
+            q.extend(REACTION_QUANTITIES.iter().map(|q| format!("<joint>.{q}")));
+            q.push("<driver>.effort".into());
+            format!(
+                "expected {} or t, with a body among: {known}; a joint among: {joints}; a driver among: {drivers}",
+                q.join(", ")
+            )
+        };
+        // The entry in the reactions row of `<owner>.<quantity>`: `Some(None)` for a joint or
+        // driver that could not be read (its own problem is reported), `None` when the name is
+        // not a reaction or effort.
+        let reaction_of = |owner: &str, quantity: &str| -> Option<Option<usize>> {
+            let component = REACTION_QUANTITIES.iter().position(|q| *q == quantity);
+            if let Some(j) = spec.joints.get_index_of(owner) {
+                return component.map(|c| Some(3 * j + c));
+            }
+            if let Some(d) = spec.drivers.get_index_of(owner) {
+                return (quantity == "effort").then_some(Some(3 * spec.joints.len() + d));
+            }
+            let broken = (component.is_some() && broken_joints.contains(&owner))
+                || (quantity == "effort" && broken_drivers.contains(&owner));
+            broken.then_some(None)
+        };
         let mut uses_broken = false;
         let mut vars: Vec<V> = Vec::new();
         let mut resolve = |name: &str| -> Result<usize, String> {
             let v = if name == "t" {
                 var(None)
             } else {
-                let hint = || {
-                    let q: Vec<String> = quantities.iter().map(|q| format!("<body>.{q}")).collect();
-                    format!("expected {} or t, with a body among: {known}", q.join(", "))
-                };
                 let (b, c) = name.split_once('.').ok_or_else(hint)?;
-                let at = quantities.iter().position(|q| *q == c).ok_or_else(hint)?;
-                // A body that exists but could not be read: its own problem is reported.
-                let k = match spec.bodies.get_index_of(b) {
-                    Some(k) => k,
-                    None if broken.contains(&b) => {
+                let row = reaction.and_then(|r| Some((r, reaction_of(b, c)?)));
+                match (spec.bodies.get_index_of(b), row) {
+                    (None, Some((r, Some(k)))) => r(k),
+                    (None, Some((r, None))) => {
                         uses_broken = true;
-                        0
+                        r(0)
                     }
-                    None => return Err(hint()),
-                };
-                var(Some((3 * k + at % 3, at / 3)))
+                    (k, _) => {
+                        let at = quantities.iter().position(|q| *q == c).ok_or_else(hint)?;
+                        // A body that exists but could not be read: its own problem is reported.
+                        let k = match k {
+                            Some(k) => k,
+                            None if broken_bodies.contains(&b) => {
+                                uses_broken = true;
+                                0
+                            }
+                            None => return Err(hint()),
+                        };
+                        var(Some((3 * k + at % 3, at / 3)))
+                    }
+                }
             };
             Ok(match vars.iter().position(|u| *u == v) {
                 Some(s) => s,
@@ -826,13 +877,145 @@ impl Cx<'_> {
         })
     }
 
-    fn measure(&mut self, path: &str, m: &MeasureSpec) -> Option<MeasureKind> {
+    /// A measure; `joints`: the joints compiled, whose pins a transmission angle takes.
+    fn measure(&mut self, path: &str, m: &MeasureSpec, joints: &[Element]) -> Option<MeasureKind> {
         match m {
             MeasureSpec::Expression(src) => self.state_expr(path, src, true).map(MeasureKind::Expression),
             MeasureSpec::Point(PointMeasure { body, point, component }) => {
                 let b = self.moving(&format!("{path}.body"), body);
                 let s = self.point(&format!("{path}.point"), body, point);
                 Some(MeasureKind::Point { body: b?, s: s?, component: *component })
+            }
+            MeasureSpec::Standard(StandardMeasure::TransmissionAngle(TransmissionAngleMeasure {
+                joint,
+                coupler_joint,
+                rocker_joint,
+            })) => {
+                let b = self.pin(&format!("{path}.joint"), joint, joints);
+                let c = self.pin(&format!("{path}.coupler_joint"), coupler_joint, joints);
+                let r = self.pin(&format!("{path}.rocker_joint"), rocker_joint, joints);
+                let (b, c, r) = (b?, c?, r?);
+                let coupler = self.link(&format!("{path}.coupler_joint"), "coupler", (joint, &b), (coupler_joint, &c));
+                let rocker = self.link(&format!("{path}.rocker_joint"), "rocker", (joint, &b), (rocker_joint, &r));
+                let (coupler, rocker) = (coupler?, rocker?);
+                if coupler.0 == rocker.0 {
+                    let body = self.body_name(coupler.0);
+                    self.problem(
+                        format!("{path}.rocker_joint"),
+                        format!("'{rocker_joint}' is a pin of '{body}', the coupler (the body '{joint}' shares with '{coupler_joint}'); expected a pin of the other body of '{joint}'"),
+                    );
+                    return None;
+                }
+                Some(MeasureKind::TransmissionAngle { coupler, rocker })
+            }
+            MeasureSpec::Standard(StandardMeasure::VelocityRatio(VelocityRatioMeasure { input, output })) => {
+                let i = self.moving(&format!("{path}.input"), input);
+                let o = self.moving(&format!("{path}.output"), output);
+                Some(MeasureKind::VelocityRatio { input: i? + 2, output: o? + 2 })
+            }
+            MeasureSpec::Standard(StandardMeasure::MechanicalAdvantage(MechanicalAdvantageMeasure {
+                input,
+                output,
+            })) => {
+                let i = self.effort(&format!("{path}.input"), input);
+                let o = self.effort(&format!("{path}.output"), output);
+                Some(MeasureKind::MechanicalAdvantage { input: i?, output: o? })
+            }
+        }
+    }
+
+    /// The name of body `b` (`ground` for ground).
+    fn body_name(&self, b: BodyIx) -> &str {
+        b.0.map_or("ground", |k| self.spec.bodies.get_index(k / 3).map_or("ground", |(n, _)| n.as_str()))
+    }
+
+    /// The revolute joint `name` at `path` as its [`Sketch`] (its two bodies and their points);
+    /// `None` with a problem when there is no such joint or it is not a pin (nothing more when
+    /// the joint's own entry has a problem, reported there).
+    fn pin(&mut self, path: &str, name: &str, joints: &[Element]) -> Option<Sketch> {
+        let Some(spec) = self.spec.joints.get(name) else {
+            if !self.broken.iter().any(|b| b.strip_prefix("joints.") == Some(name)) {
+                let known: Vec<&str> = self.spec.joints.keys().map(String::as_str).collect();
+                self.problem(path, format!("unknown joint '{name}'; expected one of: {}", known.join(", ")));
+            }
+            return None;
+        };
+        let sketch = joints.iter().find(|j| j.name == name)?.constraint.sketch();
+        match sketch {
+            Some(s @ Sketch { shape: Shape::Pin, .. }) => Some(s),
+            _ => {
+                self.problem(path, format!("'{name}' is a {} joint; expected a revolute joint (a pin)", spec.name()));
+                None
+            }
+        }
+    }
+
+    /// One of the two links whose lines make a transmission angle (`role`: coupler or rocker):
+    /// the body the pin `common` shares with the pin `other` (named at `path`), and the line from
+    /// `common` to `other` in its frame.
+    fn link(
+        &mut self,
+        path: &str,
+        role: &str,
+        (common, b): (&str, &Sketch),
+        (other, o): (&str, &Sketch),
+    ) -> Option<(BodyIx, [f64; 2])> {
+        let ends = |s: &Sketch| [(s.i, s.p), (s.j, s.q)];
+        let shared: Vec<(BodyIx, [f64; 2], [f64; 2])> = ends(b)
+            .into_iter()
+            .flat_map(|(bb, sb)| ends(o).into_iter().filter(move |(ob, _)| *ob == bb).map(move |(_, so)| (bb, sb, so)))
+            .collect();
+        let bodies = |s: &Sketch| format!("'{}' and '{}'", self.body_name(s.i), self.body_name(s.j));
+        let [(body, from, to)] = shared[..] else {
+            let why = if shared.is_empty() { "shares no body with" } else { "joins the same two bodies as" };
+            let message = format!(
+                "'{other}' (between {}) {why} '{common}' (between {}); expected the {role}'s other pin, on one of the bodies of '{common}'",
+                bodies(o),
+                bodies(b)
+            );
+            self.problem(path, message);
+            return None;
+        };
+        let line = [to[0] - from[0], to[1] - from[1]];
+        // Pins closer than 1e-12 m (the round-off of coordinates of a few metres) give the line
+        // no direction.
+        if line[0].hypot(line[1]) < 1e-12 {
+            let body = self.body_name(body).to_string();
+            self.problem(path, format!("'{other}' and '{common}' are at the same point of '{body}': the {role}'s line is undefined; expected its pin at the other end of the {role}"));
+            return None;
+        }
+        Some((body, line))
+    }
+
+    /// The input or output of a mechanical advantage at `path`: a driver (its effort) or a
+    /// `torque` force (its torque).
+    fn effort(&mut self, path: &str, name: &str) -> Option<Effort> {
+        let spec = self.spec;
+        if let Some(d) = spec.drivers.get_index_of(name) {
+            return Some(Effort::Driver { slot: 3 * spec.joints.len() + d });
+        }
+        match spec.forces.get_full(name) {
+            Some((k, _, ForceSpec::Torque(TorqueSpec { torque, .. }))) => {
+                // The torque is compiled again over global coordinates; its problems are the
+                // force's, reported at its own entry.
+                let before = self.problems.len();
+                let torque = self.load(&format!("forces.{name}.torque"), torque);
+                self.problems.truncate(before);
+                Some(Effort::Torque { force: k, torque: torque? })
+            }
+            Some((_, _, other)) => {
+                self.problem(path, format!("'{name}' is a {} force; expected a driver or a torque force (for another load, write an expression of the result columns)", other.name()));
+                None
+            }
+            None if self.broken.iter().any(|b| [format!("drivers.{name}"), format!("forces.{name}")].contains(b)) => {
+                None
+            }
+            None => {
+                let torques =
+                    spec.forces.iter().filter(|(_, f)| matches!(f, ForceSpec::Torque(..))).map(|(n, _)| n.as_str());
+                let known: Vec<&str> = spec.drivers.keys().map(String::as_str).chain(torques).collect();
+                self.problem(path, format!("unknown driver or torque '{name}'; expected one of: {}", known.join(", ")));
+                None
             }
         }
     }

@@ -17,12 +17,16 @@ pub use drawing::{BodyDrawing, Drawing, JointDrawing};
 pub use parse::{parse_partial, parse_partial_with, parse_spec, Parsed};
 pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
 
-use crate::constraints::Constraint;
-use crate::error::{Error, Result};
-use crate::forces::{Force, StateExpr};
+use crate::constraints::{BodyIx, Constraint, Frame};
+use crate::error::{Error, Problem, Result};
+use crate::forces::{Force, Load, StateExpr};
 use indexmap::IndexMap;
 use spec::AnalysisKind;
 use std::path::{Path, PathBuf};
+
+/// The reaction columns of each joint, `<joint>.<quantity>`: the force on its first body in the
+/// global frame, N, and the torque, N m. Measures read them by these names.
+pub const REACTION_QUANTITIES: [&str; 3] = ["fx", "fy", "torque"];
 
 /// A moving body.
 #[derive(Debug, Clone)]
@@ -102,6 +106,84 @@ impl Model {
     }
 }
 
+impl Model {
+    /// The name of entry `k` of the reactions row: `<joint>.fx`, `.fy`, `.torque` or
+    /// `<driver>.effort`.
+    pub fn reaction_name(&self, k: usize) -> String {
+        match self.joints.get(k / 3) {
+            Some(j) => format!("{}.{}", j.name, REACTION_QUANTITIES[k % 3]),
+            None => format!("{}.effort", self.drivers[k - 3 * self.joints.len()].name),
+        }
+    }
+
+    /// The measures `analysis` cannot compute, each a problem at the measure (or its field):
+    /// a reaction, an effort or a mechanical advantage in an analysis with no reactions
+    /// (`kinematic`, `modes`); the effort of a driver it does not hold; a torque it does not
+    /// apply; a velocity ratio at rest (a `static` analysis, a `modes` one about an equilibrium).
+    pub fn unavailable_measures(&self, analysis: &Analysis) -> Vec<Problem> {
+        let mut problems = Vec::new();
+        let drivers = 3 * self.joints.len();
+        let named = |names: Vec<&str>| if names.is_empty() { "none".to_string() } else { names.join(", ") };
+        for m in &self.measures {
+            let path = format!("measures.{}", m.name);
+            let (kind, name) = (analysis.kind, &analysis.name);
+            let reads = m.reads();
+            if matches!(kind, AnalysisKind::Kinematic | AnalysisKind::Modes) && !reads.is_empty() {
+                let what =
+                    match reads.iter().find_map(|(_, r)| if let Reads::Reaction(k) = r { Some(*k) } else { None }) {
+                        Some(k) => format!("it reads {}, a joint reaction or driver effort", self.reaction_name(k)),
+                        None => "a mechanical advantage needs the loads".to_string(),
+                    };
+                problems.push(Problem::new(
+                    path,
+                    format!(
+                        "{what}, which the {} analysis '{name}' does not compute; expected an inverse, static or dynamic analysis (an inverse analysis with the same drivers has the same motion, and the reactions)",
+                        kind.name()
+                    ),
+                ));
+                continue;
+            }
+            let at_rest = kind == AnalysisKind::Static
+                || (kind == AnalysisKind::Modes && analysis.about == spec::LinearisePoint::Equilibrium);
+            if at_rest && matches!(m.kind, MeasureKind::VelocityRatio { .. }) {
+                problems.push(Problem::new(
+                    path,
+                    format!("a velocity ratio needs velocities, and the {} analysis '{name}' is at rest (every velocity 0); expected a kinematic, inverse or dynamic analysis", kind.name()),
+                ));
+                continue;
+            }
+            for (field, read) in reads {
+                let at = format!("{path}{field}");
+                match read {
+                    Reads::Reaction(k) if k >= drivers && !analysis.drivers.contains(&(k - drivers)) => {
+                        let active = named(analysis.drivers.iter().map(|&d| self.drivers[d].name.as_str()).collect());
+                        problems.push(Problem::new(
+                            at,
+                            format!(
+                                "driver '{}' is not active in the analysis '{name}' (its drivers: {active}), so it has no {}; expected the effort of one of its drivers",
+                                self.drivers[k - drivers].name,
+                                self.reaction_name(k)
+                            ),
+                        ));
+                    }
+                    Reads::Force(f) if !analysis.forces.contains(&f) => {
+                        let active = named(analysis.forces.iter().map(|&k| self.forces[k].name.as_str()).collect());
+                        problems.push(Problem::new(
+                            at,
+                            format!(
+                                "force '{}' does not load the analysis '{name}' (its forces: {active}); expected one of its forces or drivers",
+                                self.forces[f].name
+                            ),
+                        ));
+                    }
+                    _ => {}
+                }
+            }
+        }
+        problems
+    }
+}
+
 impl ForceElement {
     /// The element's generalised force at `(q, qdot, t)`, on its columns.
     fn generalised(&self, q: &[f64], qdot: &[f64], t: f64) -> Vec<f64> {
@@ -153,7 +235,8 @@ pub struct Measure {
 /// How a measure is computed.
 #[derive(Debug)]
 pub enum MeasureKind {
-    /// An expression of time, positions, velocities and accelerations.
+    /// An expression of time, positions, velocities, accelerations, and entries of the
+    /// reactions row (joints' reactions and drivers' efforts).
     Expression(StateExpr),
     /// A component of a body point (global frame).
     Point {
@@ -164,21 +247,79 @@ pub enum MeasureKind {
         /// Which component.
         component: spec::PointComponent,
     },
+    /// The acute angle between two lines, each fixed in a body: the coupler's and the rocker's,
+    /// each `(body, direction in its frame from the common pin to the body's other pin)`.
+    TransmissionAngle {
+        /// The coupler's line.
+        coupler: (BodyIx, [f64; 2]),
+        /// The rocker's line.
+        rocker: (BodyIx, [f64; 2]),
+    },
+    /// `omega_output / omega_input`.
+    VelocityRatio {
+        /// Index in `q` of the input body's `phi`.
+        input: usize,
+        /// Index in `q` of the output body's `phi`.
+        output: usize,
+    },
+    /// `-output / input`, each applied to the mechanism.
+    MechanicalAdvantage {
+        /// The effort at the input.
+        input: Effort,
+        /// The load at the output.
+        output: Effort,
+    },
+}
+
+/// A torque or force applied to the mechanism, as a mechanical advantage reads it.
+#[derive(Debug)]
+pub enum Effort {
+    /// A driver's effort: entry `slot` of the reactions row.
+    Driver {
+        /// Its entry in the reactions row.
+        slot: usize,
+    },
+    /// A `torque` force's torque.
+    Torque {
+        /// Index into [`Model::forces`].
+        force: usize,
+        /// The torque, over global coordinates.
+        torque: Load,
+    },
+}
+
+impl Effort {
+    fn value(&self, q: &[f64], qdot: &[f64], reactions: &[f64], t: f64) -> f64 {
+        match self {
+            Effort::Driver { slot } => reactions.get(*slot).copied().unwrap_or(f64::NAN),
+            Effort::Torque { torque, .. } => torque.value(q, qdot, t),
+        }
+    }
+}
+
+/// What a measure reads besides the motion, at the field that names it.
+enum Reads {
+    /// Entry `k` of the reactions row.
+    Reaction(usize),
+    /// Force `k` of [`Model::forces`].
+    Force(usize),
 }
 
 impl Measure {
-    /// Its expression's source for a message (empty for a point measure).
+    /// Its expression's source for a message (empty for the other kinds).
     pub fn expression(&self) -> &str {
         match &self.kind {
             MeasureKind::Expression(e) => e.source(),
-            MeasureKind::Point { .. } => "",
+            _ => "",
         }
     }
 
-    /// The value at `(q, qdot, qddot, t)`, each `(n)`.
-    pub fn value(&self, q: &[f64], qdot: &[f64], qddot: &[f64], t: f64) -> f64 {
+    /// The value at `(q, qdot, qddot, t)`, each `(n)`, with `reactions` the reactions row: every
+    /// joint's `fx, fy, torque`, then every driver's effort, in model order (empty in an analysis
+    /// that has none: [`Model::unavailable_measures`] refuses a measure that reads it there).
+    pub fn value(&self, q: &[f64], qdot: &[f64], qddot: &[f64], reactions: &[f64], t: f64) -> f64 {
         match &self.kind {
-            MeasureKind::Expression(e) => e.eval_global(q, qdot, qddot, t),
+            MeasureKind::Expression(e) => e.eval_global(q, qdot, qddot, reactions, t),
             MeasureKind::Point { body: b, s, component } => {
                 use spec::PointComponent as C;
                 let (sn, c) = q[b + 2].sin_cos();
@@ -193,6 +334,33 @@ impl Measure {
                     C::Ay => qddot[b + 1] + al * a[0] - w * w * a[1],
                 }
             }
+            MeasureKind::TransmissionAngle { coupler: (c, u), rocker: (r, v) } => {
+                let (u, v) = (Frame::of_slice(*c, q).rotate(*u), Frame::of_slice(*r, q).rotate(*v));
+                // The angle between the lines, in [0, pi], from both its sine and cosine (accurate
+                // near 0 and pi, where acos of the cosine is not), folded to the acute one.
+                let gamma = (u[0] * v[1] - u[1] * v[0]).abs().atan2(u[0] * v[0] + u[1] * v[1]);
+                gamma.min(std::f64::consts::PI - gamma)
+            }
+            MeasureKind::VelocityRatio { input, output } => qdot[*output] / qdot[*input],
+            MeasureKind::MechanicalAdvantage { input, output } => {
+                -output.value(q, qdot, reactions, t) / input.value(q, qdot, reactions, t)
+            }
+        }
+    }
+
+    /// What it reads besides the motion, each with the field of its entry that names it (`""`:
+    /// the entry itself).
+    fn reads(&self) -> Vec<(&'static str, Reads)> {
+        let effort = |field, e: &Effort| match e {
+            Effort::Driver { slot } => (field, Reads::Reaction(*slot)),
+            Effort::Torque { force, .. } => (field, Reads::Force(*force)),
+        };
+        match &self.kind {
+            MeasureKind::Expression(e) => e.reactions().map(|k| ("", Reads::Reaction(k))).collect(),
+            MeasureKind::MechanicalAdvantage { input, output } => {
+                vec![effort(".input", input), effort(".output", output)]
+            }
+            _ => Vec::new(),
         }
     }
 }

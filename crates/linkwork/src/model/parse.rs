@@ -7,7 +7,7 @@
 use super::params;
 use super::spec::{
     AnalysisSpec, BodySpec, DriverSpec, ForceSpec, GroundSpec, JointSpec, MeasureSpec, ModelSpec, PointMeasure,
-    TableSpec, Tagged,
+    StandardMeasure, TableSpec, Tagged,
 };
 use crate::error::Problem;
 use indexmap::IndexMap;
@@ -185,17 +185,21 @@ fn entry<T: DeserializeOwned>(path: &str, v: &Value, problems: &mut Vec<Problem>
     }
 }
 
-/// A measure: an expression (a string) or a point component (a mapping), read by hand so that a
-/// bad field keeps its path.
+/// A measure: an expression (a string), a standard quantity (a mapping with a `type`) or a point
+/// component (a mapping without one), read by hand so that a bad field keeps its path.
 fn measure(path: &str, v: &Value, problems: &mut Vec<Problem>) -> Option<MeasureSpec> {
     match v {
         Value::String(s) => Some(MeasureSpec::Expression(s.clone())),
+        Value::Mapping(m) if m.contains_key("type") => {
+            tagged::<StandardMeasure>()(path, v, problems).map(MeasureSpec::Standard)
+        }
         Value::Mapping(_) => entry::<PointMeasure>(path, v, problems).map(MeasureSpec::Point),
         other => {
             problems.push(Problem::new(
                 path,
                 format!(
-                    "expected an expression (a string) or a mapping with body, point and component, found {}",
+                    "expected an expression (a string), a mapping with body, point and component, or a mapping with a `type` ({}), found {}",
+                    StandardMeasure::NAMES.join(", "),
                     describe(other)
                 ),
             ));

@@ -279,7 +279,9 @@ pub struct RotationalSpringDamperSpec {
 }
 
 /// A named output: an expression of time and state (`"slider_d.x + 4"`; besides positions and
-/// velocities it may use accelerations `<body>.ax, .ay, .alpha`), or a component of a body point.
+/// velocities it may use accelerations `<body>.ax, .ay, .alpha`, and where the analysis has them
+/// the reactions `<joint>.fx, .fy, .torque` and efforts `<driver>.effort`), a component of a body
+/// point, or a standard quantity of mechanism design named by its `type`.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
 pub enum MeasureSpec {
@@ -287,6 +289,65 @@ pub enum MeasureSpec {
     Expression(String),
     /// A component of a point of a body.
     Point(PointMeasure),
+    /// A standard quantity: transmission angle, velocity ratio, mechanical advantage.
+    Standard(StandardMeasure),
+}
+
+named! {
+    tagged
+    /// The standard quantities of mechanism design, each named by its `type`
+    /// (docs/model-format.md, "Measures").
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(tag = "type")]
+    pub enum StandardMeasure {
+        /// The transmission angle `mu` at a pin between a coupler and an output link (rocker):
+        /// the acute angle between the coupler's line and the rocker's line, in `[0, pi/2]` rad,
+        /// as R. L. Norton defines it (Design of Machinery: `|theta3 - theta4|`, folded to
+        /// `pi - mu` when obtuse).
+        "transmission_angle" => TransmissionAngle(TransmissionAngleMeasure),
+        /// `omega_output / omega_input`, the angular velocity ratio of two bodies.
+        "velocity_ratio" => VelocityRatio(VelocityRatioMeasure),
+        /// `-F_output / F_input`: the load at the output over the effort at the input, each the
+        /// torque (or force) applied to the mechanism there; `omega_input / omega_output` in a
+        /// frictionless, massless mechanism.
+        "mechanical_advantage" => MechanicalAdvantage(MechanicalAdvantageMeasure),
+    }
+}
+
+/// The transmission angle at the pin `joint` between a coupler and a rocker: the coupler's line
+/// runs from `joint` to its other pin `coupler_joint`, the rocker's from `joint` to its other pin
+/// `rocker_joint` (its pivot). All three are revolute joints; the coupler is the body `joint`
+/// shares with `coupler_joint`, the rocker the body it shares with `rocker_joint`.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TransmissionAngleMeasure {
+    /// The revolute joint between the coupler and the rocker.
+    pub joint: String,
+    /// The coupler's other revolute joint (to the crank, the input).
+    pub coupler_joint: String,
+    /// The rocker's other revolute joint (its pivot, usually on ground).
+    pub rocker_joint: String,
+}
+
+/// `omega_output / omega_input`, rad/s over rad/s.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct VelocityRatioMeasure {
+    /// The input body (a crank).
+    pub input: String,
+    /// The output body (a rocker).
+    pub output: String,
+}
+
+/// `-F_output / F_input`: each the name of a driver (its effort) or of a `torque` force (its
+/// torque), the torque or force applied to the mechanism at the input and at the output.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MechanicalAdvantageMeasure {
+    /// The input: a driver or a `torque` force.
+    pub input: String,
+    /// The output (the load): a driver or a `torque` force.
+    pub output: String,
 }
 
 /// A tabulated function `y(x)`, interpolated by a piecewise cubic with exact derivatives

@@ -245,9 +245,10 @@ impl<'m> Dae<'m> {
 
     /// `(q, qdot, t) => Q`, `out: (n)`: gravity plus every active force.
     /// Why a state's derived values are not finite: the first active force, then the first
-    /// measure, that evaluates to a non-finite number at `(q, qdot, qddot, t)`; else the
-    /// equations of motion, with `value`, the first non-finite number found.
-    pub fn non_finite(&self, q: &[f64], qdot: &[f64], qddot: &[f64], t: f64, value: f64) -> Error {
+    /// measure, that evaluates to a non-finite number at `(q, qdot, qddot, t)` with the
+    /// reactions row `reactions` ([`crate::model::Measure::value`]); else the equations of
+    /// motion, with `value`, the first non-finite number found.
+    pub fn non_finite(&self, q: &[f64], qdot: &[f64], qddot: &[f64], reactions: &[f64], t: f64, value: f64) -> Error {
         let error =
             |element: String, expression: String, value: f64| Error::NonFinite { time: t, element, expression, value };
         for f in &self.forces {
@@ -256,7 +257,7 @@ impl<'m> Dae<'m> {
             }
         }
         for m in &self.model.measures {
-            let v = m.value(q, qdot, qddot, t);
+            let v = m.value(q, qdot, qddot, reactions, t);
             if !v.is_finite() {
                 return error(format!("measures.{}", m.name), m.expression().to_string(), v);
             }

@@ -29,15 +29,19 @@ pub struct Output {
     h: f64,
     /// The results.
     pub results: Results,
+    /// Indices into the model's drivers of the active ones.
+    drivers: Vec<usize>,
     /// `(t, W)` at the last two accepted steps, and the power at the last.
     work_prev: (f64, f64),
     work_last: (f64, f64),
     power_last: f64,
-    /// Scratch: `(n + m)` solution, two `(m)` rows, reactions row, output row.
+    /// Scratch: `(n + m)` solution, two `(m)` rows, reactions row, the reactions row measures
+    /// read, output row.
     sol: Vec<f64>,
     rows: Vec<f64>,
     rows2: Vec<f64>,
     react: Vec<f64>,
+    reactions: Vec<f64>,
     row: Vec<f64>,
     /// Largest residuals at output times.
     pub max_position_residual: f64,
@@ -61,6 +65,7 @@ impl Output {
             next: 0,
             h,
             results,
+            drivers: analysis.drivers.clone(),
             work_prev: (t0, 0.0),
             work_last: (t0, 0.0),
             power_last: 0.0,
@@ -68,6 +73,7 @@ impl Output {
             rows: vec![0.0; m],
             rows2: vec![0.0; m],
             react: Vec::new(),
+            reactions: Vec::new(),
             row: Vec::new(),
             max_position_residual: 0.0,
             max_velocity_residual: 0.0,
@@ -124,6 +130,7 @@ impl Output {
         dae.accelerations(q, qdot, t, &mut self.sol).map_err(|e| factor_error(e, t))?;
         let (qddot, lambda) = self.sol.split_at(n);
         dae.reactions(q, lambda, &mut self.react);
+        crate::analysis::measure_reactions(dae.model, &self.drivers, &self.react, &mut self.reactions);
         let position_residual = dae.phi.iter().fold(0.0f64, |a, x| a.max(x.abs()));
         dae.jv(qdot, &mut self.rows);
         dae.nu(q, t, &mut self.rows2);
@@ -136,12 +143,12 @@ impl Output {
         self.row.extend_from_slice(&self.react);
         self.row.extend([kinetic, potential, self.work_at(t), position_residual, velocity_residual]);
         for m in &dae.model.measures {
-            self.row.push(m.value(q, qdot, qddot, t));
+            self.row.push(m.value(q, qdot, qddot, &self.reactions, t));
         }
         // No non-finite number leaves as a result: the row's own check finds the first, and the
         // analysis stops naming the element that gave it rather than the column.
         self.results.push(t, q, qdot, qddot, &self.row).map_err(|e| match e {
-            Error::NonFinite { value, .. } => dae.non_finite(q, qdot, qddot, t, value),
+            Error::NonFinite { value, .. } => dae.non_finite(q, qdot, qddot, &self.reactions, t, value),
             other => other,
         })?;
         self.next += 1;
