@@ -659,7 +659,7 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
                     st.dae.jacobian_dense(st.jac.as_mut());
                     indeterminate = Some(element_names(&st.dae.sys, &indeterminate_rows(st.jac.as_ref())));
                 }
-                st.dae.reactions(&eq.q, &eq.lambda, &mut react);
+                st.dae.reactions(&eq.q, &zero, &eq.lambda, &mut react);
                 row.clear();
                 row.extend_from_slice(&react);
                 row.push(st.dae.potential_energy(&eq.q));

@@ -16,7 +16,7 @@ pub use drawing::{BodyDrawing, Drawing, JointDrawing};
 pub use parse::{parse_partial, parse_partial_with, parse_spec, Parsed};
 pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
 
-use crate::constraints::Constraint;
+use crate::constraints::{Constraint, Friction};
 use crate::error::{Error, Result};
 use crate::forces::{Force, StateExpr};
 use indexmap::IndexMap;
@@ -53,6 +53,8 @@ pub struct Element {
     pub kind: &'static str,
     /// The equations.
     pub constraint: Box<dyn Constraint>,
+    /// Coulomb friction (revolute and translational joints with a `friction:` mapping).
+    pub friction: Option<Friction>,
 }
 
 /// A named applied force or force element.

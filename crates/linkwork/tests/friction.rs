@@ -1,0 +1,241 @@
+//! Joint friction (docs/model-format.md, "Joint friction") against independent solutions: the
+//! inverse analysis of a slider-crank against its free-body diagrams solved by hand, and the
+//! dynamics of a block on an incline against its closed forms.
+
+mod common;
+
+use common::{col, example, example_text, patch};
+use linkwork::{Error, Model, Results};
+
+/// The example's friction: pins of radius 10 mm at `mu = 0.1`, a 50 mm block at `mu = 0.15`, the
+/// default transition velocity; the pump's damping, N s/m.
+const PIN: (f64, f64) = (0.1, 0.01);
+const GUIDE: (f64, f64) = (0.15, 0.05);
+const V_S: f64 = 1e-3;
+const PUMP: f64 = 200.0;
+
+/// `a x b`.
+fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+/// A body's pose, velocities and accelerations at output `k`, from the results.
+struct Body {
+    r: [f64; 2],
+    phi: f64,
+    v: [f64; 2],
+    omega: f64,
+    a: [f64; 2],
+    alpha: f64,
+}
+
+impl Body {
+    fn at(r: &Results, name: &str, k: usize) -> Body {
+        let c = |q: &str| col(r, &format!("{name}.{q}"))[k];
+        Body {
+            r: [c("x"), c("y")],
+            phi: c("phi"),
+            v: [c("vx"), c("vy")],
+            omega: c("omega"),
+            a: [c("ax"), c("ay")],
+            alpha: c("alpha"),
+        }
+    }
+    /// The global position of body point `s`.
+    fn point(&self, s: [f64; 2]) -> [f64; 2] {
+        let (sn, cs) = self.phi.sin_cos();
+        [self.r[0] + cs * s[0] - sn * s[1], self.r[1] + sn * s[0] + cs * s[1]]
+    }
+}
+
+/// What the free-body diagrams give at one output time: the motor torque, the friction of `O`,
+/// `A`, `B` (on their first bodies, N m) and of the guide (on ground, N), and the iterations.
+struct Hand {
+    torque: f64,
+    friction: [f64; 4],
+    iterations: usize,
+}
+
+/// The slider-crank's Newton-Euler equations, body by body, with the friction of each joint, in the
+/// order that makes each step explicit (slider along the guide, the rod's moment about `A`, the
+/// slider across the guide, the rod's and the crank's forces, the crank's moment), iterated on the
+/// friction (which depends on the forces found) until it changes by less than `1e-13` N. An
+/// independent formulation: no multipliers, no constraint Jacobian, none of the engine's reaction
+/// or friction code. Masses and geometry as examples/slider_crank_friction.yaml; `mu` scales
+/// every coefficient (0: no friction).
+fn free_bodies(r: &Results, k: usize, mu: f64) -> Hand {
+    let (m1, i1, m2, i2, m3, i3) = (1.0, 0.001, 2.0, 0.015, 1.0, 0.001);
+    let g = [0.0, -9.81];
+    let (crank, rod, slider) = (Body::at(r, "crank", k), Body::at(r, "rod", k), Body::at(r, "slider", k));
+    let (r_o, r_a, r_b) = (crank.point([-0.05, 0.0]), crank.point([0.05, 0.0]), rod.point([0.15, 0.0]));
+    let (mu_pin, radius) = (mu * PIN.0, PIN.1);
+    let (mu_guide, length) = (mu * GUIDE.0, GUIDE.1);
+    let pin = |rate: f64, force: [f64; 2]| -mu_pin * (radius * rate / V_S).tanh() * radius * force[0].hypot(force[1]);
+    let (mut t_o, mut t_a, mut t_b, mut f_guide) = (0.0, 0.0, 0.0, 0.0);
+    for iterations in 1..=100 {
+        // The slider: pin B's force on it (fb), the guide's normal force (n) and couple (m_s) about
+        // its centre, the guide's friction on it (-f_guide), the pump, gravity.
+        let pump = -PUMP * slider.v[0];
+        let fb_x = m3 * slider.a[0] + f_guide - pump;
+        let m_s = i3 * slider.alpha + t_b;
+        // The rod about A: pin B's force on it is -fb, pin A's goes through A.
+        let d = [r_b[0] - r_a[0], r_b[1] - r_a[1]];
+        let lever = [rod.r[0] - r_a[0], rod.r[1] - r_a[1]];
+        let inertia = [m2 * rod.a[0] - m2 * g[0], m2 * rod.a[1] - m2 * g[1]];
+        // I2 alpha2 = d x (-fb) + lever x (m2 g) + t_b - t_a, taken about A with the inertia force.
+        let rhs = i2 * rod.alpha + cross(lever, inertia) - t_b + t_a;
+        let fr_x = -fb_x;
+        let fr_y = (rhs + d[1] * fr_x) / d[0];
+        let f_rod_b = [fr_x, fr_y];
+        let n = m3 * slider.a[1] + fr_y - m3 * g[1];
+        let f_rod_a = [inertia[0] - f_rod_b[0], inertia[1] - f_rod_b[1]];
+        let f_o = [m1 * crank.a[0] - m1 * g[0] + f_rod_a[0], m1 * crank.a[1] - m1 * g[1] + f_rod_a[1]];
+        let arm_a = [r_a[0] - crank.r[0], r_a[1] - crank.r[1]];
+        let arm_o = [r_o[0] - crank.r[0], r_o[1] - crank.r[1]];
+        let torque = i1 * crank.alpha + cross(arm_a, f_rod_a) - cross(arm_o, f_o) - t_a - t_o;
+        let next_o = pin(crank.omega, f_o);
+        let next_a = pin(crank.omega - rod.omega, f_rod_a);
+        let next_b = pin(rod.omega - slider.omega, f_rod_b);
+        let load = n.abs() + m_s.abs() / length;
+        let next_guide = mu_guide * (slider.v[0] / V_S).tanh() * load;
+        let change =
+            [next_o - t_o, next_a - t_a, next_b - t_b, next_guide - f_guide].iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        (t_o, t_a, t_b, f_guide) = (next_o, next_a, next_b, next_guide);
+        // The torque went with the friction before this update, which moved by under 1e-13.
+        if change < 1e-13 {
+            return Hand { torque, friction: [t_o, t_a, t_b, f_guide], iterations };
+        }
+    }
+    panic!("the free-body iteration did not converge at output {k}");
+}
+
+/// `integral(y dt)` over the first `count` outputs by the trapezoidal rule.
+fn integral(t: &[f64], y: impl Fn(usize) -> f64, count: usize) -> f64 {
+    (1..count).map(|k| 0.5 * (t[k] - t[k - 1]) * (y(k) + y(k - 1))).sum()
+}
+
+/// The inverse analysis's motor torque and joint friction against the free-body diagrams at every
+/// output time. Both solve the same equations to `~1e-13` of the loads (the engine's iteration
+/// stops at `1e-10` of the largest multiplier, ~130 N here, so `1.3e-8` N at worst); the inputs
+/// (positions, velocities, accelerations) are the same result columns. Tolerance `1e-7` N or N m:
+/// a lever arm of 0.1 m or more turns `1.3e-8` N into less, with a margin of 5 for the sums; a
+/// wrong sign, lever or reference point of a friction term errs by its whole size, `1e-3` N m or
+/// more. Measured: the largest difference is printed.
+#[test]
+fn slider_crank_inverse_matches_free_body_diagrams() {
+    let model = Model::load(example("slider_crank_friction.yaml")).unwrap();
+    let r = model.run("inverse").unwrap_or_else(|f| panic!("{}", f.error));
+    let names = ["O.friction", "A.friction", "B.friction", "guide.friction"];
+    let (mut worst, mut most_iterations) = (0.0f64, 0);
+    for k in 0..r.len() {
+        let hand = free_bodies(&r, k, 1.0);
+        most_iterations = most_iterations.max(hand.iterations);
+        let mut diff = (col(&r, "motor.effort")[k] - hand.torque).abs();
+        for (name, f) in names.iter().zip(hand.friction) {
+            diff = diff.max((col(&r, name)[k] - f).abs());
+        }
+        worst = worst.max(diff);
+    }
+    println!("largest difference from the free-body diagrams: {worst:.3e} (at most {most_iterations} hand iterations)");
+    assert!(worst < 1e-7, "{worst:e}");
+    // The friction is not negligible: the pins' torques reach 0.01 N m and more, and the guide's
+    // force several newtons, so the comparison above tests them.
+    let peak = |name: &str| col(&r, name).iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    assert!(
+        peak("O.friction") > 1e-2 && peak("guide.friction") > 1.0,
+        "{} {}",
+        peak("O.friction"),
+        peak("guide.friction")
+    );
+}
+
+/// At every output time, the power of the motor, the pump and the friction is the rate of the
+/// kinetic and potential energies: `P_motor + P_pump + P_friction = d(T + V)/dt`, with
+/// `P_friction` from the friction columns and the joints' relative velocities and
+/// `d(T + V)/dt = sum m v . a + I omega alpha - m g . v` from the body columns. A check of each
+/// friction's sign and of what it acts on. Tolerance `1e-8` of the motor's peak power (~100 W):
+/// the multipliers stop at `1e-10` of the largest (~130 N), and each of the six terms carries that
+/// times a velocity of up to 0.6 m/s or 7 rad/s (measured: `1.8e-9` of the peak).
+#[test]
+fn slider_crank_friction_dissipates_what_the_motor_loses() {
+    let (_, r) = common::run("slider_crank_friction.yaml", "inverse");
+    let peak = col(&r, "driver_power").iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let bodies = [("crank", 1.0, 0.001), ("rod", 2.0, 0.015), ("slider", 1.0, 0.001)];
+    let mut worst = 0.0f64;
+    for k in 0..r.len() {
+        let b: Vec<Body> = bodies.iter().map(|(n, _, _)| Body::at(&r, n, k)).collect();
+        let rate: f64 = bodies
+            .iter()
+            .zip(&b)
+            .map(|((_, m, i), b)| m * (b.v[0] * b.a[0] + b.v[1] * b.a[1]) + i * b.omega * b.alpha + m * 9.81 * b.v[1])
+            .sum();
+        let f = |name: &str| col(&r, &format!("{name}.friction"))[k];
+        // Each pair's power: the friction on body i times the velocity of i relative to j.
+        let friction = f("O") * b[0].omega
+            + f("A") * (b[0].omega - b[1].omega)
+            + f("B") * (b[1].omega - b[2].omega)
+            + f("guide") * (0.0 - b[2].v[0]);
+        let balance = col(&r, "driver_power")[k] + col(&r, "applied_power")[k] + friction - rate;
+        worst = worst.max(balance.abs());
+        assert!(friction <= 0.0, "friction gives power {friction} at output {k}");
+    }
+    assert!(worst < 1e-8 * peak, "{worst:e} of {peak}");
+}
+
+/// The example's efficiency over one turn, `-integral(applied_power) / integral(driver_power)`
+/// (its comments give the formula), from the engine's columns and from the free-body diagrams'
+/// torque: the two agree to `1e-9` (the torques agree to `1e-7` N m of ~10 N m, the trapezoidal
+/// rule is the same). Without friction (every `mu` 0, the same run otherwise) the same formula
+/// gives 1 to the trapezoidal rule's error over the turn (`1e-5`: steps of 1 ms on a motion at
+/// 1 rev/s, `h^2 / 12` times the integrand's second derivative, measured 2e-7), so friction's
+/// loss is what lowers it.
+#[test]
+fn slider_crank_efficiency() {
+    let (_, r) = common::run("slider_crank_friction.yaml", "inverse");
+    let t = &r.time;
+    let count = r.len();
+    let (driver, applied) = (col(&r, "driver_power"), col(&r, "applied_power"));
+    let eta = -integral(t, |k| applied[k], count) / integral(t, |k| driver[k], count);
+    let omega = col(&r, "crank.omega");
+    let hand: Vec<f64> = (0..count).map(|k| free_bodies(&r, k, 1.0).torque * omega[k]).collect();
+    let eta_hand = -integral(t, |k| applied[k], count) / integral(t, |k| hand[k], count);
+    println!("efficiency over one turn: {eta:.6} (free-body diagrams: {eta_hand:.6})");
+    assert!((eta - eta_hand).abs() < 1e-9, "{eta} vs {eta_hand}");
+
+    let text = example_text("slider_crank_friction.yaml");
+    assert_eq!(text.matches("{mu: 0.1, ").count() + text.matches("{mu: 0.15, ").count(), 4);
+    let text = text.replace("{mu: 0.1, ", "{mu: 0, ").replace("{mu: 0.15, ", "{mu: 0, ");
+    let free = Model::from_yaml(&text).unwrap().run("inverse").unwrap_or_else(|f| panic!("{}", f.error));
+    let (driver, applied) = (col(&free, "driver_power"), col(&free, "applied_power"));
+    let eta_free = -integral(t, |k| applied[k], count) / integral(t, |k| driver[k], count);
+    println!("without friction: {eta_free:.9}");
+    assert!((eta_free - 1.0).abs() < 1e-5, "{eta_free}");
+    assert!(eta < eta_free - 0.01, "{eta} vs {eta_free}");
+    // The free-body diagrams without friction agree with the run without friction too.
+    let worst = (0..count)
+        .map(|k| (col(&free, "motor.effort")[k] - free_bodies(&free, k, 0.0).torque).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-7, "{worst:e}");
+}
+
+/// A guide with a coefficient that locks the slider (`mu tan(beta) >= 1` with the rod at an angle
+/// `beta` up to `asin(r / L) = 19.5` degrees: `mu = 4` locks from `tan(beta) = 0.25` on): the
+/// iteration on the reactions contracts by about `mu tan(beta)` plus the pins' and the block's
+/// shares, and stops converging on the way to the lock (100 iterations reach the tolerance up to a
+/// contraction of 0.79). The run stops with a friction error that names the guide and the time, and
+/// keeps the results before it; the rod is by then steep enough that its angle alone gives the
+/// guide's friction a gain `mu tan(beta)` above a half.
+#[test]
+fn self_locking_friction_is_named() {
+    let text =
+        patch(&example_text("slider_crank_friction.yaml"), "{mu: 0.15, length: 50 mm}", "{mu: 4, length: 50 mm}");
+    let failure = Model::from_yaml(&text).unwrap().run("inverse").unwrap_err();
+    let message = failure.error.to_string();
+    assert!(matches!(failure.error, Error::Friction { .. }), "{message}");
+    assert!(message.contains("in guide.friction") && message.contains("self-locking"), "{message}");
+    let Error::Friction { time, .. } = failure.error else { unreachable!() };
+    let rows = failure.results.len();
+    assert!(rows > 10 && (failure.results.time[rows - 1] - (time - 0.001)).abs() < 1e-12, "{rows} rows, t = {time}");
+    let beta = col(&failure.results, "rod.phi")[rows - 1];
+    assert!(4.0 * beta.tan().abs() > 0.5, "beta {beta} at t = {time}");
+}
