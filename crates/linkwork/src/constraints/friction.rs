@@ -83,11 +83,6 @@ impl Friction {
         Friction { law, contact: Contact::Slide { i, s_p, u, j, s_q, length } }
     }
 
-    /// The law.
-    pub fn law(&self) -> FrictionLaw {
-        self.law
-    }
-
     /// `(q, qdot, lambda) => (Q_f, value)`: the generalised friction force on the joint's `columns`
     /// (`out: (columns)`, body i's `(x, y, phi)` then body j's, ground left out) and the friction
     /// on body i (the torque of a pin, N m; the force along the axis of a slider, N). `block`: the
