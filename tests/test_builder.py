@@ -157,3 +157,41 @@ def test_the_standard_measures_built_run_as_the_example() -> None:
     with pytest.raises(linkwork.ModelError) as error:
         bad.build()
     assert any(path == "measures.vr.output" and "unknown body 'rockr'" in message for path, message in error.value.problems)
+
+
+def test_a_built_slider_crank_with_friction_runs_as_the_example() -> None:
+    """examples/slider_crank_friction.yaml built with `friction=` on the revolute and translational
+    joints: the inverse analysis gives the file's results, bit for bit, friction columns included;
+    bad friction is refused at its path in the model."""
+    m = linkwork.Mechanism("slider-crank with joint friction", gravity=(0, -9.81))
+    m.parameter("damping", 200)
+    crank = m.body("crank", mass=1.0, inertia=0.001, position=(0.05, 0.001), angle=0.0,
+                   points={"O": (-0.05, 0), "A": (0.05, 0)})
+    rod = m.body("rod", mass=2.0, inertia=0.015, position=(0.25, -0.002), angle=0.01,
+                 points={"A": (-0.15, 0), "B": (0.15, 0)})
+    slider = m.body("slider", mass=1.0, inertia=0.001, position=(0.4, 0.0), angle=0.0)
+    pin: linkwork.PinFriction = {"mu": 0.1, "radius": "10 mm"}
+    m.revolute("O", crank, "ground", point_i="O", point_j=(0, 0), friction=pin)
+    m.revolute("A", crank, rod, point_i="A", point_j="A", friction=pin)
+    m.revolute("B", rod, slider, point_i="B", point_j=(0, 0), friction=pin)
+    m.translational("guide", "ground", slider, point_i=(0, 0), axis_i=(1, 0), point_j=(0, 0), axis_j=(1, 0),
+                    friction={"mu": 0.15, "length": "50 mm"})
+    m.driver("motor", "angle", body=crank, function="2*pi*t")
+    m.force("pump", "force", body=slider, fx="-damping*slider.vx")
+    m.measure("motor_power", "motor.effort * crank.omega")
+    m.measure("pump_power", "damping * slider.vx^2")
+    m.analysis("inverse", "inverse", drivers=["motor"], forces=["pump"], t_end=1.0, step=0.001)
+    built = m.build().run("inverse")
+    loaded = linkwork.load(EXAMPLES / "slider_crank_friction.yaml").run("inverse")
+    assert built.columns == loaded.columns
+    assert np.array_equal(built.values, loaded.values)
+    assert {"O.friction", "A.friction", "B.friction", "guide.friction"} <= set(built.columns)
+
+    bad = linkwork.Mechanism()
+    bad.body("wheel", mass=1, inertia=0.1, position=(0, 0))
+    bad.revolute("O", "wheel", "ground", at=(0, 0), friction={"mu": -0.1, "radius": 0})
+    with pytest.raises(linkwork.ModelError) as error:
+        bad.build()
+    problems = dict(error.value.problems)
+    assert "coefficient of friction >= 0, found -0.1" in problems["joints.O.friction.mu"]
+    assert "positive number, found 0" in problems["joints.O.friction.radius"]

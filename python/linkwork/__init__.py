@@ -36,7 +36,7 @@ from .errors import (
     SingularError,
     SolverError,
 )
-from .builder import Body, Mechanism
+from .builder import Body, Mechanism, PinFriction, SlideFriction
 from .model import Model
 from .results import Results, Summary
 from .sweep import sweep
@@ -57,8 +57,10 @@ __all__ = [
     "ModelError",
     "NonFiniteError",
     "OutOfMemoryError",
+    "PinFriction",
     "Results",
     "SingularError",
+    "SlideFriction",
     "SolverError",
     "Summary",
     "__version__",

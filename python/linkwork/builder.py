@@ -34,7 +34,7 @@ import math
 import numbers
 import re
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any, Union
+from typing import Any, Required, TypedDict, Union
 
 import numpy as np
 
@@ -46,6 +46,36 @@ parameters (``"r/2"``)."""
 
 Point = Union[tuple[Number, Number], Sequence[Number], "np.ndarray[Any, Any]"]
 """``(x, y)``, m (or text with a unit); a numpy array of two numbers too."""
+
+class PinFriction(TypedDict, total=False):
+    """Coulomb friction in a revolute joint (docs/model-format.md, "Joint friction"): the torque
+    ``mu * tanh(r * omega / transition_velocity) * r * |F|`` opposes the relative rotation, ``|F|``
+    the magnitude of the joint's reaction force.
+
+    ``mu``: coefficient of friction (>= 0). ``radius``: the pin's radius ``r``, m (or a number with a
+    unit, ``"10 mm"``). ``transition_velocity``: the sliding speed on the pin's surface, m/s, at which
+    the coefficient reaches 76% of ``mu`` (default 0.001).
+    """
+
+    mu: Required[Number]
+    radius: Required[Number]
+    transition_velocity: Number
+
+
+class SlideFriction(TypedDict, total=False):
+    """Coulomb friction in a translational joint (docs/model-format.md, "Joint friction"): the
+    force ``mu * tanh(v / transition_velocity) * (|F| + |M| / length)`` opposes the sliding velocity
+    ``v``, ``|F|`` the magnitude of the joint's reaction force and ``M`` its moment about ``point_j``.
+
+    ``mu``: coefficient of friction (>= 0). ``length``: the length of the sliding block, centred at
+    ``point_j``, m. ``transition_velocity``: m/s, at which the coefficient reaches 76% of ``mu``
+    (default 0.001).
+    """
+
+    mu: Required[Number]
+    length: Required[Number]
+    transition_velocity: Number
+
 
 _SECTIONS = (
     "name", "gravity", "parameters", "tables", "ground", "bodies", "joints", "drivers", "forces", "measures", "analyses"
@@ -132,10 +162,14 @@ class Mechanism:
         at: Point | None = None,
         point_i: Point | str | None = None,
         point_j: Point | str | None = None,
+        friction: PinFriction | None = None,
     ) -> str:
         """A pin: ``point_i`` of ``body_i`` on ``point_j`` of ``body_j`` (body frames, m, or point
-        names), or both at the global point ``at`` of the initial position."""
-        return self.joint(name, "revolute", body_i=body_i, body_j=body_j, at=at, point_i=point_i, point_j=point_j)
+        names), or both at the global point ``at`` of the initial position; ``friction``: Coulomb
+        friction in the pin (:class:`PinFriction`: ``mu``, ``radius`` in m, ``transition_velocity`` in
+        m/s), reported as the column ``<name>.friction`` (N m, on ``body_i``)."""
+        fields = {"at": at, "point_i": point_i, "point_j": point_j, "friction": friction}
+        return self.joint(name, "revolute", body_i=body_i, body_j=body_j, **fields)
 
     def translational(
         self,
@@ -149,11 +183,16 @@ class Mechanism:
         axis_i: Point | None = None,
         point_j: Point | str | None = None,
         axis_j: Point | None = None,
+        friction: SlideFriction | None = None,
     ) -> str:
         """A slider: ``body_j`` slides without turning along the line of ``body_i``, given in body
         frames (``point_i``, ``axis_i``, ``point_j``, ``axis_j``) or by a global point of the line
-        ``at`` and its global direction ``axis`` at the initial position."""
-        fields = {"at": at, "axis": axis, "point_i": point_i, "axis_i": axis_i, "point_j": point_j, "axis_j": axis_j}
+        ``at`` and its global direction ``axis`` at the initial position; ``friction``: Coulomb
+        friction in the slider (:class:`SlideFriction`: ``mu``, ``length`` of the block in m,
+        ``transition_velocity`` in m/s), reported as the column ``<name>.friction`` (N along the
+        axis, on ``body_i``)."""
+        fields: dict[str, Any] = {"at": at, "axis": axis, "point_i": point_i, "axis_i": axis_i, "point_j": point_j}
+        fields.update(axis_j=axis_j, friction=friction)
         return self.joint(name, "translational", body_i=body_i, body_j=body_j, **fields)
 
     def point_on_line(

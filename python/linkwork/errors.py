@@ -5,7 +5,8 @@
     LinkworkError
     ├── ModelError          problems: list of (path, message), e.g. ("joints.B.body_j", "unknown body 'rokcer' ...")
     ├── AssemblyError       joints, row, residual, iterations, hint, results
-    ├── SolverError         time (s), joints, rows, results (the output computed before the failure)
+    ├── SolverError         time (s), joints, rows, results (the output computed before the failure);
+    │                       raised itself, with detail, when a joint's friction and its reactions do not converge
     │   ├── SingularError       detail: a dead centre, lock-up or lost degree of freedom
     │   ├── ConvergenceError    row, residual, iterations, substep
     │   │   └── EquilibriumError    coordinates, index: no stable static equilibrium (stopped short: row,

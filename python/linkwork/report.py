@@ -590,6 +590,8 @@ def plots(run: Run) -> list[dict[str, Any]]:
     add(sorted(reaction, key=lambda c: c.endswith(".fy")), "joint reaction forces (global frame, on the first body)", "N")
     add([c for c in cols if c not in bodies and c.endswith(".torque")], "joint reaction torques", "N m")
     add([c for c in cols if c not in bodies and c.endswith(".effort")], "driver efforts", "N or N m")
+    friction = "joint friction (on the first body: torque of a pin, force along a slider)"
+    add([c for c in cols if c not in bodies and c.endswith(".friction")], friction, "N m or N")
     # Measures come after every column the engine names itself.
     engine = bodies | set(ENGINE_COLUMNS) | used
     add([c for c in cols if c not in engine], "measures", "")

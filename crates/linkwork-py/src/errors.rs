@@ -4,7 +4,8 @@
 //! LinkworkError
 //! ├── ModelError          problems: list[(path, message)]
 //! ├── AssemblyError       joints, row, residual, iterations, hint, results
-//! ├── SolverError         time, joints, rows, results
+//! ├── SolverError         time, joints, rows, results; itself for joint friction that did not
+//! │                       converge (detail)
 //! │   ├── SingularError       detail
 //! │   ├── ConvergenceError    row, residual, iterations, substep
 //! │   │   └── EquilibriumError    coordinates, index; row, residual, iterations, load_fraction or cause
@@ -230,6 +231,9 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
             EquilibriumError::new_err(message),
             failure(*time, vec![])?.with("coordinates", coordinates)?.with("index", index)?.with("cause", cause)?,
         ),
+        Error::Friction { time, row, detail } => {
+            (SolverError::new_err(message), failure(*time, vec![row.to_string()])?.with("detail", detail)?)
+        }
         Error::Integration { time, step, cause, rows } => {
             (IntegrationError::new_err(message), failure(*time, names(rows))?.with("step", step)?.with("cause", cause)?)
         }

@@ -124,6 +124,17 @@ pub enum Error {
         /// The rows with the largest residual or involved in a singularity, if known.
         rows: Vec<RowName>,
     },
+    /// A joint's friction and the reactions it depends on (docs/model-format.md, "Joint friction")
+    /// did not converge to a consistent solution.
+    #[error("joint friction did not converge at t = {when} s in {row}: {detail}", when = seconds(.time))]
+    Friction {
+        /// Time of the failure.
+        time: f64,
+        /// The joint (equation `friction`) whose multipliers changed most in the last iteration.
+        row: RowName,
+        /// What did not converge, by how much, and what it may mean.
+        detail: String,
+    },
     /// Static equilibrium was not found: Newton with a line search, descents and load stepping
     /// all stopped short of the tolerance.
     #[error("no static equilibrium found at t = {when} s: residual {residual:.3e} (largest in {equation}) after {iterations} Newton iterations, {:.1}% of the applied load reached", 100.0 * .load_fraction, when = seconds(.time))]
@@ -251,7 +262,7 @@ impl Error {
     pub fn elements(&self) -> Vec<String> {
         let rows: Vec<&RowName> = match self {
             Error::Singular { rows, .. } | Error::Integration { rows, .. } => rows.iter().collect(),
-            Error::Convergence { row, .. } | Error::Assembly { row, .. } => vec![row],
+            Error::Convergence { row, .. } | Error::Assembly { row, .. } | Error::Friction { row, .. } => vec![row],
             Error::Equilibrium { equation: Unbalanced::Row(row), .. } => vec![row],
             _ => vec![],
         };

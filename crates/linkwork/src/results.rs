@@ -28,6 +28,10 @@ pub const BODY_QUANTITIES: [&str; 9] = ["x", "y", "phi", "vx", "vy", "omega", "a
 
 pub use crate::model::REACTION_QUANTITIES;
 
+/// The column of a joint with friction, `<joint>.friction`: its friction on its first body, the
+/// torque of a revolute joint (N m) or the force along the axis of a translational one (N).
+pub const FRICTION_QUANTITY: &str = "friction";
+
 /// Results of one analysis: one column per quantity, one row per output time.
 #[derive(Debug)]
 pub struct Results {
@@ -331,7 +335,8 @@ impl Results {
                 columns.contains(name.as_str())
                     || name.rsplit_once('.').is_some_and(|(owner, quantity)| {
                         (bodies.contains(owner) && BODY_QUANTITIES.contains(&quantity))
-                            || (joints.contains(owner) && REACTION_QUANTITIES.contains(&quantity))
+                            || (joints.contains(owner)
+                                && (REACTION_QUANTITIES.contains(&quantity) || quantity == FRICTION_QUANTITY))
                     })
             })
             .collect();
@@ -417,6 +422,7 @@ impl Results {
             Some(
                 Error::Singular { time, .. }
                 | Error::Convergence { time, .. }
+                | Error::Friction { time, .. }
                 | Error::Equilibrium { time, .. }
                 | Error::NoEquilibrium { time, .. }
                 | Error::Assembly { time, .. }

@@ -14,10 +14,11 @@
 //! for a small mechanism and by the sparse Gram matrix `Phi_q Phi_q^T` for a large one
 //! ([`crate::linalg::rows`]), so its cost per output time grows linearly with a chain's bodies.
 
-use super::dynamic::{factor_error, Dae};
+use super::dynamic::{factor_error, Dae, FRICTION_RTOL};
 use super::kinematic::run_driven;
 use super::{element_names, row_space};
 use crate::error::Error;
+use crate::linalg::rows::RowSpace;
 use crate::linalg::{ColMatrix, Pattern};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
@@ -28,6 +29,13 @@ use crate::results::{Failure, Results};
 /// kinematics' `singular_condition` (1e10); a direction dropped as rank-deficient leaves the
 /// whole load along it.
 pub const BALANCE_TOLERANCE: f64 = 1e-5;
+
+/// The most fixed-point iterations on the multipliers at one output time when joints have
+/// friction: 100. Each iteration shrinks the error by the contraction `rho`, the friction's
+/// change per change of the multipliers it depends on (`~ mu r / arm` for a pin of radius `r` whose
+/// load turns about a lever `arm`: `1e-3` to `1e-1` in machines); 100 iterations reach
+/// [`FRICTION_RTOL`] for any `rho` up to 0.79, and the iteration stops at once where it diverges.
+const MAX_FRICTION_ITERATIONS: usize = 100;
 
 /// Columns after the reactions and efforts.
 pub const INVERSE_COLUMNS: [&str; 4] = ["kinetic_energy", "potential_energy", "driver_power", "applied_power"];
@@ -62,11 +70,11 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         }
         let jac = ColMatrix::from_entries(&pattern, dae.jacobian_entries().1);
         let mut space = row_space(&jac, t)?;
-        let lambda = space.min_norm_transpose_solve(&rhs).ok_or_else(|| Error::Singular {
-            time: t,
-            rows: vec![],
-            detail: "the singular value decomposition of the constraint Jacobian failed (a non-finite entry)".into(),
-        })?;
+        let mut lambda = transpose_solve(&mut space, &rhs, t)?;
+        if dae.has_friction() {
+            lambda = with_friction(&dae, &mut space, (t, q, qdot), &rhs, lambda)?;
+            dae.add_friction(q, qdot, &lambda, 1.0, &mut rhs, None);
+        }
         // The multipliers must balance every body. Near a singular position the solve drops
         // the directions whose singular values are below RANK_TOLERANCE while the kinematics,
         // whose limit is `singular_condition`, still goes on: the load along such a direction is
@@ -85,7 +93,7 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         if indeterminate.is_none() {
             indeterminate = Some(element_names(&dae.sys, &space.dependent_rows()));
         }
-        dae.reactions(q, &lambda, &mut react);
+        dae.reactions(q, qdot, &lambda, &mut react);
         super::measure_reactions(model, &analysis.drivers, &react, &mut reactions);
         extra.clear();
         extra.extend_from_slice(&react);
@@ -113,12 +121,64 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     }
 }
 
-/// `<joint>.fx, .fy, .torque` for every joint, then `<driver>.effort` for every active driver.
+/// `lambda` solving `Phi_q^T lambda = rhs` (minimum norm) in the row space `space` at `t`.
+fn transpose_solve(space: &mut RowSpace, rhs: &[f64], t: f64) -> Result<Vec<f64>, Error> {
+    space.min_norm_transpose_solve(rhs).ok_or_else(|| Error::Singular {
+        time: t,
+        rows: vec![],
+        detail: "the singular value decomposition of the constraint Jacobian failed (a non-finite entry)".into(),
+    })
+}
+
+/// The multipliers with joint friction: `Phi_q^T lambda = rhs + Q_f(q, qdot, lambda)`, by the
+/// fixed point `lambda_{k+1} = solve(rhs + Q_f(lambda_k))` from the frictionless `lambda`, each
+/// solve with the factorization of `space` already made. Converged when the estimated distance
+/// to the fixed point, `rho / (1 - rho)` times the last change (`rho` the last contraction; the
+/// change itself at the first iteration), is below [`FRICTION_RTOL`] of the largest multiplier;
+/// [`Error::Friction`] when it is not after `MAX_FRICTION_ITERATIONS` or when it diverges (a
+/// contraction of 1 or more twice running: the friction, through the reactions, asks for more
+/// than it gives, as at a self-locking position).
+fn with_friction(
+    dae: &Dae<'_>,
+    space: &mut RowSpace,
+    (t, q, qdot): (f64, &[f64], &[f64]),
+    rhs: &[f64],
+    mut lambda: Vec<f64>,
+) -> Result<Vec<f64>, Error> {
+    let mut loaded = rhs.to_vec();
+    let mut previous = f64::INFINITY;
+    let mut growing = 0;
+    let mut worst = (0, f64::INFINITY);
+    for it in 1..=MAX_FRICTION_ITERATIONS {
+        loaded.copy_from_slice(rhs);
+        dae.add_friction(q, qdot, &lambda, 1.0, &mut loaded, None);
+        let next = transpose_solve(space, &loaded, t)?;
+        let delta: Vec<f64> = next.iter().zip(&lambda).map(|(a, b)| a - b).collect();
+        lambda = next;
+        worst = dae.friction_change(q, qdot, &delta, &lambda);
+        let rate = worst.1 / previous;
+        let distance = if it == 1 || worst.1 == 0.0 { worst.1 } else { rate / (1.0 - rate) * worst.1 };
+        if (rate < 1.0 || it == 1) && distance <= FRICTION_RTOL {
+            return Ok(lambda);
+        }
+        growing = if it > 1 && rate >= 1.0 { growing + 1 } else { 0 };
+        if growing >= 2 {
+            return Err(dae.friction_error(worst, t, it, "the reactions"));
+        }
+        previous = worst.1;
+    }
+    Err(dae.friction_error(worst, t, MAX_FRICTION_ITERATIONS, "the reactions"))
+}
+
+/// `<joint>.fx, .fy, .torque` for every joint, then `<driver>.effort` for every active driver,
+/// then `<joint>.friction` for every joint with friction.
 pub(crate) fn reaction_columns(model: &Model, analysis: &Analysis) -> Vec<String> {
     let mut names = Vec::new();
     for j in &model.joints {
         names.extend(crate::results::REACTION_QUANTITIES.map(|q| format!("{}.{q}", j.name)));
     }
     names.extend(analysis.drivers.iter().map(|&d| format!("{}.effort", model.drivers[d].name)));
+    let friction = model.joints.iter().filter(|j| j.friction.is_some());
+    names.extend(friction.map(|j| format!("{}.{}", j.name, crate::results::FRICTION_QUANTITY)));
     names
 }

@@ -66,7 +66,7 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
     } else {
         let mut sol = vec![0.0; n + m];
         if let Err(e) = st.dae.accelerations(&assembly.q, &assembly.qdot, t, &mut sol) {
-            return Err(fail(results, factor_error(e, t)));
+            return Err(fail(results, e));
         }
         (assembly.q.clone(), assembly.qdot.clone(), sol[n..].to_vec())
     };

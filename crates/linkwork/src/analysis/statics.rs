@@ -660,7 +660,7 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
                     st.dae.jacobian_dense(st.jac.as_mut());
                     indeterminate = Some(element_names(&st.dae.sys, &indeterminate_rows(st.jac.as_ref())));
                 }
-                st.dae.reactions(&eq.q, &eq.lambda, &mut react);
+                st.dae.reactions(&eq.q, &zero, &eq.lambda, &mut react);
                 super::measure_reactions(model, &analysis.drivers, &react, &mut reactions);
                 row.clear();
                 row.extend_from_slice(&react);

@@ -14,16 +14,19 @@ mod absolute;
 mod distance;
 mod driver;
 mod expression;
+mod friction;
 mod gear;
 mod point_line;
 mod revolute;
 mod rolling;
 mod translational;
 
+use crate::expr::Scalar;
 pub use absolute::{Absolute, AbsoluteKind};
 pub use distance::Distance;
 pub use driver::{Driver, DriverKind};
 pub use expression::{GeneralConstraint, Var, MAX_SLOTS};
+pub use friction::{Friction, FrictionLaw, DEFAULT_TRANSITION_VELOCITY};
 pub use gear::{GearKind, GearPair};
 pub use point_line::PointOnLine;
 pub use revolute::Revolute;
@@ -189,6 +192,59 @@ pub struct Anchor {
     pub j: BodyIx,
     /// The reaction point, body i frame.
     pub point: [f64; 2],
+}
+
+/// The reaction of a joint on its first body, from the multipliers `lambda` of its rows: the
+/// force `f` (global frame) and its moment about `anchor.point` (body i frame; the global frame
+/// when body i is ground). `columns` and `block` are the joint's Jacobian columns and block
+/// (`rows x columns`, row-major) at `q`. Generic over [`Scalar`] so that friction, which depends on
+/// the reaction, gets its exact derivatives by the multipliers.
+///
+/// ```text
+/// g_b = -Phi_q,b^T lambda          generalised reaction on body b: (fx, fy, moment about its centre)
+/// body i moving:  f = g_i[0..2],   moment = g_i[2] - (A_i s'_P) x f
+/// body i ground:  f = -g_j[0..2],  moment = -(g_j[2] + (r_j - P) x g_j[0..2])
+/// ```
+pub fn reaction<S: Scalar>(
+    anchor: Anchor,
+    columns: &[usize],
+    block: &[f64],
+    lambda: &[S],
+    q: &Config<'_>,
+) -> ([S; 2], S) {
+    let w = columns.len();
+    // g = -Phi_q,b^T lambda on the body's columns. The sum starts at -0.0, as `f64`'s `Sum`
+    // does, so that the result is bit for bit that of the sum it replaced.
+    let generalised = |body: BodyIx| -> [S; 3] {
+        let mut g = [S::constant(0.0); 3];
+        let Some(b) = body.0 else { return g };
+        for (ci, &col) in columns.iter().enumerate() {
+            if (b..b + 3).contains(&col) {
+                let sum = lambda
+                    .iter()
+                    .enumerate()
+                    .fold(S::constant(-0.0), |a, (ri, &l)| a + S::constant(block[ri * w + ci]) * l);
+                g[col - b] = -sum;
+            }
+        }
+        g
+    };
+    let Anchor { i, j, point } = anchor;
+    match i.0 {
+        Some(_) => {
+            let [fx, fy, m] = generalised(i);
+            // Moment about P = moment about the centre of mass - (A s'_P) x f.
+            let a = Frame::of(i, q).rotate(point);
+            ([fx, fy], m - (S::constant(a[0]) * fy - S::constant(a[1]) * fx))
+        }
+        None => {
+            // On ground: the opposite of the reaction on body j, its moment taken about P.
+            let [fx, fy, m] = generalised(j);
+            let rj = j.coords(q);
+            let d = [rj[0] - point[0], rj[1] - point[1]];
+            ([-fx, -fy], -(m + S::constant(d[0]) * fy - S::constant(d[1]) * fx))
+        }
+    }
 }
 
 /// Where a body's coordinates sit in `q`: the index of its `x` (`y` and `phi` follow), or `None`

@@ -8,7 +8,7 @@
 //! ```
 //! with `B = dA/dphi`. Haug (1989) section 3.3.1; Nikravesh (2018) section 7.1.
 
-use super::{Anchor, BodyIx, Config, Constraint, Frame, Pair, Separation, Shape, Sketch};
+use super::{Anchor, BodyIx, Config, Constraint, Frame, Friction, FrictionLaw, Pair, Separation, Shape, Sketch};
 
 /// A revolute joint between body i (point `P`) and body j (point `Q`).
 #[derive(Debug, Clone)]
@@ -22,6 +22,11 @@ impl Revolute {
     /// `s_p`, `s_q`: the joint point in the frames of body i and body j.
     pub fn new(i: BodyIx, s_p: [f64; 2], j: BodyIx, s_q: [f64; 2]) -> Revolute {
         Revolute { pair: Pair::new(i, j), s_p, s_q }
+    }
+
+    /// Coulomb friction in this joint's pin of `radius` (m) ([`Friction`]).
+    pub fn friction(&self, law: FrictionLaw, radius: f64) -> Friction {
+        Friction::pin(law, self.anchor(), radius)
     }
 }
 

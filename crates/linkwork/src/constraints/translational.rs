@@ -18,7 +18,7 @@
 //! takes the whole turns from the starting relative angle, so that a body written a turn away
 //! (`phi = 2 pi + 0.1` against the axes' `0.1`) stays on its branch. Haug (1989) section 3.3.2; Nikravesh (2018) section 7.1.
 
-use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Pair, Projection, Shape, Sketch};
+use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Friction, FrictionLaw, Pair, Projection, Shape, Sketch};
 
 /// A translational joint between body i (line through `P` along `v_i`) and body j (point `Q`, axis
 /// `v_j`).
@@ -46,6 +46,13 @@ impl Translational {
         let turn = 2.0 * std::f64::consts::PI;
         self.c += turn * ((relative - self.c) / turn).round();
         self
+    }
+
+    /// Coulomb friction in this joint, its sliding block of `length` (m) centred at body j's point
+    /// ([`Friction`]).
+    pub fn friction(&self, law: FrictionLaw, length: f64) -> Friction {
+        let l = &self.line;
+        Friction::slide(law, (l.i, l.s_p, l.along()), (l.j, l.s_q), length)
     }
 }
 

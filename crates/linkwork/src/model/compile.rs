@@ -7,8 +7,9 @@ use super::{
     REACTION_QUANTITIES,
 };
 use crate::constraints::{
-    Absolute, AbsoluteKind, BodyIx, Constraint, Distance, Driver, DriverKind, Frame, GearKind, GearPair,
-    GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc, Shape, Sketch, Translational, Var,
+    Absolute, AbsoluteKind, BodyIx, Constraint, Distance, Driver, DriverKind, Frame, Friction, FrictionLaw, GearKind,
+    GearPair, GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc, Shape, Sketch, Translational, Var,
+    DEFAULT_TRANSITION_VELOCITY,
 };
 use crate::error::Problem;
 use crate::expr::{Expr, Names, Spline, TimeFunction};
@@ -69,10 +70,11 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
     cx.q0 = bodies.iter().flat_map(|b| b.q0).collect();
     cx.unique_names();
     let joints = cx.entries("joints", &spec.joints, |cx, name, path, j| {
-        Some(Element { name: name.into(), kind: j.name(), constraint: cx.joint(path, j)? })
+        let (constraint, friction) = cx.joint(path, j)?;
+        Some(Element { name: name.into(), kind: j.name(), constraint, friction })
     });
     let drivers = cx.entries("drivers", &spec.drivers, |cx, name, path, d| {
-        Some(Element { name: name.into(), kind: d.name(), constraint: cx.driver(path, d)? })
+        Some(Element { name: name.into(), kind: d.name(), constraint: cx.driver(path, d)?, friction: None })
     });
     let forces = cx.entries("forces", &spec.forces, |cx, name, path, f| {
         let applied = matches!(f, ForceSpec::Force(..) | ForceSpec::Torque(..));
@@ -522,27 +524,78 @@ impl Cx<'_> {
         (r[0] - p[0]).hypot(r[1] - p[1])
     }
 
-    fn joint(&mut self, path: &str, j: &JointSpec) -> Option<Box<dyn Constraint>> {
+    /// The coefficient and transition velocity of the `friction:` mapping at `path`, checked.
+    fn friction_law(&mut self, path: &str, mu: f64, transition_velocity: Option<f64>) -> Option<FrictionLaw> {
+        let mu = self.finite(&format!("{path}.mu"), mu).and_then(|mu| {
+            if mu >= 0.0 {
+                Some(mu)
+            } else {
+                self.problem(format!("{path}.mu"), format!("expected a coefficient of friction >= 0, found {mu}"));
+                None
+            }
+        });
+        let v_s = match transition_velocity {
+            Some(v) => self.positive(&format!("{path}.transition_velocity"), v),
+            None => Some(DEFAULT_TRANSITION_VELOCITY),
+        };
+        Some(FrictionLaw { mu: mu?, transition_velocity: v_s? })
+    }
+
+    /// A joint's constraint, and its friction when it has a `friction:` mapping.
+    fn joint(&mut self, path: &str, j: &JointSpec) -> Option<(Box<dyn Constraint>, Option<Friction>)> {
         use JointSpec as J;
+        let mut friction = None;
         let c: Box<dyn Constraint> = match j {
-            J::Revolute(RevoluteJoint { body_i, point_i, body_j, point_j, at }) => {
+            J::Revolute(RevoluteJoint { body_i, point_i, body_j, point_j, at, friction: pin }) => {
                 let points = self.placed_points(path, [body_i, body_j], [point_i, point_j], at);
                 // The bodies are checked (`ends`) whether or not the points could be placed.
                 let (pi, pj) = points.clone().unwrap_or_default();
                 let ends = self.ends(path, body_i, &pi, body_j, &pj);
+                let law = pin.as_ref().map(|f| {
+                    let at = format!("{path}.friction");
+                    (
+                        self.friction_law(&at, f.mu, f.transition_velocity),
+                        self.positive(&format!("{at}.radius"), f.radius),
+                    )
+                });
                 let (_, [(i, sp), (j, sq)]) = (points?, ends?);
-                Box::new(Revolute::new(i, sp, j, sq))
+                let joint = Revolute::new(i, sp, j, sq);
+                if let Some((law, radius)) = law {
+                    friction = Some(joint.friction(law?, radius?));
+                }
+                Box::new(joint)
             }
-            J::Translational(TranslationalJoint { body_i, point_i, axis_i, body_j, point_j, axis_j, at, axis }) => {
+            J::Translational(TranslationalJoint {
+                body_i,
+                point_i,
+                axis_i,
+                body_j,
+                point_j,
+                axis_j,
+                at,
+                axis,
+                friction: slide,
+            }) => {
                 let points = self.placed_points(path, [body_i, body_j], [point_i, point_j], at);
                 let axes = self.placed_axes(path, [("axis_i", body_i, axis_i), ("axis_j", body_j, axis_j)], axis);
                 let (pi, pj) = points.clone().unwrap_or_default();
                 let ends = self.ends(path, body_i, &pi, body_j, &pj);
                 let vi = axes.and_then(|[ai, _]| self.axis(&format!("{path}.axis_i"), ai));
                 let vj = axes.and_then(|[_, aj]| self.axis(&format!("{path}.axis_j"), aj));
+                let law = slide.as_ref().map(|f| {
+                    let at = format!("{path}.friction");
+                    (
+                        self.friction_law(&at, f.mu, f.transition_velocity),
+                        self.positive(&format!("{at}.length"), f.length),
+                    )
+                });
                 let (_, [(i, sp), (j, sq)], vi, vj) = (points?, ends?, vi?, vj?);
                 let relative = i.coords(&self.q0)[2] - j.coords(&self.q0)[2];
-                Box::new(Translational::new(i, sp, vi, j, sq, vj).near(relative))
+                let joint = Translational::new(i, sp, vi, j, sq, vj).near(relative);
+                if let Some((law, length)) = law {
+                    friction = Some(joint.friction(law?, length?));
+                }
+                Box::new(joint)
             }
             J::PointOnLine(PointOnLineJoint { body_i, point_i, axis_i, body_j, point_j, at, axis }) => {
                 let points = self.placed_points(path, [body_i, body_j], [point_i, point_j], at);
@@ -641,7 +694,7 @@ impl Cx<'_> {
             }
             J::Expression(ExpressionJoint { expression }) => self.general(&format!("{path}.expression"), expression)?,
         };
-        Some(c)
+        Some((c, friction))
     }
 
     /// The ends of a point-on-line joint and the line's axis `axis_i`, resolved.

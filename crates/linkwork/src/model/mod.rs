@@ -17,7 +17,7 @@ pub use drawing::{BodyDrawing, Drawing, JointDrawing};
 pub use parse::{parse_partial, parse_partial_with, parse_spec, Parsed};
 pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
 
-use crate::constraints::{BodyIx, Constraint, Frame};
+use crate::constraints::{BodyIx, Constraint, Frame, Friction};
 use crate::error::{Error, Problem, Result};
 use crate::forces::{Force, Load, StateExpr};
 use indexmap::IndexMap;
@@ -58,6 +58,8 @@ pub struct Element {
     pub kind: &'static str,
     /// The equations.
     pub constraint: Box<dyn Constraint>,
+    /// Coulomb friction (revolute and translational joints with a `friction:` mapping).
+    pub friction: Option<Friction>,
 }
 
 /// A named applied force or force element.

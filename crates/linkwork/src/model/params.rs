@@ -200,6 +200,9 @@ pub fn field(section: &str, kind: Option<&str>, key: &str) -> Option<Field> {
             D(Dim::NONE)
         }
         ("solver", "max_steps") => D(Dim::NONE),
+        ("friction", "mu") => D(Dim::NONE),
+        ("friction", "radius" | "length") => D(Dim::LENGTH),
+        ("friction", "transition_velocity") => D(Dim::VELOCITY),
         ("solver", "tolerance" | "atol") => Mixed,
         _ => return None,
     })
@@ -239,6 +242,7 @@ fn entry(
         let here = format!("{path}.{key}");
         match (key, value) {
             ("solver", Value::Mapping(solver)) => entry("solver", &here, None, solver, params, problems),
+            ("friction", Value::Mapping(friction)) => entry("friction", &here, None, friction, params, problems),
             ("points" | "points_global", Value::Mapping(points)) => {
                 for (point, v) in points.iter_mut() {
                     let at = format!("{here}.{}", point.as_str().unwrap_or("?"));

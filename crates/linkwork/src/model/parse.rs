@@ -121,7 +121,7 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
     }
     let mut broken = Vec::new();
     let bodies = section("bodies", get("bodies"), &mut problems, &mut broken, entry::<BodySpec>);
-    let joints = section("joints", get("joints"), &mut problems, &mut broken, tagged::<JointSpec>());
+    let joints = section("joints", get("joints"), &mut problems, &mut broken, joint);
     let drivers = section("drivers", get("drivers"), &mut problems, &mut broken, tagged::<DriverSpec>());
     let forces = section("forces", get("forces"), &mut problems, &mut broken, tagged::<ForceSpec>());
     let measures = section("measures", get("measures"), &mut problems, &mut broken, measure);
@@ -205,6 +205,30 @@ fn measure(path: &str, v: &Value, problems: &mut Vec<Problem>) -> Option<Measure
             ));
             None
         }
+    }
+}
+
+/// The joint types that take a `friction:` mapping.
+const FRICTION_TYPES: [&str; 2] = ["revolute", "translational"];
+
+/// A joint: a [`tagged`] entry, whose `friction:` on a type that has none is reported as that
+/// rather than as an unknown field (the rest of the joint is read without it).
+fn joint(path: &str, v: &Value, problems: &mut Vec<Problem>) -> Option<JointSpec> {
+    let kind = v.get("type").and_then(Value::as_str);
+    match (v, kind) {
+        (Value::Mapping(map), Some(kind)) if map.contains_key("friction") && !FRICTION_TYPES.contains(&kind) => {
+            problems.push(Problem::new(
+                format!("{path}.friction"),
+                format!(
+                    "a {kind} joint has no friction model; friction is supported on {} joints",
+                    FRICTION_TYPES.join(" and ")
+                ),
+            ));
+            let mut rest = map.clone();
+            rest.remove("friction");
+            tagged::<JointSpec>()(path, &Value::Mapping(rest), problems)
+        }
+        _ => tagged::<JointSpec>()(path, v, problems),
     }
 }
 

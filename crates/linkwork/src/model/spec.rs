@@ -590,6 +590,42 @@ pub struct RevoluteJoint {
     /// The pin's global position at the initial position, m, instead of `point_i` and `point_j`.
     #[serde(default)]
     pub at: Option<[f64; 2]>,
+    /// Coulomb friction in the pin.
+    #[serde(default)]
+    pub friction: Option<PinFriction>,
+}
+
+/// Coulomb friction in a revolute joint: a torque `mu tanh(r omega / v_s) r |F|` opposing the
+/// relative rotation `omega = omega_i - omega_j`, `|F|` the magnitude of the joint's reaction force
+/// (docs/model-format.md, "Joint friction").
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PinFriction {
+    /// Coefficient of friction, `>= 0`.
+    pub mu: f64,
+    /// Radius of the pin, m, `> 0`.
+    pub radius: f64,
+    /// Sliding speed on the pin's surface at which the coefficient reaches `tanh(1) = 76%` of
+    /// `mu`, m/s, `> 0`; default 0.001.
+    #[serde(default)]
+    pub transition_velocity: Option<f64>,
+}
+
+/// Coulomb friction in a translational joint: a force `mu tanh(v / v_s) (|F| + |M| / L)` opposing
+/// the sliding velocity `v`, `|F|` the magnitude of the joint's reaction force and `M` its moment
+/// about `point_j`, the centre of the sliding block of length `L` (docs/model-format.md, "Joint
+/// friction").
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SlideFriction {
+    /// Coefficient of friction, `>= 0`.
+    pub mu: f64,
+    /// Length of the sliding block (its contact with the guide), centred at `point_j`, m, `> 0`.
+    pub length: f64,
+    /// Sliding velocity at which the coefficient reaches `tanh(1) = 76%` of `mu`, m/s, `> 0`;
+    /// default 0.001.
+    #[serde(default)]
+    pub transition_velocity: Option<f64>,
 }
 
 /// Prismatic: `point_j` of `body_j` slides on the line of `body_i` through `point_i` along
@@ -620,6 +656,9 @@ pub struct TranslationalJoint {
     /// The line's global direction at the initial position, instead of `axis_i` and `axis_j`.
     #[serde(default)]
     pub axis: Option<[f64; 2]>,
+    /// Coulomb friction in the slider.
+    #[serde(default)]
+    pub friction: Option<SlideFriction>,
 }
 
 /// Pin in slot: `point_j` of `body_j` stays on the line of `body_i` through `point_i` along

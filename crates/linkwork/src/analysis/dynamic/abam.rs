@@ -78,8 +78,8 @@
 
 use super::adams::{Adams, MAX_ORDER};
 use super::{
-    factor_error, hermite5, roundoff_ratio, step_failure, Dae, DynamicStats, IntegratorKind, IntegratorSettings,
-    Outcome, Output, Span, Start,
+    hermite5, roundoff_ratio, step_failure, Dae, DynamicStats, IntegratorKind, IntegratorSettings, Outcome, Output,
+    Span, Start,
 };
 use crate::error::Error;
 use crate::linalg::dense::RANK_TOLERANCE;
@@ -513,7 +513,7 @@ impl Split<'_, '_> {
     /// there, and that state as the accepted one (with no step before it).
     fn resume(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), Error> {
         let n = q.len();
-        self.dae.accelerations(q, v, t, &mut self.sol).map_err(|e| factor_error(e, t))?;
+        self.dae.accelerations(q, v, t, &mut self.sol)?;
         self.ta = t;
         self.qa.copy_from_slice(q);
         self.va.copy_from_slice(v);
@@ -656,7 +656,7 @@ impl Split<'_, '_> {
         self.t_last = t;
         // (q, v, t) => (qddot, lambda) => y' = (v_I, qddot_I).
         if let Some(yp) = yp {
-            self.dae.accelerations(&self.q, &self.v, t, &mut self.sol).map_err(|e| factor_error(e, t))?;
+            self.dae.accelerations(&self.q, &self.v, t, &mut self.sol)?;
             if !self.sol.iter().all(|x| x.is_finite()) {
                 return Ok(Eval::Failed { residual });
             }

@@ -238,7 +238,9 @@ impl Bdf<'_, '_> {
 
     /// Factorise the Newton matrices at the iterate.
     fn refactor(&mut self, t1: f64, c: f64) -> Result<(), Error> {
-        self.dae.factor(&self.q1, &self.v1, t1, 1.0 / c, 1.0 / (c * c)).map_err(|e| super::factor_error(e, t1))?;
+        self.dae
+            .factor(&self.q1, &self.v1, t1, 1.0 / c, 1.0 / (c * c), &self.lam1, 1.0)
+            .map_err(|e| super::factor_error(e, t1))?;
         if self.si2 {
             self.dae.factor_mass().map_err(|e| super::factor_error(e, t1))?;
         }
@@ -266,6 +268,7 @@ impl Bdf<'_, '_> {
             self.dae.positions(&self.q1, t1);
             // r = -[M a + Phi_q^T lambda - Q;  c^2 Phi] (index 3) or -[... ; Phi_q v - nu] (SI2).
             self.dae.load(&self.q1, &self.v1, t1, &mut self.work);
+            self.dae.add_friction(&self.q1, &self.v1, &self.lam1, 1.0, &mut self.work, None);
             let (r1, r2) = self.r.split_at_mut(n);
             for i in 0..n {
                 r1[i] = self.work[i] - self.dae.mass[i] * self.a1[i];

@@ -153,6 +153,7 @@ impl Hht<'_, '_> {
             self.dae.positions(&self.q1, t1);
             // r = -[M a + Phi_q^T mu - (1 + alpha) Q - alpha F_n;  Phi / (beta h^2)]
             self.dae.load(&self.q1, &self.v1, t1, &mut self.work);
+            self.dae.add_friction(&self.q1, &self.v1, &self.mu1, 1.0 + al, &mut self.work, None);
             let (r1, r2) = self.r.split_at_mut(n);
             for k in 0..n {
                 r1[k] = (1.0 + al) * self.work[k] + al * self.f[k] - self.dae.mass[k] * self.a1[k];
@@ -171,7 +172,15 @@ impl Hht<'_, '_> {
             let stale = self.factored_h.is_none_or(|fh| !(0.8..=1.25).contains(&(h / fh)));
             if stale || (it >= 2 && !fresh) {
                 self.dae
-                    .factor(&self.q1, &self.v1, t1, (1.0 + al) * self.gamma * h, (1.0 + al) * b * h * h)
+                    .factor(
+                        &self.q1,
+                        &self.v1,
+                        t1,
+                        (1.0 + al) * self.gamma * h,
+                        (1.0 + al) * b * h * h,
+                        &self.mu1,
+                        1.0 + al,
+                    )
                     .map_err(|e| super::factor_error(e, t1))?;
                 self.factored_h = Some(h);
                 fresh = true;

@@ -31,6 +31,7 @@ mod order_tests;
 mod output;
 
 pub use crate::model::spec::{Formulation, IntegratorKind};
+pub(crate) use dae::FRICTION_RTOL;
 pub use dae::{Dae, LinearStats, EPS_REL};
 pub use output::{factor_error, Output, ENERGY_COLUMNS};
 
@@ -370,7 +371,7 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     }
     let mut sol = vec![0.0; n + m];
     if let Err(e) = dae.accelerations(&assembly.q, &assembly.qdot, t0, &mut sol) {
-        return Err(fail(out.results, factor_error(e, t0)));
+        return Err(fail(out.results, e));
     }
     let start = Start {
         t: t0,

@@ -127,9 +127,9 @@ impl Output {
     /// Write the next output time `t` from the state `(q, qdot)`.
     pub fn push(&mut self, dae: &mut Dae<'_>, t: f64, q: &[f64], qdot: &[f64]) -> Result<(), Error> {
         let n = dae.n;
-        dae.accelerations(q, qdot, t, &mut self.sol).map_err(|e| factor_error(e, t))?;
+        dae.accelerations(q, qdot, t, &mut self.sol)?;
         let (qddot, lambda) = self.sol.split_at(n);
-        dae.reactions(q, lambda, &mut self.react);
+        dae.reactions(q, qdot, lambda, &mut self.react);
         crate::analysis::measure_reactions(dae.model, &self.drivers, &self.react, &mut self.reactions);
         let position_residual = dae.phi.iter().fold(0.0f64, |a, x| a.max(x.abs()));
         dae.jv(qdot, &mut self.rows);
