@@ -142,6 +142,11 @@ fn bad_tables_are_problems_at_their_fields() {
         let list = problems(&model(tables, function));
         assert!(list.iter().any(|p| p.starts_with(want)), "no '{want}' in {list:#?}");
     }
+    // A bad table used by an expression is one problem, the table's, not also the expression's.
+    for tables in ["  a: {x: [0, 1, 1], y: [0, 1, 2]}\n", "  a: {x: [0, 1], z: [0, 1]}\n"] {
+        let list = problems(&model(tables, "spline(a, t)"));
+        assert!(list.len() == 1 && list[0].starts_with("tables.a"), "{list:#?}");
+    }
 }
 
 #[test]

@@ -57,14 +57,19 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
         q0: Vec::new(),
         broken,
     };
+    // A table that cannot be built (or read) stands in as zero, so that an expression using it
+    // reports only its own problems; the model is refused for the table's.
+    let stand_in = || Arc::new(Spline::new(vec![0.0, 1.0], vec![0.0, 0.0], Default::default()).expect("two points"));
     for (name, table) in &spec.tables {
         let path = format!("tables.{name}");
-        match super::tables::table(&path, table, folder) {
-            Ok(t) => {
-                cx.tables.insert(name.clone(), Arc::new(t));
-            }
-            Err(problems) => cx.problems.extend(problems),
-        }
+        let built = super::tables::table(&path, table, folder).map(Arc::new).unwrap_or_else(|problems| {
+            cx.problems.extend(problems);
+            stand_in()
+        });
+        cx.tables.insert(name.clone(), built);
+    }
+    for name in broken.iter().filter_map(|b| b.strip_prefix("tables.")) {
+        cx.tables.insert(name.to_string(), stand_in());
     }
     let bodies = cx.bodies();
     cx.q0 = bodies.iter().flat_map(|b| b.q0).collect();
