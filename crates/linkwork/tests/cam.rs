@@ -132,6 +132,12 @@ fn bad_cams_are_problems_at_their_fields() {
         (&format!("{good}, radius: r0"), "pin", "measures.p.joint: 'pin' is a revolute joint; expected a cam joint"),
         (&format!("{good}, radius: r0"), "cams", "measures.p.joint: unknown joint 'cams'"),
     ];
+    let centred = model(&format!("{good}, radius: r0"), "contact").replace("position: [0, 0.05]", "position: [0, 0]");
+    let list = problems(&centred);
+    assert!(
+        list.iter().any(|p| p.starts_with("joints.contact: the follower's point is at the cam's centre")),
+        "{list:#?}"
+    );
     for (joint, measure, want) in cases {
         let list = problems(&model(joint, measure));
         assert!(list.iter().any(|p| p.contains(want)), "no '{want}' in {list:#?}");

@@ -735,6 +735,11 @@ impl Cx<'_> {
             }
         };
         let ([(i, si), (j, sj)], _, expr) = (ends?, roller?, expr?);
+        if self.initial_distance([(i, si), (j, sj)]) < 1e-12 {
+            let message = "the follower's point is at the cam's centre in the initial configuration: psi is undefined";
+            self.problem(path, message);
+            return None;
+        }
         match Cam::try_new(i, si, j, sj, expr) {
             Ok(c) => Some(c),
             Err(e) => {
