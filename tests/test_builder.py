@@ -195,3 +195,38 @@ def test_a_built_slider_crank_with_friction_runs_as_the_example() -> None:
     problems = dict(error.value.problems)
     assert "coefficient of friction >= 0, found -0.1" in problems["joints.O.friction.mu"]
     assert "positive number, found 0" in problems["joints.O.friction.radius"]
+
+
+def test_a_built_cam_runs_as_the_example() -> None:
+    """examples/cam_roller.yaml built with the typed `cam` joint and `pressure_angle` measure:
+    both analyses give the file's results, bit for bit; a radius naming anything but psi,
+    parameters and tables is refused at its field."""
+    m = linkwork.Mechanism("disc cam with a radial roller follower", gravity=(0, -9.81))
+    m.parameter("base", "50 mm")
+    m.parameter("lift", "20 mm")
+    cam = m.body("cam", mass=1.2, inertia=0.002, position=(0, 0))
+    follower = m.body("follower", mass=0.3, inertia=0.0001, position=(0, "base"))
+    m.revolute("bearing", "ground", cam, at=(0, 0))
+    m.translational("guide", "ground", follower, at=(0, "base"), axis=(0, 1))
+    radius = "base + cycloidal(pi/2 - psi, 0, 0, 2*pi/3, lift) + cycloidal(pi/2 - psi, pi, lift, 3*pi/2, 0) - lift"
+    m.cam("contact", cam, follower, point_j=(0, 0), radius=radius, roller_radius="10 mm")
+    m.driver("motor", "angle", body=cam, function="2*pi*t")
+    m.pressure_angle("pressure_angle", joint="contact")
+    m.analysis("motion", "kinematic", drivers=["motor"], t_end=1.5, step="1/360")
+    m.analysis("drive", "inverse", drivers=["motor"], t_end=1.5, step="1/360")
+    assert m.to_dict()["measures"]["pressure_angle"] == {"type": "pressure_angle", "joint": "contact"}
+    built, loaded = m.build(), linkwork.load(EXAMPLES / "cam_roller.yaml")
+    assert built.analyses == loaded.analyses == ["motion", "drive"]
+    for analysis in built.analyses:
+        a, b = built.run(analysis), loaded.run(analysis)
+        assert a.columns == b.columns and "pressure_angle" in a.columns
+        assert np.array_equal(a.values, b.values) and np.array_equal(a.time, b.time), analysis
+
+    bad = linkwork.Mechanism()
+    bad.body("disc", mass=1, inertia=0.1, position=(0, 0))
+    bad.body("roller", mass=1, inertia=0.1, position=(0, 0.05))
+    bad.cam("contact", "disc", "roller", point_j=(0, 0), radius="0.05 + disc.phi")
+    with pytest.raises(linkwork.ModelError) as error:
+        bad.build()
+    problems = dict(error.value.problems)
+    assert "expected psi" in problems["joints.contact.radius"]

@@ -219,6 +219,27 @@ class Mechanism:
         fields = {"point_i": point_i, "point_j": point_j, "length": length}
         return self.joint(name, "distance", body_i=body_i, body_j=body_j, **fields)
 
+    def cam(
+        self,
+        name: str,
+        body_i: str,
+        body_j: str,
+        point_j: Point | str,
+        radius: str,
+        *,
+        point_i: Point | str | None = None,
+        roller_radius: Number | None = None,
+    ) -> str:
+        """A cam and roller (or knife-edge) follower: ``point_j`` of the follower ``body_j`` (the
+        roller's centre, body frame, m, or a point name) stays on the pitch curve of the cam
+        ``body_i``, whose pitch radius ``radius`` (m) is an expression of ``psi``, the polar angle
+        (rad) of the follower's point about the cam's centre ``point_i`` (body frame, m; default
+        its origin) measured in the cam's frame, of parameters and of tables. The pitch curve is
+        the path of the roller's centre; the cam's surface is its inward offset by
+        ``roller_radius`` (m, default 0: a knife edge)."""
+        fields = {"point_i": point_i, "point_j": point_j, "radius": radius, "roller_radius": roller_radius}
+        return self.joint(name, "cam", body_i=body_i, body_j=body_j, **fields)
+
     def driver(self, name: str, type: str, **fields: Any) -> str:
         """A driver (``"angle"``, ``"relative_angle"``, ``"distance"``, ``"x"``, ``"y"``) with its
         fields: ``m.driver("motor", "angle", body=crank, function="2*pi*t")``; ``function`` an
@@ -284,6 +305,13 @@ class Mechanism:
         force applied to the mechanism there; ``omega_input / omega_output`` in a frictionless
         mechanism of negligible inertia. Needs an inverse, static or dynamic analysis."""
         return self.measure(name, type="mechanical_advantage", input=input, output=output)
+
+    def pressure_angle(self, name: str, joint: str) -> str:
+        """The pressure angle of the cam joint ``joint`` with a radial follower (moving along the
+        line through the cam's centre), rad: the angle between the pitch curve's normal at the
+        follower's point and that line, ``atan(sign(dpsi/dt) R'(psi) / R(psi))``, positive while
+        the cam pushes the follower out. The usual rule is ``|phi| <= 30`` degrees."""
+        return self.measure(name, type="pressure_angle", joint=joint)
 
     def analysis(self, name: str, type: str, **fields: Any) -> str:
         """An analysis (``"kinematic"``, ``"dynamic"``, ``"inverse"``, ``"static"``, ``"modes"``)

@@ -11,6 +11,7 @@
 //! `r_P = r_i + A(phi_i) s'_P` with `A(phi) = [[cos, -sin], [sin, cos]]`.
 
 mod absolute;
+mod cam;
 mod distance;
 mod driver;
 mod expression;
@@ -23,6 +24,7 @@ mod translational;
 
 use crate::expr::Scalar;
 pub use absolute::{Absolute, AbsoluteKind};
+pub use cam::{Cam, PitchPoint};
 pub use distance::Distance;
 pub use driver::{Driver, DriverKind};
 pub use expression::{GeneralConstraint, Var, MAX_SLOTS};

@@ -7,9 +7,9 @@ use super::{
     REACTION_QUANTITIES,
 };
 use crate::constraints::{
-    Absolute, AbsoluteKind, BodyIx, Constraint, Distance, Driver, DriverKind, Frame, Friction, FrictionLaw, GearKind,
-    GearPair, GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc, Shape, Sketch, Translational, Var,
-    DEFAULT_TRANSITION_VELOCITY,
+    Absolute, AbsoluteKind, BodyIx, Cam, Constraint, Distance, Driver, DriverKind, Frame, Friction, FrictionLaw,
+    GearKind, GearPair, GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc, Shape, Sketch,
+    Translational, Var, DEFAULT_TRANSITION_VELOCITY,
 };
 use crate::error::Problem;
 use crate::expr::{Expr, Names, Spline, TimeFunction};
@@ -698,6 +698,7 @@ impl Cx<'_> {
                 }
             }
             J::Expression(ExpressionJoint { expression }) => self.general(&format!("{path}.expression"), expression)?,
+            J::Cam(cam) => Box::new(self.cam(path, cam)?),
         };
         Some((c, friction))
     }
@@ -715,6 +716,42 @@ impl Cx<'_> {
         let ends = self.ends(path, body_i, point_i, body_j, point_j);
         let v = self.axis(&format!("{path}.axis_i"), *axis_i);
         Some((ends?, v?))
+    }
+
+    /// A cam joint's row: its ends, and its pitch radius, an expression of `psi`, parameters and
+    /// tables.
+    fn cam(&mut self, path: &str, cam: &CamJoint) -> Option<Cam> {
+        let CamJoint { body_i, point_i, body_j, point_j, radius, roller_radius } = cam;
+        let ends = self.ends(path, body_i, point_i, body_j, point_j);
+        let roller = self.non_negative(&format!("{path}.roller_radius"), *roller_radius);
+        let names = ModelNames { parameters: &self.spec.parameters, tables: &self.tables };
+        let mut resolve = |name: &str| {
+            if name == "psi" {
+                Ok(0)
+            } else {
+                Err("expected psi (the polar angle of the follower's point, rad), a parameter or a table".to_string())
+            }
+        };
+        let expr = match Expr::parse_with(radius, &names, &mut resolve) {
+            Ok(e) => Some(e),
+            Err(e) => {
+                self.problem(format!("{path}.radius"), format!("cannot read the expression '{radius}': {e}"));
+                None
+            }
+        };
+        let ([(i, si), (j, sj)], _, expr) = (ends?, roller?, expr?);
+        if self.initial_distance([(i, si), (j, sj)]) < 1e-12 {
+            let message = "the follower's point is at the cam's centre in the initial configuration: psi is undefined";
+            self.problem(path, message);
+            return None;
+        }
+        match Cam::try_new(i, si, j, sj, expr) {
+            Ok(c) => Some(c),
+            Err(e) => {
+                self.problem(format!("{path}.radius"), e);
+                None
+            }
+        }
     }
 
     /// A general constraint: names are `<body>.x`, `<body>.y`, `<body>.phi` and `t`.
@@ -978,6 +1015,29 @@ impl Cx<'_> {
                 let i = self.effort(&format!("{path}.input"), input);
                 let o = self.effort(&format!("{path}.output"), output);
                 Some(MeasureKind::MechanicalAdvantage { input: i?, output: o? })
+            }
+            MeasureSpec::Standard(StandardMeasure::PressureAngle(PressureAngleMeasure { joint })) => {
+                let path = format!("{path}.joint");
+                let cam = match self.spec.joints.get(joint) {
+                    // A cam joint that did not compile has its own problem.
+                    Some(JointSpec::Cam(cam)) if joints.iter().any(|j| j.name == *joint) => cam,
+                    Some(JointSpec::Cam(_)) => return None,
+                    Some(other) => {
+                        self.problem(path, format!("'{joint}' is a {} joint; expected a cam joint", other.name()));
+                        return None;
+                    }
+                    None => {
+                        if !self.broken.iter().any(|b| b.strip_prefix("joints.") == Some(joint)) {
+                            let known: Vec<&str> = self.spec.joints.keys().map(String::as_str).collect();
+                            self.problem(
+                                path,
+                                format!("unknown joint '{joint}'; expected one of: {}", known.join(", ")),
+                            );
+                        }
+                        return None;
+                    }
+                };
+                self.cam(&format!("joints.{joint}"), cam).map(MeasureKind::PressureAngle)
             }
         }
     }

@@ -17,7 +17,7 @@ pub use drawing::{BodyDrawing, Drawing, JointDrawing};
 pub use parse::{parse_partial, parse_partial_with, parse_spec, Parsed};
 pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
 
-use crate::constraints::{BodyIx, Constraint, Frame, Friction};
+use crate::constraints::{BodyIx, Cam, Constraint, Frame, Friction};
 use crate::error::{Error, Problem, Result};
 use crate::forces::{Force, Load, StateExpr};
 use indexmap::IndexMap;
@@ -264,6 +264,9 @@ pub enum MeasureKind {
         /// Index in `q` of the output body's `phi`.
         output: usize,
     },
+    /// The pressure angle of a cam joint with a radial follower: `atan(sigma R' / R)`,
+    /// `sigma = sign(dpsi/dt)`.
+    PressureAngle(Cam),
     /// `-output / input`, each applied to the mechanism.
     MechanicalAdvantage {
         /// The effort at the input.
@@ -344,6 +347,10 @@ impl Measure {
                 gamma.min(std::f64::consts::PI - gamma)
             }
             MeasureKind::VelocityRatio { input, output } => qdot[*output] / qdot[*input],
+            MeasureKind::PressureAngle(cam) => {
+                let p = cam.pitch_point(q, qdot);
+                (p.psi_rate.signum() * p.slope).atan2(p.radius)
+            }
             MeasureKind::MechanicalAdvantage { input, output } => {
                 -output.value(q, qdot, reactions, t) / input.value(q, qdot, reactions, t)
             }

@@ -184,7 +184,9 @@ pub fn field(section: &str, kind: Option<&str>, key: &str) -> Option<Field> {
         ("bodies", "omega") => D(Dim::ANGULAR_VELOCITY),
         ("joints", "axis_i" | "axis_j" | "axis") => D(Dim::NONE),
         ("joints", "at") => D(Dim::LENGTH),
-        ("joints", "offset" | "length" | "radius" | "radius_i" | "radius_j") => D(Dim::LENGTH),
+        // A cam's radius is an expression of the polar angle `psi`, read when the joint compiles.
+        ("joints", "radius") if kind == Some("cam") => return None,
+        ("joints", "offset" | "length" | "radius" | "radius_i" | "radius_j" | "roller_radius") => D(Dim::LENGTH),
         ("joints", "value") if kind == Some("absolute_angle") => D(Dim::ANGLE),
         ("joints", "value") => D(Dim::LENGTH),
         ("forces", "stiffness") if kind == Some("rotational_spring_damper") => D(Dim::ROTATIONAL_STIFFNESS),

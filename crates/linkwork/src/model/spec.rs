@@ -311,6 +311,11 @@ named! {
         /// torque (or force) applied to the mechanism there; `omega_input / omega_output` in a
         /// frictionless, massless mechanism.
         "mechanical_advantage" => MechanicalAdvantage(MechanicalAdvantageMeasure),
+        /// The pressure angle of a cam joint with a radial follower (one that moves along the
+        /// line through the cam's centre): the angle between the pitch curve's normal at the
+        /// follower's point and that line, `atan(sigma R'(psi) / R(psi))` with `sigma = sign(dpsi/dt)`,
+        /// rad; positive while the cam pushes the follower outward.
+        "pressure_angle" => PressureAngle(PressureAngleMeasure),
     }
 }
 
@@ -348,6 +353,14 @@ pub struct MechanicalAdvantageMeasure {
     pub input: String,
     /// The output (the load): a driver or a `torque` force.
     pub output: String,
+}
+
+/// The pressure angle of the cam joint `joint` with a radial follower.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PressureAngleMeasure {
+    /// The cam joint.
+    pub joint: String,
 }
 
 /// A tabulated function `y(x)`, interpolated by a piecewise cubic with exact derivatives
@@ -570,6 +583,10 @@ named! {
         /// A general constraint `expression = 0` in body coordinates (`crank.x`, `crank.y`,
         /// `crank.phi`) and time `t`, differentiated exactly. 1 equation.
         "expression" => Expression(ExpressionJoint),
+        /// Cam and roller (or knife-edge) follower: `point_j` of `body_j` (the roller's centre)
+        /// stays on the pitch curve of the cam `body_i`, `radius` a function of the polar angle
+        /// `psi` about `point_i` in the cam's frame. 1 equation.
+        "cam" => Cam(CamJoint),
     }
 }
 
@@ -799,6 +816,31 @@ pub struct RollingJoint {
 pub struct ExpressionJoint {
     /// The left-hand side, e.g. `"crank.x^2 + crank.y^2 - 0.5625"`.
     pub expression: String,
+}
+
+/// Cam and roller (or knife-edge) follower: with `d` the follower's point relative to the cam's
+/// centre in the cam's frame and `psi = atan2(d_y, d_x)`, `|d| = R(psi)`. The pitch curve
+/// `R(psi)` is the path of the roller's centre; the cam's working surface is its inward offset by
+/// `roller_radius`. 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CamJoint {
+    /// The cam.
+    pub body_i: String,
+    /// The cam's centre, body i frame. Default: its origin.
+    #[serde(default)]
+    pub point_i: PointRef,
+    /// The follower.
+    pub body_j: String,
+    /// The roller's centre (the knife edge), body j frame.
+    pub point_j: PointRef,
+    /// The pitch radius, m: an expression of the polar angle `psi` (rad, cam frame, from the
+    /// cam's x axis), parameters and tables, e.g. `"0.05 + cycloidal(psi, 0, 0, 2*pi/3, 0.02)"`.
+    pub radius: String,
+    /// The roller's radius, m (the pitch curve's offset to the cam's surface). Default: 0, a
+    /// knife edge.
+    #[serde(default)]
+    pub roller_radius: f64,
 }
 
 named! {
