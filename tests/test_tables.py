@@ -9,6 +9,7 @@ import pickle
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import linkwork
 
@@ -16,14 +17,16 @@ ROOT = Path(__file__).resolve().parent.parent
 CAM = ROOT / "examples" / "cam_table.yaml"
 
 
-def test_a_models_table_file_is_read_beside_it_and_travels_with_it(tmp_path: Path) -> None:
-    model = linkwork.load(CAM)
+def test_a_models_table_file_is_read_beside_it_and_travels_with_it(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(ROOT)
+    model = linkwork.load("examples/cam_table.yaml")  # a relative path: its folder is made absolute
     results = model.run("motion")
     lift = results["follower.y"] - 0.05
     # The measure and the joint read the same table.
     np.testing.assert_allclose(results["lift_mm"], 1000 * lift, rtol=0, atol=1e-9)
     assert lift.max() > 0.0199
     # Unpickled elsewhere (another working folder), the model still finds its file.
+    monkeypatch.chdir(tmp_path)
     again = pickle.loads(pickle.dumps(model)).run("motion")
     np.testing.assert_array_equal(again["follower.y"], results["follower.y"])
     # The output folder holds the table at the path model.yaml names, so it runs again there.
@@ -62,6 +65,6 @@ def test_a_bad_table_is_refused_naming_its_field() -> None:
     try:
         m.build()
     except linkwork.ModelError as e:
-        assert "tables.history: x must increase strictly: x[2] = 1 follows x[1] = 1" in str(e)
+        assert "tables.history.x: x must increase strictly: x[2] = 1 follows x[1] = 1" in str(e)
     else:
         raise AssertionError("a table whose x does not increase compiled")

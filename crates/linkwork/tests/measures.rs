@@ -84,6 +84,25 @@ fn transmission_angle_and_velocity_ratio_match_the_closed_forms() {
     eprintln!("largest differences: mu {worst_mu:.2e} rad, vr {worst_vr:.2e}");
 }
 
+/// A crank started from rest at a constant acceleration (`theta = 1.5 t^2`: `omega = 0`,
+/// `alpha = 3 / s^2` at t = 0, as a mechanism released from rest): the
+/// velocity ratio at the start comes from the accelerations (`alpha_out = G alpha_in` where the
+/// input is at rest) and is the closed form's there, as it is after. Same tolerance and reasons
+/// as above (the accelerations come from the same exact linear solve as the velocities).
+#[test]
+fn the_velocity_ratio_of_a_start_from_rest_is_the_closed_forms() {
+    let text = patch(&example_text("fourbar_measures.yaml"), "function: \"2*t\"", "function: \"1.5*t^2\"");
+    let r = run(&text, "inverse", &[]);
+    let vr = col(&r, "vr");
+    let omega = col(&r, "crank.omega");
+    assert_eq!(omega[0], 0.0, "the run starts at rest");
+    for (k, &t) in r.time.iter().enumerate().filter(|&(_, &t)| t <= 1.0) {
+        let theta2 = 1.5 * t * t;
+        let want = closed_velocity_ratio(theta2);
+        assert!((vr[k] - want).abs() <= 1e-10 * want.abs().max(1.0), "vr at t = {t}: {} vs {want}", vr[k]);
+    }
+}
+
 /// Massless links (`rho = 0`), no friction: the motor's power goes to the brake, `T2 omega2 +
 /// T_brake omega4 = 0`, so the mechanical advantage `-T_brake / T2` is `omega2 / omega4`, the
 /// inverse of the closed-form velocity ratio; and the coupler is a two-force member, so the pin

@@ -126,12 +126,14 @@ fn bad_tables_are_problems_at_their_fields() {
         )
     };
     let cases = [
-        ("  a: {x: [0, 1, 1], y: [0, 1, 2]}\n", "t", "tables.a: x must increase strictly: x[2] = 1 follows x[1] = 1"),
+        ("  a: {x: [0, 1, 1], y: [0, 1, 2]}\n", "t", "tables.a.x: x must increase strictly: x[2] = 1 follows x[1] = 1"),
         ("  a: {x: [0, 1], y: [0, 1, 2]}\n", "t", "tables.a: x has 2 values and y 3"),
-        ("  a: {x: [0, 1, 2], y: [0, 1, 2], method: periodic}\n", "t", "tables.a: a periodic table ends where"),
+        ("  a: {x: [0, 1, 2], y: [0, 1, 2], method: periodic}\n", "t", "tables.a.y: a periodic table ends where"),
         ("  a: {x: [0, 1], y: [0, 1], method: linear}\n", "t", "tables.a.method: unknown variant `linear`"),
         ("  a: {x: time, y: [0, 1]}\n", "t", "tables.a.x: expected a list of numbers (a column name needs `file:`)"),
         ("  a: {file: nowhere.csv, x: t, y: angle}\n", "t", "tables.a.file: cannot read 'nowhere.csv'"),
+        ("  a: {x: [0, '1 deg'], y: [0, 1]}\n", "t", "tables.a.x: a list of plain numbers (SI, without units"),
+        ("  my table: {x: [0, 1], y: [0, 1]}\n", "t", "tables.my table: 'my table' is not a valid name"),
         (
             "  a: {x: [0, 1], y: [0, 1]}\n",
             "spline(b, t)",
@@ -156,6 +158,7 @@ fn a_files_columns_are_found_by_name_and_read_as_numbers() {
     let write = |name: &str, text: &str| std::fs::write(dir.join(name), text).unwrap();
     write("good.csv", "# a comment line\ntime, angle\n0, 0\n1, 2\n2, 4\n");
     write("bad.csv", "time,angle\n0,0\n1,two\n");
+    write("back.csv", "time,angle\n# a comment line\n0,0\n1,1\n0.5,2\n");
     let model = |file: &str, y: &str| {
         format!(
             "bodies:\n  crank: {{mass: 1, inertia: 0.1, position: [0, 0]}}\n\
@@ -177,10 +180,17 @@ fn a_files_columns_are_found_by_name_and_read_as_numbers() {
     );
     let list = problems(&model(&dir.join("bad.csv").display().to_string(), "angle"));
     assert!(
-        list.iter().any(
-            |p| p.starts_with("tables.a.y:") && p.contains("row 3, column 'angle': expected a number, found 'two'")
-        ),
+        list.iter()
+            .any(|p| p.starts_with("tables.a.y:")
+                && p.contains("line 3, column 'angle': expected a number, found 'two'")),
         "{list:#?}"
     );
+    // A point's problem names the file's line (comment lines counted).
+    let list = problems(&model(&dir.join("back.csv").display().to_string(), "angle"));
+    let backwards = |p: &String| p.starts_with("tables.a.x: x must increase strictly") && p.ends_with("line 5)");
+    assert!(list.iter().any(backwards), "{list:#?}");
+    // A folder (or a device) is not a table file.
+    let list = problems(&model(&dir.display().to_string(), "angle"));
+    assert!(list.iter().any(|p| p.starts_with("tables.a.file:") && p.contains("is not a file")), "{list:#?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -120,7 +120,12 @@ pub fn check(model: &Model) -> Result<CheckReport> {
                         AnalysisKind::Dynamic => massless(model, &a.drivers, &system.assembly.q, a.t_start),
                         _ => unmet_freedom(model, a, system.equations, system.rank),
                     };
-                    AnalysisCheck { kind: a.kind, system: Some(system), error: None, warning: warning.or(measures) }
+                    AnalysisCheck {
+                        kind: a.kind,
+                        system: Some(system),
+                        error: None,
+                        warning: joined(warning, measures),
+                    }
                 }
                 Err(e) => AnalysisCheck { kind: a.kind, system: None, error: Some(e.to_string()), warning: measures },
             };
@@ -136,4 +141,12 @@ pub fn check(model: &Model) -> Result<CheckReport> {
         analyses,
         placed: model.placed.clone(),
     })
+}
+
+/// Both warnings of an analysis, one after the other, or the one there is.
+fn joined(a: Option<String>, b: Option<String>) -> Option<String> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(format!("{a}; {b}")),
+        (a, b) => a.or(b),
+    }
 }

@@ -35,7 +35,7 @@ pub const BALANCE_TOLERANCE: f64 = 1e-5;
 /// change per change of the multipliers it depends on (`~ mu r / arm` for a pin of radius `r` whose
 /// load turns about a lever `arm`: `1e-3` to `1e-1` in machines); 100 iterations reach
 /// [`FRICTION_RTOL`] for any `rho` up to 0.79, and the iteration stops at once where it diverges.
-const MAX_FRICTION_ITERATIONS: usize = 100;
+const FIXED_POINT_FRICTION_ITERATIONS: usize = 100;
 
 /// Columns after the reactions and efforts.
 pub const INVERSE_COLUMNS: [&str; 4] = ["kinetic_energy", "potential_energy", "driver_power", "applied_power"];
@@ -135,7 +135,7 @@ fn transpose_solve(space: &mut RowSpace, rhs: &[f64], t: f64) -> Result<Vec<f64>
 /// solve with the factorization of `space` already made. Converged when the estimated distance
 /// to the fixed point, `rho / (1 - rho)` times the last change (`rho` the last contraction; the
 /// change itself at the first iteration), is below [`FRICTION_RTOL`] of the largest multiplier;
-/// [`Error::Friction`] when it is not after `MAX_FRICTION_ITERATIONS` or when it diverges (a
+/// [`Error::Friction`] when it is not after `FIXED_POINT_FRICTION_ITERATIONS` or when it diverges (a
 /// contraction of 1 or more twice running: the friction, through the reactions, asks for more
 /// than it gives, as at a self-locking position).
 fn with_friction(
@@ -149,7 +149,7 @@ fn with_friction(
     let mut previous = f64::INFINITY;
     let mut growing = 0;
     let mut worst = (0, f64::INFINITY);
-    for it in 1..=MAX_FRICTION_ITERATIONS {
+    for it in 1..=FIXED_POINT_FRICTION_ITERATIONS {
         loaded.copy_from_slice(rhs);
         dae.add_friction(q, qdot, &lambda, 1.0, &mut loaded, None);
         let next = transpose_solve(space, &loaded, t)?;
@@ -167,7 +167,7 @@ fn with_friction(
         }
         previous = worst.1;
     }
-    Err(dae.friction_error(worst, t, MAX_FRICTION_ITERATIONS, "the reactions"))
+    Err(dae.friction_error(worst, t, FIXED_POINT_FRICTION_ITERATIONS, "the reactions"))
 }
 
 /// `<joint>.fx, .fy, .torque` for every joint, then `<driver>.effort` for every active driver,

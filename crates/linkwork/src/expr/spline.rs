@@ -40,6 +40,24 @@ pub enum Method {
     Akima,
 }
 
+/// What is wrong with a table's points: the column (`"x"`, `"y"`, or `""` for the table as a
+/// whole), the index of the point concerned, if one, and the reason.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TableError {
+    /// `"x"`, `"y"` or `""`.
+    pub column: &'static str,
+    /// The point concerned.
+    pub index: Option<usize>,
+    /// The reason.
+    pub message: String,
+}
+
+impl TableError {
+    fn new(column: &'static str, index: Option<usize>, message: String) -> Self {
+        TableError { column, index, message }
+    }
+}
+
 /// A tabulated function of one variable, with exact first and second derivatives.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Spline {
@@ -58,41 +76,36 @@ impl Spline {
     /// What is wrong with the data: fewer than two points (three when periodic), `x` and `y` of
     /// different lengths, a number that is not finite, `x` not strictly increasing (naming the
     /// first index where it is not), or a periodic table whose first and last `y` differ.
-    pub fn new(x: Vec<f64>, y: Vec<f64>, method: Method) -> Result<Spline, String> {
+    pub fn new(x: Vec<f64>, y: Vec<f64>, method: Method) -> Result<Spline, TableError> {
         let periodic = method == Method::Periodic;
         let least = if periodic { 3 } else { 2 };
         if x.len() != y.len() {
-            return Err(format!("x has {} values and y {}; expected as many of each", x.len(), y.len()));
+            let message = format!("x has {} values and y {}; expected as many of each", x.len(), y.len());
+            return Err(TableError::new("", None, message));
         }
         if x.len() < least {
-            return Err(format!("{} points given; expected at least {least}", x.len()));
+            return Err(TableError::new("", None, format!("{} points given; expected at least {least}", x.len())));
         }
         if let Some(i) = x.iter().chain(&y).position(|v| !v.is_finite()) {
             let (axis, i) = if i < x.len() { ("x", i) } else { ("y", i - x.len()) };
-            return Err(format!("{axis}[{i}] is not a finite number"));
+            return Err(TableError::new(axis, Some(i), format!("{axis}[{i}] is not a finite number")));
         }
         if let Some(i) = x.windows(2).position(|w| w[1] <= w[0]) {
-            return Err(format!("x must increase strictly: x[{}] = {} follows x[{i}] = {}", i + 1, x[i + 1], x[i]));
+            let message = format!("x must increase strictly: x[{}] = {} follows x[{i}] = {}", i + 1, x[i + 1], x[i]);
+            return Err(TableError::new("x", Some(i + 1), message));
         }
-        if periodic && y[0] != y[y.len() - 1] {
-            return Err(format!(
-                "a periodic table ends where it starts: y[0] = {} but y[{}] = {}",
-                y[0],
-                y.len() - 1,
-                y[y.len() - 1]
-            ));
+        let last = y.len() - 1;
+        if periodic && y[0] != y[last] {
+            let message = format!("a periodic table ends where it starts: y[0] = {} but y[{last}] = {}", y[0], y[last]);
+            return Err(TableError::new("y", Some(last), message));
         }
         let m = match method {
-            Method::NotAKnot => not_a_knot(&x, &y)?,
-            Method::Periodic => periodic_slopes(&x, &y)?,
-            Method::Akima => akima(&x, &y),
-        };
+            Method::NotAKnot => not_a_knot(&x, &y),
+            Method::Periodic => periodic_slopes(&x, &y),
+            Method::Akima => Ok(akima(&x, &y)),
+        }
+        .map_err(|message| TableError::new("x", None, message))?;
         Ok(Spline { x, y, m, periodic })
-    }
-
-    /// The tabulated points' abscissae.
-    pub fn x(&self) -> &[f64] {
-        &self.x
     }
 
     /// `(s(x), s'(x), s''(x))`; NaN for a NaN `x`.
@@ -368,7 +381,7 @@ mod tests {
 
     #[test]
     fn bad_tables_are_refused_with_the_reason() {
-        let bad = |x: Vec<f64>, y: Vec<f64>, m| Spline::new(x, y, m).unwrap_err();
+        let bad = |x: Vec<f64>, y: Vec<f64>, m| Spline::new(x, y, m).unwrap_err().message;
         assert!(bad(vec![0.0], vec![1.0], Method::NotAKnot).contains("at least 2"));
         assert!(bad(vec![0.0, 1.0], vec![1.0, 1.0], Method::Periodic).contains("at least 3"));
         assert!(bad(vec![0.0, 1.0, 2.0], vec![1.0, 2.0], Method::NotAKnot).contains("3 values and y 2"));

@@ -62,6 +62,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
     let stand_in = || Arc::new(Spline::new(vec![0.0, 1.0], vec![0.0, 0.0], Default::default()).expect("two points"));
     for (name, table) in &spec.tables {
         let path = format!("tables.{name}");
+        cx.name(&path, name);
         let built = super::tables::table(&path, table, folder).map(Arc::new).unwrap_or_else(|problems| {
             cx.problems.extend(problems);
             stand_in()

@@ -346,10 +346,21 @@ impl Measure {
                 let gamma = (u[0] * v[1] - u[1] * v[0]).abs().atan2(u[0] * v[0] + u[1] * v[1]);
                 gamma.min(std::f64::consts::PI - gamma)
             }
-            MeasureKind::VelocityRatio { input, output } => qdot[*output] / qdot[*input],
+            MeasureKind::VelocityRatio { input, output } => {
+                // omega_out = G(q) omega_in, so alpha_out = G alpha_in + G' omega_in^2: where the
+                // input is at rest (a start from rest) the accelerations give G exactly.
+                if qdot[*input] == 0.0 {
+                    qddot[*output] / qddot[*input]
+                } else {
+                    qdot[*output] / qdot[*input]
+                }
+            }
             MeasureKind::PressureAngle(cam) => {
                 let p = cam.pitch_point(q, qdot);
-                (p.psi_rate.signum() * p.slope).atan2(p.radius)
+                // At rest the follower's direction of motion is taken as the rise's (psi falling
+                // as the cam turns counter-clockwise under it), whatever the sign of the zero.
+                let sense = if p.psi_rate > 0.0 { 1.0 } else { -1.0 };
+                (sense * p.slope).atan2(p.radius)
             }
             MeasureKind::MechanicalAdvantage { input, output } => {
                 -output.value(q, qdot, reactions, t) / input.value(q, qdot, reactions, t)
@@ -452,7 +463,12 @@ impl Model {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path)
             .map_err(|e| Error::Io { path: path.display().to_string(), message: e.to_string() })?;
-        Model::from_yaml_in(&text, set, path.parent().unwrap_or(Path::new("")))
+        // The folder made absolute, so that a model sent to another process (a Dask worker, in
+        // another working folder) still finds its tables' files.
+        let folder = path.parent().unwrap_or(Path::new(""));
+        let folder = std::fs::canonicalize(if folder.as_os_str().is_empty() { Path::new(".") } else { folder })
+            .unwrap_or_else(|_| folder.to_path_buf());
+        Model::from_yaml_in(&text, set, folder)
     }
 
     /// Compile a model from the text of a model file.

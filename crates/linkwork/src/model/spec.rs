@@ -383,7 +383,10 @@ pub struct TableSpec {
 
 /// A table's column: its numbers, or the name of a column of the table's file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(untagged, expecting = "a list of numbers, or the name of a column of the table's file")]
+#[serde(
+    untagged,
+    expecting = "a list of plain numbers (SI, without units or parameters), or the name of a column of the table's file"
+)]
 pub enum TableColumn {
     /// The numbers.
     Values(Vec<f64>),

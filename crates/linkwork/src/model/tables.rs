@@ -6,12 +6,21 @@ use crate::error::Problem;
 use crate::expr::spline::{Method, Spline};
 use std::path::Path;
 
+/// The largest table file read: 64 MiB, some two million rows of a few columns, far beyond a
+/// test rig's or a CAD export's table; anything larger (or a device such as `/dev/zero`) would
+/// take the memory rather than be a table.
+const MAX_TABLE_BYTES: u64 = 64 << 20;
+
 /// The table at `path` (`tables.<name>`), a file named relative to `folder`; every problem with
 /// the path of its field.
 pub(super) fn table(path: &str, spec: &TableSpec, folder: &Path) -> Result<Spline, Vec<Problem>> {
-    let (x, y) = match (&spec.file, &spec.x, &spec.y) {
-        (None, TableColumn::Values(x), TableColumn::Values(y)) => (x.clone(), y.clone()),
-        (Some(file), TableColumn::Column(x), TableColumn::Column(y)) => columns(path, &folder.join(file), x, y)?,
+    // With a file, the file's line of each point, for the messages.
+    let (x, y, lines) = match (&spec.file, &spec.x, &spec.y) {
+        (None, TableColumn::Values(x), TableColumn::Values(y)) => (x.clone(), y.clone(), None),
+        (Some(file), TableColumn::Column(x), TableColumn::Column(y)) => {
+            let (x, y, lines) = columns(path, &folder.join(file), x, y)?;
+            (x, y, Some((file, lines)))
+        }
         (None, _, _) => {
             let problems = [("x", &spec.x), ("y", &spec.y)]
                 .into_iter()
@@ -36,13 +45,32 @@ pub(super) fn table(path: &str, spec: &TableSpec, folder: &Path) -> Result<Splin
         SplineMethod::Periodic => Method::Periodic,
         SplineMethod::Akima => Method::Akima,
     };
-    Spline::new(x, y, method).map_err(|message| vec![Problem::new(path, message)])
+    Spline::new(x, y, method).map_err(|e| {
+        let at = if e.column.is_empty() { path.to_string() } else { format!("{path}.{}", e.column) };
+        let line = match (lines, e.index) {
+            (Some((file, lines)), Some(i)) => format!(" ('{file}' line {})", lines[i]),
+            _ => String::new(),
+        };
+        vec![Problem::new(at, format!("{}{line}", e.message))]
+    })
 }
 
-/// Columns `x` and `y` of the CSV file `file` (its first row names the columns), as numbers.
-fn columns(path: &str, file: &Path, x: &str, y: &str) -> Result<(Vec<f64>, Vec<f64>), Vec<Problem>> {
+/// Columns `x` and `y` of the CSV file `file` (its first row names the columns), as numbers, and
+/// the file's line of each row.
+type Columns = (Vec<f64>, Vec<f64>, Vec<u64>);
+
+fn columns(path: &str, file: &Path, x: &str, y: &str) -> Result<Columns, Vec<Problem>> {
     let at = |field: &str, message: String| vec![Problem::new(format!("{path}.{field}"), message)];
     let shown = file.display();
+    match std::fs::metadata(file) {
+        Ok(m) if !m.is_file() => return Err(at("file", format!("'{shown}' is not a file"))),
+        Ok(m) if m.len() > MAX_TABLE_BYTES => {
+            let message = format!("'{shown}' has {} bytes; a table file may have at most {MAX_TABLE_BYTES}", m.len());
+            return Err(at("file", message));
+        }
+        Ok(_) => {}
+        Err(e) => return Err(at("file", format!("cannot read '{shown}': {e}"))),
+    }
     let mut reader = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
@@ -57,10 +85,10 @@ fn columns(path: &str, file: &Path, x: &str, y: &str) -> Result<(Vec<f64>, Vec<f
             .ok_or_else(|| at(field, format!("'{shown}' has no column '{name}'; its columns are {}", names.join(", "))))
     };
     let (ix, iy) = (index("x", x)?, index("y", y)?);
-    let (mut xs, mut ys) = (Vec::new(), Vec::new());
-    for (row, record) in reader.records().enumerate() {
+    let (mut xs, mut ys, mut lines) = (Vec::new(), Vec::new(), Vec::new());
+    for record in reader.records() {
         let record = record.map_err(|e| at("file", format!("cannot read '{shown}': {e}")))?;
-        // Row 1 is the header: data rows count from 2, as a spreadsheet shows them.
+        let line = record.position().map_or(0, csv::Position::line);
         let number = |field: &str, i: usize, out: &mut Vec<f64>| match record.get(i).map(str::parse::<f64>) {
             Some(Ok(v)) => {
                 out.push(v);
@@ -68,13 +96,14 @@ fn columns(path: &str, file: &Path, x: &str, y: &str) -> Result<(Vec<f64>, Vec<f
             }
             _ => Err(at(
                 field,
-                format!("'{shown}' row {}, column '{}': expected a number, found '{}'", row + 2, names[i], {
+                format!("'{shown}' line {line}, column '{}': expected a number, found '{}'", names[i], {
                     record.get(i).unwrap_or("")
                 }),
             )),
         };
         number("x", ix, &mut xs)?;
         number("y", iy, &mut ys)?;
+        lines.push(line);
     }
-    Ok((xs, ys))
+    Ok((xs, ys, lines))
 }

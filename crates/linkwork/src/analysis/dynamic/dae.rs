@@ -99,7 +99,7 @@ impl Kkt {
 /// refinement or a few more. A reaction near zero (a pin unloaded while the mechanism moves)
 /// turns its direction fast, which costs a few more; 30 leaves room for those and still fails fast
 /// where there is no solution.
-const MAX_FRICTION_ITERATIONS: usize = 30;
+const NEWTON_FRICTION_ITERATIONS: usize = 30;
 
 /// An iteration on the multipliers with joint friction (Newton on the accelerations, the inverse
 /// analysis's fixed point) has converged when its last correction of the multipliers is below this
@@ -516,9 +516,9 @@ impl<'m> Dae<'m> {
     ///
     /// With joint friction `Q` holds `Q_f(lambda)`, and the system is nonlinear (through the
     /// reactions' magnitudes): Newton's method from `lambda = 0`, the matrix refreshed at each
-    /// iterate ([`Dae::factor`]), until no joint's friction changes by more than `FRICTION_RTOL` of
-    /// itself; [`Error::Friction`] naming the joint that still changed most after
-    /// `MAX_FRICTION_ITERATIONS`.
+    /// iterate ([`Dae::factor`]), until the multipliers change by less than `FRICTION_RTOL` of the
+    /// largest ([`Dae::friction_change`]); [`Error::Friction`] naming the joint whose friction
+    /// still changed most after `NEWTON_FRICTION_ITERATIONS`.
     pub fn accelerations(&mut self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) -> Result<(), Error> {
         self.positions(q, t);
         out.fill(0.0);
@@ -557,7 +557,7 @@ impl<'m> Dae<'m> {
     ) -> Result<(), Error> {
         let n = self.n;
         let mut worst = (0, f64::INFINITY);
-        for it in 0..MAX_FRICTION_ITERATIONS {
+        for it in 0..NEWTON_FRICTION_ITERATIONS {
             self.residual(q, qdot, t, out, r);
             self.factor(q, qdot, t, 0.0, 0.0, &out[n..], 1.0).map_err(|e| super::factor_error(e, t))?;
             self.solve(r);
@@ -569,7 +569,7 @@ impl<'m> Dae<'m> {
                 return Ok(());
             }
         }
-        Err(self.friction_error(worst, t, MAX_FRICTION_ITERATIONS, "the accelerations and reactions"))
+        Err(self.friction_error(worst, t, NEWTON_FRICTION_ITERATIONS, "the accelerations and reactions"))
     }
 
     /// How far an iteration that changed the multipliers by `delta (m)` to `lambda (m)` is from
