@@ -30,7 +30,7 @@ pub enum Shape {
     Polyline(Vec<[f64; 2]>),
 }
 
-/// Normal force, penetration, approach rate and geometry of a touch.
+/// Where two shapes overlap: the penetration, the normal from b into a, and the contact point.
 struct Touch<S> {
     delta: S,
     n: [S; 2],
