@@ -77,6 +77,18 @@ class SlideFriction(TypedDict, total=False):
     transition_velocity: Number
 
 
+class ContactFriction(TypedDict, total=False):
+    """Coulomb friction at a contact (docs/model-format.md, "Contact"): ``mu *
+    tanh(v_t / transition_velocity)`` times the normal force opposes the slip velocity ``v_t``.
+
+    ``mu``: coefficient of friction (>= 0). ``transition_velocity``: m/s, at which the coefficient
+    reaches 76% of ``mu`` (default 0.001).
+    """
+
+    mu: Required[Number]
+    transition_velocity: Number
+
+
 _SECTIONS = (
     "name", "gravity", "parameters", "tables", "ground", "bodies", "joints", "drivers", "forces", "measures", "analyses"
 )
@@ -249,9 +261,39 @@ class Mechanism:
 
     def force(self, name: str, type: str, **fields: Any) -> str:
         """A force or force element (``"force"``, ``"torque"``, ``"spring_damper"``,
-        ``"rotational_spring_damper"``) with its fields, N, N m, N/m, N s/m."""
+        ``"rotational_spring_damper"``, ``"contact"``) with its fields, N, N m, N/m, N s/m."""
         self._add("forces", name, _entry(f"forces.{name}", {"type": type, **fields}))
         return name
+
+    def contact(
+        self,
+        name: str,
+        body_i: str,
+        shape_i: Mapping[str, Any],
+        body_j: str,
+        shape_j: Mapping[str, Any],
+        *,
+        stiffness: Number,
+        exponent: Number | None = None,
+        damping: Number | None = None,
+        friction: ContactFriction | None = None,
+        max_penetration: Number | None = None,
+    ) -> str:
+        """A unilateral contact (docs/model-format.md, "Contact") between shapes fixed to two
+        bodies, in their frames: ``{"circle": {"centre": (x, y), "radius": r}}``,
+        ``{"segment": [(x, y), (x, y)]}`` or ``{"polyline": [(x, y), ...]}``, one a circle. Normal
+        force ``stiffness * delta**exponent * (1 + damping * ddelta/dt)`` (N/m^n, default exponent
+        1.5, damping s/m, default 0), Coulomb friction optional."""
+        fields = {
+            "shape_i": shape_i,
+            "shape_j": shape_j,
+            "stiffness": stiffness,
+            "exponent": exponent,
+            "damping": damping,
+            "friction": friction,
+            "max_penetration": max_penetration,
+        }
+        return self.force(name, "contact", body_i=body_i, body_j=body_j, **fields)
 
     def measure(self, name: str, expression: str | None = None, **fields: Any) -> str:
         """A named output: an expression (``"slider_d.x + 4"``; where the analysis has them it

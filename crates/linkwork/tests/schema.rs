@@ -65,6 +65,7 @@ forces:
   torque: {type: torque, body: a, torque: 1}
   spring_damper: {type: spring_damper, body_i: a, point_i: [0, 0], body_j: b, point_j: [1, 0]}
   rotational_spring_damper: {type: rotational_spring_damper, body_i: a, body_j: b}
+  contact: {type: contact, body_i: a, shape_i: {circle: {radius: 1}}, body_j: b, shape_j: {segment: [[0, 0], [1, 0]]}, stiffness: 1}
 "#;
 
 /// The names `schema`'s definition `def` gives its variants (`"const"`, of the `type` of a tagged

@@ -9,10 +9,12 @@
 //!
 //! Gravity is not an element: it is constant, `Q_i = (m_i g, 0)`, added by the dynamics.
 
+mod contact;
 mod point;
 mod spring;
 mod state_expr;
 
+pub use contact::{Contact, ContactState, Shape};
 pub use point::{PointLoad, Torque};
 pub use spring::{RotationalSpringDamper, SpringDamper};
 pub use state_expr::{Load, StateExpr, StateVar};
@@ -34,6 +36,10 @@ pub trait ForceLaw: Debug + Send + Sync {
     fn expressions(&self) -> Vec<(&'static str, &str)> {
         Vec::new()
     }
+    /// The contact this force is, if it is one (for its events and output columns).
+    fn contact(&self) -> Option<&Contact> {
+        None
+    }
 }
 
 /// An applied force or force element, object-safe (see [`ForceLaw`]).
@@ -50,6 +56,8 @@ pub trait Force: Debug + Send + Sync {
     fn potential_dual(&self, x: &[Dual]) -> Dual;
     /// The expressions the force evaluates, as `(field, source)` (for messages).
     fn expressions(&self) -> Vec<(&'static str, &str)>;
+    /// The contact this force is, if it is one.
+    fn contact(&self) -> Option<&Contact>;
 }
 
 impl<T: ForceLaw> Force for T {
@@ -70,6 +78,9 @@ impl<T: ForceLaw> Force for T {
     }
     fn expressions(&self) -> Vec<(&'static str, &str)> {
         ForceLaw::expressions(self)
+    }
+    fn contact(&self) -> Option<&Contact> {
+        ForceLaw::contact(self)
     }
 }
 

@@ -13,7 +13,10 @@ use crate::constraints::{
 };
 use crate::error::Problem;
 use crate::expr::{Expr, Names, Spline, TimeFunction};
-use crate::forces::{Force, Load, PointLoad, RotationalSpringDamper, SpringDamper, StateExpr, StateVar, Torque};
+use crate::forces::{
+    Contact, Force, Load, PointLoad, RotationalSpringDamper, Shape as ContactShape, SpringDamper, StateExpr, StateVar,
+    Torque,
+};
 use indexmap::IndexMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -970,7 +973,111 @@ impl Cx<'_> {
                 };
                 Box::new(RotationalSpringDamper::new(i.0, j.0, k, c, theta0, act))
             }
+            ForceSpec::Contact(spec) => self.contact(path, spec)?,
         })
+    }
+
+    /// A contact: its bodies, shapes (one a circle), normal law, friction and event depth.
+    fn contact(&mut self, path: &str, spec: &ContactSpec) -> Option<Box<dyn Force>> {
+        let bi = self.body(&format!("{path}.body_i"), &spec.body_i);
+        let bj = self.body(&format!("{path}.body_j"), &spec.body_j);
+        if spec.body_i == spec.body_j {
+            let message = format!("a contact needs two different bodies, found '{}' twice", spec.body_i);
+            self.problem(format!("{path}.body_j"), message);
+        }
+        let si = self.shape(&format!("{path}.shape_i"), &spec.shape_i);
+        let sj = self.shape(&format!("{path}.shape_j"), &spec.shape_j);
+        let k = self.positive(&format!("{path}.stiffness"), spec.stiffness);
+        let e = match spec.exponent {
+            Some(e) => self.finite(&format!("{path}.exponent"), e).and_then(|e| {
+                if e < 1.0 {
+                    self.problem(format!("{path}.exponent"), format!("expected a number >= 1 (the force's derivative is infinite at first touch below 1), found {e}"));
+                    return None;
+                }
+                Some(e)
+            }),
+            None => Some(DEFAULT_CONTACT_EXPONENT),
+        };
+        let c = self.non_negative(&format!("{path}.damping"), spec.damping);
+        let friction = match &spec.friction {
+            Some(ContactFriction { mu, transition_velocity }) => {
+                let mu = self.non_negative(&format!("{path}.friction.mu"), *mu);
+                let v_s = match transition_velocity {
+                    Some(v) => self.positive(&format!("{path}.friction.transition_velocity"), *v),
+                    None => Some(DEFAULT_TRANSITION_VELOCITY),
+                };
+                mu.zip(v_s)
+            }
+            None => Some((0.0, DEFAULT_TRANSITION_VELOCITY)),
+        };
+        let depth = spec.max_penetration.map(|d| self.positive(&format!("{path}.max_penetration"), d));
+        let (bi, bj, si, sj, k, e, c, friction) = (bi?, bj?, si?, sj?, k?, e?, c?, friction?);
+        if bi == BodyIx::GROUND && bj == BodyIx::GROUND {
+            self.problem(format!("{path}.body_j"), "both shapes are on ground: name a moving body");
+            return None;
+        }
+        let ((a, (centre, radius)), (b, other)) = match (si, sj) {
+            (ContactShape::Circle(centre, radius), other) => ((bi, (centre, radius)), (bj, other)),
+            (other, ContactShape::Circle(centre, radius)) => ((bj, (centre, radius)), (bi, other)),
+            _ => {
+                self.problem(
+                    format!("{path}.shape_j"),
+                    "a contact between two segments or polylines is not supported; expected a circle on one of the bodies",
+                );
+                return None;
+            }
+        };
+        let smallest = match other {
+            ContactShape::Circle(_, r) => radius.min(r),
+            ContactShape::Polyline(_) => radius,
+        };
+        let depth = match depth {
+            Some(d) => d?,
+            None => DEFAULT_PENETRATION_FRACTION * smallest,
+        };
+        Some(Box::new(Contact::new(a.0, centre, radius, b.0, other, (k, e, c), friction, depth)))
+    }
+
+    /// A contact shape, in its body's frame.
+    fn shape(&mut self, path: &str, spec: &ShapeSpec) -> Option<ContactShape> {
+        match (&spec.circle, &spec.segment, &spec.polyline) {
+            (Some(CircleShape { centre, radius }), None, None) => {
+                let c = self.vec2(&format!("{path}.circle.centre"), *centre);
+                let r = self.positive(&format!("{path}.circle.radius"), *radius);
+                Some(ContactShape::Circle(c?, r?))
+            }
+            (None, Some(points), None) => self.polyline(&format!("{path}.segment"), points),
+            (None, None, Some(points)) => self.polyline(&format!("{path}.polyline"), points),
+            _ => {
+                self.problem(path, "expected exactly one of circle, segment, polyline");
+                None
+            }
+        }
+    }
+
+    /// A chain of two or more points, each segment of positive length.
+    fn polyline(&mut self, path: &str, points: &[[f64; 2]]) -> Option<ContactShape> {
+        if points.len() < 2 {
+            self.problem(path, format!("expected two or more points, found {}", points.len()));
+            return None;
+        }
+        let mut ok = true;
+        for (k, p) in points.iter().enumerate() {
+            ok &= self.vec2(&format!("{path}[{k}]"), *p).is_some();
+        }
+        if !ok {
+            return None;
+        }
+        for (k, w) in points.windows(2).enumerate() {
+            if (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]) < 1e-12 {
+                self.problem(
+                    format!("{path}[{}]", k + 1),
+                    format!("the point repeats point {k}: a segment needs two distinct ends"),
+                );
+                ok = false;
+            }
+        }
+        ok.then(|| ContactShape::Polyline(points.to_vec()))
     }
 
     /// A measure; `joints`: the joints compiled, whose pins a transmission angle takes.
@@ -1520,6 +1627,15 @@ fn finite(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f64> {
         None
     }
 }
+
+/// The exponent of a contact's penetration when none is given: 1.5, Hertz's for two cylinders'
+/// ends or spheres, the usual choice (Lankarani and Nikravesh 1990).
+pub const DEFAULT_CONTACT_EXPONENT: f64 = 1.5;
+
+/// A contact's `max_penetration` when none is given, as a fraction of the smallest radius of the
+/// pair: 1e-3. A step into first contact then ends at most that deep, where the force is a small
+/// fraction of its peak in any impact that deforms the shapes less than their size.
+pub const DEFAULT_PENETRATION_FRACTION: f64 = 1e-3;
 
 /// `v`, or a problem at `path` when it is not a finite number above zero.
 fn positive(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f64> {

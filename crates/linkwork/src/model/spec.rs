@@ -184,6 +184,10 @@ named! {
         /// opposite on `body_j`) is `-stiffness (theta - free_angle) - damping dtheta/dt + actuator`,
         /// `theta = phi_i - phi_j`.
         "rotational_spring_damper" => RotationalSpringDamper(RotationalSpringDamperSpec),
+        /// Unilateral contact between a circle and a circle, segment or polyline fixed to two
+        /// bodies: a Hunt-Crossley normal force and smoothed Coulomb friction
+        /// (docs/model-format.md, "Contact").
+        "contact" => Contact(ContactSpec),
     }
 }
 
@@ -276,6 +280,77 @@ pub struct RotationalSpringDamperSpec {
     /// Default 0.
     #[serde(default)]
     pub actuator: Quantity,
+}
+
+/// Unilateral contact between shapes fixed to two bodies (one may be ground); one of the shapes is
+/// a circle. The normal force is `k delta^n (1 + c ddelta/dt)`, never negative, `delta` the
+/// penetration; the friction `mu tanh(v_t / v_s)` times it opposes the slip `v_t`.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// First body (or ground).
+    pub body_i: String,
+    /// The shape fixed to the first body, in its frame.
+    pub shape_i: ShapeSpec,
+    /// Second body (or ground).
+    pub body_j: String,
+    /// The shape fixed to the second body, in its frame.
+    pub shape_j: ShapeSpec,
+    /// Contact stiffness `k`, N/m^n, `> 0`.
+    pub stiffness: f64,
+    /// Exponent `n` of the penetration, `>= 1`. Default 1.5 (Hertz).
+    #[serde(default)]
+    pub exponent: Option<f64>,
+    /// Hunt-Crossley hysteresis damping factor `c`, s/m, `>= 0`. Default 0 (elastic).
+    #[serde(default)]
+    pub damping: f64,
+    /// Coulomb friction at the contact point. Default: none.
+    #[serde(default)]
+    pub friction: Option<ContactFriction>,
+    /// Penetration at which a step that begins separated and ends in contact is rejected and
+    /// retried shorter, m, `> 0`. Default: 1e-3 of the smallest radius of the pair.
+    #[serde(default)]
+    pub max_penetration: Option<f64>,
+}
+
+/// A shape fixed to a body, in the body's frame (points relative to its reference): exactly one
+/// of `circle`, `segment`, `polyline`.
+#[derive(Debug, Clone, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ShapeSpec {
+    /// A circle (a disc's rim).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub circle: Option<CircleShape>,
+    /// A segment between two points.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segment: Option<[[f64; 2]; 2]>,
+    /// A chain of segments through two or more points.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub polyline: Option<Vec<[f64; 2]>>,
+}
+
+/// A circle fixed to a body.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CircleShape {
+    /// Centre, body frame, m. Default: the body's reference `[0, 0]`.
+    #[serde(default)]
+    pub centre: [f64; 2],
+    /// Radius, m, `> 0`.
+    pub radius: f64,
+}
+
+/// Coulomb friction at a contact: `mu tanh(v_t / v_s)` times the normal force, opposing the
+/// slip velocity `v_t`.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ContactFriction {
+    /// Coefficient of friction, `>= 0`.
+    pub mu: f64,
+    /// Slip velocity at which the coefficient reaches `tanh(1) = 76%` of `mu`, m/s, `> 0`;
+    /// default 0.001.
+    #[serde(default)]
+    pub transition_velocity: Option<f64>,
 }
 
 /// A named output: an expression of time and state (`"slider_d.x + 4"`; besides positions and

@@ -69,6 +69,7 @@
 
 use super::{
     step_failure, Dae, DynamicStats, Formulation, IntegratorKind, IntegratorSettings, Outcome, Output, Span, Start,
+    CONTACT_UNRESOLVED,
 };
 use crate::error::Error;
 
@@ -372,7 +373,9 @@ impl Bdf<'_, '_> {
             // condition reaches `1e9` there, amplifies the round-off of `Phi` (`7e-15`) into
             // corrections of `1e-11` m that no iteration can remove (the backward error is
             // round-off; hht's test is the same).
-            let settled = stalled && !self.si2 && fresh && {
+            // (Not with contacts: their stiff forces, not the constraints, can stall Newton while
+            // `Phi` is at round-off, and a settled step would then pass with its error untested.)
+            let settled = stalled && !self.si2 && fresh && !self.dae.has_contacts() && {
                 self.rows.fill(0.0);
                 super::roundoff_ratio(&self.dae.phi, &self.rows, qscale) <= 1.0
             };
@@ -576,6 +579,20 @@ pub fn run_until(
                         h,
                         &format!("the error test fails (error {err:.3e} of the tolerance) even with the smallest step"),
                     ));
+                }
+                continue;
+            }
+            if let Some(r) = s.dae.contact_event(&s.qs[0], &s.q1) {
+                // A first contact inside the step: shorter, until the step ends just into it, at
+                // order 1 (the step falls far below the history's spacing, and the contact's
+                // onset is not smooth: a high order would extrapolate free flight through it).
+                s.stats.rejected_steps += 1;
+                start_up = false;
+                at_order = 0;
+                k = 1;
+                h *= r;
+                if h < h_min {
+                    return Err(step_failure(s.dae, &s.qs[0], t0, h, CONTACT_UNRESOLVED));
                 }
                 continue;
             }

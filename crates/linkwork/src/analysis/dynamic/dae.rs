@@ -189,6 +189,8 @@ pub struct Dae<'m> {
     pub stats: LinearStats,
     /// The joints with friction (none in most models: then nothing is evaluated for it).
     friction: Vec<FrictionSlot<'m>>,
+    /// Indices into `forces` of the contacts (none in most models: then no step is checked).
+    contacts: Vec<usize>,
 }
 
 impl<'m> Dae<'m> {
@@ -218,6 +220,7 @@ impl<'m> Dae<'m> {
         let force_cols: Vec<&[usize]> =
             forces.iter().map(|f| f.force.columns()).chain(friction.iter().map(|f| f.columns)).collect();
         let applied = forces.iter().map(|f| f.applied).collect();
+        let contacts = (0..forces.len()).filter(|&k| forces[k].force.contact().is_some()).collect();
         let kkt = Kkt::new(n, m, &entries, &force_cols)?;
         let w = force_cols.iter().map(|c| c.len()).max().unwrap_or(0);
         let max_mass = mass.iter().fold(0.0f64, |a, &b| a.max(b));
@@ -248,6 +251,7 @@ impl<'m> Dae<'m> {
             applied,
             stats: LinearStats::default(),
             friction,
+            contacts,
         })
     }
 
@@ -638,8 +642,48 @@ impl<'m> Dae<'m> {
         0.5 * self.mass.iter().zip(qdot).map(|(m, v)| m * v * v).sum::<f64>()
     }
 
-    /// Potential energy of gravity and of the active springs, J (zero at the origin and at each
-    /// spring's free length).
+    /// Whether a contact is active.
+    pub fn has_contacts(&self) -> bool {
+        !self.contacts.is_empty()
+    }
+
+    /// For a step from `q0` to `q1`: the fraction of it to retry with when it carries a contact
+    /// from separation past its `max_penetration` or further than its smallest radius
+    /// ([`crate::forces::Contact::event`]; the smallest fraction of all contacts), `None` when the
+    /// step may stand (always, without contacts).
+    pub fn contact_event(&mut self, q0: &[f64], q1: &[f64]) -> Option<f64> {
+        let mut fraction: Option<f64> = None;
+        for &k in &self.contacts {
+            let f = self.forces[k].force.as_ref();
+            let Some(contact) = f.contact() else { continue };
+            let cols = f.columns();
+            let w = cols.len();
+            gather(q0, cols, &mut self.fx[..w]);
+            gather(q1, cols, &mut self.fv[..w]);
+            if let Some(r) = contact.event(&self.fx[..w], &self.fv[..w]) {
+                fraction = Some(fraction.map_or(r, |g| g.min(r)));
+            }
+        }
+        fraction
+    }
+
+    /// `(normal force, friction, penetration)` of each active contact at `(q, qdot)`
+    /// ([`crate::forces::Contact::state`]), into `out`.
+    pub fn contact_states(&mut self, q: &[f64], qdot: &[f64], out: &mut Vec<f64>) {
+        for &k in &self.contacts {
+            let f = self.forces[k].force.as_ref();
+            let Some(contact) = f.contact() else { continue };
+            let cols = f.columns();
+            let w = cols.len();
+            gather(q, cols, &mut self.fx[..w]);
+            gather(qdot, cols, &mut self.fv[..w]);
+            let s = contact.state(&self.fx[..w], &self.fv[..w]);
+            out.extend([s.normal, s.friction, s.penetration]);
+        }
+    }
+
+    /// Potential energy of gravity and of the active springs and contacts, J (zero at the origin
+    /// and at each spring's free length).
     pub fn potential_energy(&mut self, q: &[f64]) -> f64 {
         let mut v = -self.gravity.iter().zip(q).map(|(g, x)| g * x).sum::<f64>();
         for f in &self.forces {

@@ -478,6 +478,15 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                 }
                 continue;
             }
+            if let Some(r) = s.dae.contact_event(&s.q, &s.q1) {
+                // A first contact inside the step: shorter, until the step ends just into it.
+                s.stats.rejected_steps += 1;
+                h *= r;
+                if h < h_min {
+                    return Err(step_failure(s.dae, &s.q, s.t, h, super::CONTACT_UNRESOLVED));
+                }
+                continue;
+            }
             // Accept.
             let t1 = s.t + h;
             s.stats.accept(h);

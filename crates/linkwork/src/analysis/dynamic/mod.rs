@@ -250,6 +250,11 @@ pub fn singular_rows(dae: &mut Dae<'_>, q: &[f64], t: f64) -> (f64, Vec<RowName>
 /// size.
 const SUDDEN_FORCE: f64 = 1e-2;
 
+/// The cause of a step failure when a first contact cannot be reached within `max_penetration`
+/// by shortening the step.
+pub const CONTACT_UNRESOLVED: &str =
+    "a first contact cannot be located: the step that ends within the contact's max_penetration is below the smallest";
+
 /// The failure of an integrator whose step fell below `h_min` at `t`: names a force or driver
 /// that is not finite at `t + h` ([`Error::NonFinite`]), else a force with a singularity in time
 /// there ([`Error::Unbounded`]), else, where `Phi_q` has (nearly) lost rank,
@@ -349,6 +354,15 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         Ok(d) => d,
         Err(e) => return Err(fail(Results::new(model, analysis), factor_error(e, analysis.t_start))),
     };
+    if settings.kind == IntegratorKind::Abam && dae.has_contacts() {
+        // ABAM's steps are not checked for first contacts (bdf and hht reject a step that
+        // carries a contact from separation past its `max_penetration`): it could step over one.
+        let problem = crate::error::Problem::new(
+            format!("analyses.{}.integrator", analysis.name),
+            "abam does not locate first contacts, so it could step over an impact unseen; use bdf or hht with contacts",
+        );
+        return Err(fail(Results::new(model, analysis), Error::Model(vec![problem])));
+    }
     let m = dae.m;
     let mut out = Output::new(model, analysis, n, m);
     let t0 = analysis.t_start;

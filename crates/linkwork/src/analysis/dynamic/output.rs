@@ -18,6 +18,11 @@ use crate::results::Results;
 pub const ENERGY_COLUMNS: [&str; 5] =
     ["kinetic_energy", "potential_energy", "nonconservative_work", "position_residual", "velocity_residual"];
 
+/// Columns of each contact, `<contact>.<quantity>`, after the measures: its normal force `fn`
+/// (N, `>= 0`), its friction `ft` on the circle's body along the tangent `R90 n` (N) and its
+/// penetration (m, 0 when separated).
+pub const CONTACT_QUANTITIES: [&str; 3] = ["fn", "ft", "penetration"];
+
 /// The requested output times and the results written so far.
 #[derive(Debug)]
 pub struct Output {
@@ -56,6 +61,12 @@ impl Output {
         let mut names = crate::analysis::reaction_columns(model, analysis);
         names.extend(ENERGY_COLUMNS.map(String::from));
         names.extend(model.measures.iter().map(|m| m.name.clone()));
+        for &k in &analysis.forces {
+            let f = &model.forces[k];
+            if f.force.contact().is_some() {
+                names.extend(CONTACT_QUANTITIES.map(|q| format!("{}.{q}", f.name)));
+            }
+        }
         results.add_columns(names);
         let (h, t0) = (analysis.step, analysis.t_start);
         let times = crate::analysis::setup::output_times(analysis);
@@ -144,6 +155,9 @@ impl Output {
         self.row.extend([kinetic, potential, self.work_at(t), position_residual, velocity_residual]);
         for m in &dae.model.measures {
             self.row.push(m.value(q, qdot, qddot, &self.reactions, t));
+        }
+        if dae.has_contacts() {
+            dae.contact_states(q, qdot, &mut self.row);
         }
         // No non-finite number leaves as a result: the row's own check finds the first, and the
         // analysis stops naming the element that gave it rather than the column.

@@ -1,0 +1,372 @@
+//! Unilateral contact between a circle fixed to body a and a circle or polyline fixed to body b
+//! (docs/model-format.md, "Contact").
+//!
+//! ```text
+//! circle-circle:    d = c_a - c_b,  l = |d|,  delta = r_a + r_b - l,  n = d / l
+//!                   P = c_b + n (r_b - delta / 2)
+//! circle-polyline:  Q the point of the polyline closest to c_a,  d = c_a - Q,  l = |d|,
+//!                   delta = r_a - l,  n = d / l,  P = Q - n delta / 2
+//! slip:             w = v_a(P) - v_b(P),  v(P) = rdot + omega R90 (P - r)
+//!                   ddelta/dt = -n . w,  v_t = t . w,  t = R90 n
+//! normal:           F_n = max(0, k delta^e (1 + c ddelta/dt))   (delta > 0; else no force)
+//! friction:         F_t = -mu F_n tanh(v_t / v_s)
+//! on a:             f = F_n n + F_t t at P;  on b: -f at P;  V = k delta^(e+1) / (e+1)
+//! ```
+//!
+//! `n` points from b into a, `P` is the middle of the overlap. The normal law is Hunt and
+//! Crossley's (1975), `F_n = k delta^e (1 + (3/2) alpha ddelta/dt)` with `c = 3 alpha / 2`; it
+//! vanishes at first touch and at separation, and the clamp keeps it from pulling as the bodies
+//! part. Polylines are two-sided: the penetration must stay below the circle's radius.
+
+use super::{cross, layout, rotate, ForceLaw, Local};
+use crate::expr::Scalar;
+
+/// The shape of body b.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Shape {
+    /// A circle: centre (body frame) and radius.
+    Circle([f64; 2], f64),
+    /// A chain of two or more points (body frame).
+    Polyline(Vec<[f64; 2]>),
+}
+
+/// Where two shapes overlap: the penetration, the normal from b into a, and the contact point.
+struct Touch<S> {
+    delta: S,
+    n: [S; 2],
+    p: [S; 2],
+}
+
+/// The normal force and the friction of a contact at a state, for output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactState {
+    /// Penetration `delta`, m (`0` when separated).
+    pub penetration: f64,
+    /// Normal force `F_n >= 0`, N.
+    pub normal: f64,
+    /// Friction `F_t` on body a along `t = R90 n`, N.
+    pub friction: f64,
+}
+
+/// A contact between a circle on body a and a shape on body b.
+#[derive(Debug, Clone)]
+pub struct Contact {
+    a: Local,
+    centre: [f64; 2],
+    radius: f64,
+    b: Local,
+    shape: Shape,
+    stiffness: f64,
+    exponent: f64,
+    damping: f64,
+    mu: f64,
+    transition_velocity: f64,
+    max_penetration: f64,
+    columns: Vec<usize>,
+}
+
+impl Contact {
+    /// A contact between the circle `(centre, radius)` of the body whose `x` is `q[a]` and
+    /// `shape` of the body whose `x` is `q[b]` (`None` for ground), with the normal law
+    /// `(stiffness, exponent, damping)`, friction `(mu, transition_velocity)` and the penetration
+    /// `max_penetration` above which a step into first contact is rejected.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        a: Option<usize>,
+        centre: [f64; 2],
+        radius: f64,
+        b: Option<usize>,
+        shape: Shape,
+        (stiffness, exponent, damping): (f64, f64, f64),
+        (mu, transition_velocity): (f64, f64),
+        max_penetration: f64,
+    ) -> Contact {
+        let (columns, l) = layout(&[a, b], &mut []);
+        Contact {
+            a: l[0],
+            centre,
+            radius,
+            b: l[1],
+            shape,
+            stiffness,
+            exponent,
+            damping,
+            mu,
+            transition_velocity,
+            max_penetration,
+            columns,
+        }
+    }
+
+    /// The smallest radius of the pair, m.
+    pub fn smallest_radius(&self) -> f64 {
+        match self.shape {
+            Shape::Circle(_, r) => self.radius.min(r),
+            Shape::Polyline(_) => self.radius,
+        }
+    }
+
+    /// The circle's centre, global frame.
+    fn centre<S: Scalar>(&self, x: &[S]) -> [S; 2] {
+        let pa = self.a.pose(x);
+        let s = rotate(pa[2], self.centre);
+        [pa[0] + s[0], pa[1] + s[1]]
+    }
+
+    /// Where the shapes touch; `None` when they do not overlap (or the centres coincide, where
+    /// the normal has no direction).
+    fn touch<S: Scalar>(&self, x: &[S]) -> Option<Touch<S>> {
+        let ca = self.centre(x);
+        let pb = self.b.pose(x);
+        let global = |s: [f64; 2]| {
+            let r = rotate(pb[2], s);
+            [pb[0] + r[0], pb[1] + r[1]]
+        };
+        let (q, reach) = match &self.shape {
+            Shape::Circle(c, r) => (global(*c), self.radius + r),
+            Shape::Polyline(points) => {
+                let mut best: Option<([S; 2], f64)> = None;
+                let mut from = global(points[0]);
+                for p in &points[1..] {
+                    let to = global(*p);
+                    let e = [to[0] - from[0], to[1] - from[1]];
+                    let u = ((ca[0] - from[0]) * e[0] + (ca[1] - from[1]) * e[1]) / (e[0] * e[0] + e[1] * e[1]);
+                    let u = if u.value() < 0.0 {
+                        S::constant(0.0)
+                    } else if u.value() > 1.0 {
+                        S::constant(1.0)
+                    } else {
+                        u
+                    };
+                    let near = [from[0] + u * e[0], from[1] + u * e[1]];
+                    let dist = (ca[0].value() - near[0].value()).hypot(ca[1].value() - near[1].value());
+                    if best.as_ref().is_none_or(|b| dist < b.1) {
+                        best = Some((near, dist));
+                    }
+                    from = to;
+                }
+                (best.map(|b| b.0).unwrap_or(from), self.radius)
+            }
+        };
+        let d = [ca[0] - q[0], ca[1] - q[1]];
+        let l = (d[0] * d[0] + d[1] * d[1]).sqrt();
+        let delta = S::constant(reach) - l;
+        if delta.value() <= 0.0 || l.value() < 1e-300 {
+            return None;
+        }
+        let n = [d[0] / l, d[1] / l];
+        // P = c_a - n (r_a - delta / 2): the middle of the overlap, for either shape of b.
+        let back = S::constant(self.radius) - delta * S::constant(0.5);
+        Some(Touch { delta, n, p: [ca[0] - n[0] * back, ca[1] - n[1] * back] })
+    }
+
+    /// `(F_n, F_t)` and the touch, from the velocities `v`.
+    fn forces<S: Scalar>(&self, x: &[S], v: &[S]) -> Option<(S, S, Touch<S>)> {
+        let touch = self.touch(x)?;
+        let (pa, pb, va, vb) = (self.a.pose(x), self.b.pose(x), self.a.pose(v), self.b.pose(v));
+        let p = touch.p;
+        // v(P) = rdot + omega R90 (P - r), for a minus for b.
+        let w = [
+            va[0] - va[2] * (p[1] - pa[1]) - vb[0] + vb[2] * (p[1] - pb[1]),
+            va[1] + va[2] * (p[0] - pa[0]) - vb[1] - vb[2] * (p[0] - pb[0]),
+        ];
+        let n = touch.n;
+        let rate = -(n[0] * w[0] + n[1] * w[1]);
+        let elastic = S::constant(self.stiffness) * touch.delta.powf(self.exponent);
+        let normal = elastic * (S::constant(1.0) + S::constant(self.damping) * rate);
+        if normal.value() <= 0.0 {
+            return None;
+        }
+        let slip = n[0] * w[1] - n[1] * w[0];
+        let friction = if self.mu > 0.0 {
+            -(S::constant(self.mu) * normal * (slip / S::constant(self.transition_velocity)).tanh())
+        } else {
+            S::constant(0.0)
+        };
+        Some((normal, friction, touch))
+    }
+
+    /// Penetration, normal force and friction at `(x, v)` (local columns), for output.
+    pub fn state(&self, x: &[f64], v: &[f64]) -> ContactState {
+        let penetration = self.touch(x).map_or(0.0, |t| t.delta);
+        let (normal, friction) = self.forces(x, v).map_or((0.0, 0.0), |(n, f, _)| (n, f));
+        ContactState { penetration, normal, friction }
+    }
+
+    /// The gap between the shapes at `x` (local columns), m: negative when they overlap.
+    fn gap(&self, x: &[f64]) -> f64 {
+        let ca = self.centre(x);
+        let pb = self.b.pose(x);
+        let global = |s: [f64; 2]| {
+            let r = rotate(pb[2], s);
+            [pb[0] + r[0], pb[1] + r[1]]
+        };
+        match &self.shape {
+            Shape::Circle(c, r) => {
+                let cb = global(*c);
+                (ca[0] - cb[0]).hypot(ca[1] - cb[1]) - self.radius - r
+            }
+            Shape::Polyline(points) => {
+                let mut dist = f64::INFINITY;
+                for w in points.windows(2) {
+                    let (from, to) = (global(w[0]), global(w[1]));
+                    let e = [to[0] - from[0], to[1] - from[1]];
+                    let u = (((ca[0] - from[0]) * e[0] + (ca[1] - from[1]) * e[1]) / (e[0] * e[0] + e[1] * e[1]))
+                        .clamp(0.0, 1.0);
+                    dist = dist.min((ca[0] - from[0] - u * e[0]).hypot(ca[1] - from[1] - u * e[1]));
+                }
+                dist - self.radius
+            }
+        }
+    }
+
+    /// The circle's centre in body b's frame, relative to its reference.
+    fn centre_in_b(&self, x: &[f64]) -> [f64; 2] {
+        let ca = self.centre(x);
+        let pb = self.b.pose(x);
+        let (c, s) = (pb[2].cos(), pb[2].sin());
+        let d = [ca[0] - pb[0], ca[1] - pb[1]];
+        [c * d[0] + s * d[1], -s * d[0] + c * d[1]]
+    }
+
+    /// For a step from `x0` to `x1` (local columns) that begins separated: the fraction of the
+    /// step to retry with when the step ends deeper than `max_penetration` (aiming, by linear
+    /// interpolation of the gap, at half of it) or moves the circle relative to body b by more
+    /// than the smallest radius (a step that could carry it through a thin shape unseen);
+    /// `None` when the step may stand. Within `[0.05, 0.9]`.
+    pub fn event(&self, x0: &[f64], x1: &[f64]) -> Option<f64> {
+        let g0 = self.gap(x0);
+        if g0 <= 0.0 {
+            return None; // in contact already: the force acts and the error test sees it
+        }
+        let g1 = self.gap(x1);
+        let (c0, c1) = (self.centre_in_b(x0), self.centre_in_b(x1));
+        let moved = (c1[0] - c0[0]).hypot(c1[1] - c0[1]);
+        let reach = self.smallest_radius();
+        let mut fraction: Option<f64> = None;
+        if -g1 > self.max_penetration {
+            fraction = Some((g0 + 0.5 * self.max_penetration) / (g0 - g1));
+        }
+        if moved > reach {
+            let f = 0.5 * reach / moved;
+            fraction = Some(fraction.map_or(f, |g| g.min(f)));
+        }
+        fraction.map(|f| f.clamp(0.05, 0.9))
+    }
+}
+
+impl ForceLaw for Contact {
+    fn columns(&self) -> &[usize] {
+        &self.columns
+    }
+    fn load<S: Scalar>(&self, x: &[S], v: &[S], _t: f64, out: &mut [S]) {
+        out.fill(S::constant(0.0));
+        let Some((normal, friction, touch)) = self.forces(x, v) else {
+            return;
+        };
+        let (n, p) = (touch.n, touch.p);
+        let f = [normal * n[0] - friction * n[1], normal * n[1] + friction * n[0]];
+        let (pa, pb) = (self.a.pose(x), self.b.pose(x));
+        self.a.add(out, [f[0], f[1], cross([p[0] - pa[0], p[1] - pa[1]], f)]);
+        let g = [-f[0], -f[1]];
+        self.b.add(out, [g[0], g[1], cross([p[0] - pb[0], p[1] - pb[1]], g)]);
+    }
+    fn potential<S: Scalar>(&self, x: &[S]) -> S {
+        match self.touch(x) {
+            Some(t) => S::constant(self.stiffness / (self.exponent + 1.0)) * t.delta.powf(self.exponent + 1.0),
+            None => S::constant(0.0),
+        }
+    }
+    fn contact(&self) -> Option<&Contact> {
+        Some(self)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::forces::testing::{check_conservative, check_derivatives};
+    use crate::forces::Force;
+
+    fn disc_on_floor(friction: (f64, f64)) -> Contact {
+        let floor = Shape::Polyline(vec![[-5.0, 0.0], [5.0, 0.0]]);
+        Contact::new(Some(0), [0.0, 0.0], 0.5, None, floor, (1e4, 1.5, 0.2), friction, 1e-4)
+    }
+
+    /// Hand-derived: a disc of radius 0.5 at height 0.49 on a floor: `delta = 0.01`,
+    /// `F_n = 1e4 * 0.01^1.5 = 10 N`; sinking at 1 m/s with `c = 0.2` multiplies it by 1.2; sliding
+    /// at +2 m/s with `mu = 0.3`, `v_s = 1`: friction `-0.3 * 12 * tanh(2)` along x, at the contact
+    /// point 0.495 below the centre.
+    #[test]
+    fn hand_derived() {
+        let c = disc_on_floor((0.3, 1.0));
+        let mut out = [0.0; 3];
+        ForceLaw::load(&c, &[0.0, 0.49, 0.0], &[2.0, -1.0, 0.0], 0.0, &mut out);
+        let fn_ = 1e4 * 0.01f64.powf(1.5) * 1.2;
+        let ft = -0.3 * fn_ * 2.0f64.tanh();
+        // The contact point is 0.495 below the centre: the moment of (ft, fn) about the centre
+        // is (-0.495 along y) x (ft, fn) = 0.495 ft.
+        let want = [ft, fn_, 0.495 * ft];
+        for k in 0..3 {
+            assert!((out[k] - want[k]).abs() < 1e-12, "{out:?} vs {want:?}");
+        }
+        let s = c.state(&[0.0, 0.49, 0.0], &[2.0, -1.0, 0.0]);
+        assert!((s.penetration - 0.01).abs() < 1e-15 && (s.normal - fn_).abs() < 1e-12);
+        // Parting fast enough that 1 + c ddelta/dt < 0: no pull.
+        ForceLaw::load(&c, &[0.0, 0.49, 0.0], &[0.0, 6.0, 0.0], 0.0, &mut out);
+        assert_eq!(out, [0.0; 3]);
+        // Separated.
+        ForceLaw::load(&c, &[0.0, 0.51, 0.0], &[0.0, -1.0, 0.0], 0.0, &mut out);
+        assert_eq!(out, [0.0; 3]);
+    }
+
+    /// Shapes large enough that the random states of the harness overlap (asserted), so the
+    /// derivatives checked are those of a contact that acts.
+    #[test]
+    fn derivatives_match_finite_differences() {
+        let law = (50.0, 1.5, 0.3);
+        let circles =
+            Contact::new(Some(0), [0.2, 0.1], 3.0, Some(3), Shape::Circle([-0.3, 0.4], 2.5), law, (0.4, 0.7), 1e-3);
+        let chain = Shape::Polyline(vec![[-3.0, -0.5], [0.0, 0.5], [3.0, 0.0]]);
+        let poly = Contact::new(Some(3), [0.1, -0.2], 5.0, Some(0), chain.clone(), law, (0.4, 0.7), 1e-3);
+        let grounded = Contact::new(Some(0), [0.1, -0.2], 5.0, None, chain, law, (0.4, 0.7), 1e-3);
+        for (c, seed) in [(&circles, 41), (&poly, 42), (&grounded, 43)] {
+            let x = [0.3, -0.2, 0.4, -0.5, 0.6, 1.1];
+            assert!(c.state(&x[..c.columns.len()], &[0.0; 6][..c.columns.len()]).normal > 0.0);
+            check_derivatives(c as &dyn Force, 6, seed);
+        }
+    }
+
+    /// Without damping or friction the load is minus the gradient of `k delta^(e+1) / (e+1)`.
+    #[test]
+    fn elastic_contact_is_conservative() {
+        let circles = Contact::new(
+            Some(0),
+            [0.2, 0.1],
+            2.5,
+            Some(3),
+            Shape::Circle([-0.3, 0.4], 2.0),
+            (50.0, 1.5, 0.0),
+            (0.0, 1.0),
+            1e-3,
+        );
+        check_conservative(&circles, 51);
+        let chain = Shape::Polyline(vec![[-3.0, -0.5], [0.0, 0.5], [3.0, 0.0]]);
+        let poly = Contact::new(Some(3), [0.1, -0.2], 3.0, Some(0), chain, (50.0, 1.0, 0.0), (0.0, 1.0), 1e-3);
+        check_conservative(&poly, 52);
+    }
+
+    /// A step from 1 mm above the floor to 3 mm into it (allowed 0.1 mm) is cut to
+    /// `(1 + 0.05) / 4` of itself; one ending 0.05 mm in stands; one carrying the disc across more
+    /// than its radius is cut to half the radius over the motion.
+    #[test]
+    fn events() {
+        let c = disc_on_floor((0.0, 1.0));
+        let f = c.event(&[0.0, 0.501, 0.0], &[0.0, 0.497, 0.0]).unwrap();
+        assert!((f - 1.05e-3 / 4e-3).abs() < 1e-9, "{f}");
+        assert_eq!(c.event(&[0.0, 0.501, 0.0], &[0.0, 0.49995, 0.0]), None);
+        assert_eq!(c.event(&[0.0, 0.49, 0.0], &[0.0, 0.45, 0.0]), None);
+        let f = c.event(&[0.0, 2.0, 0.0], &[2.0, 2.0, 0.0]).unwrap();
+        assert!((f - 0.125).abs() < 1e-12, "{f}");
+    }
+}
