@@ -521,7 +521,7 @@ impl<'m> Dae<'m> {
     /// With joint friction `Q` holds `Q_f(lambda)`, and the system is nonlinear (through the
     /// reactions' magnitudes): Newton's method from `lambda = 0`, the matrix refreshed at each
     /// iterate ([`Dae::factor`]), until the multipliers change by less than `FRICTION_RTOL` of the
-    /// largest ([`Dae::friction_change`]); [`Error::Friction`] naming the joint whose friction
+    /// largest (`Dae::friction_change`); [`Error::Friction`] naming the joint whose friction
     /// still changed most after `NEWTON_FRICTION_ITERATIONS`.
     pub fn accelerations(&mut self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) -> Result<(), Error> {
         self.positions(q, t);
