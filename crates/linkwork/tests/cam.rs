@@ -2,29 +2,15 @@
 //! lifting a radial roller follower, against the motion law the curve was made from, the closed
 //! form of the pressure angle, and virtual work; bad cams.
 
+mod common;
+
 use linkwork::{Error, Model};
 use std::f64::consts::PI;
 
-/// The example's lift in the cam angle `theta`: a cycloidal rise of `H` over 120 deg, a dwell
+/// The example's lift in the cam angle `theta`: a cycloidal rise of 20 mm over 120 deg, a dwell
 /// to 180, a cycloidal return over 90 deg, a dwell to 360. `(s, s', s'')` in `theta`.
 fn lift(theta: f64) -> (f64, f64, f64) {
-    const H: f64 = 0.02;
-    let theta = theta.rem_euclid(2.0 * PI);
-    let cycloidal = |u: f64, beta: f64| {
-        let w = 2.0 * PI * u;
-        (H * (u - w.sin() / (2.0 * PI)), H * (1.0 - w.cos()) / beta, H * 2.0 * PI * w.sin() / (beta * beta))
-    };
-    let (rise, ret) = (2.0 * PI / 3.0, PI / 2.0);
-    if theta <= rise {
-        cycloidal(theta / rise, rise)
-    } else if theta <= PI {
-        (H, 0.0, 0.0)
-    } else if theta <= PI + ret {
-        let (s, d1, d2) = cycloidal((theta - PI) / ret, ret);
-        (H - s, -d1, -d2)
-    } else {
-        (0.0, 0.0, 0.0)
-    }
+    common::cycloidal_cam_lift(theta, 0.02, 2.0 * PI / 3.0, PI / 2.0)
 }
 
 const BASE: f64 = 0.05;

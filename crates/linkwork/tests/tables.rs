@@ -2,30 +2,16 @@
 //! lift is a periodic spline through a CSV file's points, against the cycloidal law the points
 //! were sampled from and against virtual work; a table given inline in a driver; bad tables.
 
+mod common;
+
 use linkwork::{Error, Model};
 use std::f64::consts::PI;
 
-/// The lift the table was sampled from (examples/data/cam_lift.csv): a cycloidal rise of
-/// `H` over 120 deg, a dwell to 180, a cycloidal return over 120 deg, a dwell to 360. `(y, y', y'')`
+/// The lift the table was sampled from (examples/data/cam_lift.csv): a cycloidal rise of 20 mm
+/// over 120 deg, a dwell to 180, a cycloidal return over 120 deg, a dwell to 360. `(y, y', y'')`
 /// in the cam angle.
 fn cycloidal_lift(theta: f64) -> (f64, f64, f64) {
-    const H: f64 = 0.02;
-    let beta = 2.0 * PI / 3.0;
-    let theta = theta.rem_euclid(2.0 * PI);
-    let rise = |u: f64| {
-        let w = 2.0 * PI * u;
-        (H * (u - w.sin() / (2.0 * PI)), H * (1.0 - w.cos()) / beta, H * 2.0 * PI * w.sin() / (beta * beta))
-    };
-    if theta <= beta {
-        rise(theta / beta)
-    } else if theta <= PI {
-        (H, 0.0, 0.0)
-    } else if theta <= PI + beta {
-        let (y, d1, d2) = rise((theta - PI) / beta);
-        (H - y, -d1, -d2)
-    } else {
-        (0.0, 0.0, 0.0)
-    }
+    common::cycloidal_cam_lift(theta, 0.02, 2.0 * PI / 3.0, 2.0 * PI / 3.0)
 }
 
 fn cam() -> Model {

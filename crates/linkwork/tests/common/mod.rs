@@ -140,3 +140,25 @@ analyses:
     );
     linkwork::Model::from_yaml(&text).unwrap()
 }
+
+/// A cam's lift in the cam angle `theta` (any turn): a cycloidal rise of `h` over `rise` rad from
+/// 0, a dwell to pi, a cycloidal return over `ret` rad, a dwell to 2 pi; `(s, s', s'')` in `theta`.
+/// Written out from the law `s(u) = u - sin(2 pi u) / (2 pi)`, independently of the engine's.
+pub fn cycloidal_cam_lift(theta: f64, h: f64, rise: f64, ret: f64) -> (f64, f64, f64) {
+    use std::f64::consts::PI;
+    let theta = theta.rem_euclid(2.0 * PI);
+    let cycloidal = |u: f64, beta: f64| {
+        let w = 2.0 * PI * u;
+        (h * (u - w.sin() / (2.0 * PI)), h * (1.0 - w.cos()) / beta, h * 2.0 * PI * w.sin() / (beta * beta))
+    };
+    if theta <= rise {
+        cycloidal(theta / rise, rise)
+    } else if theta <= PI {
+        (h, 0.0, 0.0)
+    } else if theta <= PI + ret {
+        let (s, d1, d2) = cycloidal((theta - PI) / ret, ret);
+        (h - s, -d1, -d2)
+    } else {
+        (0.0, 0.0, 0.0)
+    }
+}
