@@ -352,6 +352,19 @@ mod tests {
     }
 
     #[test]
+    fn akima_end_slopes_follow_his_end_rule() {
+        // Worked by hand from Akima (1970): chords 0, 1, 0; continued at each end as
+        // d_-1 = 2 d_0 - d_1 = -1, d_-2 = 2 d_-1 - d_0 = -2 (and d_3 = -1, d_4 = -2). At point 0
+        // the weights |d_1 - d_0| = |d_-1 - d_-2| = 1 give m_0 = (d_-1 + d_0) / 2 = -0.5; at
+        // point 1, |d_2 - d_1| = |d_0 - d_-1| = 1 give m_1 = (d_0 + d_1) / 2 = 0.5; by symmetry
+        // m_2 = 0.5 and m_3 = -0.5. Another end rule (a chord continued as itself) gives m_0 = 0.
+        let s = Spline::new(vec![0.0, 1.0, 2.0, 3.0], vec![0.0, 0.0, 1.0, 1.0], Method::Akima).unwrap();
+        for (x, m) in [(0.0, -0.5), (1.0, 0.5), (2.0, 0.5), (3.0, -0.5)] {
+            assert!((s.eval(x).1 - m).abs() < 1e-15, "slope at {x}: {} vs {m}", s.eval(x).1);
+        }
+    }
+
+    #[test]
     fn derivatives_match_finite_differences_for_every_method() {
         let x = grid(9, 0.0, 3.0);
         let mut y: Vec<f64> = x.iter().map(|x| (1.3 * x).sin() * x.exp() / 5.0).collect();
