@@ -14,7 +14,7 @@
 //! for a small mechanism and by the sparse Gram matrix `Phi_q Phi_q^T` for a large one
 //! ([`crate::linalg::rows`]), so its cost per output time grows linearly with a chain's bodies.
 
-use super::dynamic::{factor_error, Dae, FRICTION_RTOL};
+use super::dynamic::{factor_error, Dae, FRICTION_RTOL, NEWTON_FRICTION_ITERATIONS};
 use super::kinematic::run_driven;
 use super::{element_names, row_space};
 use crate::error::Error;
@@ -22,6 +22,8 @@ use crate::linalg::rows::RowSpace;
 use crate::linalg::{ColMatrix, Pattern};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
+use faer::linalg::solvers::Solve;
+use faer::Mat;
 
 /// The largest force or moment left unbalanced by the multipliers, relative to the largest
 /// load or inertia force, before the position counts as singular: `1e-5`. A backward-stable
@@ -29,13 +31,6 @@ use crate::results::{Failure, Results};
 /// kinematics' `singular_condition` (1e10); a direction dropped as rank-deficient leaves the
 /// whole load along it.
 pub const BALANCE_TOLERANCE: f64 = 1e-5;
-
-/// The most fixed-point iterations on the multipliers at one output time when joints have
-/// friction: 100. Each iteration shrinks the error by the contraction `rho`, the friction's
-/// change per change of the multipliers it depends on (`~ mu r / arm` for a pin of radius `r` whose
-/// load turns about a lever `arm`: `1e-3` to `1e-1` in machines); 100 iterations reach
-/// [`FRICTION_RTOL`] for any `rho` up to 0.79, and the iteration stops at once where it diverges.
-const FIXED_POINT_FRICTION_ITERATIONS: usize = 100;
 
 /// Columns after the reactions and efforts.
 pub const INVERSE_COLUMNS: [&str; 4] = ["kinetic_energy", "potential_energy", "driver_power", "applied_power"];
@@ -130,14 +125,19 @@ fn transpose_solve(space: &mut RowSpace, rhs: &[f64], t: f64) -> Result<Vec<f64>
     })
 }
 
-/// The multipliers with joint friction: `Phi_q^T lambda = rhs + Q_f(q, qdot, lambda)`, by the
-/// fixed point `lambda_{k+1} = solve(rhs + Q_f(lambda_k))` from the frictionless `lambda`, each
-/// solve with the factorization of `space` already made. Converged when the estimated distance
-/// to the fixed point, `rho / (1 - rho)` times the last change (`rho` the last contraction; the
-/// change itself at the first iteration), is below [`FRICTION_RTOL`] of the largest multiplier;
-/// [`Error::Friction`] when it is not after `FIXED_POINT_FRICTION_ITERATIONS` or when it diverges (a
-/// contraction of 1 or more twice running: the friction, through the reactions, asks for more
-/// than it gives, as at a self-locking position).
+/// The multipliers with joint friction: `Phi_q^T lambda = rhs + Q_f(q, qdot, lambda)`.
+///
+/// `Q_f` depends on `lambda` only through the friction joints' rows `z` (their reactions'
+/// magnitudes) and the solve `S` (minimum norm, with the factorization of `space` already made)
+/// is linear, so `lambda = lambda_0 + S Q_f(z)` from the frictionless `lambda_0`, and Newton
+/// solves the small system `g(z) = lambda_0[rows] + (S E) Q_f(z) - z = 0`: `S E` the response of
+/// those rows to a unit load on each friction column (one solve per column, once), `dQ_f/dz`
+/// exact ([`Dae::friction_by_multipliers`]). A fixed point `z <- lambda_0[rows] + S E Q_f(z)`
+/// contracts by the friction's gain (`~ mu r / arm` for a pin, `mu tan(beta)` for a slider pushed
+/// at an angle `beta`) and stalls as the gain nears 1 on the way to a self-locking position;
+/// Newton converges there as well, and fails only where there is no solution. Converged when the
+/// correction is below [`FRICTION_RTOL`] of the largest multiplier; [`Error::Friction`] naming
+/// the joint whose friction changed most when it is not after `NEWTON_FRICTION_ITERATIONS`.
 fn with_friction(
     dae: &Dae<'_>,
     space: &mut RowSpace,
@@ -145,29 +145,56 @@ fn with_friction(
     rhs: &[f64],
     mut lambda: Vec<f64>,
 ) -> Result<Vec<f64>, Error> {
-    let mut loaded = rhs.to_vec();
-    let mut previous = f64::INFINITY;
-    let mut growing = 0;
-    let mut worst = (0, f64::INFINITY);
-    for it in 1..=FIXED_POINT_FRICTION_ITERATIONS {
-        loaded.copy_from_slice(rhs);
-        dae.add_friction(q, qdot, &lambda, 1.0, &mut loaded, None);
-        let next = transpose_solve(space, &loaded, t)?;
-        let delta: Vec<f64> = next.iter().zip(&lambda).map(|(a, b)| a - b).collect();
-        lambda = next;
-        worst = dae.friction_change(q, qdot, &delta, &lambda);
-        let rate = worst.1 / previous;
-        let distance = if it == 1 || worst.1 == 0.0 { worst.1 } else { rate / (1.0 - rate) * worst.1 };
-        if (rate < 1.0 || it == 1) && distance <= FRICTION_RTOL {
-            return Ok(lambda);
+    let n = rhs.len();
+    let (rows, columns) = dae.friction_support();
+    let (nr, nc) = (rows.len(), columns.len());
+    let mut response = Mat::<f64>::zeros(nr, nc);
+    let mut unit = vec![0.0; n];
+    for (j, &c) in columns.iter().enumerate() {
+        unit[c] = 1.0;
+        let solved = transpose_solve(space, &unit, t)?;
+        unit[c] = 0.0;
+        for (i, &r) in rows.iter().enumerate() {
+            response[(i, j)] = solved[r];
         }
-        growing = if it > 1 && rate >= 1.0 { growing + 1 } else { 0 };
-        if growing >= 2 {
-            return Err(dae.friction_error(worst, t, it, "the reactions"));
-        }
-        previous = worst.1;
     }
-    Err(dae.friction_error(worst, t, FIXED_POINT_FRICTION_ITERATIONS, "the reactions"))
+    let base: Vec<f64> = rows.iter().map(|&r| lambda[r]).collect();
+    let scale = lambda.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let (mut load, mut by) = (vec![0.0; n], vec![0.0; n * nr]);
+    let mut delta = vec![0.0; lambda.len()];
+    let mut worst = (0, f64::INFINITY);
+    for _ in 0..NEWTON_FRICTION_ITERATIONS {
+        load.fill(0.0);
+        dae.add_friction(q, qdot, &lambda, 1.0, &mut load, None);
+        dae.friction_by_multipliers(q, qdot, &lambda, &rows, &mut by);
+        let g = Mat::<f64>::from_fn(nr, 1, |i, _| {
+            base[i] + (0..nc).map(|j| response[(i, j)] * load[columns[j]]).sum::<f64>() - lambda[rows[i]]
+        });
+        let jacobian = Mat::<f64>::from_fn(nr, nr, |i, k| {
+            let slope: f64 = (0..nc).map(|j| response[(i, j)] * by[k * n + columns[j]]).sum();
+            f64::from(u8::from(i == k)) - slope
+        });
+        let step = jacobian.partial_piv_lu().solve(&g);
+        delta.fill(0.0);
+        for (i, &r) in rows.iter().enumerate() {
+            delta[r] = step[(i, 0)];
+        }
+        if !delta.iter().all(|d: &f64| d.is_finite()) {
+            break;
+        }
+        for &r in &rows {
+            lambda[r] += delta[r];
+        }
+        let largest = scale.max(rows.iter().fold(0.0f64, |a, &r| a.max(lambda[r].abs())));
+        let change = delta.iter().fold(0.0f64, |a, d| a.max(d.abs()));
+        if change <= FRICTION_RTOL * largest {
+            load.copy_from_slice(rhs);
+            dae.add_friction(q, qdot, &lambda, 1.0, &mut load, None);
+            return transpose_solve(space, &load, t);
+        }
+        worst = dae.friction_change(q, qdot, &delta, &lambda);
+    }
+    Err(dae.friction_error(worst, t, NEWTON_FRICTION_ITERATIONS, "the reactions"))
 }
 
 /// `<joint>.fx, .fy, .torque` for every joint, then `<driver>.effort` for every active driver,

@@ -93,16 +93,17 @@ impl Kkt {
     }
 }
 
-/// The most Newton iterations [`Dae::accelerations`] takes when joints have friction: 30. The
+/// The most Newton iterations [`Dae::accelerations`] (and the inverse analysis' Newton on the
+/// multipliers) takes when joints have friction: 30. The
 /// friction depends on the reactions only through their magnitudes, so Newton converges
 /// quadratically once the reactions' directions settle, in the three solves of the frictionless
 /// refinement or a few more. A reaction near zero (a pin unloaded while the mechanism moves)
 /// turns its direction fast, which costs a few more; 30 leaves room for those and still fails fast
 /// where there is no solution.
-const NEWTON_FRICTION_ITERATIONS: usize = 30;
+pub(crate) const NEWTON_FRICTION_ITERATIONS: usize = 30;
 
-/// An iteration on the multipliers with joint friction (Newton on the accelerations, the inverse
-/// analysis's fixed point) has converged when its last correction of the multipliers is below this
+/// An iteration on the multipliers with joint friction (Newton on the accelerations, and on the
+/// inverse analysis's friction rows) has converged when its last correction of the multipliers is below this
 /// fraction of the largest multiplier: `1e-10`. Once the friction holds still the rest is linear
 /// and the correction is the refinement's, which the frictionless solve stops after three solves,
 /// each shrinking it by the regularisation's `~1e-10`; `1e-10` is a hundred to ten thousand times
@@ -440,6 +441,60 @@ impl<'m> Dae<'m> {
     /// Whether a joint has friction.
     pub fn has_friction(&self) -> bool {
         !self.friction.is_empty()
+    }
+
+    /// The multipliers' rows and the coordinates' columns that joint friction involves, each
+    /// ascending without repeats: `Q_f` is zero off `columns` and depends on `lambda` only
+    /// through `rows`.
+    pub(crate) fn friction_support(&self) -> (Vec<usize>, Vec<usize>) {
+        let mut rows: Vec<usize> = self.friction.iter().flat_map(|s| s.rows.clone()).collect();
+        let mut columns: Vec<usize> = self.friction.iter().flat_map(|s| s.columns.iter().copied()).collect();
+        for v in [&mut rows, &mut columns] {
+            v.sort_unstable();
+            v.dedup();
+        }
+        (rows, columns)
+    }
+
+    /// `out (n x rows.len())`, column-major, `= dQ_f / dlambda[rows]`: the exact derivatives of
+    /// the joints' friction by the multipliers of `rows` ([`Dae::friction_support`]'s), positions
+    /// as at the last [`Dae::positions`].
+    pub(crate) fn friction_by_multipliers(
+        &self,
+        q: &[f64],
+        qdot: &[f64],
+        multipliers: &[f64],
+        rows: &[usize],
+        out: &mut [f64],
+    ) {
+        let n = self.n;
+        out.fill(0.0);
+        for slot in &self.friction {
+            let (w, count) = (slot.columns.len(), slot.rows.len());
+            let (mut v, mut lambda) = ([0.0; FRICTION_WIDTH], [0.0; FRICTION_ROWS]);
+            gather(qdot, slot.columns, &mut v[..w]);
+            lambda[..count].copy_from_slice(&multipliers[slot.rows.clone()]);
+            let (mut by_l, mut by_v) = ([0.0; FRICTION_WIDTH * FRICTION_ROWS], [0.0; FRICTION_WIDTH * FRICTION_WIDTH]);
+            let mut work = [Dual::new(0.0, 0.0); 2 * FRICTION_WIDTH + FRICTION_ROWS];
+            let config = Config::new(q, &self.rot);
+            let block = &self.jac[slot.block.clone()];
+            slot.friction.derivatives(
+                &config,
+                slot.columns,
+                block,
+                &v[..w],
+                &lambda[..count],
+                &mut by_l,
+                &mut by_v,
+                &mut work,
+            );
+            for (r, row) in slot.rows.clone().enumerate() {
+                let Ok(j) = rows.binary_search(&row) else { continue };
+                for (c, &col) in slot.columns.iter().enumerate() {
+                    out[j * n + col] += by_l[c * count + r];
+                }
+            }
+        }
     }
 
     /// `out (n) += Q_f(q, qdot, multipliers / per)`: the joints' friction ([`Friction`]) with the

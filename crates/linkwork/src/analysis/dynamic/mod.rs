@@ -31,8 +31,8 @@ mod order_tests;
 mod output;
 
 pub use crate::model::spec::{Formulation, IntegratorKind};
-pub(crate) use dae::FRICTION_RTOL;
 pub use dae::{Dae, LinearStats, EPS_REL};
+pub(crate) use dae::{FRICTION_RTOL, NEWTON_FRICTION_ITERATIONS};
 pub use output::{factor_error, Output, ENERGY_COLUMNS};
 
 use super::assemble;
