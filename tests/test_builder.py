@@ -161,8 +161,8 @@ def test_the_standard_measures_built_run_as_the_example() -> None:
 
 def test_a_built_slider_crank_with_friction_runs_as_the_example() -> None:
     """examples/slider_crank_friction.yaml built with `friction=` on the revolute and translational
-    joints: the inverse analysis gives the file's results, bit for bit, friction columns included;
-    bad friction is refused at its path in the model."""
+    joints and its summaries: the inverse analysis gives the file's results, bit for bit, friction
+    columns and summaries included; bad friction is refused at its path in the model."""
     m = linkwork.Mechanism("slider-crank with joint friction", gravity=(0, -9.81))
     m.parameter("damping", 200)
     crank = m.body("crank", mass=1.0, inertia=0.001, position=(0.05, 0.001), angle=0.0,
@@ -180,11 +180,21 @@ def test_a_built_slider_crank_with_friction_runs_as_the_example() -> None:
     m.force("pump", "force", body=slider, fx="-damping*slider.vx")
     m.measure("motor_power", "motor.effort * crank.omega")
     m.measure("pump_power", "damping * slider.vx^2")
+    m.summary("efficiency", "integral(pump_power) / integral(motor_power)")
+    m.summary("motor_work", "integral(motor_power)")
+    m.summary("pump_work", "integral(pump_power)")
+    m.summary(
+        "friction_work",
+        "-integral(O.friction * crank.omega + A.friction * (crank.omega - rod.omega)"
+        " + B.friction * (rod.omega - slider.omega) - guide.friction * slider.vx)",
+    )
+    m.summary("peak_torque", "max(abs(motor.effort))")
     m.analysis("inverse", "inverse", drivers=["motor"], forces=["pump"], t_end=1.0, step=0.001)
     built = m.build().run("inverse")
     loaded = linkwork.load(EXAMPLES / "slider_crank_friction.yaml").run("inverse")
     assert built.columns == loaded.columns
     assert np.array_equal(built.values, loaded.values)
+    assert built.summaries == loaded.summaries and len(built.summaries) == 5
     assert {"O.friction", "A.friction", "B.friction", "guide.friction"} <= set(built.columns)
 
     bad = linkwork.Mechanism()

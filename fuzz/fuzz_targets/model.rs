@@ -9,7 +9,8 @@
 //! - a model that does not compile says why: at least one problem, each with a message;
 //! - no NaN or infinity leaves the engine: every number of a check report (the assembled
 //!   positions, velocities and residuals) and every column of a run's results, the rows of a
-//!   failed run included (they are the results "computed before it", kept for the user);
+//!   failed run included (they are the results "computed before it", kept for the user), and
+//!   every summary;
 //! - results are whole: one value per output time in every column, times increasing;
 //! - no input hangs it: libFuzzer's `-timeout` (5 s in `fuzz/run.sh`, for at most
 //!   [`MAX_ANALYSES`] analyses) reports an input that runs longer as a failure.
@@ -119,8 +120,11 @@ fn short(a: &linkwork::model::Analysis) -> Overrides {
 }
 
 /// Every column of `r` has one value per output time, times increase, and no value is NaN or
-/// infinite.
+/// infinite, nor any summary.
 fn whole_and_finite(r: &Results, analysis: &str, status: &str) {
+    for (name, value) in r.summary.summaries.iter().flatten() {
+        assert!(value.is_finite(), "{analysis} ({status}): summary {name} is {value}");
+    }
     assert_eq!(r.names.len(), r.columns.len(), "{analysis} ({status}): one name per column");
     assert!(r.time.windows(2).all(|w| w[0] < w[1]), "{analysis} ({status}): times increase: {:?}", r.time);
     assert!(r.time.iter().all(|t| t.is_finite()), "{analysis} ({status}): a non-finite time: {:?}", r.time);

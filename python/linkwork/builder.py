@@ -15,8 +15,9 @@
 Every entry is what the model file holds (docs/model-format.md): a number is SI, or text with a
 unit (``"40 mm"``) or an expression of the parameters (``"r/2"``); a point is ``(x, y)``; a body is
 its name or the :class:`Body` that :meth:`Mechanism.body` returns. The typed methods cover the
-common joints and the standard measures; :meth:`Mechanism.joint`, :meth:`driver`, :meth:`force`,
-:meth:`measure` and :meth:`analysis` take any type with its fields as keywords, so the builder
+common joints and the standard measures (and :meth:`Mechanism.summary` a whole-run quantity);
+:meth:`Mechanism.joint`, :meth:`driver`, :meth:`force`, :meth:`measure` and :meth:`analysis` take
+any type with its fields as keywords, so the builder
 expresses whatever the file format does.
 The engine checks the model when it is built (:meth:`Mechanism.build`), each problem at its path
 in the file (``joints.A.body_j: unknown body 'coupler'``); the builder itself refuses only what
@@ -90,11 +91,12 @@ class ContactFriction(TypedDict, total=False):
 
 
 _SECTIONS = (
-    "name", "gravity", "parameters", "tables", "ground", "bodies", "joints", "drivers", "forces", "measures", "analyses"
+    "name", "gravity", "parameters", "tables", "ground", "bodies", "joints", "drivers", "forces", "measures",
+    "summaries", "analyses",
 )
-_NAMED = ("parameters", "tables", "bodies", "joints", "drivers", "forces", "measures", "analyses")
+_NAMED = ("parameters", "tables", "bodies", "joints", "drivers", "forces", "measures", "summaries", "analyses")
 # Bodies, joints, drivers, forces and measures share one space of names (they label the results'
-# columns); parameters and analyses have their own.
+# columns); parameters, summaries and analyses have their own.
 _SHARED = ("bodies", "joints", "drivers", "forces", "measures")
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
@@ -104,8 +106,8 @@ class Body(str):
 
 
 class Mechanism:
-    """A model under construction: bodies, joints, drivers, forces, measures and analyses, by
-    name, in the order they are added (the order of the file, and of the results' columns)."""
+    """A model under construction: bodies, joints, drivers, forces, measures, summaries and
+    analyses, by name, in the order they are added (the order of the file, and of the results' columns)."""
 
     def __init__(self, name: str | None = None, *, gravity: Point | None = None) -> None:
         """``name``: the model's title. ``gravity``: ``(gx, gy)``, m/s^2 (default: none)."""
@@ -306,6 +308,15 @@ class Mechanism:
             )
         value = _value(f"measures.{name}", expression) if expression is not None else _entry(f"measures.{name}", fields)
         self._add("measures", name, value)
+        return name
+
+    def summary(self, name: str, expression: str) -> str:
+        """A whole-run quantity, one number in ``results.summaries`` and ``summary.json``: an
+        expression of aggregations of the result columns over the run (``integral``, ``mean``,
+        ``rms``, ``min``, ``max``, ``peak``, ``initial``, ``final``, ``at(time, f)``) and of parameters,
+        such as ``m.summary("efficiency", "integral(pump_power) / integral(motor_power)")``
+        (docs/model-format.md, "Summaries")."""
+        self._add("summaries", name, _value(f"summaries.{name}", expression))
         return name
 
     def table(

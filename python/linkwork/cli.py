@@ -321,6 +321,8 @@ def _print_summary(results: Results) -> None:
         redundant = [f"{r['element']}.{r['equation']}" for r in s.redundant_rows or []]
         if redundant:
             print(f"  redundant rows (hold implicitly): {', '.join(redundant)}")
+    for name, value in results.summaries.items():
+        print(f"  summary {name:<21} {value:.6g}")
     _print_peaks(s)
 
 

@@ -674,6 +674,12 @@ def failure_html(summary: Summary) -> str:
     return "\n".join(parts)
 
 
+def summaries_html(summary: Summary) -> str:
+    """The model's summaries (whole-run quantities) as a table; nothing when the run has none."""
+    values = summary.summaries or {}
+    return "<h3>Summaries</h3>" + _table(list(values.items())) if values else ""
+
+
 def summary_html(summary: Summary) -> str:
     """The model summary and the solver statistics, as HTML."""
     s = summary
@@ -764,7 +770,7 @@ def page(run: Run, plotly_js: str) -> str:
     title = run.title or f"{s.model}: {s.analysis or ''}"
     body = [f"<h1>{html.escape(title)}</h1>",
             f"<div>{html.escape(s.type or 'no')} analysis, status {html.escape(s.status or 'ok')}</div>",
-            failure_html(s)]
+            failure_html(s), summaries_html(s)]
     if mech is not None:
         body += ['<h2>The mechanism <span id="now"></span></h2>', '<div id="mechanism"></div>']
     elif not modes:
@@ -797,12 +803,13 @@ def _packed(text: str) -> str:
 
 
 def compact_html(summary: Summary, rows: int, time: np.ndarray) -> str:
-    """A few lines on a run, for a notebook: analysis, status, output span, warnings, error."""
+    """A few lines on a run, for a notebook: analysis, status, output span, warnings, error,
+    summaries."""
     span = f"t = {time[0]:.6g} .. {time[-1]:.6g} s" if rows else "no output"
     head = f"<b>{html.escape(summary.model or '')}</b>: {html.escape(summary.analysis or '')} " + (
         f"({html.escape(summary.type or '')}), {html.escape(summary.status or 'ok')}, {rows} points, {span}"
     )
-    return f"<div>{head}{failure_html(summary)}</div>"
+    return f"<div>{head}{failure_html(summary)}{summaries_html(summary)}</div>"
 
 
 def figure(fig: Mapping[str, Any]) -> Any:

@@ -106,6 +106,9 @@ class Summary(dict[str, Any]):
     """The body each joint's reaction acts on (inverse, static, dynamic)."""
     peaks: _Key[dict[str, dict[str, Any]] | None] = _Key()
     """Per joint and active driver the largest reaction or effort ``max_abs`` and its ``time``."""
+    summaries: _Key[dict[str, float] | None] = _Key()
+    """The model's summaries (its ``summaries:``, whole-run quantities) by name: in a run that ended
+    well and whose output spans time, when the model has any (see :attr:`Results.summaries`)."""
     # Last: in the class body `type` is this attribute from here on.
     type: _Key[str | None] = _Key()
     """The analysis' type: ``kinematic``, ``inverse``, ``static``, ``modes`` or ``dynamic``."""
@@ -185,6 +188,15 @@ class Results:
         otherwise), ``eigenvalue`` (``[re, im]``, 1/s) and ``shape`` (``{"<body>.x": ...}``, the
         largest component 1). ``summary.stable`` is false when any mode is unstable."""
         return self.summary.modes or []
+
+    @property
+    def summaries(self) -> dict[str, float]:
+        """The model's summaries (its ``summaries:`` section, or :meth:`Mechanism.summary`) by name
+        (in alphabetical order, as ``summary.json`` writes its keys): whole-run quantities such as ``integral(pump_power) / integral(motor_power)``,
+        each a finite number (docs/model-format.md, "Summaries"). Empty when the model has none, or
+        the analysis' output spans no time (``modes``; ``static`` at one time). A run that fails
+        has none: its error's ``results`` hold the rows computed, not their summaries."""
+        return self.summary.summaries or {}
 
     def __getitem__(self, name: str) -> np.ndarray:
         """The column called ``name`` (``"time"`` included), as a read-only numpy array."""

@@ -5,7 +5,8 @@
 //! [`Results`], and `results` imports nothing of `analysis`.
 //!
 //! ```text
-//! expr                      expressions of time and state, differentiated exactly
+//! expr                      expressions of time and state, differentiated exactly; tables;
+//!                           functionals of sampled columns (integral, mean, max, ...)
 //!  -> constraints, forces   joint and driver rows (Phi, Phi_q, nu, gamma); force laws
 //!  -> model                 a file's schema (spec), its parameters and units (params, units),
 //!                           read with every problem located (parse),
@@ -14,9 +15,10 @@
 //!  -> system                an analysis' joints and active drivers stacked into one system
 //!  -> analysis              the run entry point (Model::run, Overrides) and every analysis:
 //!                           assembly, checks, kinematic, inverse, static, modes, dynamic
-//!  -> results               columnar time series, the typed summary, and their files
+//!  -> results               columnar time series, the typed summary (with the model's
+//!                           summaries, functionals of the columns), and their files
 //!  -> sweep                 an analysis over many parameter values in parallel, reduced to
-//!                           outputs (aggregations of result columns)
+//!                           outputs (functionals of result columns)
 //!
 //! linalg                    sparse patterns and LU, dense SVD helpers (rank, null space,
 //!                           minimum-norm solve), knowing no mechanics, below system

@@ -3,7 +3,9 @@
 //! for dynamics every joint's `<joint>.fx, .fy, .torque`, every active driver's
 //! `<driver>.effort`, the energies and constraint residuals; then one column per measure) and
 //! `summary.json` ([`Summary`], with `output_points`, `status` and the error if there is one:
-//! the same header and the same shape of each fact for every analysis, see [`summary`]).
+//! the same header and the same shape of each fact for every analysis, see [`summary`]), which
+//! holds the model's summaries, functionals of the columns
+//! ([`functional`](crate::expr::functional)) evaluated once a run ends well.
 
 pub mod stream;
 pub mod summary;
@@ -14,8 +16,10 @@ pub use summary::{
 };
 
 use crate::error::{Error, Problem};
+use crate::expr::functional::{EvalError, Functional, TIME};
 use crate::model::spec::OutputsSpec;
 use crate::model::{Analysis, Model};
+use indexmap::IndexMap;
 use serde::Serialize;
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -48,6 +52,8 @@ pub struct Results {
     selection: Selection,
     /// The running peaks of the reactions and efforts ([`Results::insert_reaction_summary`]).
     peaks: Peaks,
+    /// The model's summaries and the columns they read ([`Results::summarise`]).
+    summaries: Summaries,
     /// (9 bodies + extra columns) the row being pushed, every column.
     row: Vec<f64>,
     /// (3 bodies) the positions of the first output point.
@@ -70,6 +76,29 @@ enum Peaks {
     /// Each peak's key in the summary, the row positions of its one or two components (two: the
     /// resultant of a force), and the largest value so far with its time.
     Watching(Vec<(String, [usize; 2], Peak)>),
+}
+
+/// The model's summaries (`summaries:` of the model file) as the run goes.
+#[derive(Debug, Clone, Default)]
+enum Summaries {
+    /// None to evaluate: the model has none, or the analysis' output spans no time (`modes`, a
+    /// `static` analysis at one time).
+    #[default]
+    None,
+    /// The summaries of an analysis over `[t_start, t_end]`, to be checked once every column is
+    /// named.
+    Pending { span: [f64; 2], functionals: IndexMap<String, Functional> },
+    /// Checked: the summaries, and a copy of each column they read that the results do not
+    /// keep (every one of a streamed run, `time` included; those `outputs` leaves out), with its
+    /// position in the row pushed (`None`: the time).
+    Reading {
+        span: [f64; 2],
+        functionals: IndexMap<String, Functional>,
+        copies: Vec<(String, Option<usize>, Vec<f64>)>,
+    },
+    /// One reads a column that does not exist, or an `at` time outside the span: the error the
+    /// first push returns.
+    Failed(Error),
 }
 
 /// Which columns of the rows pushed are kept.
@@ -106,6 +135,10 @@ impl Results {
         if let Some(outputs) = &analysis.outputs {
             results.selection = Selection::Pending(analysis.name.clone(), outputs.clone());
         }
+        if analysis.t_end > analysis.t_start && !model.summaries.is_empty() {
+            let span = [analysis.t_start, analysis.t_end];
+            results.summaries = Summaries::Pending { span, functionals: model.summaries.clone() };
+        }
         results.summary.analysis = Some(AnalysisHeader {
             analysis: analysis.name.clone(),
             kind: analysis.kind,
@@ -140,6 +173,7 @@ impl Results {
             summary,
             selection: Selection::All,
             peaks: Peaks::None,
+            summaries: Summaries::None,
             row: Vec::new(),
             first_positions: Vec::new(),
             stream: None,
@@ -201,6 +235,9 @@ impl Results {
                 .flat_map(|b| [q, qdot, qddot].into_iter().flat_map(move |v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]]))
                 .chain(extra.iter().copied()),
         );
+        if let Summaries::Failed(e) = &self.summaries {
+            return Err(e.clone());
+        }
         let (names, keep) = match &self.selection {
             Selection::Failed(e) => return Err(e.clone()),
             Selection::Applied { names, keep } => (names, Some(keep)),
@@ -220,6 +257,11 @@ impl Results {
                 if v >= peak.max_abs || peak.time.is_none() {
                     *peak = Peak { max_abs: v, time: Some(t) };
                 }
+            }
+        }
+        if let Summaries::Reading { copies, .. } = &mut self.summaries {
+            for (_, position, values) in copies {
+                values.push(position.map_or(t, |k| self.row[k]));
             }
         }
         self.time.push(t);
@@ -252,6 +294,82 @@ impl Results {
         if let Some(s) = &mut self.stream {
             s.set_columns(self.columns.len());
         }
+        self.read_summaries();
+    }
+
+    /// Check the summaries against the columns (every column of the row pushed, those `outputs`
+    /// leaves out included) and the span, and choose the columns to copy as rows are pushed: a
+    /// column one reads that does not exist, or an `at` time outside the span, is a problem at
+    /// `summaries.<name>` that the first push returns.
+    fn read_summaries(&mut self) {
+        let Summaries::Pending { span, functionals } = std::mem::take(&mut self.summaries) else { return };
+        let (names, keep) = match &self.selection {
+            Selection::Applied { names, keep } => (names, Some(keep)),
+            _ => (&self.names, None),
+        };
+        let position: std::collections::HashMap<&str, usize> =
+            names.iter().enumerate().map(|(k, n)| (n.as_str(), k)).collect();
+        let columns = match &self.summary.analysis {
+            Some(a) => format!(
+                "a column of the {} analysis '{}' (a name in its results.csv) or time",
+                a.kind.name(),
+                a.analysis
+            ),
+            None => "a column of results.csv or time".to_string(),
+        };
+        for (name, f) in &functionals {
+            if let Err(message) = f.check(&|c| position.contains_key(c), span, &columns) {
+                self.summaries =
+                    Summaries::Failed(Error::Model(vec![Problem::new(format!("summaries.{name}"), message)]));
+                return;
+            }
+        }
+        let streamed = self.stream.is_some();
+        let mut read: Vec<&str> = if streamed { vec![TIME] } else { Vec::new() };
+        for c in functionals.values().flat_map(Functional::columns) {
+            if !read.contains(&c) {
+                read.push(c);
+            }
+        }
+        let copies = read
+            .into_iter()
+            .filter_map(|c| {
+                // Every column but the time is in the row: the check above found it there.
+                let at = if c == TIME { None } else { Some(*position.get(c)?) };
+                let kept = !streamed && at.is_none_or(|k| keep.is_none_or(|keep| keep[k]));
+                (!kept).then(|| (c.to_string(), at, Vec::new()))
+            })
+            .collect();
+        self.summaries = Summaries::Reading { span, functionals, copies };
+    }
+
+    /// Evaluate the model's summaries over the rows of a run that ended well, into the summary
+    /// (`summaries`, by name); nothing when there are none to evaluate. A value that is not a
+    /// finite number (an argument's at a row, or the whole expression's: a division by zero) is
+    /// an [`Error::NonFinite`] at `summaries.<name>`, at the row's time or the end of the run,
+    /// and no summary is written.
+    pub(crate) fn summarise(&mut self) -> Result<(), Error> {
+        let Summaries::Reading { span, functionals, copies } = std::mem::take(&mut self.summaries) else {
+            return Ok(());
+        };
+        let copy = |name: &str| copies.iter().find(|(n, _, _)| n == name).map(|(_, _, v)| v.as_slice());
+        let time = copy(TIME).unwrap_or(&self.time);
+        let column = |name: &str| copy(name).or_else(|| self.column(name));
+        let values = functionals
+            .iter()
+            .map(|(name, f)| {
+                let element = format!("summaries.{name}");
+                let value = f.eval(time, &column).map_err(|e| match e {
+                    EvalError::NonFinite { value, what, time: at } => {
+                        Error::NonFinite { time: at.unwrap_or(span[1]), element, expression: what, value }
+                    }
+                    EvalError::Missing(message) => Error::Model(vec![Problem::new(element, message)]),
+                })?;
+                Ok((name.clone(), value))
+            })
+            .collect::<Result<IndexMap<String, f64>, Error>>()?;
+        self.summary.summaries = Some(values);
+        Ok(())
     }
 
     /// Find the columns of the peaks to watch among those kept: each joint's `fx, fy, torque`

@@ -43,10 +43,10 @@ fn the_stroke_of_each_radius_is_twice_it() {
 }
 
 /// Each aggregation on the crank angle `phi = 2 pi t` over one second (201 rows), the crank speed
-/// and the slider's start, against closed forms. Tolerances: max, min, mean, peak, at and the
-/// first and last rows are exact for a linear function up to round-off (1e-12); the trapezoidal
-/// rms of `(2 pi t)^2` over steps of h = 5 ms is high by `h^2 / 12 * 2 (2 pi)^2`, 1.25e-5 of the
-/// exact `(2 pi)^2 / 3`, hence 2e-5 relative.
+/// and the slider's start, against closed forms. Every one is exact up to round-off (1e-12
+/// relative): max, min, peak, at and the first and last rows of a linear function, and the
+/// integrals of `phi` and of `phi^2` (for `rms`), polynomials of degree below 4 that the cubic
+/// spline of the quadrature reproduces (the trapezoidal rule erred by 1.25e-5 in `rms`).
 #[test]
 fn aggregations_match_their_closed_forms() {
     let list = [
@@ -54,6 +54,7 @@ fn aggregations_match_their_closed_forms() {
         ("min", "min(crank.phi)"),
         ("mean", "mean(crank.phi)"),
         ("rms", "rms(crank.phi)"),
+        ("integral", "integral(crank.phi^2)"),
         ("peak", "peak(crank.phi - 4)"),
         ("initial", "initial(slider.x)"),
         ("final", "final(crank.phi) / (2*pi)"),
@@ -63,10 +64,21 @@ fn aggregations_match_their_closed_forms() {
     ];
     let rows = sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&list), Some(1), &Progress::new()).unwrap();
     let got = rows[0].as_ref().unwrap();
-    let expected = [2.0 * PI, 0.0, PI, 2.0 * PI / 3f64.sqrt(), 4.0, 0.4, 1.0, PI / 2.0, 4.0 * PI + 1.0, 2.0 * PI];
+    let expected = [
+        2.0 * PI,
+        0.0,
+        PI,
+        2.0 * PI / 3f64.sqrt(),
+        4.0 * PI * PI / 3.0,
+        4.0,
+        0.4,
+        1.0,
+        PI / 2.0,
+        4.0 * PI + 1.0,
+        2.0 * PI,
+    ];
     for ((name, _), (g, e)) in list.iter().zip(got.iter().zip(expected)) {
-        let tol = if *name == "rms" { 2e-5 * e } else { 1e-12 * e.abs().max(1.0) };
-        assert!((g - e).abs() <= tol, "{name}: {g} against {e}");
+        assert!((g - e).abs() <= 1e-12 * e.abs().max(1.0), "{name}: {g} against {e}");
     }
 }
 

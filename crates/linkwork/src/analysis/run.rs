@@ -93,12 +93,18 @@ impl Model {
             return Err(Box::new(Failure { error: Error::Model(unavailable), results: Results::new(self, &analysis) }));
         }
         progress.begin(analysis.t_start, analysis.t_end);
-        let mut outcome = progress::scope(progress, || match analysis.kind {
+        let outcome = progress::scope(progress, || match analysis.kind {
             AnalysisKind::Kinematic => run_kinematic(self, &analysis),
             AnalysisKind::Dynamic => dynamic::run_dynamic(self, &analysis),
             AnalysisKind::Inverse => run_inverse(self, &analysis),
             AnalysisKind::Static => run_static(self, &analysis),
             AnalysisKind::Modes => run_modes(self, &analysis),
+        });
+        // The summaries of a run that ended well; one that cannot be evaluated fails the run,
+        // with every row kept.
+        let mut outcome = outcome.and_then(|mut results| match results.summarise() {
+            Ok(()) => Ok(results),
+            Err(error) => Err(Box::new(Failure { error, results })),
         });
         let results = match &mut outcome {
             Ok(r) => r,

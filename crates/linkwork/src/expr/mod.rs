@@ -7,7 +7,9 @@
 //! [`Expr::eval`] runs it generically over any [`Scalar`] without allocating. Evaluating
 //! over [`Dual`] or [`HyperDual`] numbers gives exact first and second derivatives
 //! (forward-mode automatic differentiation), see [`gradient`], [`directional2`] and
-//! [`TimeFunction::eval`].
+//! [`TimeFunction::eval`]. [`functional`] reads expressions of aggregations of sampled
+//! columns (`integral(pump_power) / integral(motor_power)`): a model's summaries and a sweep's
+//! outputs.
 //!
 //! # Language
 //!
@@ -53,6 +55,7 @@
 //! assert_eq!((v, dv, ddv), (0.0, 1.2, 0.0));
 //! ```
 
+pub mod functional;
 pub mod laws;
 mod parse;
 mod scalar;

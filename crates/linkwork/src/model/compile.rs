@@ -12,6 +12,7 @@ use crate::constraints::{
     Translational, Var, DEFAULT_TRANSITION_VELOCITY,
 };
 use crate::error::Problem;
+use crate::expr::functional::Functional;
 use crate::expr::{Expr, Names, Spline, TimeFunction};
 use crate::forces::{
     Contact, Force, Load, PointLoad, RotationalSpringDamper, Shape as ContactShape, SpringDamper, StateExpr, StateVar,
@@ -92,6 +93,9 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
     let measures = cx.entries("measures", &spec.measures, |cx, name, path, m| {
         Some(Measure { name: name.into(), kind: cx.measure(path, m, &joints)? })
     });
+    let summaries = cx.entries("summaries", &spec.summaries, |cx, name, path, source| {
+        Some((name.to_string(), cx.summary(path, source)?))
+    });
     let gravity = spec.gravity.and_then(|g| cx.vec2("gravity", g)).unwrap_or([0.0, 0.0]);
     // Each number is a double, but the weight is their product: past 1.8e308 it is infinite,
     // and every reaction and potential energy with it.
@@ -117,6 +121,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
             gravity,
             forces,
             measures,
+            summaries: summaries.into_iter().collect(),
             analyses,
             source: String::new(),
             folder: folder.to_path_buf(),
@@ -1078,6 +1083,12 @@ impl Cx<'_> {
             }
         }
         ok.then(|| ContactShape::Polyline(points.to_vec()))
+    }
+
+    /// A summary: a functional of the result columns, with the model's parameters and tables.
+    fn summary(&mut self, path: &str, source: &str) -> Option<Functional> {
+        let names = ModelNames { parameters: &self.spec.parameters, tables: &self.tables };
+        Functional::parse(source, &names).map_err(|message| self.problem(path, message)).ok()
     }
 
     /// A measure; `joints`: the joints compiled, whose pins a transmission angle takes.

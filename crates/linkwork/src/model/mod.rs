@@ -19,6 +19,7 @@ pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
 
 use crate::constraints::{BodyIx, Cam, Constraint, Frame, Friction};
 use crate::error::{Error, Problem, Result};
+use crate::expr::functional::Functional;
 use crate::forces::{Force, Load, StateExpr};
 use indexmap::IndexMap;
 use spec::AnalysisKind;
@@ -430,6 +431,8 @@ pub struct Model {
     pub forces: Vec<ForceElement>,
     /// Named outputs.
     pub measures: Vec<Measure>,
+    /// Whole-run quantities by name, evaluated after a run (`Results`' summary, `summaries`).
+    pub summaries: IndexMap<String, Functional>,
     /// Analyses by name, in file order.
     pub analyses: IndexMap<String, Analysis>,
     /// The text of the model file it was compiled from (empty for a model compiled from a

@@ -125,6 +125,7 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
     let drivers = section("drivers", get("drivers"), &mut problems, &mut broken, tagged::<DriverSpec>());
     let forces = section("forces", get("forces"), &mut problems, &mut broken, tagged::<ForceSpec>());
     let measures = section("measures", get("measures"), &mut problems, &mut broken, measure);
+    let summaries = section("summaries", get("summaries"), &mut problems, &mut broken, summary);
     let tables = section("tables", get("tables"), &mut problems, &mut broken, entry::<TableSpec>);
     let analyses = section("analyses", get("analyses"), &mut problems, &mut broken, entry::<AnalysisSpec>);
     // One problem a field: a number that could not be read is not reported again as a string
@@ -146,6 +147,7 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
         drivers,
         forces,
         measures,
+        summaries,
         tables,
         analyses,
     };
@@ -206,6 +208,22 @@ fn measure(path: &str, v: &Value, problems: &mut Vec<Problem>) -> Option<Measure
             None
         }
     }
+}
+
+/// A summary: an expression (a string).
+fn summary(path: &str, v: &Value, problems: &mut Vec<Problem>) -> Option<String> {
+    if let Value::String(s) = v {
+        return Some(s.clone());
+    }
+    let example = "\"integral(pump_power) / integral(motor_power)\"";
+    problems.push(Problem::new(
+        path,
+        format!(
+            "expected an expression of aggregations of result columns (a string), such as {example}, found {}",
+            describe(v)
+        ),
+    ));
+    None
 }
 
 /// The joint types that take a `friction:` mapping.

@@ -115,6 +115,13 @@ pub struct ModelSpec {
     /// Named output quantities, written as extra columns of `results.csv`.
     #[serde(default)]
     pub measures: IndexMap<String, MeasureSpec>,
+    /// Whole-run quantities by name, each one number written to `summary.json` under
+    /// `summaries`: an expression of aggregations of the result columns over the run
+    /// (`integral`, `mean`, `rms`, `min`, `max`, `peak`, `initial`, `final`, `at(time, f)`) and
+    /// of parameters, such as `"integral(pump_power) / integral(motor_power)"`
+    /// (docs/model-format.md, "Summaries").
+    #[serde(default)]
+    pub summaries: IndexMap<String, String>,
     /// Tabulated functions by name, for `spline(<name>, x)` in any expression.
     #[serde(default)]
     pub tables: IndexMap<String, TableSpec>,

@@ -17,8 +17,10 @@
 //! | `stable`, `index`, `min_reduced_stiffness` | static (`stable` also modes) | the equilibrium's stability |
 //! | `about`, `modes` | modes | the state linearised about; the modes ([`Mode`]) |
 //! | `reaction_bodies`, `peaks` | inverse, static, dynamic | each joint's first body; the largest reactions and efforts ([`Peak`]) |
+//! | `summaries` | every analysis whose output spans time (not modes, nor static at one time), when the model has summaries and the run ended well | each summary's value by name (`model.yaml`'s `summaries:`, [`crate::expr::functional`]) |
 //!
-//! An analysis that fails writes what it found before the failure.
+//! An analysis that fails writes what it found before the failure, but no `summaries`: a
+//! whole-run quantity over part of the run would be another quantity under the same name.
 
 use crate::error::RowName;
 use crate::model::spec::{AnalysisKind, LinearisePoint};
@@ -90,6 +92,10 @@ pub struct Summary {
     /// dynamic).
     #[serde(flatten)]
     pub reactions: Option<Reactions>,
+    /// The model's summaries by name, each a finite number: written by a run that ended well and
+    /// whose output spans time (`None` otherwise, or when the model has none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub summaries: Option<IndexMap<String, f64>>,
 }
 
 /// The analysis a summary is of.
