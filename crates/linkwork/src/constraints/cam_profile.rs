@@ -447,9 +447,10 @@ impl CamProfile {
     /// The nearest point of the curve to `d`, if it is unique and a strict minimum.
     fn nearest(&self, d: [f64; 2]) -> Option<Contact> {
         let m = self.samples.len();
+        // Squared distances for the search (a hypot per sample would be most of its cost).
         let dist = |k: usize| {
             let v = sub(self.samples[k % m], d);
-            v[0].hypot(v[1])
+            v[0] * v[0] + v[1] * v[1]
         };
         // A sample nearer than both neighbours (ties broken towards the later one) starts a basin
         // of the distance. The nearest sample's basin is refined first; another's only if its
@@ -468,7 +469,7 @@ impl CamProfile {
         let (mut best, mut nearest) = (gap(&start), start);
         let mut second = f64::INFINITY;
         for k in (0..m).filter(|&k| k != first && basin(k)) {
-            if dist(k) - self.reach > best + TIE * self.size {
+            if dist(k).sqrt() - self.reach > best + TIE * self.size {
                 continue;
             }
             let c = self.refine(k, d)?;
