@@ -636,37 +636,81 @@ mod tests {
         }
     }
 
-    /// `gamma = -(d/ds)(Phi_q qdot)` along `q(s) = q + s qdot`: the central difference of
-    /// `Phi_q(q(s)) qdot` in `s` (step 1e-5: truncation ~h^2 |Phi'''| ~ 1e-10, rounding
-    /// ~eps |Phi_q qdot| / h ~ 1e-10), to 1e-7. And `du*/dt` against the central difference of the
-    /// nearest point's parameter `u*(q(s))` (the same step and tolerance).
-    #[test]
-    fn gamma_and_the_contact_rate_match_differences_along_a_trajectory() {
-        let cam =
-            CamProfile::try_new(BodyIx(Some(0)), [0.1, -0.2], BodyIx(Some(3)), [0.3, 0.1], convex(), 0.3).unwrap();
-        let h = 1e-5;
+    /// The largest differences of `gamma` from `-(d/ds)(Phi_q qdot)` along `q(s) = q + s qdot`
+    /// (central differences of step `h`), and of `du*/dt` from the central differences of the
+    /// nearest point's parameter `u*(q(s))`, over `states`.
+    fn trajectory_errors(cam: &CamProfile, states: &[(Vec<f64>, Vec<f64>)], h: f64) -> (f64, f64) {
         let at = |q: &[f64], qdot: &[f64], s: f64| -> Vec<f64> { q.iter().zip(qdot).map(|(a, b)| a + s * b).collect() };
         let rate = |q: &[f64], qdot: &[f64]| {
             let mut jac = [0.0; 6];
             cam.jacobian_at(q, 0.0, &mut jac);
             jac.iter().zip(qdot).map(|(a, b)| a * b).sum::<f64>()
         };
+        let period = cam.curve.period;
         let (mut worst_gamma, mut worst_rate) = (0.0f64, 0.0f64);
-        for (q, qdot) in states(&cam, 0.2, 7, 30) {
+        for (q, qdot) in states {
             let mut gamma = [0.0];
-            cam.gamma_at(&q, &qdot, 0.0, &mut gamma);
-            let fd = (rate(&at(&q, &qdot, h), &qdot) - rate(&at(&q, &qdot, -h), &qdot)) / (2.0 * h);
+            cam.gamma_at(q, qdot, 0.0, &mut gamma);
+            let fd = (rate(&at(q, qdot, h), qdot) - rate(&at(q, qdot, -h), qdot)) / (2.0 * h);
             worst_gamma = worst_gamma.max((gamma[0] + fd).abs());
-            let (u, u_rate) = cam.contact_rate(&q, &qdot).unwrap();
-            let (up, _) = cam.contact_rate(&at(&q, &qdot, h), &qdot).unwrap();
-            let (um, _) = cam.contact_rate(&at(&q, &qdot, -h), &qdot).unwrap();
+            let (u, u_rate) = cam.contact_rate(q, qdot).unwrap();
+            let (up, _) = cam.contact_rate(&at(q, qdot, h), qdot).unwrap();
+            let (um, _) = cam.contact_rate(&at(q, qdot, -h), qdot).unwrap();
             // The parameters may lie a period apart across the curve's seam.
-            let unwrap = |v: f64| u + (v - u + PI).rem_euclid(2.0 * PI) - PI;
+            let unwrap = |v: f64| u + (v - u + period / 2.0).rem_euclid(period) - period / 2.0;
             let fd = (unwrap(up) - unwrap(um)) / (2.0 * h);
             worst_rate = worst_rate.max((u_rate - fd).abs());
         }
-        assert!(worst_gamma < 1e-7, "gamma against differences of Phi_q qdot: {worst_gamma:e}");
-        assert!(worst_rate < 1e-7, "du*/dt against differences of u*: {worst_rate:e}");
+        (worst_gamma, worst_rate)
+    }
+
+    /// `gamma = -(d/ds)(Phi_q qdot)` along `q(s) = q + s qdot`, and `du*/dt`, against central
+    /// differences of step 1e-5: truncation `h^2 |f'''| / 6` with `f''' ~ |qdot|^3` times the
+    /// curve's derivatives, some 1e3 for velocities up to 3 (~2e-8), rounding
+    /// `eps |Phi_q qdot| / h ~ 1e-10`; to 1e-6. Measured: 1.5e-8 and 1.2e-9.
+    #[test]
+    fn gamma_and_the_contact_rate_match_differences_along_a_trajectory() {
+        let cam =
+            CamProfile::try_new(BodyIx(Some(0)), [0.1, -0.2], BodyIx(Some(3)), [0.3, 0.1], convex(), 0.3).unwrap();
+        let (gamma, rate) = trajectory_errors(&cam, &states(&cam, 0.2, 7, 30), 1e-5);
+        eprintln!("expressions: gamma {gamma:.1e}, du*/dt {rate:.1e} off their differences");
+        assert!(gamma < 1e-6, "gamma against differences of Phi_q qdot: {gamma:e}");
+        assert!(rate < 1e-6, "du*/dt against differences of u*: {rate:e}");
+    }
+
+    /// The same curve as a table of 200 of its points: the Jacobian against central differences
+    /// (as `check_fd`, 1e-7), and `gamma` and `du*/dt` along trajectories. The splines' `p'''`
+    /// jumps at the points, so a difference that straddles one errs by some `h |jump|` rather than
+    /// `h^2`: with `h = 1e-7` (rounding ~eps |Phi_q qdot| / h ~ 1e-8) that is below 1e-6.
+    /// Measured: 4.4e-8 and 5.0e-9.
+    #[test]
+    fn a_point_tables_derivatives_match_differences() {
+        let table: Vec<[f64; 2]> = (0..200)
+            .map(|k| 2.0 * PI * k as f64 / 200.0)
+            .map(|u| [0.1 + 1.2 * u.cos() + 0.05 * (3.0 * u).cos(), -0.05 + 0.8 * u.sin()])
+            .collect();
+        let curve = Curve::points(&table).unwrap();
+        let cam = CamProfile::try_new(BodyIx(Some(0)), [0.1, -0.2], BodyIx(Some(3)), [0.3, 0.1], curve, 0.3).unwrap();
+        let states = states(&cam, 0.2, 3, 30);
+        let h = 1e-5;
+        for (q, _) in &states {
+            let mut jac = [0.0; 6];
+            cam.jacobian_at(q, 0.0, &mut jac);
+            for (k, &an) in jac.iter().enumerate() {
+                let (mut qp, mut qm) = (q.clone(), q.clone());
+                qp[k] += h;
+                qm[k] -= h;
+                let (mut fp, mut fm) = ([0.0], [0.0]);
+                cam.phi_at(&qp, 0.0, &mut fp);
+                cam.phi_at(&qm, 0.0, &mut fm);
+                let fd = (fp[0] - fm[0]) / (2.0 * h);
+                assert!((fd - an).abs() < 1e-7, "Phi_q[{k}] analytic {an} vs fd {fd}");
+            }
+        }
+        let (gamma, rate) = trajectory_errors(&cam, &states, 1e-7);
+        eprintln!("points: gamma {gamma:.1e}, du*/dt {rate:.1e} off their differences");
+        assert!(gamma < 1e-6, "gamma against differences of Phi_q qdot: {gamma:e}");
+        assert!(rate < 1e-6, "du*/dt against differences of u*: {rate:e}");
     }
 
     /// A circle of radius 2 about the cam's centre with a roller of 0.5: the row is the
