@@ -47,7 +47,7 @@ use std::sync::Arc;
 /// Two candidate nearest points whose distances differ by less than this fraction of the curve's
 /// size are the same distance: the position solver holds a constraint to 1e-10 (absolute) on
 /// mechanisms of size ~0.1 to 1 m, so distances closer than 1e-9 of the size cannot be told apart.
-pub const TIE: f64 = 1e-9;
+const TIE: f64 = 1e-9;
 
 /// The samples of a curve given by expressions: 2048 resolve features down to 1/2048 of the
 /// curve's period (0.18 degrees of a polar cam), far finer than any cam's flank, and a search
@@ -504,12 +504,20 @@ impl CamProfile {
         self.nearest(self.offset(q, &|_, v| v))
     }
 
-    /// `(u*, du*/dt)` at `(q, qdot)`: where the contact is on the curve and how fast it runs along
-    /// it; `None` where the nearest point is not unique or not regular.
+    /// The nearest point to the roller's centre `d` moving at `rate` (cam frame), and how fast
+    /// it runs along the curve: `du*/dt = p' . d' / g_u`, from differentiating
+    /// `(p(u*) - d) . p'(u*) = 0` in time.
+    fn moving_contact(&self, d: [f64; 2], rate: [f64; 2]) -> Option<(Contact, f64)> {
+        let c = self.nearest(d)?;
+        Some((c, dot(c.p[1], rate) / c.g_u))
+    }
+
+    /// Where the roller touches the surface at `(q, qdot)` and how fast the contact runs along
+    /// it: `(u*, du*/dt)`, the curve's parameter and its rate; `None` where the nearest point is
+    /// not unique or not regular.
     pub fn contact_rate(&self, q: &[f64], qdot: &[f64]) -> Option<(f64, f64)> {
         let [dx, dy] = self.offset(q, &|c, v| Dual { v, d: qdot[c] });
-        let c = self.nearest([dx.v, dy.v])?;
-        Some((c.u, dot(c.p[1], [dx.d, dy.d]) / c.g_u))
+        self.moving_contact([dx.v, dy.v], [dx.d, dy.d]).map(|(c, u_rate)| (c.u, u_rate))
     }
 
     /// The pressure angle of a radial follower (moving along the line from the cam's centre to
@@ -552,18 +560,17 @@ impl Constraint for CamProfile {
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         let [dx, dy] = self.offset(q, &|c, v| HyperDual::seed(v, qdot[c], qdot[c]));
-        let Some(c) = self.nearest([dx.v, dy.v]) else {
+        let (rate, free) = ([dx.e1, dy.e1], [dx.e12, dy.e12]);
+        let Some((c, u_rate)) = self.moving_contact([dx.v, dy.v], rate) else {
             out[0] = f64::NAN;
             return;
         };
-        let (rate, free) = ([dx.e1, dy.e1], [dx.e12, dy.e12]);
         let [_, p1, p2] = c.p;
         let speed = p1[0].hypot(p1[1]);
         let t = [p1[0] / speed, p1[1] / speed];
         let along = dot(t, p2);
         let bent = [p2[0] - t[0] * along, p2[1] - t[1] * along];
         let dn = [self.sigma * bent[1] / speed, -self.sigma * bent[0] / speed];
-        let u_rate = dot(p1, rate) / c.g_u;
         out[0] = -(dot(c.n, free) + u_rate * dot(dn, rate));
     }
     fn non_finite_cause(&self) -> Option<&'static str> {
