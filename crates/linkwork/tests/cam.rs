@@ -310,6 +310,13 @@ fn bad_profiles_are_problems_at_their_fields() {
         let list = problems(&model(joint));
         assert!(list.iter().any(|p| p.starts_with(want)), "no '{want}' in {list:#?}");
     }
+    // Every field is read: a bad body and a bad profile are both reported.
+    let both = model("profile: {x: 'r0*cos(u)', y: 'r0*sin(t)'}")
+        .replace("body_j: follower, point_j", "body_j: folower, point_j");
+    let list = problems(&both);
+    for want in ["joints.contact.body_j: unknown body 'folower'", "joints.contact.profile.y: cannot read"] {
+        assert!(list.iter().any(|p| p.starts_with(want)), "no '{want}' in {list:#?}");
+    }
 }
 
 #[test]

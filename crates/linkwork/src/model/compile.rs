@@ -734,19 +734,23 @@ impl Cx<'_> {
     }
 
     /// A cam joint's row: its ends, and its pitch curve (`radius`) or its working surface
-    /// (`surface_radius`, `profile`) with the roller on it.
+    /// (`surface_radius`, `profile`) with the roller on it. Every field is read before any
+    /// problem returns, so that each is reported.
     fn cam(&mut self, path: &str, cam: &CamJoint) -> Option<CamRow> {
         let CamJoint { body_i, point_i, body_j, point_j, radius, surface_radius, profile, roller_radius } = cam;
         let ends = self.ends(path, body_i, point_i, body_j, point_j);
         let roller = self.non_negative(&format!("{path}.roller_radius"), *roller_radius);
-        let curve = match (radius, surface_radius, profile) {
-            (Some(_), None, None) => None,
+        // Either the pitch radius (`Ok`) or the surface (`Err`), each `None` when it has a problem.
+        let given = match (radius, surface_radius, profile) {
+            (Some(r), None, None) => {
+                Ok(self.curve_expr(&format!("{path}.radius"), r, "psi", "the polar angle of the follower's point"))
+            }
             (None, Some(r), None) => {
                 let expr =
                     self.curve_expr(&format!("{path}.surface_radius"), r, "psi", "the polar angle of the surface");
-                expr.and_then(|e| self.curve_at(path, Curve::polar(e)))
+                Err(expr.and_then(|e| self.curve_at(path, Curve::polar(e))))
             }
-            (None, None, Some(p)) => self.profile(&format!("{path}.profile"), p),
+            (None, None, Some(p)) => Err(self.profile(&format!("{path}.profile"), p)),
             _ => {
                 let message = "give one of radius (the pitch curve), surface_radius or profile (the working surface)";
                 self.problem(path, message);
@@ -754,17 +758,18 @@ impl Cx<'_> {
             }
         };
         let ([(i, si), (j, sj)], roller) = (ends?, roller?);
-        let Some(radius) = radius else {
-            return match CamProfile::try_new(i, si, j, sj, curve?, roller) {
-                Ok(c) => Some(CamRow::Surface(c)),
-                Err(e) => {
-                    self.problem(format!("{path}.{}", e.field), e.message);
-                    None
-                }
-            };
+        let expr = match given {
+            Ok(expr) => expr?,
+            Err(curve) => {
+                return match CamProfile::try_new(i, si, j, sj, curve?, roller) {
+                    Ok(c) => Some(CamRow::Surface(c)),
+                    Err(e) => {
+                        self.problem(format!("{path}.{}", e.field), e.message);
+                        None
+                    }
+                };
+            }
         };
-        let expr =
-            self.curve_expr(&format!("{path}.radius"), radius, "psi", "the polar angle of the follower's point")?;
         if self.initial_distance([(i, si), (j, sj)]) < 1e-12 {
             let message = "the follower's point is at the cam's centre in the initial configuration: psi is undefined";
             self.problem(path, message);
