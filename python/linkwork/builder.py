@@ -90,6 +90,22 @@ class ContactFriction(TypedDict, total=False):
     transition_velocity: Number
 
 
+class CamProfile(TypedDict, total=False):
+    """A cam's working surface as a closed curve about the cam's centre in its frame, m
+    (docs/model-format.md, "Cams"): ``x`` and ``y`` expressions of ``u`` (``"e + Rc*cos(u)"``; parameters,
+    tables and motion laws too) over ``period`` (default ``2*pi``); or the points' coordinates in
+    order round the curve (lists of numbers, or text with units); or, with ``file`` (a CSV file whose
+    first row names its columns, relative to the model file's folder, or to the working folder for
+    :meth:`Mechanism.build`), the names of two of its columns. Points are joined by periodic cubic
+    splines over their chord length.
+    """
+
+    x: Required[str | Sequence[Number]]
+    y: Required[str | Sequence[Number]]
+    period: Number
+    file: str
+
+
 _SECTIONS = (
     "name", "gravity", "parameters", "tables", "ground", "bodies", "joints", "drivers", "forces", "measures",
     "summaries", "analyses",
@@ -239,19 +255,27 @@ class Mechanism:
         body_i: str,
         body_j: str,
         point_j: Point | str,
-        radius: str,
+        radius: str | None = None,
         *,
         point_i: Point | str | None = None,
         roller_radius: Number | None = None,
+        surface_radius: str | None = None,
+        profile: CamProfile | None = None,
     ) -> str:
-        """A cam and roller (or knife-edge) follower: ``point_j`` of the follower ``body_j`` (the
-        roller's centre, body frame, m, or a point name) stays on the pitch curve of the cam
-        ``body_i``, whose pitch radius ``radius`` (m) is an expression of ``psi``, the polar angle
-        (rad) of the follower's point about the cam's centre ``point_i`` (body frame, m; default
-        its origin) measured in the cam's frame, of parameters and of tables. The pitch curve is
-        the path of the roller's centre; the cam's surface is its inward offset by
-        ``roller_radius`` (m, default 0: a knife edge)."""
-        fields = {"point_i": point_i, "point_j": point_j, "radius": radius, "roller_radius": roller_radius}
+        """A cam and roller (or knife-edge) follower, the cam ``body_i`` given by one of:
+
+        ``radius``: its pitch curve, the path of the roller's centre ``point_j`` of the follower
+        ``body_j`` (body frame, m, or a point name): the pitch radius (m) as an expression of
+        ``psi``, the polar angle (rad) of the follower's point about the cam's centre ``point_i``
+        (body frame, m; default its origin) in the cam's frame, of parameters and of tables;
+
+        ``surface_radius`` (an expression of ``psi`` likewise) or ``profile`` (a closed Cartesian
+        curve, :class:`CamProfile`): its working surface, the curve that is cut, which the roller
+        of ``roller_radius`` (m) touches from outside.
+
+        ``roller_radius`` defaults to 0: a knife edge (on a surface, a point on the curve)."""
+        fields: dict[str, Any] = {"point_i": point_i, "point_j": point_j, "radius": radius}
+        fields.update(surface_radius=surface_radius, profile=profile, roller_radius=roller_radius)
         return self.joint(name, "cam", body_i=body_i, body_j=body_j, **fields)
 
     def driver(self, name: str, type: str, **fields: Any) -> str:
@@ -361,9 +385,10 @@ class Mechanism:
 
     def pressure_angle(self, name: str, joint: str) -> str:
         """The pressure angle of the cam joint ``joint`` with a radial follower (moving along the
-        line through the cam's centre), rad: the angle between the pitch curve's normal at the
-        follower's point and that line, ``atan(sign(dpsi/dt) R'(psi) / R(psi))``, positive while
-        the cam pushes the follower out. The usual rule is ``|phi| <= 30`` degrees."""
+        line through the cam's centre), rad: the angle between the contact normal (the pitch
+        curve's normal at the follower's point) and that line, ``atan(sign(dpsi/dt) R'(psi) /
+        R(psi))`` on a polar pitch curve, positive while the cam pushes the follower out; for a
+        cam given by its working surface as well. The usual rule is ``|phi| <= 30`` degrees."""
         return self.measure(name, type="pressure_angle", joint=joint)
 
     def analysis(self, name: str, type: str, **fields: Any) -> str:

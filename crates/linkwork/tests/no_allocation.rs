@@ -71,6 +71,26 @@ fn time_loop_allocates_nothing() {
     );
 }
 
+/// The cam joint on a working surface searches its samples and refines the nearest point at every
+/// evaluation, allocating nothing: examples/cam_profile.yaml (expressions and a point table) run
+/// over a quarter turn and over two turns makes as many allocations.
+#[test]
+fn a_cam_surface_allocates_nothing_in_the_time_loop() {
+    allocations();
+    let path = format!("{}/../../examples/cam_profile.yaml", env!("CARGO_MANIFEST_DIR"));
+    let mut model = linkwork::Model::load(path).unwrap();
+    let mut count = |t_end: f64| {
+        model.analyses[0].t_end = t_end;
+        let before = allocations();
+        let r = model.run("motion").unwrap();
+        (allocations() - before, r.len())
+    };
+    let (short, n_short) = count(0.25);
+    let (long, n_long) = count(2.0);
+    assert_eq!((n_short, n_long), (91, 721));
+    assert_eq!(short, long, "the long run allocated {} more times than the short one", long as i64 - short as i64);
+}
+
 /// The dynamic step allocates nothing either: a run of ten times the motion (ten times the
 /// steps, Newton iterations and factorizations) makes as many allocations, with each integrator,
 /// on the double pendulum and on the quick-return coasting. The results' columns are sized for

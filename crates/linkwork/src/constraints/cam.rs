@@ -17,7 +17,7 @@
 //! need. The row is undefined where `P` is at the centre (`d = 0`). Norton, Design of Machinery,
 //! chapter 8; Haug (1989) section 3.5.
 
-use super::{Anchor, BodyIx, Config, Constraint};
+use super::{Anchor, BodyIx, CamProfile, Config, Constraint};
 use crate::expr::{Dual, Expr, HyperDual, Scalar};
 
 /// The cam's pitch curve `|d| = R(psi)` between the cam's centre and the follower's point.
@@ -95,6 +95,44 @@ impl Cam {
         let psi = dy.atan2(dx);
         let r = self.radius.eval(&[Dual { v: psi.v, d: 1.0 }]);
         PitchPoint { psi: psi.v, radius: r.v, slope: r.d, psi_rate: psi.d }
+    }
+
+    /// The pressure angle of a radial follower: `atan(sigma R' / R)`, `sigma = sign(dpsi/dt)`,
+    /// rad, positive while the cam pushes the follower outward.
+    pub fn pressure_angle(&self, q: &[f64], qdot: &[f64]) -> f64 {
+        let p = self.pitch_point(q, qdot);
+        // At rest the follower's direction of motion is taken as the rise's (psi falling as the
+        // cam turns counter-clockwise under it), whatever the sign of the zero.
+        let sense = if p.psi_rate > 0.0 { 1.0 } else { -1.0 };
+        (sense * p.slope).atan2(p.radius)
+    }
+}
+
+/// A cam joint's row: on a pitch curve ([`Cam`]) or on a working surface ([`CamProfile`]).
+#[derive(Debug, Clone)]
+pub enum CamRow {
+    /// The follower's point on the polar pitch curve.
+    Pitch(Cam),
+    /// The roller tangent to the working surface.
+    Surface(CamProfile),
+}
+
+impl CamRow {
+    /// The pressure angle of a radial follower, rad ([`Cam::pressure_angle`],
+    /// [`CamProfile::pressure_angle`]).
+    pub fn pressure_angle(&self, q: &[f64], qdot: &[f64]) -> f64 {
+        match self {
+            CamRow::Pitch(c) => c.pressure_angle(q, qdot),
+            CamRow::Surface(c) => c.pressure_angle(q, qdot),
+        }
+    }
+
+    /// The row as a constraint.
+    pub fn boxed(self) -> Box<dyn Constraint> {
+        match self {
+            CamRow::Pitch(c) => Box::new(c),
+            CamRow::Surface(c) => Box::new(c),
+        }
     }
 }
 

@@ -12,6 +12,7 @@
 
 mod absolute;
 mod cam;
+mod cam_profile;
 mod distance;
 mod driver;
 mod expression;
@@ -24,7 +25,8 @@ mod translational;
 
 use crate::expr::Scalar;
 pub use absolute::{Absolute, AbsoluteKind};
-pub use cam::{Cam, PitchPoint};
+pub use cam::{Cam, CamRow, PitchPoint};
+pub use cam_profile::{CamProfile, Curve, CurveError};
 pub use distance::Distance;
 pub use driver::{Driver, DriverKind};
 pub use expression::{GeneralConstraint, Var, MAX_SLOTS};
@@ -122,6 +124,11 @@ pub trait Constraint: Debug + Send + Sync {
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], t: f64, out: &mut [f64]);
     /// The function of time a driver prescribes, for messages (`None` for a joint).
     fn time_function(&self) -> Option<&crate::expr::TimeFunction> {
+        None
+    }
+    /// What a value that is not finite means for this row, when it has a cause of its own (a
+    /// cam's nearest point that is not unique), for the error that stops an analysis there.
+    fn non_finite_cause(&self) -> Option<&'static str> {
         None
     }
     /// How the joint is drawn (the report's picture of the mechanism); `None` for rows with no

@@ -108,6 +108,11 @@ impl Spline {
         Ok(Spline { x, y, m, periodic })
     }
 
+    /// The number of pieces: one fewer than the points.
+    pub fn pieces(&self) -> usize {
+        self.x.len() - 1
+    }
+
     /// `(s(x), s'(x), s''(x))`; NaN for a NaN `x`.
     pub fn eval(&self, x: f64) -> (f64, f64, f64) {
         let (first, last) = (self.x[0], self.x[self.x.len() - 1]);

@@ -7,9 +7,9 @@ use super::{
     REACTION_QUANTITIES,
 };
 use crate::constraints::{
-    Absolute, AbsoluteKind, BodyIx, Cam, Constraint, Distance, Driver, DriverKind, Frame, Friction, FrictionLaw,
-    GearKind, GearPair, GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc, Shape, Sketch,
-    Translational, Var, DEFAULT_TRANSITION_VELOCITY,
+    Absolute, AbsoluteKind, BodyIx, Cam, CamProfile, CamRow, Constraint, Curve, Distance, Driver, DriverKind, Frame,
+    Friction, FrictionLaw, GearKind, GearPair, GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc,
+    Shape, Sketch, Translational, Var, DEFAULT_TRANSITION_VELOCITY,
 };
 use crate::error::Problem;
 use crate::expr::functional::Functional;
@@ -60,6 +60,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
         problems: Vec::new(),
         q0: Vec::new(),
         broken,
+        folder,
     };
     // A table that cannot be built (or read) stands in as zero, so that an expression using it
     // reports only its own problems; the model is refused for the table's.
@@ -125,7 +126,15 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
             analyses,
             source: String::new(),
             folder: folder.to_path_buf(),
-            table_files: spec.tables.values().filter_map(|t| t.file.clone()).collect(),
+            table_files: spec
+                .tables
+                .values()
+                .filter_map(|t| t.file.clone())
+                .chain(spec.joints.values().filter_map(|j| match j {
+                    JointSpec::Cam(CamJoint { profile: Some(p), .. }) => p.file.clone(),
+                    _ => None,
+                }))
+                .collect(),
             parameters: spec.parameters.clone(),
             set: Vec::new(),
             placed: cx.placed,
@@ -155,6 +164,8 @@ struct Cx<'s> {
     q0: Vec<f64>,
     /// `section.name` of entries that exist but could not be read.
     broken: &'s [String],
+    /// The folder a table's or a profile's `file:` is relative to.
+    folder: &'s Path,
 }
 
 /// What a model's expressions name besides the state: its parameters and tables.
@@ -707,7 +718,7 @@ impl Cx<'_> {
                 }
             }
             J::Expression(ExpressionJoint { expression }) => self.general(&format!("{path}.expression"), expression)?,
-            J::Cam(cam) => Box::new(self.cam(path, cam)?),
+            J::Cam(cam) => self.cam(path, cam)?.boxed(),
         };
         Some((c, friction))
     }
@@ -727,40 +738,139 @@ impl Cx<'_> {
         Some((ends?, v?))
     }
 
-    /// A cam joint's row: its ends, and its pitch radius, an expression of `psi`, parameters and
-    /// tables.
-    fn cam(&mut self, path: &str, cam: &CamJoint) -> Option<Cam> {
-        let CamJoint { body_i, point_i, body_j, point_j, radius, roller_radius } = cam;
+    /// A cam joint's row: its ends, and its pitch curve (`radius`) or its working surface
+    /// (`surface_radius`, `profile`) with the roller on it. Every field is read before any
+    /// problem returns, so that each is reported.
+    fn cam(&mut self, path: &str, cam: &CamJoint) -> Option<CamRow> {
+        let CamJoint { body_i, point_i, body_j, point_j, radius, surface_radius, profile, roller_radius } = cam;
         let ends = self.ends(path, body_i, point_i, body_j, point_j);
         let roller = self.non_negative(&format!("{path}.roller_radius"), *roller_radius);
-        let names = ModelNames { parameters: &self.spec.parameters, tables: &self.tables };
-        let mut resolve = |name: &str| {
-            if name == "psi" {
-                Ok(0)
-            } else {
-                Err("expected psi (the polar angle of the follower's point, rad), a parameter or a table".to_string())
+        // Either the pitch radius (`Ok`) or the surface (`Err`), each `None` when it has a problem.
+        let given = match (radius, surface_radius, profile) {
+            (Some(r), None, None) => {
+                Ok(self.curve_expr(&format!("{path}.radius"), r, "psi", "the polar angle of the follower's point"))
+            }
+            (None, Some(r), None) => {
+                let expr =
+                    self.curve_expr(&format!("{path}.surface_radius"), r, "psi", "the polar angle of the surface");
+                Err(expr.and_then(|e| self.curve_at(path, Curve::polar(e))))
+            }
+            (None, None, Some(p)) => Err(self.profile(&format!("{path}.profile"), p)),
+            _ => {
+                let message = "give one of radius (the pitch curve), surface_radius or profile (the working surface)";
+                self.problem(path, message);
+                return None;
             }
         };
-        let expr = match Expr::parse_with(radius, &names, &mut resolve) {
-            Ok(e) => Some(e),
-            Err(e) => {
-                self.problem(format!("{path}.radius"), format!("cannot read the expression '{radius}': {e}"));
-                None
+        let ([(i, si), (j, sj)], roller) = (ends?, roller?);
+        let expr = match given {
+            Ok(expr) => expr?,
+            Err(curve) => {
+                return match CamProfile::try_new(i, si, j, sj, curve?, roller) {
+                    Ok(c) => Some(CamRow::Surface(c)),
+                    Err(e) => {
+                        self.problem(format!("{path}.{}", e.field), e.message);
+                        None
+                    }
+                };
             }
         };
-        let ([(i, si), (j, sj)], _, expr) = (ends?, roller?, expr?);
         if self.initial_distance([(i, si), (j, sj)]) < 1e-12 {
             let message = "the follower's point is at the cam's centre in the initial configuration: psi is undefined";
             self.problem(path, message);
             return None;
         }
         match Cam::try_new(i, si, j, sj, expr) {
-            Ok(c) => Some(c),
+            Ok(c) => Some(CamRow::Pitch(c)),
             Err(e) => {
                 self.problem(format!("{path}.radius"), e);
                 None
             }
         }
+    }
+
+    /// An expression at `path` of the curve parameter `var` (slot 0; `what` it is), parameters
+    /// and tables.
+    fn curve_expr(&mut self, path: &str, src: &str, var: &str, what: &str) -> Option<Expr> {
+        let names = ModelNames { parameters: &self.spec.parameters, tables: &self.tables };
+        let mut resolve = |name: &str| {
+            if name == var {
+                Ok(0)
+            } else {
+                Err(format!("expected {var} ({what}), a parameter or a table"))
+            }
+        };
+        match Expr::parse_with(src, &names, &mut resolve) {
+            Ok(e) => Some(e),
+            Err(e) => {
+                self.problem(path, format!("cannot read the expression '{src}': {e}"));
+                None
+            }
+        }
+    }
+
+    /// A curve, or its problem at its field of the joint at `path`.
+    fn curve_at(&mut self, path: &str, curve: Result<Curve, crate::constraints::CurveError>) -> Option<Curve> {
+        curve.map_err(|e| self.problem(format!("{path}.{}", e.field), e.message)).ok()
+    }
+
+    /// A cam's `profile` at `path`: expressions of `u`, or points inline or from a file.
+    fn profile(&mut self, path: &str, p: &CamProfileSpec) -> Option<Curve> {
+        use ProfileColumn::{Text, Values};
+        let joint = path.strip_suffix(".profile").unwrap_or(path).to_string();
+        let points = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(&a, &b)| [a, b]).collect::<Vec<[f64; 2]>>();
+        let no_period = |cx: &mut Self| {
+            if p.period.is_some() {
+                cx.problem(format!("{path}.period"), "points take no period (their parameter is the chord length)");
+                return false;
+            }
+            true
+        };
+        let curve = match (&p.file, &p.x, &p.y) {
+            (None, Text(x), Text(y)) => {
+                let period = match p.period {
+                    Some(v) => self.positive(&format!("{path}.period"), v),
+                    // A parameter u that is an angle round the cam: one turn.
+                    None => Some(2.0 * std::f64::consts::PI),
+                };
+                let x = self.curve_expr(&format!("{path}.x"), x, "u", "the profile's parameter");
+                let y = self.curve_expr(&format!("{path}.y"), y, "u", "the profile's parameter");
+                Curve::parametric(x?, y?, period?)
+            }
+            (None, Values(x), Values(y)) => {
+                if x.len() != y.len() {
+                    let message = format!("x has {} values and y {}; expected as many of each", x.len(), y.len());
+                    self.problem(path, message);
+                    return None;
+                }
+                if !no_period(self) {
+                    return None;
+                }
+                Curve::points(&points(x, y))
+            }
+            (Some(file), Text(x), Text(y)) => {
+                if !no_period(self) {
+                    return None;
+                }
+                let (x, y, _) = super::tables::columns(path, &self.folder.join(file), x, y)
+                    .map_err(|problems| self.problems.extend(problems))
+                    .ok()?;
+                Curve::points(&points(&x, &y))
+            }
+            (Some(_), x, y) => {
+                for (field, c) in [("x", x), ("y", y)] {
+                    if matches!(c, Values(_)) {
+                        self.problem(format!("{path}.{field}"), "expected the name of a column of the file");
+                    }
+                }
+                return None;
+            }
+            (None, _, _) => {
+                self.problem(path, "expected x and y both expressions of u (text) or both lists of numbers (points)");
+                return None;
+            }
+        };
+        self.curve_at(&joint, curve)
     }
 
     /// A general constraint: names are `<body>.x`, `<body>.y`, `<body>.phi` and `t`.

@@ -17,7 +17,7 @@ pub use drawing::{BodyDrawing, Drawing, JointDrawing};
 pub use parse::{parse_partial, parse_partial_with, parse_spec, Parsed};
 pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
 
-use crate::constraints::{BodyIx, Cam, Constraint, Frame, Friction};
+use crate::constraints::{BodyIx, CamRow, Constraint, Frame, Friction};
 use crate::error::{Error, Problem, Result};
 use crate::expr::functional::Functional;
 use crate::forces::{Force, Load, StateExpr};
@@ -265,9 +265,10 @@ pub enum MeasureKind {
         /// Index in `q` of the output body's `phi`.
         output: usize,
     },
-    /// The pressure angle of a cam joint with a radial follower: `atan(sigma R' / R)`,
-    /// `sigma = sign(dpsi/dt)`.
-    PressureAngle(Cam),
+    /// The pressure angle of a cam joint with a radial follower: the angle between the line from
+    /// the cam's centre to the follower's point and the contact normal (`atan(sigma R' / R)`,
+    /// `sigma = sign(dpsi/dt)`, on a polar pitch curve).
+    PressureAngle(CamRow),
     /// `-output / input`, each applied to the mechanism.
     MechanicalAdvantage {
         /// The effort at the input.
@@ -356,13 +357,7 @@ impl Measure {
                     qdot[*output] / qdot[*input]
                 }
             }
-            MeasureKind::PressureAngle(cam) => {
-                let p = cam.pitch_point(q, qdot);
-                // At rest the follower's direction of motion is taken as the rise's (psi falling
-                // as the cam turns counter-clockwise under it), whatever the sign of the zero.
-                let sense = if p.psi_rate > 0.0 { 1.0 } else { -1.0 };
-                (sense * p.slope).atan2(p.radius)
-            }
+            MeasureKind::PressureAngle(cam) => cam.pressure_angle(q, qdot),
             MeasureKind::MechanicalAdvantage { input, output } => {
                 -output.value(q, qdot, reactions, t) / input.value(q, qdot, reactions, t)
             }

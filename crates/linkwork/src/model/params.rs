@@ -245,6 +245,20 @@ fn entry(
         match (key, value) {
             ("solver", Value::Mapping(solver)) => entry("solver", &here, None, solver, params, problems),
             ("friction", Value::Mapping(friction)) => entry("friction", &here, None, friction, params, problems),
+            // A cam's profile: its period, and points given inline (lengths); `x` and `y` as text
+            // are expressions of `u` or column names, read when the joint compiles.
+            ("profile", Value::Mapping(profile)) => {
+                for (key, value) in profile.iter_mut() {
+                    let at = format!("{here}.{}", key.as_str().unwrap_or("?"));
+                    match (key.as_str(), &value) {
+                        (Some("period"), _) => numbers(&at, value, Field::Mixed, params, problems),
+                        (Some("x" | "y"), Value::Sequence(_)) => {
+                            numbers(&at, value, Field::Dim(Dim::LENGTH), params, problems)
+                        }
+                        _ => {}
+                    }
+                }
+            }
             ("points" | "points_global", Value::Mapping(points)) => {
                 for (point, v) in points.iter_mut() {
                     let at = format!("{here}.{}", point.as_str().unwrap_or("?"));

@@ -394,9 +394,10 @@ named! {
         /// frictionless, massless mechanism.
         "mechanical_advantage" => MechanicalAdvantage(MechanicalAdvantageMeasure),
         /// The pressure angle of a cam joint with a radial follower (one that moves along the
-        /// line through the cam's centre): the angle between the pitch curve's normal at the
-        /// follower's point and that line, `atan(sigma R'(psi) / R(psi))` with `sigma = sign(dpsi/dt)`,
-        /// rad; positive while the cam pushes the follower outward.
+        /// line through the cam's centre): the angle between the contact normal (the pitch
+        /// curve's normal at the follower's point) and that line, rad, positive while the cam
+        /// pushes the follower outward; `atan(sigma R'(psi) / R(psi))` with
+        /// `sigma = sign(dpsi/dt)` on a polar pitch curve.
         "pressure_angle" => PressureAngle(PressureAngleMeasure),
     }
 }
@@ -670,7 +671,9 @@ named! {
         "expression" => Expression(ExpressionJoint),
         /// Cam and roller (or knife-edge) follower: `point_j` of `body_j` (the roller's centre)
         /// stays on the pitch curve of the cam `body_i`, `radius` a function of the polar angle
-        /// `psi` about `point_i` in the cam's frame. 1 equation.
+        /// `psi` about `point_i` in the cam's frame; or the roller (`roller_radius`) touches the
+        /// cam's working surface from outside, given by `surface_radius` (polar) or `profile` (a
+        /// closed Cartesian curve). 1 equation.
         "cam" => Cam(CamJoint),
     }
 }
@@ -903,16 +906,17 @@ pub struct ExpressionJoint {
     pub expression: String,
 }
 
-/// Cam and roller (or knife-edge) follower: with `d` the follower's point relative to the cam's
-/// centre in the cam's frame and `psi = atan2(d_y, d_x)`, `|d| = R(psi)`. The pitch curve
-/// `R(psi)` is the path of the roller's centre; the cam's working surface is its inward offset by
-/// `roller_radius`. 1 equation.
+/// Cam and roller (or knife-edge) follower, the cam given by one of: its pitch curve `radius`
+/// (the path of the roller's centre, polar), or its working surface, `surface_radius` (polar) or
+/// `profile` (a closed Cartesian curve), which the roller of `roller_radius` touches from outside
+/// (docs/model-format.md, "Cams"). 1 equation.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CamJoint {
     /// The cam.
     pub body_i: String,
-    /// The cam's centre, body i frame. Default: its origin.
+    /// The cam's centre, body i frame: the origin of `psi` and of the profile. Default: its
+    /// frame's origin.
     #[serde(default)]
     pub point_i: PointRef,
     /// The follower.
@@ -921,11 +925,58 @@ pub struct CamJoint {
     pub point_j: PointRef,
     /// The pitch radius, m: an expression of the polar angle `psi` (rad, cam frame, from the
     /// cam's x axis), parameters and tables, e.g. `"0.05 + cycloidal(psi, 0, 0, 2*pi/3, 0.02)"`.
-    pub radius: String,
-    /// The roller's radius, m (the pitch curve's offset to the cam's surface). Default: 0, a
-    /// knife edge.
+    /// The pitch curve `|d| = radius(psi)` is the path of the roller's centre. Give one of
+    /// `radius`, `surface_radius` and `profile`.
+    #[serde(default)]
+    pub radius: Option<String>,
+    /// The working surface's radius, m: an expression of the polar angle `psi` (as `radius`), the
+    /// surface `radius(psi) (cos psi, sin psi)` about `point_i` in the cam's frame.
+    #[serde(default)]
+    pub surface_radius: Option<String>,
+    /// The working surface as a closed curve about `point_i` in the cam's frame.
+    #[serde(default)]
+    pub profile: Option<CamProfileSpec>,
+    /// The roller's radius, m: the pitch curve's offset to the surface. Default: 0, a knife edge
+    /// (on a profile or surface radius: a point on the curve).
     #[serde(default)]
     pub roller_radius: f64,
+}
+
+/// A cam's working surface as a closed curve `(x, y)` about the cam's centre in its frame, m:
+/// expressions `x(u)`, `y(u)` of a parameter `u` over one `period`; or points in order (the last
+/// joined to the first), inline or two columns of a CSV file, joined by periodic cubic splines
+/// over their chord length.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CamProfileSpec {
+    /// A CSV file whose first row names its columns, relative to the model file's folder (the
+    /// working folder for a model given as text). With it, `x` and `y` are column names.
+    #[serde(default)]
+    pub file: Option<String>,
+    /// An expression of `u`, parameters and tables; the points' x coordinates, m; or, with
+    /// `file`, the name of their column.
+    pub x: ProfileColumn,
+    /// As `x`, for y.
+    pub y: ProfileColumn,
+    /// The period of `u` for expressions (the curve closes: the same point and slope at `u = 0`
+    /// and `u = period`). Default: `2 pi`. Points take none (their parameter is the chord
+    /// length).
+    #[serde(default)]
+    pub period: Option<f64>,
+}
+
+/// A coordinate of a cam profile: the points' values, or text (an expression of `u`, or a column
+/// of the profile's file).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(
+    untagged,
+    expecting = "an expression of u (text), a list of numbers (the points' coordinates, m), or with `file:` the name of a column"
+)]
+pub enum ProfileColumn {
+    /// The points' coordinates.
+    Values(Vec<f64>),
+    /// An expression of `u`, or a column of the file.
+    Text(String),
 }
 
 named! {

@@ -57,9 +57,9 @@ pub(super) fn table(path: &str, spec: &TableSpec, folder: &Path) -> Result<Splin
 
 /// Columns `x` and `y` of the CSV file `file` (its first row names the columns), as numbers, and
 /// the file's line of each row.
-type Columns = (Vec<f64>, Vec<f64>, Vec<u64>);
+pub(super) type Columns = (Vec<f64>, Vec<f64>, Vec<u64>);
 
-fn columns(path: &str, file: &Path, x: &str, y: &str) -> Result<Columns, Vec<Problem>> {
+pub(super) fn columns(path: &str, file: &Path, x: &str, y: &str) -> Result<Columns, Vec<Problem>> {
     let at = |field: &str, message: String| vec![Problem::new(format!("{path}.{field}"), message)];
     let shown = file.display();
     match std::fs::metadata(file) {

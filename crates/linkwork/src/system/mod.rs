@@ -129,7 +129,11 @@ impl<'m> System<'m> {
         let k = self.element_of(row);
         let e = self.elements[k];
         let section = if k < self.joints { "joints" } else { "drivers" };
-        let expression = e.constraint.time_function().map(|f| f.source().to_string()).unwrap_or_default();
+        let expression = match (e.constraint.time_function(), e.constraint.non_finite_cause()) {
+            (Some(f), _) => f.source().to_string(),
+            (None, Some(cause)) => cause.to_string(),
+            (None, None) => String::new(),
+        };
         Some(Error::NonFinite { time: t, element: format!("{section}.{}", e.name), expression, value: v[row] })
     }
 
