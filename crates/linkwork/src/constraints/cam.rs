@@ -20,13 +20,55 @@
 use super::{Anchor, BodyIx, CamProfile, Config, Constraint};
 use crate::expr::{Dual, Expr, HyperDual, Scalar};
 
+/// Where a cam joint measures from: the cam `i` with its centre `si`, the follower `j` with its
+/// point `sj` (the roller's centre), each in its body's frame. Shared by the pitch-curve cam and
+/// the working-surface cam ([`CamProfile`]).
+#[derive(Debug, Clone, Copy)]
+pub struct CamFrame {
+    pub(crate) i: BodyIx,
+    pub(crate) si: [f64; 2],
+    pub(crate) j: BodyIx,
+    pub(crate) sj: [f64; 2],
+}
+
+impl CamFrame {
+    /// The coordinates `(x, y, phi)` of body `b` from `q`, each seeded by `seed(column index)`.
+    #[inline]
+    fn body<S: Scalar>(&self, b: BodyIx, q: &[f64], seed: &impl Fn(usize, f64) -> S) -> [S; 3] {
+        match b.0 {
+            None => [S::constant(0.0); 3],
+            Some(c) => [seed(c, q[c]), seed(c + 1, q[c + 1]), seed(c + 2, q[c + 2])],
+        }
+    }
+
+    /// `d`, the follower's point relative to the cam's centre in the cam's frame.
+    #[inline]
+    pub(crate) fn offset<S: Scalar>(&self, q: &[f64], seed: &impl Fn(usize, f64) -> S) -> [S; 2] {
+        let [xi, yi, pi] = self.body(self.i, q, seed);
+        let [xj, yj, pj] = self.body(self.j, q, seed);
+        let (cj, sn) = (pj.cos(), pj.sin());
+        let k = |v: f64| S::constant(v);
+        let gx = xj + cj * k(self.sj[0]) - sn * k(self.sj[1]) - xi;
+        let gy = yj + sn * k(self.sj[0]) + cj * k(self.sj[1]) - yi;
+        let (ci, si) = (pi.cos(), pi.sin());
+        [ci * gx + si * gy - k(self.si[0]), ci * gy - si * gx - k(self.si[1])]
+    }
+
+    /// The columns of the two bodies' coordinates.
+    pub(crate) fn columns(&self) -> Vec<usize> {
+        [self.i, self.j].iter().filter_map(|b| b.0).flat_map(|c| c..c + 3).collect()
+    }
+
+    /// The joint's reaction point: the cam's centre.
+    pub(crate) fn anchor(&self) -> Anchor {
+        Anchor { i: self.i, j: self.j, point: self.si }
+    }
+}
+
 /// The cam's pitch curve `|d| = R(psi)` between the cam's centre and the follower's point.
 #[derive(Debug, Clone)]
 pub struct Cam {
-    i: BodyIx,
-    si: [f64; 2],
-    j: BodyIx,
-    sj: [f64; 2],
+    at: CamFrame,
     /// `R(psi)`, slot 0 the polar angle `psi`, m.
     radius: Expr,
     columns: Vec<usize>,
@@ -56,42 +98,20 @@ impl Cam {
         if radius.slots().iter().any(|&s| s != 0) {
             return Err("the pitch radius may name only psi, parameters and tables".into());
         }
-        let columns = [i, j].iter().filter_map(|b| b.0).flat_map(|c| c..c + 3).collect();
-        Ok(Cam { i, si, j, sj, radius, columns })
-    }
-
-    /// The coordinates `(x, y, phi)` of body `b` from `q`, each seeded by `seed(column index)`.
-    #[inline]
-    fn body<S: Scalar>(&self, b: BodyIx, q: &[f64], seed: &impl Fn(usize, f64) -> S) -> [S; 3] {
-        match b.0 {
-            None => [S::constant(0.0); 3],
-            Some(c) => [seed(c, q[c]), seed(c + 1, q[c + 1]), seed(c + 2, q[c + 2])],
-        }
-    }
-
-    /// `d`, the follower's point relative to the cam's centre in the cam's frame.
-    #[inline]
-    fn offset<S: Scalar>(&self, q: &[f64], seed: &impl Fn(usize, f64) -> S) -> [S; 2] {
-        let [xi, yi, pi] = self.body(self.i, q, seed);
-        let [xj, yj, pj] = self.body(self.j, q, seed);
-        let (cj, sn) = (pj.cos(), pj.sin());
-        let k = |v: f64| S::constant(v);
-        let gx = xj + cj * k(self.sj[0]) - sn * k(self.sj[1]) - xi;
-        let gy = yj + sn * k(self.sj[0]) + cj * k(self.sj[1]) - yi;
-        let (ci, si) = (pi.cos(), pi.sin());
-        [ci * gx + si * gy - k(self.si[0]), ci * gy - si * gx - k(self.si[1])]
+        let at = CamFrame { i, si, j, sj };
+        Ok(Cam { at, radius, columns: at.columns() })
     }
 
     /// `Phi = |d| - R(psi)`.
     #[inline]
     fn residual<S: Scalar>(&self, q: &[f64], seed: &impl Fn(usize, f64) -> S) -> S {
-        let [dx, dy] = self.offset(q, seed);
+        let [dx, dy] = self.at.offset(q, seed);
         dx.hypot(dy) - self.radius.eval(&[dy.atan2(dx)])
     }
 
     /// Where the follower's point is on the pitch curve, and how fast it runs round it.
     pub fn pitch_point(&self, q: &[f64], qdot: &[f64]) -> PitchPoint {
-        let [dx, dy] = self.offset(q, &|c, v| Dual { v, d: qdot[c] });
+        let [dx, dy] = self.at.offset(q, &|c, v| Dual { v, d: qdot[c] });
         let psi = dy.atan2(dx);
         let r = self.radius.eval(&[Dual { v: psi.v, d: 1.0 }]);
         PitchPoint { psi: psi.v, radius: r.v, slope: r.d, psi_rate: psi.d }
@@ -138,7 +158,7 @@ impl CamRow {
 
 impl Constraint for Cam {
     fn anchor(&self) -> Anchor {
-        Anchor { i: self.i, j: self.j, point: self.si }
+        self.at.anchor()
     }
     fn row_names(&self) -> &[&'static str] {
         &["pitch curve"]

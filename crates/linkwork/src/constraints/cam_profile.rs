@@ -39,7 +39,7 @@
 //! there, naming the joint and the time ([`Constraint::non_finite_cause`]).
 //! Norton, Design of Machinery, chapter 8 (roller followers, undercutting).
 
-use super::{Anchor, BodyIx, Config, Constraint};
+use super::{Anchor, BodyIx, CamFrame, Config, Constraint};
 use crate::expr::{Dual, Expr, HyperDual, Scalar, Spline};
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -219,10 +219,7 @@ struct Contact {
 /// The row for a roller of radius `roller` on the closed curve of a cam; see the module's text.
 #[derive(Clone)]
 pub struct CamProfile {
-    i: BodyIx,
-    si: [f64; 2],
-    j: BodyIx,
-    sj: [f64; 2],
+    at: CamFrame,
     curve: Curve,
     roller: f64,
     /// `+1` when the curve runs counter-clockwise, `-1` clockwise.
@@ -242,10 +239,7 @@ pub struct CamProfile {
 impl std::fmt::Debug for CamProfile {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("CamProfile")
-            .field("i", &self.i)
-            .field("si", &self.si)
-            .field("j", &self.j)
-            .field("sj", &self.sj)
+            .field("at", &self.at)
             .field("curve", &self.curve)
             .field("roller", &self.roller)
             .field("sigma", &self.sigma)
@@ -362,30 +356,9 @@ impl CamProfile {
             }
         }
         let fastest = (0..m).map(speed).fold(0.0, f64::max);
-        let columns = [i, j].iter().filter_map(|b| b.0).flat_map(|c| c..c + 3).collect();
-        Ok(CamProfile { i, si, j, sj, curve, roller, sigma, samples, step, reach: 2.0 * step * fastest, size, columns })
-    }
-
-    /// The coordinates `(x, y, phi)` of body `b` from `q`, each seeded by `seed(column index)`.
-    #[inline]
-    fn body<S: Scalar>(&self, b: BodyIx, q: &[f64], seed: &impl Fn(usize, f64) -> S) -> [S; 3] {
-        match b.0 {
-            None => [S::constant(0.0); 3],
-            Some(c) => [seed(c, q[c]), seed(c + 1, q[c + 1]), seed(c + 2, q[c + 2])],
-        }
-    }
-
-    /// `d`, the roller's centre relative to the cam's centre in the cam's frame.
-    #[inline]
-    fn offset<S: Scalar>(&self, q: &[f64], seed: &impl Fn(usize, f64) -> S) -> [S; 2] {
-        let [xi, yi, pi] = self.body(self.i, q, seed);
-        let [xj, yj, pj] = self.body(self.j, q, seed);
-        let (cj, sn) = (pj.cos(), pj.sin());
-        let k = |v: f64| S::constant(v);
-        let gx = xj + cj * k(self.sj[0]) - sn * k(self.sj[1]) - xi;
-        let gy = yj + sn * k(self.sj[0]) + cj * k(self.sj[1]) - yi;
-        let (ci, si) = (pi.cos(), pi.sin());
-        [ci * gx + si * gy - k(self.si[0]), ci * gy - si * gx - k(self.si[1])]
+        let at = CamFrame { i, si, j, sj };
+        let reach = 2.0 * step * fastest;
+        Ok(CamProfile { at, curve, roller, sigma, samples, step, reach, size, columns: at.columns() })
     }
 
     /// `g(u) = (p(u) - d) . p'(u)` and `g_u = |p'|^2 + (p - d) . p''` at `u`, with the curve there.
@@ -494,14 +467,14 @@ impl CamProfile {
     /// (constants), `d` seeded by `seed`: the derivatives are those of `n . d`.
     #[inline]
     fn residual<S: Scalar>(&self, c: &Contact, q: &[f64], seed: &impl Fn(usize, f64) -> S) -> S {
-        let [dx, dy] = self.offset(q, seed);
+        let [dx, dy] = self.at.offset(q, seed);
         let k = S::constant;
         k(c.n[0]) * (dx - k(c.p[0][0])) + k(c.n[1]) * (dy - k(c.p[0][1])) - k(self.roller)
     }
 
     /// The nearest point to the roller's centre at `q`.
     fn contact(&self, q: &[f64]) -> Option<Contact> {
-        self.nearest(self.offset(q, &|_, v| v))
+        self.nearest(self.at.offset(q, &|_, v| v))
     }
 
     /// The nearest point to the roller's centre `d` moving at `rate` (cam frame), and how fast
@@ -516,7 +489,7 @@ impl CamProfile {
     /// it: `(u*, du*/dt)`, the curve's parameter and its rate; `None` where the nearest point is
     /// not unique or not regular.
     pub fn contact_rate(&self, q: &[f64], qdot: &[f64]) -> Option<(f64, f64)> {
-        let [dx, dy] = self.offset(q, &|c, v| Dual { v, d: qdot[c] });
+        let [dx, dy] = self.at.offset(q, &|c, v| Dual { v, d: qdot[c] });
         self.moving_contact([dx.v, dy.v], [dx.d, dy.d]).map(|(c, u_rate)| (c.u, u_rate))
     }
 
@@ -525,7 +498,7 @@ impl CamProfile {
     /// while the cam pushes the follower outward, as [`super::Cam::pressure_angle`]. NaN where
     /// the nearest point is not unique or not regular.
     pub fn pressure_angle(&self, q: &[f64], qdot: &[f64]) -> f64 {
-        let [dx, dy] = self.offset(q, &|c, v| Dual { v, d: qdot[c] });
+        let [dx, dy] = self.at.offset(q, &|c, v| Dual { v, d: qdot[c] });
         let Some(c) = self.nearest([dx.v, dy.v]) else { return f64::NAN };
         let d = [dx.v, dy.v];
         // dpsi/dt = (d x d') / |d|^2: only its sign is needed.
@@ -538,7 +511,7 @@ impl CamProfile {
 
 impl Constraint for CamProfile {
     fn anchor(&self) -> Anchor {
-        Anchor { i: self.i, j: self.j, point: self.si }
+        self.at.anchor()
     }
     fn row_names(&self) -> &[&'static str] {
         &["surface contact"]
@@ -559,7 +532,7 @@ impl Constraint for CamProfile {
         }
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
-        let [dx, dy] = self.offset(q, &|c, v| HyperDual::seed(v, qdot[c], qdot[c]));
+        let [dx, dy] = self.at.offset(q, &|c, v| HyperDual::seed(v, qdot[c], qdot[c]));
         let (rate, free) = ([dx.e1, dy.e1], [dx.e12, dy.e12]);
         let Some((c, u_rate)) = self.moving_contact([dx.v, dy.v], rate) else {
             out[0] = f64::NAN;

@@ -25,7 +25,7 @@ mod translational;
 
 use crate::expr::Scalar;
 pub use absolute::{Absolute, AbsoluteKind};
-pub use cam::{Cam, CamRow, PitchPoint};
+pub use cam::{Cam, CamFrame, CamRow, PitchPoint};
 pub use cam_profile::{CamProfile, Curve, CurveError};
 pub use distance::Distance;
 pub use driver::{Driver, DriverKind};
