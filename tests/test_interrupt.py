@@ -38,6 +38,13 @@ SWEEP_VARIANTS = 20_000
 SWEEP_GRID = f"r=0.05:0.15:{SWEEP_VARIANTS}"
 SWEEP_OUTPUT = "stroke=max(slider.x) - min(slider.x)"
 
+# A shell without job control starts a background command with SIGINT ignored (POSIX), Python
+# then leaves it ignored, and so does every command it starts: Ctrl-C would reach nothing (a CI run
+# launched with `nohup ... &` failed every test here, each run going on to its end). These tests
+# send Ctrl-C to see what the engine does with it, so they give the test process Python's own
+# handler (its children, started by exec, then get the default disposition and install theirs).
+signal.signal(signal.SIGINT, signal.default_int_handler)
+
 # The bar for Ctrl-C. The engine looks every 50 ms and stops at its next step (about a
 # millisecond here), so this leaves three quarters of it to a loaded machine.
 STOP_WITHIN = 0.2
