@@ -79,7 +79,7 @@
 use super::adams::{Adams, MAX_ORDER};
 use super::{
     hermite5, roundoff_ratio, step_failure, Dae, DynamicStats, IntegratorKind, IntegratorSettings, Outcome, Output,
-    Span, Start,
+    Span, Start, CONTACT_UNRESOLVED,
 };
 use crate::error::Error;
 use crate::linalg::dense::RANK_TOLERANCE;
@@ -1007,6 +1007,17 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                     continue;
                 }
             };
+            if let Some(r) = s.dae.contact_event(&s.qa, &s.q) {
+                // A first contact inside the step: shorter, until the step ends just into it (as
+                // bdf and hht; the corrected positions of the step are those tested).
+                stats.rejected_steps += 1;
+                ad.reject(h);
+                h *= r;
+                if h < h_min {
+                    return Err(step_failure(s.dae, &s.qa, s.ta, h, CONTACT_UNRESOLVED));
+                }
+                continue;
+            }
             // Accept: differences, order and next step; the state; work; output times.
             let h_used = h;
             h_recent = h_used.max(RECENT_DECAY * h_recent);
