@@ -413,17 +413,7 @@ impl<'m> Dae<'m> {
         }
         for (k, slot) in self.friction.iter().enumerate() {
             let (w, rows) = (slot.columns.len(), slot.rows.len());
-            let (mut v, mut lambda) = ([0.0; FRICTION_WIDTH], [0.0; FRICTION_ROWS]);
-            gather(qdot, slot.columns, &mut v[..w]);
-            for (l, &x) in lambda.iter_mut().zip(&multipliers[slot.rows.clone()]) {
-                *l = x / per;
-            }
-            let (mut by_l, mut by_v) = ([0.0; FRICTION_WIDTH * FRICTION_ROWS], [0.0; FRICTION_WIDTH * FRICTION_WIDTH]);
-            let mut work = [Dual::new(0.0, 0.0); 2 * FRICTION_WIDTH + FRICTION_ROWS];
-            let config = Config::new(q, &self.rot);
-            let block = &self.jac[slot.block.clone()];
-            let lambda = &lambda[..rows];
-            slot.friction.derivatives(&config, slot.columns, block, &v[..w], lambda, &mut by_l, &mut by_v, &mut work);
+            let (by_l, by_v) = self.slot_derivatives(k, q, qdot, multipliers, per);
             let (_, values) = self.kkt.lu.pattern_and_values();
             // The block's entry (r, c) is Phi_q[r, c]; its transpose sits at (c, n + r).
             for (e, &(_, upper)) in self.kkt.jac[slot.block.clone()].iter().enumerate() {
@@ -469,25 +459,9 @@ impl<'m> Dae<'m> {
     ) {
         let n = self.n;
         out.fill(0.0);
-        for slot in &self.friction {
-            let (w, count) = (slot.columns.len(), slot.rows.len());
-            let (mut v, mut lambda) = ([0.0; FRICTION_WIDTH], [0.0; FRICTION_ROWS]);
-            gather(qdot, slot.columns, &mut v[..w]);
-            lambda[..count].copy_from_slice(&multipliers[slot.rows.clone()]);
-            let (mut by_l, mut by_v) = ([0.0; FRICTION_WIDTH * FRICTION_ROWS], [0.0; FRICTION_WIDTH * FRICTION_WIDTH]);
-            let mut work = [Dual::new(0.0, 0.0); 2 * FRICTION_WIDTH + FRICTION_ROWS];
-            let config = Config::new(q, &self.rot);
-            let block = &self.jac[slot.block.clone()];
-            slot.friction.derivatives(
-                &config,
-                slot.columns,
-                block,
-                &v[..w],
-                &lambda[..count],
-                &mut by_l,
-                &mut by_v,
-                &mut work,
-            );
+        for (k, slot) in self.friction.iter().enumerate() {
+            let count = slot.rows.len();
+            let (by_l, _) = self.slot_derivatives(k, q, qdot, multipliers, 1.0);
             for (r, row) in slot.rows.clone().enumerate() {
                 let Ok(j) = rows.binary_search(&row) else { continue };
                 for (c, &col) in slot.columns.iter().enumerate() {
@@ -495,6 +469,33 @@ impl<'m> Dae<'m> {
                 }
             }
         }
+    }
+
+    /// The exact derivatives of slot `k`'s friction ([`Friction::derivatives`]) with the
+    /// multipliers `multipliers / per`: by its multipliers `(columns x rows)` and by its
+    /// velocities `(columns x columns)`, row-major.
+    fn slot_derivatives(
+        &self,
+        k: usize,
+        q: &[f64],
+        qdot: &[f64],
+        multipliers: &[f64],
+        per: f64,
+    ) -> ([f64; FRICTION_WIDTH * FRICTION_ROWS], [f64; FRICTION_WIDTH * FRICTION_WIDTH]) {
+        let slot = &self.friction[k];
+        let (w, rows) = (slot.columns.len(), slot.rows.len());
+        let (mut v, mut lambda) = ([0.0; FRICTION_WIDTH], [0.0; FRICTION_ROWS]);
+        gather(qdot, slot.columns, &mut v[..w]);
+        for (l, &x) in lambda.iter_mut().zip(&multipliers[slot.rows.clone()]) {
+            *l = x / per;
+        }
+        let (mut by_l, mut by_v) = ([0.0; FRICTION_WIDTH * FRICTION_ROWS], [0.0; FRICTION_WIDTH * FRICTION_WIDTH]);
+        let mut work = [Dual::new(0.0, 0.0); 2 * FRICTION_WIDTH + FRICTION_ROWS];
+        let config = Config::new(q, &self.rot);
+        let block = &self.jac[slot.block.clone()];
+        let lambda = &lambda[..rows];
+        slot.friction.derivatives(&config, slot.columns, block, &v[..w], lambda, &mut by_l, &mut by_v, &mut work);
+        (by_l, by_v)
     }
 
     /// `out (n) += Q_f(q, qdot, multipliers / per)`: the joints' friction ([`Friction`]) with the
