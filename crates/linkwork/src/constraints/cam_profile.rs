@@ -417,23 +417,37 @@ impl CamProfile {
         None
     }
 
-    /// The nearest point of the curve to `d`, if it is unique and a strict minimum.
-    fn nearest(&self, d: [f64; 2]) -> Option<Contact> {
+    /// Calls `f(k, |p_k - d|^2)` for every sample `k` nearer to `d` than both its neighbours
+    /// (ties broken towards the later one): each starts a basin of the distance. One pass, each
+    /// squared distance computed once (a hypot per sample would be most of the search's cost).
+    fn basins(&self, d: [f64; 2], mut f: impl FnMut(usize, f64)) {
         let m = self.samples.len();
-        // Squared distances for the search (a hypot per sample would be most of its cost).
         let dist = |k: usize| {
-            let v = sub(self.samples[k % m], d);
+            let v = sub(self.samples[k], d);
             v[0] * v[0] + v[1] * v[1]
         };
-        // A sample nearer than both neighbours (ties broken towards the later one) starts a basin
-        // of the distance. The nearest sample's basin is refined first; another's only if its
-        // sample is within a sample's reach of the best point found (else it cannot hold a
-        // nearer point, nor one as near). Two passes, so that nothing is allocated.
-        let basin = |k: usize| {
-            let here = dist(k);
-            here <= dist(k + m - 1) && here < dist(k + 1)
-        };
-        let first = (0..m).filter(|&k| basin(k)).min_by(|&a, &b| dist(a).total_cmp(&dist(b)))?;
+        let (first, mut before, mut here) = (dist(0), dist(m - 1), dist(0));
+        for k in 0..m {
+            let after = if k + 1 == m { first } else { dist(k + 1) };
+            if here <= before && here < after {
+                f(k, here);
+            }
+            (before, here) = (here, after);
+        }
+    }
+
+    /// The nearest point of the curve to `d`, if it is unique and a strict minimum.
+    fn nearest(&self, d: [f64; 2]) -> Option<Contact> {
+        // The nearest sample's basin is refined first; another's only if its sample is within a
+        // sample's reach of the best point found (else it cannot hold a nearer point, nor one as
+        // near). Two passes, so that nothing is allocated.
+        let mut first: Option<(usize, f64)> = None;
+        self.basins(d, |k, here| {
+            if first.is_none_or(|(_, f)| here < f) {
+                first = Some((k, here));
+            }
+        });
+        let (first, _) = first?;
         let start = self.refine(first, d)?;
         let gap = |c: &Contact| {
             let v = sub(d, c.p[0]);
@@ -441,17 +455,21 @@ impl CamProfile {
         };
         let (mut best, mut nearest) = (gap(&start), start);
         let mut second = f64::INFINITY;
-        for k in (0..m).filter(|&k| k != first && basin(k)) {
-            if dist(k).sqrt() - self.reach > best + TIE * self.size {
-                continue;
+        let mut failed = false;
+        self.basins(d, |k, here| {
+            if failed || k == first || here.sqrt() - self.reach > best + TIE * self.size {
+                return;
             }
-            let c = self.refine(k, d)?;
+            let Some(c) = self.refine(k, d) else {
+                failed = true;
+                return;
+            };
             let here = gap(&c);
             let w = sub(c.p[0], nearest.p[0]);
             // The same point reached from another sample is no rival: two distinct minima of the
             // distance are at least some sample spacings apart, far more than 1e-6 of the size.
             if w[0].hypot(w[1]) <= 1e3 * TIE * self.size {
-                continue;
+                return;
             }
             if here < best {
                 second = best;
@@ -459,6 +477,9 @@ impl CamProfile {
             } else {
                 second = second.min(here);
             }
+        });
+        if failed {
+            return None;
         }
         (second - best > TIE * self.size && nearest.g_u > 0.0).then_some(nearest)
     }
