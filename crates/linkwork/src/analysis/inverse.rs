@@ -65,11 +65,13 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         }
         let jac = ColMatrix::from_entries(&pattern, dae.jacobian_entries().1);
         let mut space = row_space(&jac, t)?;
-        let mut lambda = transpose_solve(&mut space, &rhs, t)?;
-        if dae.has_friction() {
-            lambda = with_friction(&dae, &mut space, (t, q, qdot), &rhs, lambda)?;
+        let lambda = if dae.has_friction() {
+            let lambda = with_friction(&dae, &mut space, (t, q, qdot), &rhs)?;
             dae.add_friction(q, qdot, &lambda, 1.0, &mut rhs, None);
-        }
+            lambda
+        } else {
+            transpose_solve(&mut space, &rhs, t)?
+        };
         // The multipliers must balance every body. Near a singular position the solve drops
         // the directions whose singular values are below RANK_TOLERANCE while the kinematics,
         // whose limit is `singular_condition`, still goes on: the load along such a direction is
@@ -118,46 +120,48 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
 
 /// `lambda` solving `Phi_q^T lambda = rhs` (minimum norm) in the row space `space` at `t`.
 fn transpose_solve(space: &mut RowSpace, rhs: &[f64], t: f64) -> Result<Vec<f64>, Error> {
-    space.min_norm_transpose_solve(rhs).ok_or_else(|| Error::Singular {
+    space.min_norm_transpose_solve(rhs).ok_or_else(|| svd_failure(t))
+}
+
+/// The failure of the dense SVD of the constraint Jacobian at `t`.
+fn svd_failure(t: f64) -> Error {
+    Error::Singular {
         time: t,
         rows: vec![],
         detail: "the singular value decomposition of the constraint Jacobian failed (a non-finite entry)".into(),
-    })
+    }
 }
 
 /// The multipliers with joint friction: `Phi_q^T lambda = rhs + Q_f(q, qdot, lambda)`.
 ///
 /// `Q_f` depends on `lambda` only through the friction joints' rows `z` (their reactions'
-/// magnitudes) and the solve `S` (minimum norm, with the factorization of `space` already made)
-/// is linear, so `lambda = lambda_0 + S Q_f(z)` from the frictionless `lambda_0`, and Newton
-/// solves the small system `g(z) = lambda_0[rows] + (S E) Q_f(z) - z = 0`: `S E` the response of
-/// those rows to a unit load on each friction column (one solve per column, once), `dQ_f/dz`
-/// exact ([`Dae::friction_by_multipliers`]). A fixed point `z <- lambda_0[rows] + S E Q_f(z)`
-/// contracts by the friction's gain (`~ mu r / arm` for a pin, `mu tan(beta)` for a slider pushed
-/// at an angle `beta`) and stalls as the gain nears 1 on the way to a self-locking position;
-/// Newton converges there as well, and fails only where there is no solution. Converged when the
-/// correction is below [`FRICTION_RTOL`] of the largest multiplier; [`Error::Friction`] naming
-/// the joint whose friction changed most when it is not after `NEWTON_FRICTION_ITERATIONS`.
+/// magnitudes) and the solve `S` (minimum norm, in the row space `space`) is linear, so
+/// `lambda = lambda_0 + (S E) Q_f(z)`: `lambda_0 = S rhs` the frictionless multipliers, `S E` the
+/// response to a unit load on each friction column, all from one solve of those columns together.
+/// Newton then solves the small system `g(z) = lambda_0[rows] + (S E)[rows] Q_f(z) - z = 0` with
+/// `dQ_f/dz` exact ([`Dae::friction_by_multipliers`]), and no more solves. A fixed point
+/// `z <- lambda_0[rows] + (S E)[rows] Q_f(z)` contracts by the friction's gain (`~ mu r / arm`
+/// for a pin, `mu tan(beta)` for a slider pushed at an angle `beta`) and stalls as the gain nears
+/// 1 on the way to a self-locking position; Newton converges there as well, and fails only where
+/// there is no solution. Converged when the correction is below [`FRICTION_RTOL`] of the largest
+/// multiplier; [`Error::Friction`] naming the joint whose friction changed most when it is not
+/// after `NEWTON_FRICTION_ITERATIONS`.
 fn with_friction(
     dae: &Dae<'_>,
     space: &mut RowSpace,
     (t, q, qdot): (f64, &[f64], &[f64]),
     rhs: &[f64],
-    mut lambda: Vec<f64>,
 ) -> Result<Vec<f64>, Error> {
     let n = rhs.len();
     let (rows, columns) = dae.friction_support();
     let (nr, nc) = (rows.len(), columns.len());
-    let mut response = Mat::<f64>::zeros(nr, nc);
-    let mut unit = vec![0.0; n];
-    for (j, &c) in columns.iter().enumerate() {
-        unit[c] = 1.0;
-        let solved = transpose_solve(space, &unit, t)?;
-        unit[c] = 0.0;
-        for (i, &r) in rows.iter().enumerate() {
-            response[(i, j)] = solved[r];
-        }
-    }
+    // Column 0 the loads, column 1 + j a unit load on friction column j.
+    let loads = Mat::<f64>::from_fn(n, 1 + nc, |i, j| match j {
+        0 => rhs[i],
+        _ => f64::from(u8::from(columns[j - 1] == i)),
+    });
+    let solved = space.min_norm_transpose_solve_columns(loads.as_ref()).ok_or_else(|| svd_failure(t))?;
+    let mut lambda: Vec<f64> = solved.col(0).iter().copied().collect();
     let base: Vec<f64> = rows.iter().map(|&r| lambda[r]).collect();
     let scale = lambda.iter().fold(0.0f64, |a, x| a.max(x.abs()));
     let (mut load, mut by) = (vec![0.0; n], vec![0.0; n * nr]);
@@ -168,10 +172,11 @@ fn with_friction(
         dae.add_friction(q, qdot, &lambda, 1.0, &mut load, None);
         dae.friction_by_multipliers(q, qdot, &lambda, &rows, &mut by);
         let g = Mat::<f64>::from_fn(nr, 1, |i, _| {
-            base[i] + (0..nc).map(|j| response[(i, j)] * load[columns[j]]).sum::<f64>() - lambda[rows[i]]
+            let r = rows[i];
+            base[i] + (0..nc).map(|j| solved[(r, 1 + j)] * load[columns[j]]).sum::<f64>() - lambda[r]
         });
         let jacobian = Mat::<f64>::from_fn(nr, nr, |i, k| {
-            let slope: f64 = (0..nc).map(|j| response[(i, j)] * by[k * n + columns[j]]).sum();
+            let slope: f64 = (0..nc).map(|j| solved[(rows[i], 1 + j)] * by[k * n + columns[j]]).sum();
             f64::from(u8::from(i == k)) - slope
         });
         let step = jacobian.partial_piv_lu().solve(&g);
@@ -188,9 +193,13 @@ fn with_friction(
         let largest = scale.max(rows.iter().fold(0.0f64, |a, &r| a.max(lambda[r].abs())));
         let change = delta.iter().fold(0.0f64, |a, d| a.max(d.abs()));
         if change <= FRICTION_RTOL * largest {
-            load.copy_from_slice(rhs);
+            // Every multiplier from the converged friction: lambda_0 + (S E) Q_f(z).
+            load.fill(0.0);
             dae.add_friction(q, qdot, &lambda, 1.0, &mut load, None);
-            return transpose_solve(space, &load, t);
+            for (r, l) in lambda.iter_mut().enumerate() {
+                *l = solved[(r, 0)] + (0..nc).map(|j| solved[(r, 1 + j)] * load[columns[j]]).sum::<f64>();
+            }
+            return Ok(lambda);
         }
         worst = dae.friction_change(q, qdot, &delta, &lambda);
     }

@@ -54,17 +54,25 @@ fn rank(s: faer::ColRef<'_, f64>) -> usize {
 /// singular values below [`RANK_TOLERANCE`] times the largest dropped. `None` when the SVD fails
 /// (a non-finite entry).
 pub fn min_norm_solve(a: MatRef<'_, f64>, b: &[f64]) -> Option<Vec<f64>> {
+    let x = min_norm_solve_columns(a, MatRef::from_column_major_slice(b, b.len(), 1))?;
+    Some(x.col(0).iter().copied().collect())
+}
+
+/// [`min_norm_solve`] for each column of `b (rows x k)`, with one SVD: `x (cols x k)`.
+pub fn min_norm_solve_columns(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Option<Mat<f64>> {
     let (m, n) = (a.nrows(), a.ncols());
+    let mut x = Mat::<f64>::zeros(n, b.ncols());
     if n == 0 || m == 0 {
-        return Some(vec![0.0; n]);
+        return Some(x);
     }
     let svd = a.thin_svd().ok()?;
     let (u, s, v) = (svd.U(), svd.S().column_vector(), svd.V());
-    let mut x = vec![0.0; n];
-    for k in 0..rank(s) {
-        let c: f64 = (0..m).map(|i| u[(i, k)] * b[i]).sum::<f64>() / s[k];
-        for (j, xj) in x.iter_mut().enumerate() {
-            *xj += v[(j, k)] * c;
+    for col in 0..b.ncols() {
+        for k in 0..rank(s) {
+            let c: f64 = (0..m).map(|i| u[(i, k)] * b[(i, col)]).sum::<f64>() / s[k];
+            for j in 0..n {
+                x[(j, col)] += v[(j, k)] * c;
+            }
         }
     }
     Some(x)

@@ -30,7 +30,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, Mat, MatMut, Par, Side};
+use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
 
 /// Entries `m n` of a matrix up to which the dense SVD is used: `40,000` (a mechanism of about
 /// 60 bodies). The Gram factorization is the faster from a few bodies on (`linkwork check` of the
@@ -117,6 +117,23 @@ impl RowSpace {
                 let mut y = b.to_vec();
                 g.solve(&mut y);
                 Some(g.transpose_times(&y))
+            }
+        }
+    }
+
+    /// [`RowSpace::min_norm_transpose_solve`] for each column of `g (n x k)`: `y (m x k)`, the
+    /// dense SVD computed once for all of them. `None` when it fails on a non-finite entry.
+    pub fn min_norm_transpose_solve_columns(&mut self, g: MatRef<'_, f64>) -> Option<Mat<f64>> {
+        match self {
+            RowSpace::Dense(a) => dense::min_norm_solve_columns(a.transpose(), g),
+            RowSpace::Gram(gram) => {
+                let mut y = Mat::<f64>::zeros(gram.a.nrows, g.ncols());
+                for col in 0..g.ncols() {
+                    let column: Vec<f64> = g.col(col).iter().copied().collect();
+                    let solved = self.min_norm_transpose_solve(&column)?;
+                    y.col_mut(col).iter_mut().zip(solved).for_each(|(a, b)| *a = b);
+                }
+                Some(y)
             }
         }
     }
@@ -440,13 +457,23 @@ mod tests {
             let (xd, xg) = (dense.min_norm_solve(&b).unwrap(), gram.min_norm_solve(&b).unwrap());
             assert!(close(&xg, &xd), "seed {seed}: {xg:?} against {xd:?}");
             // A^T y = g, in the range of A^T and not.
-            for g in [
+            let gs = [
                 (0..n).map(|j| (0..m).map(|i| full[(i, j)] * (i as f64)).sum()).collect::<Vec<f64>>(),
                 (0..n).map(|j| (j as f64).cos()).collect(),
-            ] {
-                let (yd, yg) =
-                    (dense.min_norm_transpose_solve(&g).unwrap(), gram.min_norm_transpose_solve(&g).unwrap());
+            ];
+            for g in &gs {
+                let (yd, yg) = (dense.min_norm_transpose_solve(g).unwrap(), gram.min_norm_transpose_solve(g).unwrap());
                 assert!(close(&yg, &yd), "seed {seed}: {yg:?} against {yd:?}");
+            }
+            // Both columns at once, each as alone (the dense SVD shared; the same arithmetic).
+            let both_g = Mat::<f64>::from_fn(n, 2, |j, c| gs[c][j]);
+            for space in [&mut dense, &mut gram] {
+                let y = space.min_norm_transpose_solve_columns(both_g.as_ref()).unwrap();
+                for (c, g) in gs.iter().enumerate() {
+                    let alone = space.min_norm_transpose_solve(g).unwrap();
+                    let column: Vec<f64> = y.col(c).iter().copied().collect();
+                    assert_eq!(column, alone, "seed {seed}, column {c}");
+                }
             }
             let ((rd, rowsd), (rg, rowsg)) = (dense.smallest_singular(), gram.smallest_singular());
             if dependent.is_empty() {
