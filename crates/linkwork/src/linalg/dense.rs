@@ -156,6 +156,48 @@ pub fn independent_rows(jac: MatRef<'_, f64>) -> (Vec<usize>, Vec<usize>) {
     (keep, drop)
 }
 
+/// Solve `a x = b` in place for a small symmetric positive definite `a` (order `n`, row-major,
+/// its lower triangle overwritten by the Cholesky factor `L`, `b` by `x`). False, with `a` and
+/// `b` partly overwritten, when a pivot is not positive (the matrix is not positive definite to
+/// rounding). For the few unknowns of a reduced mass matrix, solved at every evaluation: a dense
+/// library call allocates and dispatches for more work than the `n^3 / 6` flops of the
+/// factorization.
+pub fn cholesky_solve_small(a: &mut [f64], n: usize, b: &mut [f64]) -> bool {
+    for j in 0..n {
+        let mut d = a[j * n + j];
+        for k in 0..j {
+            d -= a[j * n + k] * a[j * n + k];
+        }
+        if d.is_nan() || d <= 0.0 {
+            return false;
+        }
+        let d = d.sqrt();
+        a[j * n + j] = d;
+        for i in j + 1..n {
+            let mut s = a[i * n + j];
+            for k in 0..j {
+                s -= a[i * n + k] * a[j * n + k];
+            }
+            a[i * n + j] = s / d;
+        }
+    }
+    for i in 0..n {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= a[i * n + k] * b[k];
+        }
+        b[i] = s / a[i * n + i];
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for k in i + 1..n {
+            s -= a[k * n + i] * b[k];
+        }
+        b[i] = s / a[i * n + i];
+    }
+    true
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -176,6 +218,25 @@ mod tests {
             2 => r0[j] + 2.0 * r1[j],
             _ => 3.0 * r0[j] - r1[j],
         })
+    }
+
+    /// `cholesky_solve_small` solves `G x = b` for a Gram matrix `G = A^T A + I` (symmetric
+    /// positive definite) to a residual of rounding, and refuses an indefinite matrix.
+    #[test]
+    fn small_cholesky_solves_and_refuses_indefinite() {
+        let a = rank_two();
+        let n = 5;
+        let g = Mat::from_fn(n, n, |i, j| (0..4).map(|k| a[(k, i)] * a[(k, j)]).sum::<f64>() + f64::from(i == j));
+        let mut packed: Vec<f64> = (0..n * n).map(|e| g[(e / n, e % n)]).collect();
+        let b = [1.0, -2.0, 0.5, 3.0, 0.25];
+        let mut x = b;
+        assert!(cholesky_solve_small(&mut packed, n, &mut x));
+        for i in 0..n {
+            let gx: f64 = (0..n).map(|j| g[(i, j)] * x[j]).sum();
+            assert!((gx - b[i]).abs() < CLOSE * 100.0, "row {i}: {gx} against {}", b[i]);
+        }
+        let mut indefinite = [1.0, 2.0, 2.0, 1.0];
+        assert!(!cholesky_solve_small(&mut indefinite, 2, &mut [1.0, 1.0]));
     }
 
     /// The null space of a rank-2 `4 x 5` matrix has dimension `5 - 2 = 3`; its vectors satisfy

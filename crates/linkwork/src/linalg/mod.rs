@@ -280,6 +280,11 @@ impl SparseLu {
         self.solve_with(rhs, false);
     }
 
+    /// Solve `A^T x = b` in place (`rhs: (n)`), with the last successful factorization.
+    pub fn solve_transpose(&mut self, rhs: &mut [f64]) {
+        self.solve_with(rhs, true);
+    }
+
     fn solve_with(&mut self, rhs: &mut [f64], transpose: bool) {
         debug_assert!(self.factored, "solve before a successful factorization");
         let n = rhs.len();

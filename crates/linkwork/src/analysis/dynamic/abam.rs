@@ -20,9 +20,15 @@
 //! ```text
 //! Phi(q_I, q_D, t) = 0          Newton in q_D with the block B = Phi_q[rows, D], q_I fixed
 //! B v_D = nu - Phi_q[rows, I] v_I                                     (dependent velocities)
-//! [M, Phi_q^T; Phi_q, 0] [qddot; lambda] = [Q; gamma]                 (Dae::accelerations)
+//! [M, Phi_q^T; Phi_q, 0] [qddot; lambda] = [Q; gamma]                 (the accelerations)
 //! y' = (v_I, qddot_I)
 //! ```
+//!
+//! With few independent coordinates (at most `REDUCED_MAX`), no redundant rows and no joint
+//! friction, the accelerations are solved in the independent coordinates with the factors of
+//! `B` at the evaluation (`Split::reduced_accelerations`: `(M_I + S^T M_D S) qddot_I = ...`,
+//! `S = B^-1 Phi_q[rows, I]`), the multipliers by a solve with `B^T`; otherwise the augmented
+//! system is factored (`Dae::accelerations`).
 //!
 //! Newton starts from the Taylor extrapolation `q_D + dt v_D + dt^2/2 a_D` of the last accepted
 //! state (the predictor's solution for the corrector; the quintic Hermite interpolant of the
@@ -43,7 +49,11 @@
 //! `atol + rtol |y_k|`, and the norm is the largest; a step passes at an error of 1. Near a
 //! fold, an error of `q_I` is an error of `q_D` amplified by `dq_D / dq_I`: measured on
 //! `(q_I, v_I)` alone, the error test let the kinetic energy of the coasting quick-return jump by
-//! 1e-4 relative at each re-partition at `rtol = 1e-6`. Output at the requested times uses the method's own interpolating polynomial (STEP's companion INTRP) for `(q_I, v_I)`,
+//! 1e-4 relative at each re-partition at `rtol = 1e-6`. The mapping is linear: with the
+//! reduced accelerations it is a `2r x 2p` matrix built once an evaluation from their `S` and
+//! one difference quotient per independent coordinate, instead of two evaluations of `Phi_q` at
+//! each of the three to five norms an attempt asks for. Output at the requested times uses the
+//! method's own interpolating polynomial (STEP's companion INTRP) for `(q_I, v_I)`,
 //! then recovers `q_D, v_D` as above. Departures from STEP: the step never passes the end time
 //! or the maximum step, and the "tolerance too small for the machine precision" return is
 //! replaced by the smallest-step failure.
@@ -61,10 +71,13 @@
 //! The sensitivity measures what matters directly; the pivot ratio of `B` was tried and rejected:
 //! it is dominated by pivots unrelated to the fold and only falls within a few hundredths of a
 //! radian of it, which one step can straddle. If the new choice keeps the same independent
-//! coordinates, only the reference sensitivity is updated; otherwise the Adams history (which
-//! belongs to the old coordinates) is discarded and the method restarts at order 1 with at most
-//! the initial step. `partitions` counts the choices that set up the coordinates: the first and
-//! each change.
+//! coordinates, only the reference sensitivity is updated; otherwise the Adams method is carried
+//! over to the new coordinates with its order, step and history (`Adams::rebase`: their
+//! differences rebuilt from their velocities and accelerations at the last accepted states,
+//! which every partition computes for all coordinates). It used to restart at order 1 with at
+//! most the initial step: the quick-return under its crank torque re-partitions 97 times in 2 s
+//! and took 2,232 steps at `1e-4`, now 1,344. `partitions` counts the choices that set up the
+//! coordinates: the first and each change.
 //!
 //! **Crossing singular positions.** Where `Phi_q` loses rank for every choice of `B` (A02's flat
 //! chain) the constraints fix `q_D` only to `|B^-1|` times the round-off of `Phi`, and the
@@ -133,6 +146,15 @@ const NOISE_MARGIN: f64 = 8.0;
 /// stretches last 0.12 to 0.30 s at `1e-12` (1.7 s of the 20 s in `bdf`) and 0.06 to 0.23 s at
 /// `1e-13` (2.9 s).
 const CROSSING_STEPS: f64 = 16.0;
+/// Most independent coordinates for which an evaluation solves the accelerations in them
+/// ([`Split::reduced_accelerations`]: `p + 2` solves with the factors of `B` and a `p x p`
+/// Cholesky) instead of factoring the `(n + m)` augmented matrix, and the error norm is a
+/// `2n x 2p` map built once an attempt ([`Split::norm`]). The reduced solve costs about `p` times
+/// a solve with `B`, the augmented one a factorization of twice `B`'s order and three solves: on
+/// the quick-return (`p = 1`, order 14 against 29) an evaluation's linear algebra falls from
+/// about 6 to 2 us. At 8 the reduced solve's `p` solves still cost less than the factorization;
+/// mechanisms of many degrees of freedom keep the augmented solve.
+const REDUCED_MAX: usize = 8;
 /// Decay per accepted step of the recent step size (the largest recent step): about the last 20
 /// steps count.
 const RECENT_DECAY: f64 = 0.9;
@@ -241,12 +263,34 @@ struct Split<'a, 'm> {
     influence1: f64,
     /// The sparse dependent block and its factors (`None` before the first choice).
     block: Option<Block>,
-    /// Operations (entries merged) of the sparse eliminations that chose the partitions.
-    partition_work: usize,
-    /// Numeric factorizations of `B`.
-    block_factorizations: usize,
-    /// The values of `Phi_q`'s entries that `B`'s current factors were made from.
+    /// The values of `Phi_q`'s entries that `B`'s current factors were made from, and whether
+    /// they are factors (false after a singular `B`).
     factored: Vec<f64>,
+    factored_ok: bool,
+    /// Whether the accelerations are solved in the independent coordinates
+    /// ([`Split::reduced_accelerations`]): at most [`REDUCED_MAX`] of them, no redundant rows
+    /// (their multipliers are the augmented solve's), no joint friction (its load depends on the
+    /// multipliers).
+    reduced: bool,
+    /// Scratch of the reduced solve: (n) the load, (m) `gamma`, (r) `B^-1 gamma`, (r p) the
+    /// columns `B^-1 Phi_q[rows, I]`, (p p) the reduced mass matrix, (p) its right-hand side.
+    load: Vec<f64>,
+    gamma: Vec<f64>,
+    particular: Vec<f64>,
+    sens: Vec<f64>,
+    /// Whether `sens` is that of the last evaluation, with `B` as factored now.
+    sens_fresh: bool,
+    reduced_mass: Vec<f64>,
+    reduced_rhs: Vec<f64>,
+    /// With at most [`REDUCED_MAX`] independent coordinates, the error map of this attempt:
+    /// column `k` is the change `(dq_D, dv_D)` (2r) that a unit change of the `k`-th entry of
+    /// `(q_I, v_I)` makes ([`Split::dependent_changes`]), built at the attempt's first
+    /// [`Split::norm`] (`map_ready`).
+    map: Vec<f64>,
+    map_ready: bool,
+    /// Scratch of [`Split::norm`]: (2r) the dependent changes, (2p) a unit change.
+    changes: Vec<f64>,
+    unit: Vec<f64>,
     /// The state [`Split::noise_dominates`] restores (positions, velocities, solution, factored
     /// entries) and its sample of the noise: kept here so that a step allocates nothing.
     saved: [Vec<f64>; 4],
@@ -283,6 +327,13 @@ struct Split<'a, 'm> {
     va: Vec<f64>,
     aa: Vec<f64>,
     la: Vec<f64>,
+    /// The velocities and accelerations of the last `MAX_ORDER + 1` accepted states, a ring
+    /// (`past_at` the newest), with their times: the derivatives a re-partition carries the
+    /// Adams history over with ([`Adams::rebase`]).
+    past_t: Vec<f64>,
+    past_v: Vec<Vec<f64>>,
+    past_a: Vec<Vec<f64>>,
+    past_at: usize,
     /// Newton iterations in all evaluations.
     newton_iterations: usize,
 }
@@ -294,8 +345,7 @@ impl Split<'_, '_> {
         let (m, n) = (self.dae.m, self.dae.n);
         self.dae.positions(&self.qa, self.ta);
         let (entries, jac) = self.dae.jacobian_entries();
-        let (rows, dep, work) = pivots(m, n, entries, jac);
-        self.partition_work += work;
+        let (rows, dep, _) = pivots(m, n, entries, jac);
         let ind: Vec<usize> = {
             let mut is_dep = vec![false; n];
             dep.iter().for_each(|&c| is_dep[c] = true);
@@ -305,11 +355,22 @@ impl Split<'_, '_> {
         if changed || rows != self.rows || self.block.is_none() {
             self.block = Some(Block::new(entries, m, n, &rows, &dep, &ind));
         }
-        let r = dep.len();
+        let (r, p) = (dep.len(), ind.len());
+        self.reduced = r > 0 && r == m && p <= REDUCED_MAX && !self.dae.has_friction();
         (self.rows, self.dep, self.ind) = (rows, dep, ind);
         self.rhs.resize(r, 0.0);
         self.qd.resize(r, 0.0);
         self.zeros.resize(r, 0.0);
+        self.particular.resize(r, 0.0);
+        self.sens.resize(r * p, 0.0);
+        self.reduced_mass.resize(p * p, 0.0);
+        self.reduced_rhs.resize(p, 0.0);
+        self.map.resize(4 * r * p, 0.0);
+        self.changes.resize(2 * r, 0.0);
+        self.unit.resize(2 * p, 0.0);
+        self.map_ready = false;
+        self.sens_fresh = false;
+        self.factored_ok = false;
         self.factor();
         self.influence0 = self.influence();
         self.influence1 = self.influence0;
@@ -320,6 +381,9 @@ impl Split<'_, '_> {
     /// the last [`Dae::positions`]: how strongly the independent coordinates move the others
     /// (0 when there are none).
     fn influence(&mut self) -> f64 {
+        if self.sens_fresh {
+            return self.sens.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        }
         let mut big = 0.0f64;
         let Some(block) = self.block.as_mut() else { return 0.0 };
         let (_, jac) = self.dae.jacobian_entries();
@@ -334,13 +398,19 @@ impl Split<'_, '_> {
         big
     }
 
-    /// Factor `B = Phi_q[rows, dep]` at the last [`Dae::positions`]; false when singular.
+    /// Factor `B = Phi_q[rows, dep]` at the last [`Dae::positions`]; false when singular. The
+    /// factors already made from the same values are kept (the accepted state is the corrector's
+    /// evaluation, factored there).
     fn factor(&mut self) -> bool {
         let (_, jac) = self.dae.jacobian_entries();
+        if self.factored_ok && self.factored == jac {
+            return true;
+        }
         self.factored.clear();
         self.factored.extend_from_slice(jac);
-        self.block_factorizations += 1;
-        self.block.as_mut().is_none_or(|b| b.factor(jac))
+        self.factored_ok = self.block.as_mut().is_none_or(|b| b.factor(jac));
+        self.dae.stats.factorizations += 1;
+        self.factored_ok
     }
 
     /// `rhs <- B^-1 rhs` with the factors of [`Split::factor`].
@@ -373,9 +443,73 @@ impl Split<'_, '_> {
     }
 
     /// The error norm of a change `x = (dq_I, dv_I)` of the independent state at the last
-    /// evaluation `(q, v, t)`: the largest weighted change `|dy_k| / (atol + rtol |y_k|)` over all
-    /// `2 n` positions and velocities, the dependent ones changed to first order through `Phi = 0`
-    /// and `Phi_q v = nu` (`B` factored at the accepted state, `Phi_q` at the evaluation):
+    /// evaluation: the largest weighted change `|dy_k| / (atol + rtol |y_k|)` over all `2 n`
+    /// positions and velocities, the dependent ones changed as [`Split::dependent_changes`] says.
+    /// The largest, not the mean, because the amplified error sits in a few coordinates (the crank
+    /// of a quick-return whose slider is independent), which a mean over all would dilute. With
+    /// at most [`REDUCED_MAX`] independent coordinates the changes, linear in `x`, come from the
+    /// attempt's map (`2p` columns built at its first norm; an attempt asks for three to five
+    /// norms, each of which otherwise evaluates `Phi_q` twice).
+    fn norm(&mut self, x: &[f64]) -> f64 {
+        let (p, r) = (self.ind.len(), self.dep.len());
+        let mut s = 0.0f64;
+        for (j, &c) in self.ind.iter().enumerate() {
+            s = s.max((x[j] / self.wq[c]).abs()).max((x[p + j] / self.wv[c]).abs());
+        }
+        if r == 0 {
+            return s;
+        }
+        let mut changes = std::mem::take(&mut self.changes);
+        if self.reduced {
+            if !self.map_ready {
+                let mut map = std::mem::take(&mut self.map);
+                let mut unit = std::mem::take(&mut self.unit);
+                for (k, column) in map.chunks_exact_mut(2 * r).enumerate() {
+                    unit.fill(0.0);
+                    unit[k] = 1.0;
+                    if self.sens_fresh {
+                        // `B^-1 Phi_q[rows, I]` of this evaluation is `sens`: a unit change of
+                        // `q_I` moves `q_D` by minus its column, and of `v_I` moves `v_D` so.
+                        let j = k % p;
+                        let (dq, dv) = column.split_at_mut(r);
+                        if k < p {
+                            for (d, s) in dq.iter_mut().zip(&self.sens[j * r..(j + 1) * r]) {
+                                *d = -s;
+                            }
+                            self.velocity_changes(&unit, dq, dv);
+                        } else {
+                            dq.fill(0.0);
+                            for (d, s) in dv.iter_mut().zip(&self.sens[j * r..(j + 1) * r]) {
+                                *d = -s;
+                            }
+                        }
+                    } else {
+                        self.dependent_changes(&unit, column);
+                    }
+                }
+                (self.map, self.unit, self.map_ready) = (map, unit, true);
+            }
+            changes.fill(0.0);
+            for (column, &xk) in self.map.chunks_exact(2 * r).zip(x) {
+                for (c, m) in changes.iter_mut().zip(column) {
+                    *c += m * xk;
+                }
+            }
+        } else {
+            self.dependent_changes(x, &mut changes);
+        }
+        let (dq, dv) = changes.split_at(r);
+        for ((&c, a), b) in self.dep.iter().zip(dq).zip(dv) {
+            s = s.max((a / self.wq[c]).abs()).max((b / self.wv[c]).abs());
+        }
+        self.changes = changes;
+        s
+    }
+
+    /// The changes `out = (dq_D, dv_D)` (2r) of the dependent positions and velocities that a
+    /// change `x = (dq_I, dv_I)` of the independent state makes at the last evaluation
+    /// `(q, v, t)`, to first order through `Phi = 0` and `Phi_q v = nu` (`B` as factored,
+    /// `Phi_q` at the evaluation):
     ///
     /// ```text
     /// dq_D = -B^-1 Phi_q[rows, I] dq_I
@@ -386,51 +520,54 @@ impl Split<'_, '_> {
     /// amplified by `dq_D / dq_I`, which grows without bound near a fold (an independent
     /// coordinate at its extreme); there the velocities' dependence on the positions (the second
     /// term, `~ (dq_D / dq_I)^3 v_I`) dominates. The directional derivative of `Phi_q v` is a
-    /// difference quotient over a relative change `sqrt(eps)` of the positions. The largest, not
-    /// the mean, because the amplified error sits in a few coordinates (the crank of a
-    /// quick-return whose slider is independent), which a mean over all would dilute.
-    fn norm(&mut self, x: &[f64]) -> f64 {
+    /// difference quotient over a relative change `sqrt(eps)` of the positions. Uses `dq`, `qe`
+    /// as scratch.
+    fn dependent_changes(&mut self, x: &[f64], out: &mut [f64]) {
+        let (p, r) = (self.ind.len(), self.dep.len());
+        self.times_independent(&x[..p]);
+        self.solve();
+        let (dq, dv) = out.split_at_mut(r);
+        for (o, d) in dq.iter_mut().zip(&self.rhs) {
+            *o = -d;
+        }
+        self.velocity_changes(x, dq, dv);
+    }
+
+    /// `dv_D` (into `dv`) of [`Split::dependent_changes`] for the change `x = (dq_I, dv_I)`
+    /// whose dependent positions change by `dq_D`.
+    fn velocity_changes(&mut self, x: &[f64], dq_d: &[f64], dv: &mut [f64]) {
         let (n, p) = (self.dae.n, self.ind.len());
-        let mut s = 0.0f64;
+        let mut dq = std::mem::take(&mut self.dq);
+        dq.fill(0.0);
         for (j, &c) in self.ind.iter().enumerate() {
-            s = s.max((x[j] / self.wq[c]).abs()).max((x[p + j] / self.wv[c]).abs());
+            dq[c] = x[j];
         }
-        if !self.dep.is_empty() {
-            // dq = (dq_I, dq_D).
-            self.times_independent(&x[..p]);
-            self.solve();
-            self.dq.fill(0.0);
-            for (j, &c) in self.ind.iter().enumerate() {
-                self.dq[c] = x[j];
-            }
-            for (&c, d) in self.dep.iter().zip(&self.rhs) {
-                self.dq[c] = -d;
-                s = s.max((d / self.wq[c]).abs());
-            }
-            // d(Phi_q v)/dq dq by a difference quotient, then dv_D.
-            let size = self.dq.iter().fold(0.0f64, |a, d| a.max(d.abs()));
-            let t = self.t_last;
-            if size > 0.0 && t.is_finite() {
-                let scale = self.q.iter().fold(1.0f64, |a, x| a.max(x.abs()));
-                let e = f64::EPSILON.sqrt() * scale / size;
-                for k in 0..n {
-                    self.qe[k] = self.q[k] + e * self.dq[k];
-                }
-                self.dae.positions(&self.qe, t);
-                self.dae.jv(&self.v, &mut self.phiv);
-                self.dae.positions(&self.q, t);
-                self.dae.jv(&self.v, &mut self.nu);
-                self.times_independent(&x[p..]);
-                for (b, &row) in self.rhs.iter_mut().zip(&self.rows) {
-                    *b += (self.phiv[row] - self.nu[row]) / e;
-                }
-            } else {
-                self.times_independent(&x[p..]);
-            }
-            self.solve();
-            s = self.dep.iter().zip(&self.rhs).fold(s, |a, (&c, d)| a.max((d / self.wv[c]).abs()));
+        for (&c, &d) in self.dep.iter().zip(dq_d) {
+            dq[c] = d;
         }
-        s
+        // d(Phi_q v)/dq dq by a difference quotient, then dv_D.
+        let size = dq.iter().fold(0.0f64, |a, d| a.max(d.abs()));
+        let t = self.t_last;
+        self.times_independent(&x[p..]);
+        if size > 0.0 && t.is_finite() {
+            let scale = self.q.iter().fold(1.0f64, |a, x| a.max(x.abs()));
+            let e = f64::EPSILON.sqrt() * scale / size;
+            for k in 0..n {
+                self.qe[k] = self.q[k] + e * dq[k];
+            }
+            self.dae.positions(&self.qe, t);
+            self.dae.jv(&self.v, &mut self.phiv);
+            self.dae.positions(&self.q, t);
+            self.dae.jv(&self.v, &mut self.nu);
+            for (b, &row) in self.rhs.iter_mut().zip(&self.rows) {
+                *b += (self.phiv[row] - self.nu[row]) / e;
+            }
+        }
+        self.solve();
+        for (o, d) in dv.iter_mut().zip(&self.rhs) {
+            *o = -d;
+        }
+        self.dq = dq;
     }
 
     /// Whether the error estimate `d` (the difference of `y'` at the prediction from its
@@ -452,6 +589,7 @@ impl Split<'_, '_> {
             return false;
         }
         let p = self.ind.len();
+        let ok_before = self.factored_ok;
         let [mut q0, mut v0, mut s0, mut factored] = std::mem::take(&mut self.saved);
         for (to, from) in
             [(&mut q0, &self.q), (&mut v0, &self.v), (&mut s0, &self.sol), (&mut factored, &self.factored)]
@@ -502,6 +640,7 @@ impl Split<'_, '_> {
             b.factor(&factored);
         }
         std::mem::swap(&mut self.factored, &mut factored);
+        self.factored_ok = ok_before;
         self.dae.positions(&self.q, t);
         let dominates = ok && self.norm(d) <= NOISE_MARGIN * self.norm(&sample);
         self.saved = [q0, v0, s0, factored];
@@ -526,6 +665,7 @@ impl Split<'_, '_> {
         self.q.copy_from_slice(q);
         self.v.copy_from_slice(v);
         self.t_last = f64::NAN;
+        self.record();
         Ok(())
     }
 
@@ -549,6 +689,7 @@ impl Split<'_, '_> {
         // Initial q_D, v_D: the last evaluation's when it was at this time (the corrector after
         // the predictor: q_I moved by the correction only), else the Taylor extrapolation of
         // the accepted state.
+        (self.sens_fresh, self.map_ready) = (false, false);
         if t != self.t_last {
             let h = self.ta - self.tp;
             if t < self.ta && t >= self.tp && h > 0.0 {
@@ -620,8 +761,17 @@ impl Split<'_, '_> {
             }
             // (q, v_I, t) => v_D from Phi_q v = nu: corrections B^-1 (nu - Phi_q v) of the
             // extrapolated v_D, to round-off or far below the tolerance; B refactored here if
-            // the old factors converge slowly.
+            // the old factors converge slowly. The reduced accelerations need B at q: factored
+            // here first, the velocities are then a linear solve with exact factors.
             self.dae.positions(&self.q, t);
+            // B factored at q: one solve is the exact v_D (the equations are linear in it).
+            let exact = self.reduced && yp.is_some();
+            if exact {
+                if !self.factor() {
+                    return Ok(Eval::Failed { residual });
+                }
+                fresh = true;
+            }
             self.dae.nu(&self.q, t, &mut self.nu);
             let vscale = self.v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
             let (mut since, mut previous) = (0, f64::INFINITY);
@@ -636,7 +786,7 @@ impl Split<'_, '_> {
                 if !size.is_finite() {
                     return Ok(Eval::Failed { residual });
                 }
-                if size <= NEWTON_TOL || roundoff_ratio(&self.rhs, &self.qd, vscale) <= NEWTON_ROUNDOFF {
+                if exact || size <= NEWTON_TOL || roundoff_ratio(&self.rhs, &self.qd, vscale) <= NEWTON_ROUNDOFF {
                     break;
                 }
                 let rate = size / previous;
@@ -656,7 +806,9 @@ impl Split<'_, '_> {
         self.t_last = t;
         // (q, v, t) => (qddot, lambda) => y' = (v_I, qddot_I).
         if let Some(yp) = yp {
-            self.dae.accelerations(&self.q, &self.v, t, &mut self.sol)?;
+            if !(self.reduced && self.reduced_accelerations(t)) {
+                self.dae.accelerations(&self.q, &self.v, t, &mut self.sol)?;
+            }
             if !self.sol.iter().all(|x| x.is_finite()) {
                 return Ok(Eval::Failed { residual });
             }
@@ -666,6 +818,82 @@ impl Split<'_, '_> {
             }
         }
         Ok(Eval::Done { iterations })
+    }
+
+    /// `sol = [qddot; lambda]` at the last evaluation `(q, v, t)` in the independent
+    /// coordinates, with `B` factored at `q` (the embedding of Wehage and Haug's partition):
+    /// with `S = B^-1 Phi_q[rows, I]` (`p` solves) and `w = B^-1 gamma`, the accelerations
+    /// meeting the constraints are `qddot_D = w - S qddot_I`, and `Z = [I; -S]` spans the
+    /// motions they allow, so `Z^T (M qddot - Q) = 0` is
+    ///
+    /// ```text
+    /// (M_I + S^T M_D S) qddot_I = Q_I - S^T (Q_D - M_D w)        (p x p, positive definite)
+    /// B^T lambda = (Q - M qddot)_D                                (the multipliers)
+    /// ```
+    ///
+    /// The same solution as the augmented system's (`Dae::accelerations`) to its regularisation
+    /// `eps` (`1e-10` relative) for the rows without redundancy that this is used with. False
+    /// when the reduced mass matrix is not positive definite to rounding (a coordinate with no
+    /// mass): the caller solves the augmented system.
+    fn reduced_accelerations(&mut self, t: f64) -> bool {
+        let (n, p, r) = (self.dae.n, self.ind.len(), self.dep.len());
+        let Some(block) = self.block.as_mut() else { return false };
+        self.load.resize(n, 0.0);
+        self.gamma.resize(self.dae.m, 0.0);
+        self.dae.load(&self.q, &self.v, t, &mut self.load);
+        self.dae.gamma(&self.q, &self.v, t, &mut self.gamma);
+        let (_, jac) = self.dae.jacobian_entries();
+        let mass = &self.dae.mass;
+        for (w, &row) in self.particular.iter_mut().zip(&self.rows) {
+            *w = self.gamma[row];
+        }
+        block.lu.solve(&mut self.particular);
+        for (j, col) in block.ind_cols.iter().enumerate() {
+            let s = &mut self.sens[j * r..(j + 1) * r];
+            s.fill(0.0);
+            for &(i, e) in col {
+                s[i] += jac[e];
+            }
+            block.lu.solve(s);
+        }
+        // The reduced mass matrix (row-major) and right-hand side.
+        for (i, &ci) in self.ind.iter().enumerate() {
+            let si = &self.sens[i * r..(i + 1) * r];
+            let mut rhs = self.load[ci];
+            for (k, &c) in self.dep.iter().enumerate() {
+                rhs -= si[k] * (self.load[c] - mass[c] * self.particular[k]);
+            }
+            self.reduced_rhs[i] = rhs;
+            for j in 0..=i {
+                let sj = &self.sens[j * r..(j + 1) * r];
+                let mut mij = if i == j { mass[ci] } else { 0.0 };
+                for (k, &c) in self.dep.iter().enumerate() {
+                    mij += mass[c] * si[k] * sj[k];
+                }
+                self.reduced_mass[i * p + j] = mij;
+                self.reduced_mass[j * p + i] = mij;
+            }
+        }
+        if !crate::linalg::dense::cholesky_solve_small(&mut self.reduced_mass, p, &mut self.reduced_rhs) {
+            return false;
+        }
+        let (a, lambda) = self.sol.split_at_mut(n);
+        for (&c, &x) in self.ind.iter().zip(&self.reduced_rhs) {
+            a[c] = x;
+        }
+        for (k, &c) in self.dep.iter().enumerate() {
+            a[c] = self.particular[k] - (0..p).map(|j| self.sens[j * r + k] * self.reduced_rhs[j]).sum::<f64>();
+        }
+        // (Q - M qddot)_D, then B^T lambda_rows = it; every row is a pivot row here.
+        for (x, &c) in self.particular.iter_mut().zip(&self.dep) {
+            *x = self.load[c] - mass[c] * a[c];
+        }
+        block.lu.solve_transpose(&mut self.particular);
+        for (&row, &x) in self.rows.iter().zip(&self.particular) {
+            lambda[row] = x;
+        }
+        self.sens_fresh = true;
+        true
     }
 
     /// The last evaluation (with accelerations) at `t` becomes the accepted state, and `B` is
@@ -681,7 +909,31 @@ impl Split<'_, '_> {
         self.va.copy_from_slice(&self.v);
         self.aa.copy_from_slice(&self.sol[..n]);
         self.la.copy_from_slice(&self.sol[n..]);
+        self.record();
         self.factor()
+    }
+
+    /// The accepted state's time, velocities and accelerations become the newest of the ring.
+    fn record(&mut self) {
+        self.past_at = (self.past_at + 1) % self.past_t.len();
+        self.past_t[self.past_at] = self.ta;
+        self.past_v[self.past_at].copy_from_slice(&self.va);
+        self.past_a[self.past_at].copy_from_slice(&self.aa);
+    }
+
+    /// `(v_I, qddot_I)` of the `j`-th accepted state back (0: the last), which is at `t`.
+    fn past(&self, j: usize, t: f64, out: &mut [f64]) {
+        let len = self.past_t.len();
+        let at = (self.past_at + len - j) % len;
+        debug_assert!(
+            (self.past_t[at] - t).abs() <= 1e-9 * t.abs().max(1.0),
+            "state {j} back at {} not {t}",
+            self.past_t[at]
+        );
+        let p = self.ind.len();
+        for (k, &c) in self.ind.iter().enumerate() {
+            (out[k], out[p + k]) = (self.past_v[at][c], self.past_a[at][c]);
+        }
     }
 
     /// `(y, y')` of the accepted state in the current coordinates.
@@ -864,6 +1116,20 @@ fn begin(s: &Split<'_, '_>, ad: &mut Adams) {
     ad.restart(s.ta);
 }
 
+/// Carry the Adams method over to a new partition's coordinates at the accepted state, its
+/// order, step and history kept: the differences of the new coordinates are rebuilt from their
+/// derivatives at the past accepted states ([`Adams::rebase`]). The number of independent
+/// coordinates is the rank's complement and does not change; if it did, a restart.
+fn carry(s: &Split<'_, '_>, ad: &mut Adams) {
+    if ad.neq != 2 * s.ind.len() {
+        begin(s, ad);
+        return;
+    }
+    debug_assert_eq!(ad.x, s.ta);
+    s.state(&mut ad.y, &mut ad.yp);
+    ad.rebase(&mut |j, t, out| s.past(j, t, out));
+}
+
 /// Integrate from `start` to the output's end time.
 pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, start: Start) -> Outcome {
     let (n, m) = (dae.n, dae.m);
@@ -881,9 +1147,20 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         influence0: 0.0,
         influence1: 0.0,
         block: None,
-        partition_work: 0,
-        block_factorizations: 0,
         factored: vec![],
+        factored_ok: false,
+        reduced: false,
+        load: vec![],
+        gamma: vec![],
+        particular: vec![],
+        sens: vec![],
+        sens_fresh: false,
+        reduced_mass: vec![],
+        reduced_rhs: vec![],
+        map: vec![],
+        map_ready: false,
+        changes: vec![],
+        unit: vec![],
         saved: [vec![], vec![], vec![], vec![]],
         sample: vec![],
         rhs: vec![],
@@ -908,8 +1185,13 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         va: qdot,
         aa: qddot,
         la: lambda,
+        past_t: vec![t; MAX_ORDER + 1],
+        past_v: vec![vec![0.0; n]; MAX_ORDER + 1],
+        past_a: vec![vec![0.0; n]; MAX_ORDER + 1],
+        past_at: 0,
         newton_iterations: 0,
     };
+    s.record();
     let mut ad = Adams::new(settings.order_limit().clamp(1, MAX_ORDER));
     let mut h = h_start;
     // The largest recent accepted step, decaying by RECENT_DECAY a step.
@@ -992,10 +1274,9 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                     stats.newton_failures += 1;
                     h = ad.reject(h);
                     if stats.steps > chosen_at && s.choose() {
-                        // The dependent coordinates may be the trouble: new ones, a new start.
+                        // The dependent coordinates may be the trouble: new ones.
                         stats.partitions += 1;
-                        begin(&s, &mut ad);
-                        h = h.min(h_start);
+                        carry(&s, &mut ad);
                     }
                     chosen_at = stats.steps;
                     if h < h_min {
@@ -1060,8 +1341,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                 chosen_at = stats.steps;
                 if s.choose() {
                     stats.partitions += 1;
-                    begin(&s, &mut ad);
-                    h = h.min(h_start);
+                    carry(&s, &mut ad);
                 }
             }
         }
