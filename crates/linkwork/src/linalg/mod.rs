@@ -2,14 +2,17 @@
 //! entries ([`Pattern`]), and LU for square systems of a fixed pattern ([`SparseLu`]): symbolic
 //! factorization once per analysis (faer's COLAMD ordering and elimination structure), numeric
 //! factorization per matrix, and a 1-norm condition estimate from the factors (Hager 1984,
-//! Higham 1988) to detect singular positions; up to [`DENSE_LU_MAX_ORDER`] the factors are
-//! dense, where that is faster. [`dense`]: rank, null space, minimum-norm solutions and the smallest
+//! Higham 1988) to detect singular positions; up to [`DENSE_LU_MAX_ORDER`] a dense elimination
+//! of our own, where that is faster, which keeps its pivot order from one factorization of a
+//! pattern to the next and eliminates over the structure of that order alone (`small.rs`).
+//! [`dense`]: rank, null space, minimum-norm solutions and the smallest
 //! singular value of small dense matrices by the SVD. [`rows`]: the same questions of the rows
 //! of a sparse matrix of any size (the SVD when small, the Cholesky factorization of `A A^T`
 //! when large). [`ColMatrix`]: an owned compressed-column matrix.
 
 pub mod dense;
 pub mod rows;
+mod small;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::factor::PartialPivLuParams;
@@ -169,13 +172,9 @@ enum Factors {
         numeric: Box<NumericLu<usize, f64>>,
         stack: MemBuffer,
     },
-    /// Column-major `L U` in place of the matrix (`L` unit lower, below the diagonal) after
-    /// the row interchanges `pivots` (row `k` swapped with row `pivots[k] >= k`, in order).
+    /// Dense storage, the pivot order kept from one factorization to the next (`small.rs`).
     Dense {
-        lu: Vec<f64>,
-        pivots: Vec<usize>,
-        /// Per column, where its nonzero parts of `U` start and of `L` end ([`dense_lu`]).
-        extents: Vec<(usize, usize)>,
+        lu: Box<small::DenseLu>,
         /// A column no pivot can reach whatever the values (the pattern's structural rank is
         /// short): every factorization fails there, as faer's sparse one does.
         unreachable: Option<usize>,
@@ -211,12 +210,7 @@ impl SparseLu {
     pub fn with_factors(pattern: Pattern, dense: bool) -> Result<SparseLu, FactorError> {
         let n = pattern.nrows;
         let factors = if dense {
-            Factors::Dense {
-                lu: vec![0.0; n * n],
-                pivots: vec![0; n],
-                extents: vec![(0, 0); n],
-                unreachable: unmatched_column(&pattern),
-            }
+            Factors::Dense { lu: Box::new(small::DenseLu::new(n)), unreachable: unmatched_column(&pattern) }
         } else {
             let sym = SymbolicSparseColMatRef::new_checked(n, n, &pattern.col_ptr, None, &pattern.row_idx);
             let symbolic = factorize_symbolic_lu(sym, Default::default()).map_err(|_| FactorError::OutOfMemory)?;
@@ -257,18 +251,11 @@ impl SparseLu {
                     Err(LuError::Generic(_)) => return Err(FactorError::OutOfMemory),
                 }
             }
-            Factors::Dense { lu, pivots, extents, unreachable } => {
+            Factors::Dense { lu, unreachable } => {
                 if let Some(column) = *unreachable {
                     return Err(FactorError::StructurallySingular { column });
                 }
-                lu.fill(0.0);
-                for c in 0..n {
-                    let range = self.pattern.col_ptr[c]..self.pattern.col_ptr[c + 1];
-                    for (&r, &v) in self.pattern.row_idx[range.clone()].iter().zip(&self.values[range]) {
-                        lu[c * n + r] = v;
-                    }
-                }
-                dense_lu(lu, n, pivots, extents);
+                lu.factor(&self.pattern.col_ptr, &self.pattern.row_idx, &self.values);
             }
         }
         self.factored = true;
@@ -299,11 +286,11 @@ impl SparseLu {
                     lu.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, stack);
                 }
             }
-            Factors::Dense { lu, pivots, extents, .. } => {
+            Factors::Dense { lu, .. } => {
                 if transpose {
-                    dense_solve_transpose(lu, pivots, extents, rhs)
+                    lu.solve_transpose(rhs)
                 } else {
-                    dense_solve(lu, pivots, extents, rhs)
+                    lu.solve(rhs)
                 }
             }
         }
@@ -359,89 +346,6 @@ impl SparseLu {
         }
         self.work = [x, z];
         norm_a * est
-    }
-}
-
-/// `P A = L U` in place by Gaussian elimination with partial pivoting (column-major `a` of order
-/// `n`, the row interchanges in `pivots`). A zero pivot column is left as it is: the matrix is
-/// singular, its solves give infinities, and the condition estimate says so. `extents[k]` is
-/// the first row of column `k`'s nonzero part of `U` and the end of that of `L`, so that the
-/// solves skip the zeros that a mechanism's sparse Jacobian leaves in the factors.
-fn dense_lu(a: &mut [f64], n: usize, pivots: &mut [usize], extents: &mut [(usize, usize)]) {
-    for k in 0..n {
-        let col = &a[k * n..(k + 1) * n];
-        let p = (k..n).fold(k, |best, i| if col[i].abs() > col[best].abs() { i } else { best });
-        pivots[k] = p;
-        if p != k {
-            for j in 0..n {
-                a.swap(j * n + k, j * n + p);
-            }
-        }
-        let pivot = a[k * n + k];
-        // The update needs the column's nonzero rows as they are now (later interchanges move
-        // them: the extents of the solves are found at the end).
-        let end = (k + 1..n).rev().find(|&i| a[k * n + i] != 0.0).map_or(k + 1, |i| i + 1);
-        if pivot == 0.0 {
-            continue;
-        }
-        let inv = 1.0 / pivot;
-        for v in &mut a[k * n + k + 1..k * n + end] {
-            *v *= inv;
-        }
-        let (left, right) = a.split_at_mut((k + 1) * n);
-        let l = &left[k * n + k + 1..k * n + end];
-        for column in right.chunks_exact_mut(n) {
-            let f = column[k];
-            if f != 0.0 {
-                for (x, &li) in column[k + 1..end].iter_mut().zip(l) {
-                    *x -= li * f;
-                }
-            }
-        }
-    }
-    for (k, extent) in extents.iter_mut().enumerate() {
-        let column = &a[k * n..(k + 1) * n];
-        extent.0 = (0..k).find(|&i| column[i] != 0.0).unwrap_or(k);
-        extent.1 = (k + 1..n).rev().find(|&i| column[i] != 0.0).map_or(k + 1, |i| i + 1);
-    }
-}
-
-/// Solve `A x = b` in place from [`dense_lu`]'s factors.
-fn dense_solve(lu: &[f64], pivots: &[usize], extents: &[(usize, usize)], b: &mut [f64]) {
-    let n = b.len();
-    for (k, &p) in pivots.iter().enumerate() {
-        b.swap(k, p);
-    }
-    for (k, &(_, end)) in extents.iter().enumerate() {
-        let bk = b[k];
-        if bk != 0.0 {
-            for (x, &l) in b[k + 1..end].iter_mut().zip(&lu[k * n + k + 1..k * n + end]) {
-                *x -= l * bk;
-            }
-        }
-    }
-    for (k, &(first, _)) in extents.iter().enumerate().rev() {
-        b[k] /= lu[k * n + k];
-        let bk = b[k];
-        for (x, &u) in b[first..k].iter_mut().zip(&lu[k * n + first..k * n + k]) {
-            *x -= u * bk;
-        }
-    }
-}
-
-/// Solve `A^T x = b` in place from [`dense_lu`]'s factors: `U^T L^T P x = b`.
-fn dense_solve_transpose(lu: &[f64], pivots: &[usize], extents: &[(usize, usize)], b: &mut [f64]) {
-    let n = b.len();
-    for (k, &(first, _)) in extents.iter().enumerate() {
-        let dot: f64 = lu[k * n + first..k * n + k].iter().zip(&b[first..k]).map(|(u, x)| u * x).sum();
-        b[k] = (b[k] - dot) / lu[k * n + k];
-    }
-    for (k, &(_, end)) in extents.iter().enumerate().rev() {
-        let dot: f64 = lu[k * n + k + 1..k * n + end].iter().zip(&b[k + 1..end]).map(|(l, x)| l * x).sum();
-        b[k] -= dot;
-    }
-    for (k, &p) in pivots.iter().enumerate().rev() {
-        b.swap(k, p);
     }
 }
 
