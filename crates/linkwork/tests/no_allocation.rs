@@ -96,8 +96,9 @@ fn a_cam_surface_allocates_nothing_in_the_time_loop() {
 /// on the double pendulum and on the quick-return coasting. The results' columns are sized for
 /// the output times at the start. A new partition of `abam` (a new dependent block: its pattern
 /// and symbolic factorization) is a new setup and allocates: the quick-return re-partitions
-/// about five times a second under `abam`, so there it is left out; the double pendulum keeps
-/// its first partition throughout.
+/// about five times a second under `abam`, and though the blocks of the last eight partitions
+/// are kept, a partition first met later in the motion allocates its own, so there it is left
+/// out; the double pendulum keeps its first partition throughout.
 #[test]
 fn dynamic_steps_allocate_nothing() {
     use linkwork::analysis::dynamic::IntegratorKind;

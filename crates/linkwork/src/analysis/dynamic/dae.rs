@@ -166,6 +166,14 @@ pub struct Dae<'m> {
     pub phi: Vec<f64>,
     /// (bodies) `(cos, sin)` of each angle at the last [`Dae::positions`].
     rot: Vec<[f64; 2]>,
+    /// (n) the positions and the time of the last [`Dae::positions`]; a call at the same point
+    /// finds its values there (NaN time when the buffers hold no full evaluation).
+    at_q: Vec<f64>,
+    at_t: f64,
+    /// Scratch of [`Dae::jv_at`]: (bodies) rotations and (Jacobian entries) values at another
+    /// point, so that the last [`Dae::positions`] stays.
+    rot_at: Vec<[f64; 2]>,
+    jac_at: Vec<f64>,
     /// `-eps` on the constraint diagonal of the Newton matrix.
     eps: f64,
     kkt: Kkt,
@@ -234,9 +242,13 @@ impl<'m> Dae<'m> {
             gravity,
             forces,
             jac: vec![0.0; entries.len()],
+            jac_at: vec![0.0; entries.len()],
             entries,
             phi: vec![0.0; m],
             rot: vec![[1.0, 0.0]; n / 3],
+            at_q: vec![0.0; n],
+            at_t: f64::NAN,
+            rot_at: vec![[1.0, 0.0]; n / 3],
             eps,
             kkt,
             kkt_mass: None,
@@ -258,11 +270,28 @@ impl<'m> Dae<'m> {
 
     /// `(q, t) => (Phi, Phi_q)` into [`Dae::phi`] and the Jacobian buffer; every other evaluation
     /// at `q` (`nu`, `gamma`, products with `Phi_q`, the Newton matrix) uses these.
+    /// A call at the point of the last one returns at once: integrators ask for the same point
+    /// from several places (the work of an accepted step, an error norm after the evaluation).
     pub fn positions(&mut self, q: &[f64], t: f64) {
+        if t == self.at_t && q == self.at_q.as_slice() {
+            return;
+        }
         Config::rotations(q, &mut self.rot);
         let c = Config::new(q, &self.rot);
         self.sys.phi(&c, t, &mut self.phi);
         self.sys.jacobian_values(&c, t, &mut self.jac);
+        self.at_q.copy_from_slice(q);
+        self.at_t = t;
+    }
+
+    /// `(q, t) => Phi` into [`Dae::phi`] alone, the Jacobian buffer left as it was: the residual
+    /// of a Newton iteration whose matrix was factored elsewhere (a chord iteration), at about
+    /// a third of [`Dae::positions`]' cost. Evaluations that read `Phi_q` at `q` (`nu`, `gamma`,
+    /// products with `Phi_q`, [`Dae::jacobian_entries`]) need a [`Dae::positions`] first.
+    pub fn constraints_only(&mut self, q: &[f64], t: f64) {
+        Config::rotations(q, &mut self.rot);
+        self.sys.phi(&Config::new(q, &self.rot), t, &mut self.phi);
+        self.at_t = f64::NAN;
     }
 
     /// `(q, t) => nu = -Phi_t`, `out: (m)`; `q` as at the last [`Dae::positions`].
@@ -298,10 +327,15 @@ impl<'m> Dae<'m> {
 
     /// `out (m) = Phi_q v`, with `v: (n)`.
     pub fn jv(&self, v: &[f64], out: &mut [f64]) {
-        out.fill(0.0);
-        for (&(r, c), &x) in self.entries.iter().zip(&self.jac) {
-            out[r] += x * v[c];
-        }
+        jacobian_times(&self.entries, &self.jac, v, out);
+    }
+
+    /// `out (m) = Phi_q(q, t) v` at another point than the last [`Dae::positions`], which it
+    /// leaves as it was (for a difference quotient of `Phi_q v`).
+    pub fn jv_at(&mut self, q: &[f64], t: f64, v: &[f64], out: &mut [f64]) {
+        Config::rotations(q, &mut self.rot_at);
+        self.sys.jacobian_values(&Config::new(q, &self.rot_at), t, &mut self.jac_at);
+        jacobian_times(&self.entries, &self.jac_at, v, out);
     }
 
     /// `(q, qdot, t) => Q`, `out: (n)`: gravity plus every active force.
@@ -829,6 +863,14 @@ impl<'m> Dae<'m> {
             let mut load = vec![0.0; self.n];
             self.add_friction(q, qdot, lambda, 1.0, &mut load, Some(out));
         }
+    }
+}
+
+/// `out (m) = J v` for the Jacobian entries `(row, column)` with values `values`.
+fn jacobian_times(entries: &[(usize, usize)], values: &[f64], v: &[f64], out: &mut [f64]) {
+    out.fill(0.0);
+    for (&(r, c), &x) in entries.iter().zip(values) {
+        out[r] += x * v[c];
     }
 }
 

@@ -137,9 +137,24 @@ impl Output {
 
     /// Write the next output time `t` from the state `(q, qdot)`.
     pub fn push(&mut self, dae: &mut Dae<'_>, t: f64, q: &[f64], qdot: &[f64]) -> Result<(), Error> {
+        let mut sol = std::mem::take(&mut self.sol);
+        let written = dae.accelerations(q, qdot, t, &mut sol).and_then(|_| self.push_solved(dae, t, q, qdot, &sol));
+        self.sol = sol;
+        written
+    }
+
+    /// Write the next output time `t` from the state `(q, qdot)` and its `sol = [qddot; lambda]`
+    /// (`n + m`), which the integrator solved at `(q, qdot, t)` with [`Dae::positions`] there.
+    pub fn push_solved(
+        &mut self,
+        dae: &mut Dae<'_>,
+        t: f64,
+        q: &[f64],
+        qdot: &[f64],
+        sol: &[f64],
+    ) -> Result<(), Error> {
         let n = dae.n;
-        dae.accelerations(q, qdot, t, &mut self.sol)?;
-        let (qddot, lambda) = self.sol.split_at(n);
+        let (qddot, lambda) = sol.split_at(n);
         dae.reactions(q, qdot, lambda, &mut self.react);
         crate::analysis::measure_reactions(dae.model, &self.drivers, &self.react, &mut self.reactions);
         let position_residual = dae.phi.iter().fold(0.0f64, |a, x| a.max(x.abs()));
