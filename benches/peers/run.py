@@ -191,9 +191,9 @@ def section(rows, info, command, with_plot):
         + "; its dense LU (the default) for the small models, `EigenSparse` for the N-four-bar. Steps: "
         "`it.currentStepIndex - 1`; Newton iterations: `it.newtonStepsCount`.",
         "- **Linkwork**: for `bdf` and `abam`, the loosest `rtol = atol` of 1e-4, 1e-5, ..., 1e-12 whose error is at "
-        "most Exudyn's; both are timed, and the one of the lower median is shown. Steps and Newton iterations: "
+        "most Exudyn's; both are timed, and the cheaper is shown. Steps and Newton iterations: "
         "`results.summary.statistics`.",
-        "- **CPU s**: `time.process_time()` (all threads), median of the runs; Linkwork's `Model.run()` (assembly, "
+        "- **CPU s**: `time.process_time()` (all threads), the least of the runs (noise only adds time); Linkwork's `Model.run()` (assembly, "
         "integration, every output column), Exudyn's `Assemble()` + `SolveDynamic()` (with the sensors of the compared "
         "outputs); building the model is not timed in either.",
         "- **References** (the error is the largest over the output times unless said otherwise):",
