@@ -726,7 +726,8 @@ impl Split<'_, '_> {
     /// corrections of `1e-11` m and accelerations `2e-2` m/s^2 apart. One more correction moves
     /// `q_D` within that band; the change it makes is a sample of the noise. The last evaluation's
     /// state, the factors of `B` and the positions are restored, so that the steps that follow are
-    /// those without the sample.
+    /// those without the sample (the factors to rounding: they are made again from the same
+    /// values, in the pivot order the small LU keeps, which the sample may have changed).
     fn noise_dominates(&mut self, t: f64, d: &[f64]) -> bool {
         if self.dep.is_empty() || !t.is_finite() {
             return false;
