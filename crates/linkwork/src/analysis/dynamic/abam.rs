@@ -1601,6 +1601,35 @@ mod tests {
             eprintln!("{part}: largest {big:.3e}, reduced against augmented {worst:.2e}");
             assert!(big > 0.0 && worst <= 1e-10 * big, "{part}: {worst:e} of {big:e}");
         }
+        // The velocities (`v_D = -S v_I`, no constraint moves with time here) meet `Phi_q v = nu`
+        // to round-off: 1e-12 of the largest velocity times the largest entry of `Phi_q`.
+        let mut phiv = vec![0.0; m];
+        let mut nu = vec![0.0; m];
+        s.dae.positions(&q, 0.0);
+        s.dae.jv(&v, &mut phiv);
+        s.dae.nu(&q, 0.0, &mut nu);
+        let vmax = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let jmax = s.dae.jacobian_entries().1.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let vres = phiv.iter().zip(&nu).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        assert!(vmax > 1.0 && vres <= 1e-12 * vmax * jmax, "velocity residual {vres:e}");
+        // The corrector's start (the last evaluation moved by -S dq_I, at the same time) reaches
+        // the state a start from the accepted one reaches, to Newton's tolerance (`1e-4` of the
+        // weights `atol + rtol |q|`, 1e-6 each by default: bound 1e-9 of the scale).
+        let mut moved = y.clone();
+        (moved[0], moved[p]) = (moved[0] + 1e-3, moved[p] - 0.2);
+        s.norm(&vec![1e-6; 2 * p]);
+        assert!(s.map_ready);
+        assert!(matches!(s.evaluate(0.0, &moved, Some(&mut yp), Purpose::State).unwrap(), Eval::Done { .. }));
+        assert!(s.map_ready, "the map is kept at the same time");
+        let (q1, v1) = (s.q.clone(), s.v.clone());
+        s.t_last = f64::NAN;
+        assert!(matches!(s.evaluate(0.0, &moved, Some(&mut yp), Purpose::State).unwrap(), Eval::Done { .. }));
+        let scale = q1.iter().chain(&v1).fold(1.0f64, |a, x| a.max(x.abs()));
+        let apart = q1.iter().zip(&s.q).chain(v1.iter().zip(&s.v)).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        assert!(apart <= 1e-9 * scale, "corrector's start against the accepted state's: {apart:e}");
+        // Back to the first evaluation for the map's check.
+        s.t_last = f64::NAN;
+        s.evaluate(0.0, &y, Some(&mut yp), Purpose::State).unwrap();
         // The map is built at the first norm after an evaluation; the direct path at every norm.
         let x: Vec<f64> = (0..2 * p).map(|k| 1e-6 * (1.0 + k as f64)).collect();
         let via_map = s.norm(&x);

@@ -937,4 +937,41 @@ mod tests {
         let off = again.iter().zip(&x).fold(0.0f64, |w, (y, e)| w.max((y - e).abs()));
         assert!(off > 1e-3, "{off:e}");
     }
+
+    /// The evaluations a Newton iteration and the error map use at other points leave the last
+    /// [`Dae::positions`] as it was, and a repeated call at the same point is the same values:
+    /// `jv_at` at `q2` is the directional derivative of `Phi` along `v` there (central differences
+    /// of `constraints_only` with `h = 1e-6`: truncation `~1e-12`, round-off `~1e-16 / 1e-6`;
+    /// bound `1e-8` of its size), the buffers at `q` are bit for bit those before it, and
+    /// `positions(q)` after `constraints_only(q2)` evaluates again (the memo is not stale).
+    #[test]
+    fn other_points_leave_the_positions_and_jv_at_is_the_derivative() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/quick_return_a.yaml");
+        let model = Model::load(path).unwrap();
+        let mut dae = Dae::new(&model, &[], &[]).unwrap();
+        let (n, m) = (dae.n, dae.m);
+        let mut rng = crate::constraints::testing::Lcg::new(3);
+        let q = model.q0();
+        let q2: Vec<f64> = q.iter().map(|x| x + rng.uniform(-0.1, 0.1)).collect();
+        let v = rng.vec(n, -1.0, 1.0);
+        let t = 0.2;
+        dae.positions(&q, t);
+        let (phi0, jac0) = (dae.phi.clone(), dae.jac.clone());
+        let mut jv2 = vec![0.0; m];
+        dae.jv_at(&q2, t, &v, &mut jv2);
+        assert_eq!((&dae.phi, &dae.jac), (&phi0, &jac0), "jv_at changed the positions' buffers");
+        let h = 1e-6;
+        let mut phi_at = |s: f64| {
+            let x: Vec<f64> = q2.iter().zip(&v).map(|(a, b)| a + s * b).collect();
+            dae.constraints_only(&x, t);
+            dae.phi.clone()
+        };
+        let (plus, minus) = (phi_at(h), phi_at(-h));
+        let size = jv2.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let worst = (0..m).map(|r| ((plus[r] - minus[r]) / (2.0 * h) - jv2[r]).abs()).fold(0.0, f64::max);
+        assert!(size > 0.1 && worst <= 1e-8 * size, "{worst:e} of {size:e}");
+        // The buffers now hold Phi at another point; positions(q) must evaluate again.
+        dae.positions(&q, t);
+        assert_eq!((&dae.phi, &dae.jac), (&phi0, &jac0), "positions(q) after constraints_only");
+    }
 }
