@@ -21,6 +21,12 @@
 /// 2 for partial pivoting, and in practice far less). Below it the order is found again.
 pub const KEEP_PIVOT: f64 = 0.1;
 
+/// The largest order (the solves work in a stack array of this length): at least
+/// [`super::DENSE_LU_MAX_ORDER`].
+const WIDTH: usize = 64;
+const MASK: usize = WIDTH - 1;
+const _: () = assert!(super::DENSE_LU_MAX_ORDER <= WIDTH && WIDTH.is_power_of_two());
+
 /// LU factors `P A = L U` with the structure of the kept order.
 #[derive(Debug)]
 pub(super) struct DenseLu {
@@ -32,14 +38,22 @@ pub(super) struct DenseLu {
     swaps: Vec<usize>,
     /// (n) the row of `P A` that each row of `A` becomes.
     position: Vec<usize>,
-    /// For each column `k`, the rows below `k` of `L`'s structure (`lower[lower_ptr[k]..]`).
+    /// (n) the row of `A` at each row of `P A`.
+    rows: Vec<usize>,
+    /// For each column `k`, the rows below `k` of `L`'s structure (`lower[lower_ptr[k]..]`);
+    /// `lower_col` holds each entry's column, so that the solves run over the entries in one
+    /// loop.
     lower_ptr: Vec<usize>,
     lower: Vec<usize>,
-    /// For each column `j`, the rows above `j` of `U`'s structure.
+    lower_col: Vec<usize>,
+    /// For each column `j`, the rows above `j` of `U`'s structure, and each entry's column.
     upper_ptr: Vec<usize>,
     upper: Vec<usize>,
+    upper_col: Vec<usize>,
     /// The factors' values, packed: `L`'s in the order of `lower`, then `U`'s above the
-    /// diagonal in the order of `upper`, then the diagonal (`vals[diag + k]`).
+    /// diagonal in the order of `upper`, then the diagonal (`vals[diag + k]`). Once a
+    /// factorization is done, `U`'s entries are divided by their row's diagonal (`U = D V`, `V`
+    /// unit upper triangular), so that both solves are loops over entries with one scaling.
     vals: Vec<f64>,
     diag: usize,
     /// The reciprocals of `U`'s diagonal.
@@ -69,6 +83,7 @@ impl DenseLu {
     /// densest factors of that order (for the updates, `sum (n - 1 - k)^2`, about `n^3 / 3`: 286
     /// kB at order 48), so that a new order, found when a kept one fails, allocates nothing.
     pub(super) fn new(n: usize) -> DenseLu {
+        assert!(n <= WIDTH, "dense LU of order {n} above {WIDTH}");
         let triangle = n * n.saturating_sub(1) / 2;
         let updates = n.saturating_sub(1) * n * (2 * n).saturating_sub(1) / 6;
         DenseLu {
@@ -76,10 +91,13 @@ impl DenseLu {
             lu: vec![0.0; n * n],
             swaps: vec![0; n],
             position: vec![0; n],
+            rows: vec![0; n],
             lower_ptr: vec![0; n + 1],
             lower: Vec::with_capacity(triangle),
+            lower_col: Vec::with_capacity(triangle),
             upper_ptr: vec![0; n + 1],
             upper: Vec::with_capacity(triangle),
+            upper_col: Vec::with_capacity(triangle),
             vals: Vec::with_capacity(n * n),
             diag: 0,
             dinv: vec![0.0; n],
@@ -122,7 +140,17 @@ impl DenseLu {
             }
             self.dinv[j] = 1.0 / self.lu[j * n + j];
         }
+        self.unit_upper();
         false
+    }
+
+    /// `U = D V`: `U`'s entries divided by their row's diagonal, once its elimination is done.
+    fn unit_upper(&mut self) {
+        let nl = self.lower.len();
+        let uval = &mut self.vals[nl..self.diag];
+        for (u, &i) in uval.iter_mut().zip(&self.upper) {
+            *u *= self.dinv[i];
+        }
     }
 
     /// Eliminate in the kept order over its structure, in the packed values; false (the
@@ -133,35 +161,44 @@ impl DenseLu {
         for (&slot, &v) in self.slot_of_entry.iter().zip(values) {
             vals[slot] = v;
         }
+        let mut column = [0.0; WIDTH];
         let mut t = 0;
         for k in 0..self.n {
             let below = self.lower_ptr[k]..self.lower_ptr[k + 1];
+            let width = below.len();
             let pivot = vals[self.diag + k];
-            let big = vals[below.clone()].iter().fold(0.0f64, |a, x| a.max(x.abs()));
-            // NaN fails too: partial pivoting then sees the same values.
-            let kept = pivot.abs() >= KEEP_PIVOT * big;
+            // Each entry below against the pivot, rather than their largest: a running maximum
+            // is a chain of dependent operations. NaN fails (the comparisons are false), and
+            // partial pivoting then sees the same values.
+            let size = pivot.abs();
+            let kept = size >= 0.0 && vals[below.clone()].iter().all(|x| KEEP_PIVOT * x.abs() <= size);
             if !kept {
                 return false;
             }
             let inv = 1.0 / pivot;
             self.dinv[k] = inv;
-            let width = below.len();
+            let updates = &self.factor_slot[self.update_ptr[k]..self.update_ptr[k + 1]];
             if pivot == 0.0 {
-                t += width * (self.update_ptr[k + 1] - self.update_ptr[k]);
+                t += width * updates.len();
                 continue;
             }
-            vals[below.clone()].iter_mut().for_each(|x| *x *= inv);
-            for &fs in &self.factor_slot[self.update_ptr[k]..self.update_ptr[k + 1]] {
+            let column = &mut column[..width];
+            for (c, x) in column.iter_mut().zip(&mut vals[below]) {
+                *x *= inv;
+                *c = *x;
+            }
+            for &fs in updates {
                 let f = vals[fs];
                 let run = &self.targets[t..t + width];
                 t += width;
                 if f != 0.0 {
-                    for (l, &target) in below.clone().zip(run) {
-                        vals[target] -= vals[l] * f;
+                    for (&l, &target) in column.iter().zip(run) {
+                        vals[target] -= l * f;
                     }
                 }
             }
         }
+        self.unit_upper();
         true
     }
 
@@ -171,7 +208,7 @@ impl DenseLu {
     fn order(&mut self, col_ptr: &[usize], row_idx: &[usize]) {
         let n = self.n;
         // `rows[k]`: the row of A at position k of P A.
-        let rows = &mut self.upper_ptr[..n];
+        let rows = &mut self.rows;
         rows.iter_mut().enumerate().for_each(|(k, r)| *r = k);
         for (k, &p) in self.swaps.iter().enumerate() {
             rows.swap(k, p);
@@ -209,6 +246,10 @@ impl DenseLu {
             self.upper.extend((0..j).filter(|&i| s[j * n + i]));
         }
         self.upper_ptr[n] = self.upper.len();
+        for (cols, ptr) in [(&mut self.lower_col, &self.lower_ptr), (&mut self.upper_col, &self.upper_ptr)] {
+            cols.clear();
+            cols.extend(ptr.windows(2).enumerate().flat_map(|(k, w)| std::iter::repeat_n(k, w[1] - w[0])));
+        }
         // Slots: L's, then U's, then the diagonal.
         let slots = &mut self.slots;
         slots.fill(usize::MAX);
@@ -246,46 +287,47 @@ impl DenseLu {
         self.ordered = true;
     }
 
-    /// Solve `A x = b` in place.
+    /// Solve `A x = b` in place: `P A = L D V` (`V` unit upper triangular), so `x = V^-1 D^-1
+    /// L^-1 P b`, each triangle one loop over its entries in an order where every entry reads a
+    /// finished value.
     pub(super) fn solve(&self, b: &mut [f64]) {
-        let (lval, uval) = self.vals[..self.diag].split_at(self.lower.len());
-        for (k, &p) in self.swaps.iter().enumerate() {
-            b.swap(k, p);
+        let n = self.n;
+        let (lval, vval) = self.vals[..self.diag].split_at(self.lower.len());
+        let mut x = [0.0; WIDTH];
+        for (xk, &r) in x.iter_mut().zip(&self.rows) {
+            *xk = b[r];
         }
-        for (k, range) in self.lower_ptr.windows(2).enumerate() {
-            let bk = b[k];
-            if bk != 0.0 {
-                for (&i, &l) in self.lower[range[0]..range[1]].iter().zip(&lval[range[0]..range[1]]) {
-                    b[i] -= l * bk;
-                }
-            }
+        // The masks are the identity (every index is below `n <= WIDTH`); they let the compiler
+        // drop the bounds checks of these innermost loops.
+        for ((&i, &k), &l) in self.lower.iter().zip(&self.lower_col).zip(lval) {
+            x[i & MASK] -= l * x[k & MASK];
         }
-        for (k, range) in self.upper_ptr.windows(2).enumerate().rev() {
-            let bk = b[k] * self.dinv[k];
-            b[k] = bk;
-            if bk != 0.0 {
-                for (&i, &u) in self.upper[range[0]..range[1]].iter().zip(&uval[range[0]..range[1]]) {
-                    b[i] -= u * bk;
-                }
-            }
+        for (xk, &d) in x.iter_mut().zip(&self.dinv) {
+            *xk *= d;
         }
+        for ((&i, &j), &v) in self.upper.iter().zip(&self.upper_col).zip(vval).rev() {
+            x[i & MASK] -= v * x[j & MASK];
+        }
+        b[..n].copy_from_slice(&x[..n]);
     }
 
-    /// Solve `A^T x = b` in place: `U^T L^T P x = b`.
+    /// Solve `A^T x = b` in place: `V^T D L^T P x = b`.
     pub(super) fn solve_transpose(&self, b: &mut [f64]) {
-        let (lval, uval) = self.vals[..self.diag].split_at(self.lower.len());
-        for (k, range) in self.upper_ptr.windows(2).enumerate() {
-            let dot: f64 =
-                self.upper[range[0]..range[1]].iter().zip(&uval[range[0]..range[1]]).map(|(&i, &u)| u * b[i]).sum();
-            b[k] = (b[k] - dot) * self.dinv[k];
+        let n = self.n;
+        let (lval, vval) = self.vals[..self.diag].split_at(self.lower.len());
+        let mut x = [0.0; WIDTH];
+        x[..n].copy_from_slice(&b[..n]);
+        for ((&i, &j), &v) in self.upper.iter().zip(&self.upper_col).zip(vval) {
+            x[j & MASK] -= v * x[i & MASK];
         }
-        for (k, range) in self.lower_ptr.windows(2).enumerate().rev() {
-            let dot: f64 =
-                self.lower[range[0]..range[1]].iter().zip(&lval[range[0]..range[1]]).map(|(&i, &l)| l * b[i]).sum();
-            b[k] -= dot;
+        for (xk, &d) in x.iter_mut().zip(&self.dinv) {
+            *xk *= d;
         }
-        for (k, &p) in self.swaps.iter().enumerate().rev() {
-            b.swap(k, p);
+        for ((&i, &k), &l) in self.lower.iter().zip(&self.lower_col).zip(lval).rev() {
+            x[k & MASK] -= l * x[i & MASK];
+        }
+        for (&xk, &r) in x.iter().zip(&self.rows) {
+            b[r] = xk;
         }
     }
 }
