@@ -311,6 +311,12 @@ impl<'m> Dae<'m> {
         }
     }
 
+    /// The positions of the last [`Dae::positions`]: where [`Dae::jacobian_entries`] holds
+    /// `Phi_q`.
+    pub fn jacobian_point(&self) -> &[f64] {
+        &self.at_q
+    }
+
     /// `(row, column)` of each entry of `Phi_q` (each pair once), and the entries' values at the
     /// last [`Dae::positions`]: `Phi_q` in coordinate form, for solvers of its sparse blocks.
     pub fn jacobian_entries(&self) -> (&[(usize, usize)], &[f64]) {
