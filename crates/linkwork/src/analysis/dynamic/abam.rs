@@ -130,10 +130,10 @@ const PREDICTION_NEWTON_TOL: f64 = 1e-2;
 /// was factored, as last measured, times that distance (the rate of a chord iteration grows
 /// with the distance from its matrix's point). The expectation is rough: on the loaded
 /// quick-return at `1e-4` the measured rate over the expected one had a median of 1.5, a 90th
-/// percentile of 10 and a few far beyond. With 100 none of the 1,478 evaluations that stopped
-/// after one correction was left more than its tolerance from the solution (checked against
-/// one more correction with `B` factored there); with no factor 78 of 1,843 were, by up to 14
-/// times. DASSL keeps its rate factor `S = rate / (1 - rate)` from step to step in the same
+/// percentile of 12 and a few far beyond. With 100 none of the 1,444 evaluations that stopped
+/// after one correction was left more than its tolerance from the solution (at most 0.58 of it,
+/// checked against one more correction with `B` factored there); with no factor 88 of 1,772
+/// were, by up to 38 times. DASSL keeps its rate factor `S = rate / (1 - rate)` from step to step in the same
 /// way, and starts it at 100 (`DDASTP`).
 const CHORD_SAFETY: f64 = 100.0;
 /// Newton for the dependent positions and velocities stops at a residual or correction of this
@@ -854,16 +854,18 @@ impl Split<'_, '_> {
     fn evaluate(&mut self, t: f64, y: &[f64], yp: Option<&mut [f64]>, purpose: Purpose) -> Result<Eval, Error> {
         let (p, r) = (self.ind.len(), self.dep.len());
         // Initial q_D, v_D: the last evaluation's when it was at this time (the corrector after
-        // the predictor, its sensitivities fresh); else inside the last step (an output time)
-        // the quintic Hermite interpolant of its ends; else the Taylor extrapolation of the
-        // accepted state. The first two are then moved with q_I's change from their q_I to
-        // first order (`dq_D = -S dq_I`, `dv_D = -S dv_I`, with the last computed sensitivities):
-        // Newton's first correction is then of second order in that change. The interpolant
-        // extrapolated a step ahead would start the prediction closer still (its Newton took
-        // 1.9 iterations instead of 2.6 on the loaded quick-return), but one step out it
-        // amplifies its ends' errors 31 times, and at A02's flat positions, where `q_D` is
-        // noise of `|B^-1|` times the round-off, `rtol = 1e-11` then failed (2026-11-27).
-        let mut shift = t == self.t_last && self.sens_fresh;
+        // the predictor), moved with q_I's change to first order when that evaluation's
+        // sensitivities are at hand (`dq_D = -S dq_I`, `dv_D = -S dv_I`: the corrector's first
+        // correction is then of second order in the change); else inside the last step (an
+        // output time) the quintic Hermite interpolant of its ends; else the Taylor
+        // extrapolation of the accepted state. Two more starts were tried (2026-11-27): the
+        // interpolant extrapolated a step ahead for the prediction (1.9 Newton iterations
+        // instead of 2.6 on the loaded quick-return; but one step out it amplifies its ends'
+        // errors 31 times, and at A02's flat positions, where `q_D` is noise of `|B^-1|` times
+        // the round-off, `rtol = 1e-11` failed), and the interpolant at an output time moved to
+        // its q_I by the last `S` (near a flat position `S` is unbounded: A02 erred 7 times more
+        // at `1e-10`).
+        let shift = t == self.t_last && self.sens_fresh;
         // The error map of the prediction serves the correction's norms too (the same time;
         // the positions differ by the correction, of the order of the error itself).
         self.sens_fresh = false;
@@ -873,7 +875,6 @@ impl Split<'_, '_> {
             if h > 0.0 && t >= self.tp && t < self.ta {
                 let (y0, y1) = ([&self.qp[..], &self.vp[..], &self.ap[..]], [&self.qa[..], &self.va[..], &self.aa[..]]);
                 hermite5((t - self.tp) / h, h, y0, y1, &mut self.q, &mut self.v);
-                shift = true;
             } else {
                 let dt = t - self.ta;
                 for &c in &self.dep {
