@@ -133,8 +133,8 @@ const PREDICTION_NEWTON_TOL: f64 = 1e-2;
 /// percentile of 12 and a few far beyond. With 100 none of the 1,444 evaluations that stopped
 /// after one correction was left more than its tolerance from the solution (at most 0.58 of it,
 /// checked against one more correction with `B` factored there); with no factor 88 of 1,772
-/// were, by up to 38 times. DASSL keeps its rate factor `S = rate / (1 - rate)` from step to step in the same
-/// way, and starts it at 100 (`DDASTP`).
+/// were, by up to 38 times. DASSL keeps its rate factor `S = rate / (1 - rate)` from step to
+/// step in the same way, and starts it at 100 (`DDASTP`).
 const CHORD_SAFETY: f64 = 100.0;
 /// Newton for the dependent positions and velocities stops at a residual or correction of this
 /// fraction of [`super::roundoff_ratio`]'s round-off (its `ROUNDOFF_UNITS`, 1000 units of `eps`
