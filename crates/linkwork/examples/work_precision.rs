@@ -11,6 +11,9 @@
 //! cargo run --release -p linkwork --example work_precision -- one FILE INTEGRATOR TOL
 //!     # one run of a file's `dynamics` (for a profiler: `valgrind --tool=callgrind` counts its
 //!     # instructions whatever else the machine runs); an N-four-bar's (N = 40) B0 error too
+//! cargo run --release -p linkwork --example work_precision -- spread FILE INTEGRATOR TOL [COUNT]
+//!     # a table case's error at COUNT (20) tolerances TOL (1 + k 1e-6), k = 0, 1, ..: how far
+//!     # a change of the steps by rounding moves it (its smallest, median and largest)
 //! ```
 //!
 //! Prints a Markdown table: the error (largest over the output times of the positions named
@@ -180,6 +183,37 @@ fn one(file: &str, integrator: &str, tol: f64) {
     println!("warnings: {}", r.summary_json(None)["warnings"]);
 }
 
+/// The error of the table's case for `file` with `integrator` at `COUNT` tolerances
+/// `tol (1 + k 1e-6)`: a change far below any tolerance's meaning, which moves every step by a
+/// relative `1e-6 / order` and so samples how far rounding-sized changes of the steps move the
+/// error (on A02, whose flat positions amplify them, by up to two decades at `1e-8`).
+fn spread(file: &str, integrator: &str, tol: f64, count: usize) {
+    let kind = IntegratorKind::from_name(integrator)
+        .unwrap_or_else(|| panic!("INTEGRATOR: one of {}", IntegratorKind::NAMES.join(", ")));
+    let case = cases().into_iter().find(|c| c.file == file).expect("FILE: a file of the table's cases");
+    let model = Model::load(example(file)).expect("model");
+    let mut errors = Vec::with_capacity(count);
+    for k in 0..count {
+        let t = tol * (1.0 + k as f64 * 1e-6);
+        let o = Overrides { integrator: Some(kind), rtol: Some(t), atol: Some(t), ..Default::default() };
+        let r = match model.run_with("dynamics", &o) {
+            Ok(r) => r,
+            Err(f) => {
+                println!("{t:e}: stopped: {}", f.error);
+                continue;
+            }
+        };
+        let (error, unit) = (case.error)(&r);
+        println!("{t:e}: {error:.3e} {unit}");
+        errors.push(error);
+    }
+    errors.sort_by(f64::total_cmp);
+    if let (Some(first), Some(last)) = (errors.first(), errors.last()) {
+        let median = errors[errors.len() / 2];
+        println!("{} runs: smallest {first:.3e}, median {median:.3e}, largest {last:.3e}", errors.len());
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).map(|a| a.to_lowercase()).collect();
     let filter = args.first().cloned().unwrap_or_default();
@@ -192,6 +226,10 @@ fn main() {
     }
     if filter == "one" {
         return one(arg(1), arg(2), arg(3).parse().expect("TOL: a number"));
+    }
+    if filter == "spread" {
+        let count = if arg(4).is_empty() { 20 } else { arg(4).parse().expect("COUNT: a whole number") };
+        return spread(arg(1), arg(2), arg(3).parse().expect("TOL: a number"), count);
     }
     println!("| model | integrator | rtol = atol | error | unit | CPU time (s) | steps | rejected | factorizations |");
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
