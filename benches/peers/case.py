@@ -1,22 +1,26 @@
 """One engine on one problem of benches/peers, run by run.py in a subprocess of its own (so that a
 time limit can stop it) and written as JSON to --out.
 
-    python benches/peers/case.py exudyn PROBLEM [--n N] --step H [--repeats 3] --out FILE
-    python benches/peers/case.py linkwork PROBLEM [--n N] [--target ERROR] [--repeats 3] --out FILE
+    python benches/peers/case.py exudyn PROBLEM [--n N] --step H [--repeats 3] [--budget 2] --out FILE
+    python benches/peers/case.py linkwork PROBLEM [--n N] [--target ERROR] [--repeats 3] [--budget 2] --out FILE
+    python benches/peers/case.py linkwork PROBLEM [--n N] --candidates bdf:1e-4,abam:1e-5 [...] --out FILE
 
 exudyn: the problem's Exudyn twin (exudyn_model.py) with the generalised-alpha solver at the
 fixed step H; CPU time of `Assemble()` + `SolveDynamic()`, model building excluded.
 
 linkwork: the loosest `rtol = atol` of 1e-4, 1e-5, ..., 1e-12 whose error is at most --target
 (Exudyn's), for `bdf` and for `abam`; each is timed, and the cheaper is reported (a single run of
-the search is too noisy to choose by).
+the search is too noisy to choose by). With --candidates, those settings are timed and no search
+is made (run.py's later rounds).
 Without a target, `bdf` at 1e-8. CPU time of `Model.run()` (assembly, integration and every
 output column), the file's parsing excluded.
 
-CPU time is `time.process_time()` (all threads), the least of --repeats runs, for both engines:
-the noise of a shared machine only adds time (on this 2-core machine a case has run up to 1.8
-times slower than its usual in one of several repeats), so the least is the estimate that
-repeats (as `timeit` advises).
+CPU time is `time.process_time()` (all threads), the least of the timed runs, for both engines:
+the noise of a shared machine only adds time, so the least is the estimate that repeats (as
+`timeit` advises). The runs go on until they have taken --budget seconds of CPU, and at least
+--repeats of them (as `timeit`'s autorange, by time): on this 2-core machine the noise comes in
+spells of seconds, in which a 10 ms case ran 1.5 times slower in every one of 30 runs, so a fixed
+count of short runs can fall entirely within one. Both engines get the same budget.
 """
 
 from __future__ import annotations
@@ -38,7 +42,17 @@ INTEGRATORS = ("bdf", "abam")
 UNMATCHED = ("bdf", 1e-8)
 
 
-def exudyn_case(problem, step, repeats):
+def timed(run, repeats, budget):
+    """CPU seconds of each call of `run` (which returns its own): at least `repeats` calls, and
+    more until they add up to `budget` seconds. The last call's other results come back too."""
+    cpus, last = [], None
+    while len(cpus) < repeats or sum(cpus) < budget:
+        cpu, last = run()
+        cpus.append(cpu)
+    return cpus, last
+
+
+def exudyn_case(problem, step, repeats, budget):
     import linkwork
     from exudyn_model import ExudynModel
 
@@ -46,11 +60,13 @@ def exudyn_case(problem, step, repeats):
     twin = ExudynModel(
         model, problem.analysis, problem.bodies, problem.output_step, problem.t_end, step, problem.sparse, problem.assembled
     )
-    cpus = []
-    for _ in range(repeats):
+
+    def run():
         start = time.process_time()
         it = twin.solve()
-        cpus.append(time.process_time() - start)
+        return time.process_time() - start, it
+
+    cpus, it = timed(run, repeats, budget)
     columns = twin.columns()
     if not np.isclose(columns["time"][-1], problem.t_end):
         raise RuntimeError(f"Exudyn stopped at t = {columns['time'][-1]}")
@@ -60,7 +76,7 @@ def exudyn_case(problem, step, repeats):
         "step": step,
         "error": problems.error(problem, model, columns),
         "cpu": min(cpus),
-        "cpus": cpus,
+        "runs": len(cpus),
         "steps": it.currentStepIndex - 1,
         "newton": it.newtonStepsCount,
     }
@@ -68,21 +84,34 @@ def exudyn_case(problem, step, repeats):
 
 def linkwork_run(problem, model, integrator, tol):
     """One run: its error, CPU seconds and summary statistics (a failed run raises)."""
+    cpu, r = linkwork_timed(problem, model, integrator, tol)
+    return linkwork_error(problem, model, r), cpu, dict(r.summary.statistics)
+
+
+def linkwork_timed(problem, model, integrator, tol):
+    """One run: its CPU seconds and results."""
     start = time.process_time()
     r = model.run(problem.analysis, integrator=integrator, rtol=tol, atol=tol, t_end=problem.t_end, step=problem.output_step)
-    cpu = time.process_time() - start
+    return time.process_time() - start, r
+
+
+def linkwork_error(problem, model, r):
+    """A run's error against the problem's reference (the references cost more than a run)."""
     columns = {"time": np.asarray(r.time)}
     for body in problem.bodies:
         for c in ("x", "y", "phi"):
             columns[f"{body}.{c}"] = np.asarray(r[f"{body}.{c}"])
-    return problems.error(problem, model, columns), cpu, dict(r.summary.statistics)
+    return problems.error(problem, model, columns)
 
 
-def linkwork_case(problem, target, repeats):
+def linkwork_case(problem, target, repeats, budget, candidates=None):
     import linkwork
 
     model = linkwork.from_yaml(problem.text)
     tried = []
+    met = True
+    if candidates:
+        return best_candidate(problem, model, candidates, repeats, budget, met, tried)
     candidates = []
     if target is None:
         candidates.append(UNMATCHED)
@@ -106,26 +135,35 @@ def linkwork_case(problem, target, repeats):
             raise RuntimeError(f"no Linkwork run finished: {tried}")
         best = min(finished, key=lambda t: t[2])
         candidates.append((best[0], best[1]))
-    timed = []
+    return best_candidate(problem, model, candidates, repeats, budget, met, tried)
+
+
+def best_candidate(problem, model, candidates, repeats, budget, met, tried):
+    """Each of the `(integrator, tol)` candidates timed; the cheaper one's result, with all of
+    them under "candidates" (so that run.py can take the least over its rounds)."""
+    measured = []
     for integrator, tol in candidates:
-        runs = [linkwork_run(problem, model, integrator, tol) for _ in range(repeats)]
-        timed.append((min(r[1] for r in runs), integrator, tol, runs))
-    _, integrator, tol, runs = min(timed, key=lambda c: c[0])
-    err, _, stats = runs[-1]
-    cpus = [r[1] for r in runs]
-    return {
-        "engine": "linkwork",
-        "settings": f"{integrator}, rtol = atol = {tol:.0e}",
-        "integrator": integrator,
-        "tol": tol,
-        "met": met,
-        "error": err,
-        "cpu": min(cpus),
-        "cpus": cpus,
-        "steps": stats["steps"],
-        "newton": stats["newton_iterations"],
-        "tried": tried,
-    }
+
+        cpus, r = timed(lambda i=integrator, t=tol: linkwork_timed(problem, model, i, t), repeats, budget)
+        stats = dict(r.summary.statistics)
+        measured.append(
+            {
+                "integrator": integrator,
+                "tol": tol,
+                "error": linkwork_error(problem, model, r),
+                "cpu": min(cpus),
+                "runs": len(cpus),
+                "steps": stats["steps"],
+                "newton": stats["newton_iterations"],
+            }
+        )
+    return {"engine": "linkwork", "met": met, "tried": tried, "candidates": measured, **cheapest(measured)}
+
+
+def cheapest(measured):
+    """The candidate of least CPU, as the result's settings, error, CPU and counts."""
+    best = min(measured, key=lambda c: c["cpu"])
+    return {**best, "settings": f"{best['integrator']}, rtol = atol = {best['tol']:.0e}"}
 
 
 def main(argv=None):
@@ -135,14 +173,19 @@ def main(argv=None):
     parser.add_argument("--n", type=int, default=0)
     parser.add_argument("--step", type=float)
     parser.add_argument("--target", type=float)
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=3, help="timed runs at least")
+    parser.add_argument("--budget", type=float, default=2.0, help="CPU seconds of timed runs at least")
+    parser.add_argument("--candidates", help="linkwork: INTEGRATOR:TOL,... to time, without the search")
     parser.add_argument("--out", type=Path, required=True)
     args = parser.parse_args(argv)
     problem = problems.problem(args.problem, args.n)
     if args.engine == "exudyn":
-        result = exudyn_case(problem, args.step, args.repeats)
+        result = exudyn_case(problem, args.step, args.repeats, args.budget)
     else:
-        result = linkwork_case(problem, args.target, args.repeats)
+        candidates = None
+        if args.candidates:
+            candidates = [(c.split(":")[0], float(c.split(":")[1])) for c in args.candidates.split(",")]
+        result = linkwork_case(problem, args.target, args.repeats, args.budget, candidates)
     args.out.write_text(json.dumps(result))
 
 

@@ -8,7 +8,11 @@ most Exudyn's.
     python benches/peers/run.py --problems nfourbar --n 10,100 --timeout 120 --no-write
 
 Each engine's run of each problem is a subprocess (benches/peers/case.py) stopped after
---timeout seconds and reported as a timeout. The table, with the machine and the versions, goes
+--timeout seconds and reported as a timeout. The two engines take turns, --rounds times
+(Exudyn, then Linkwork at the settings its first round chose, and again), each round with its
+share of the timed runs, and each engine's CPU time is the least over all its rounds: the
+noise of a shared machine comes in spells of seconds, and turns let both engines meet the same
+spells. The table, with the machine and the versions, goes
 between `<!-- peers:begin -->` and `<!-- peers:end -->` in docs/performance.md (section
 "Against Exudyn", added at the end the first time), and the N-four-bar's cost against N to
 docs/peers-nfourbar.svg.
@@ -30,6 +34,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import case  # noqa: E402
 import problems  # noqa: E402
 
 ROOT = problems.ROOT
@@ -40,6 +45,11 @@ CASE = Path(__file__).resolve().parent / "case.py"
 FULL_N = (10, 100, 1000, 10000)
 QUICK = ("pendulum", "slider-crank", "quick-return", "andrews", "nfourbar")
 QUICK_N = (10, 100)
+# Each case runs on one thread: NumPy's OpenBLAS threads (started by the error's computation)
+# otherwise wait by spinning, which `time.process_time()` counts as the engine's CPU (3% of the
+# samples of a loop of Linkwork runs). Exudyn's solver is serial by default (`numberOfThreads`
+# 1), Linkwork's is serial.
+SERIAL = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
 
 
 def run_case(args, timeout):
@@ -48,7 +58,11 @@ def run_case(args, timeout):
         out = Path(tmp) / "case.json"
         try:
             done = subprocess.run(
-                [sys.executable, str(CASE), *args, "--out", str(out)], capture_output=True, text=True, timeout=timeout
+                [sys.executable, str(CASE), *args, "--out", str(out)],
+                capture_output=True,
+                text=True,
+                timeout=timeout,
+                env={**os.environ, **SERIAL},
             )
         except subprocess.TimeoutExpired:
             return {"status": f"timeout (> {timeout:g} s)"}
@@ -56,6 +70,21 @@ def run_case(args, timeout):
             lines = done.stderr.strip().splitlines() or [f"exit status {done.returncode}"]
             return {"status": f"failed: {textwrap.shorten(lines[-1], 240)}"}
         return {"status": "ok", **json.loads(out.read_text())}
+
+
+def merge(first, later):
+    """One engine's result over its rounds: the first round's, with the least CPU time and the
+    runs of all (for Linkwork, of each candidate, the cheaper one then chosen again)."""
+    if first["status"] != "ok" or later["status"] != "ok":
+        return first
+    if first["engine"] == "exudyn":
+        return {**first, "cpu": min(first["cpu"], later["cpu"]), "runs": first["runs"] + later["runs"]}
+    by = {(c["integrator"], c["tol"]): c for c in later["candidates"]}
+    candidates = []
+    for c in first["candidates"]:
+        o = by[(c["integrator"], c["tol"])]
+        candidates.append({**c, "cpu": min(c["cpu"], o["cpu"]), "runs": c["runs"] + o["runs"]})
+    return {**first, "candidates": candidates, **case.cheapest(candidates)}
 
 
 def machine():
@@ -174,7 +203,7 @@ def plot(rows):
     plt.close(fig)
 
 
-def section(rows, info, command, with_plot):
+def section(rows, info, command, with_plot, repeats, budget, rounds):
     exudyn_steps = sorted({r[1]["step"] for r in rows if r[1]["status"] == "ok"})
     lines = [
         f"Measured {info['date']} with `{command}` on {info['cpu']} ({info['cores']} cores): Linkwork "
@@ -193,7 +222,10 @@ def section(rows, info, command, with_plot):
         "- **Linkwork**: for `bdf` and `abam`, the loosest `rtol = atol` of 1e-4, 1e-5, ..., 1e-12 whose error is at "
         "most Exudyn's; both are timed, and the cheaper is shown. Steps and Newton iterations: "
         "`results.summary.statistics`.",
-        "- **CPU s**: `time.process_time()` (all threads), the least of the runs (noise only adds time); Linkwork's `Model.run()` (assembly, "
+        f"- **CPU s**: `time.process_time()` (one thread), the least of the timed runs (noise only adds time). The "
+        f"engines take turns on each case, {rounds} rounds of Exudyn then Linkwork, each round at least "
+        f"{-(-repeats // rounds)} run(s) and {budget / rounds:g} s of CPU, so that both meet the same spells of a shared "
+        "machine's noise; Linkwork's `Model.run()` (assembly, "
         "integration, every output column), Exudyn's `Assemble()` + `SolveDynamic()` (with the sensors of the compared "
         "outputs); building the model is not timed in either.",
         "- **References** (the error is the largest over the output times unless said otherwise):",
@@ -232,7 +264,11 @@ def main(argv=None):
     parser.add_argument("--problems", help=f"comma-separated, of {', '.join(problems.PROBLEMS)}")
     parser.add_argument("--n", help="the N-four-bar's N, comma-separated (default 10,100,1000,10000)")
     parser.add_argument("--timeout", type=float, default=600.0, help="seconds for each engine on each problem")
-    parser.add_argument("--repeats", type=int, help="timed runs per case (default 3, --quick 1)")
+    parser.add_argument("--rounds", type=int, help="turns of the two engines on each case (default 3, --quick 1)")
+    parser.add_argument("--repeats", type=int, help="timed runs per case at least (default 3, --quick 1)")
+    parser.add_argument(
+        "--budget", type=float, help="CPU seconds of timed runs per engine and case at least (default 3, --quick 0)"
+    )
     parser.add_argument("--no-write", action="store_true", help="print the table only")
     args = parser.parse_args(argv)
     keys = args.problems.split(",") if args.problems else list(QUICK if args.quick else problems.PROBLEMS)
@@ -241,27 +277,41 @@ def main(argv=None):
             parser.error(f"unknown problem {key!r}")
     ns = [int(n) for n in args.n.split(",")] if args.n else list(QUICK_N if args.quick else FULL_N)
     repeats = args.repeats or (1 if args.quick else 3)
+    budget = args.budget if args.budget is not None else (0.0 if args.quick else 3.0)
+    rounds = args.rounds or (1 if args.quick else 3)
     command = " ".join(["python benches/peers/run.py", *(argv if argv is not None else sys.argv[1:])])
 
     rows = []
     for key in keys:
         for n in ns if key == "nfourbar" else [0]:
             problem = problems.problem(key, n)
-            base = [problem.key, "--n", str(n), "--repeats", str(repeats)]
+            share = ["--repeats", str(-(-repeats // rounds)), "--budget", repr(budget / rounds)]
+            base = [problem.key, "--n", str(n), *share]
             for step in problem.exudyn_steps:
-                print(f"{problem.label}: Exudyn h = {step:g} ...", flush=True)
-                exudyn = run_case(["exudyn", *base, "--step", repr(step)], args.timeout)
+                # An engine that failed or timed out in the first round is not run again.
+                exudyn = linkwork = None
+                for k in range(rounds):
+                    if exudyn is None or exudyn["status"] == "ok":
+                        print(f"{problem.label}: Exudyn h = {step:g}, round {k + 1} ...", flush=True)
+                        e = run_case(["exudyn", *base, "--step", repr(step)], args.timeout)
+                        exudyn = e if exudyn is None else merge(exudyn, e)
+                        print(f"  {e['status']} {e.get('error', '')} {e.get('cpu', '')}", flush=True)
+                    if linkwork is None:
+                        chosen = ["--target", repr(exudyn["error"])] if exudyn["status"] == "ok" else []
+                    elif linkwork["status"] == "ok":
+                        chosen = ["--candidates", ",".join(f"{c['integrator']}:{c['tol']!r}" for c in linkwork["candidates"])]
+                    else:
+                        continue
+                    print(f"{problem.label}: Linkwork, round {k + 1} ...", flush=True)
+                    w = run_case(["linkwork", *base, *chosen], args.timeout)
+                    linkwork = w if linkwork is None else merge(linkwork, w)
+                    print(f"  {w['status']} {w.get('settings', '')} {w.get('error', '')} {w.get('cpu', '')}", flush=True)
                 exudyn.setdefault("settings", f"generalised-alpha, h = {step:g}")
                 exudyn.setdefault("step", step)
-                print(f"  {exudyn['status']} {exudyn.get('error', '')} {exudyn.get('cpu', '')}", flush=True)
-                target = ["--target", repr(exudyn["error"])] if exudyn["status"] == "ok" else []
-                print(f"{problem.label}: Linkwork ...", flush=True)
-                linkwork = run_case(["linkwork", *base, *target], args.timeout)
-                print(f"  {linkwork['status']} {linkwork.get('settings', '')} {linkwork.get('error', '')} {linkwork.get('cpu', '')}", flush=True)
                 rows.append((problem, exudyn, linkwork))
 
     with_plot = "nfourbar" in keys
-    text = section(rows, machine(), command, with_plot)
+    text = section(rows, machine(), command, with_plot, repeats, budget, rounds)
     print(text)
     if not args.no_write:
         if with_plot:
