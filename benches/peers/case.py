@@ -1,12 +1,13 @@
 """One engine on one problem of benches/peers, run by run.py in a subprocess of its own (so that a
 time limit can stop it) and written as JSON to --out.
 
-    python benches/peers/case.py exudyn PROBLEM [--n N] --step H [--repeats 3] [--budget 2] --out FILE
+    python benches/peers/case.py exudyn PROBLEM [--n N] --step H [--rho R] [--repeats 3] [--budget 2] --out FILE
     python benches/peers/case.py linkwork PROBLEM [--n N] [--target ERROR] [--repeats 3] [--budget 2] --out FILE
     python benches/peers/case.py linkwork PROBLEM [--n N] --candidates bdf:1e-4,abam:1e-5 [...] --out FILE
 
 exudyn: the problem's Exudyn twin (exudyn_model.py) with the generalised-alpha solver at the
-fixed step H; CPU time of `Assemble()` + `SolveDynamic()`, model building excluded.
+fixed step H (and spectral radius R, Exudyn's 0.9 by default); CPU time of `Assemble()` +
+`SolveDynamic()`, model building excluded.
 
 linkwork: the loosest `rtol = atol` of 1e-4, 1e-5, ..., 1e-12 whose error is at most --target
 (Exudyn's), for `bdf` and for `abam`; each is timed, and the cheaper is reported (a single run of
@@ -52,7 +53,7 @@ def timed(run, repeats, budget):
     return cpus, last
 
 
-def exudyn_case(problem, step, repeats, budget):
+def exudyn_case(problem, step, rho, repeats, budget):
     import linkwork
     from exudyn_model import ExudynModel
 
@@ -60,6 +61,10 @@ def exudyn_case(problem, step, repeats, budget):
     twin = ExudynModel(
         model, problem.analysis, problem.bodies, problem.output_step, problem.t_end, step, problem.sparse, problem.assembled
     )
+    settings = f"generalised-alpha, h = {step:g}"
+    if rho is not None:
+        twin.settings.timeIntegration.generalizedAlpha.spectralRadius = rho
+        settings += f", spectral radius {rho:g}"
 
     def run():
         start = time.process_time()
@@ -72,7 +77,7 @@ def exudyn_case(problem, step, repeats, budget):
         raise RuntimeError(f"Exudyn stopped at t = {columns['time'][-1]}")
     return {
         "engine": "exudyn",
-        "settings": f"generalised-alpha, h = {step:g}",
+        "settings": settings,
         "step": step,
         "error": problems.error(problem, model, columns),
         "cpu": min(cpus),
@@ -172,6 +177,7 @@ def main(argv=None):
     parser.add_argument("problem", choices=problems.PROBLEMS)
     parser.add_argument("--n", type=int, default=0)
     parser.add_argument("--step", type=float)
+    parser.add_argument("--rho", type=float, help="exudyn: the generalised-alpha spectral radius (default 0.9)")
     parser.add_argument("--target", type=float)
     parser.add_argument("--repeats", type=int, default=3, help="timed runs at least")
     parser.add_argument("--budget", type=float, default=2.0, help="CPU seconds of timed runs at least")
@@ -180,7 +186,7 @@ def main(argv=None):
     args = parser.parse_args(argv)
     problem = problems.problem(args.problem, args.n)
     if args.engine == "exudyn":
-        result = exudyn_case(problem, args.step, args.repeats, args.budget)
+        result = exudyn_case(problem, args.step, args.rho, args.repeats, args.budget)
     else:
         candidates = None
         if args.candidates:

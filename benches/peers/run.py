@@ -50,6 +50,10 @@ QUICK_N = (10, 100)
 # samples of a loop of Linkwork runs). Exudyn's solver is serial by default (`numberOfThreads`
 # 1), Linkwork's is serial.
 SERIAL = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+# Exudyn's spectral radius where its default (0.9) fails: the issue that set this benchmark
+# found Exudyn "needs rho 0.6 to pass the flat positions" of the N-four-bar, and at N = 10,000
+# the default stops at the first (t = 0.7231 s); 0.6 passes it.
+FALLBACK_RHO = 0.6
 
 
 def run_case(args, timeout):
@@ -222,6 +226,7 @@ def section(rows, info, command, with_plot, repeats, budget, rounds):
         "- **Exudyn**: `SolveDynamic` with its defaults (generalised-alpha, index 3, spectral radius 0.9, modified "
         "Newton at relative tolerance 1e-8) at the fixed step h of the table"
         + (f" ({', '.join(f'{h:g}' for h in exudyn_steps)} s)" if exudyn_steps else "")
+        + f", and where that fails, once more at spectral radius {FALLBACK_RHO:g} (as its settings then say)"
         + "; its dense LU (the default) for the small models, `EigenSparse` for the N-four-bar. Steps: "
         "`it.currentStepIndex - 1`; Newton iterations: `it.newtonStepsCount`.",
         "- **Linkwork**: for `bdf` and `abam`, the loosest `rtol = atol` of 1e-4, 1e-5, ..., 1e-12 whose error is at "
@@ -295,10 +300,18 @@ def main(argv=None):
             for step in problem.exudyn_steps:
                 # An engine that failed or timed out in the first round is not run again.
                 exudyn = linkwork = None
+                rho = []
                 for k in range(rounds):
                     if exudyn is None or exudyn["status"] == "ok":
                         print(f"{problem.label}: Exudyn h = {step:g}, round {k + 1} ...", flush=True)
-                        e = run_case(["exudyn", *base, "--step", repr(step)], args.timeout)
+                        e = run_case(["exudyn", *base, "--step", repr(step), *rho], args.timeout)
+                        if exudyn is None and e["status"].startswith("failed") and not rho:
+                            # Once, with the spectral radius that passes the flat positions.
+                            failure, rho = e["status"], ["--rho", repr(FALLBACK_RHO)]
+                            print(f"  {failure}; again with spectral radius {FALLBACK_RHO:g} ...", flush=True)
+                            e = run_case(["exudyn", *base, "--step", repr(step), *rho], args.timeout)
+                            if e["status"] == "ok":
+                                e["settings"] += f" (0.9 {failure})"
                         exudyn = e if exudyn is None else merge(exudyn, e)
                         print(f"  {e['status']} {e.get('error', '')} {e.get('cpu', '')}", flush=True)
                     if linkwork is None:
