@@ -4,7 +4,7 @@
 //! Des. 104(1); Haug 1989 section 7.3; Shampine and Gordon 1975, "Computer Solution of Ordinary
 //! Differential Equations: The Initial Value Problem", Freeman, chapters 4 to 10).
 //!
-//! **Partition.** A sparse Gaussian elimination of the constraint Jacobian `Phi_q` (`PivotWork::run`:
+//! **Partition.** A Gaussian elimination of the constraint Jacobian `Phi_q` (`PivotWork::run`:
 //! threshold pivoting, each pivot at least 0.9 times the largest remaining entry and, among
 //! those, of least Markowitz count) picks `r` pivots, `r` the numerical rank (it stops when no
 //! entry above [`crate::linalg::dense::RANK_TOLERANCE`] times the largest of `Phi_q` remains): the
@@ -1185,7 +1185,9 @@ const PIVOT_ROWS: usize = 4;
 /// and merges cost more per entry but grow with the entries alone. Measured on the N-four-bar's
 /// `Phi_q` (one choice, dense against sparse): 4.3 against 6.5 us at 14 rows (the quick-return's
 /// size), 7.8 against 10.3 at 20, 12.5 against 14.6 at 26; 18.2 against 16.6 at 32, 28.5
-/// against 24.2 at 50. The crossover is between 26 and 32.
+/// against 24.2 at 50. The crossover is between 26 and 32. Those matrices have one column more
+/// than rows; the dense path's scans grow with the columns and the sparse path's work does not,
+/// so a matrix of more than `28 x 29` entries (few constraints on many coordinates) goes sparse.
 const DENSE_PIVOT_MAX_ROWS: usize = 28;
 
 /// The partition's elimination ([`PivotWork::run`]) and its buffers, kept from one partition
@@ -1225,10 +1227,10 @@ impl PivotWork {
     /// relative to its row. A row whose entries have all fallen below [`RANK_TOLERANCE`] times the
     /// largest entry of `Phi_q` is numerically zero: redundant, it is left out. The pivots are the
     /// numerical rank. The pivot rows and columns, ascending, go to `prow` and `pcol`. Dense up
-    /// to [`DENSE_PIVOT_MAX_ROWS`] rows, sparse above (whose work grows with the fill, linearly
-    /// in the length of a chain of bodies).
+    /// to [`DENSE_PIVOT_MAX_ROWS`] rows (and `28 x 29` entries), sparse above (whose work grows
+    /// with the fill, linearly in the length of a chain of bodies).
     fn run(&mut self, m: usize, n: usize, entries: &[(usize, usize)], jac: &[f64]) {
-        if m <= DENSE_PIVOT_MAX_ROWS {
+        if m <= DENSE_PIVOT_MAX_ROWS && m * n <= DENSE_PIVOT_MAX_ROWS * (DENSE_PIVOT_MAX_ROWS + 1) {
             self.run_dense(m, n, entries, jac);
         } else {
             self.run_sparse(m, n, entries, jac);
@@ -1272,10 +1274,11 @@ impl PivotWork {
             if largest <= zero || largest.is_nan() {
                 break;
             }
-            let limit = PIVOT_THRESHOLD * largest;
-            // The PIVOT_ROWS active rows of fewest entries (ties to the lower row) above the limit.
+            // The PIVOT_ROWS active rows of fewest entries (ties to the lower row) whose largest
+            // entry passes the threshold, by the test each entry then meets (so that each of them
+            // holds an entry that passes it).
             let mut top = [(usize::MAX, usize::MAX); PIVOT_ROWS];
-            for r in (0..m).filter(|&r| active[r] && row_big[r] >= limit) {
+            for r in (0..m).filter(|&r| active[r] && row_big[r] / largest >= PIVOT_THRESHOLD) {
                 let key = (row_len[r], r);
                 if key < top[PIVOT_ROWS - 1] {
                     let at = top.iter().position(|&t| key < t).unwrap_or(PIVOT_ROWS - 1);
@@ -1393,8 +1396,8 @@ impl PivotWork {
             if largest <= zero || largest.is_nan() {
                 break;
             }
-            let limit = PIVOT_THRESHOLD * largest;
-            // The sparsest rows holding an entry above the threshold (fresh heap entries only).
+            // The sparsest rows holding an entry above the threshold (fresh heap entries only), by
+            // the test each entry then meets.
             top.clear();
             skipped.clear();
             while top.len() < PIVOT_ROWS {
@@ -1403,7 +1406,7 @@ impl PivotWork {
                 if !active[r] || version[r] != e.0 .2 {
                     continue;
                 }
-                if row_max(&rows[r]) >= limit {
+                if row_max(&rows[r]) / largest >= PIVOT_THRESHOLD {
                     top.push(e);
                 } else {
                     skipped.push(e);
@@ -1692,7 +1695,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
 mod tests {
     use super::*;
 
-    /// [`PivotWork::run`] with fresh buffers: the pivot rows and columns and the work.
+    /// [`PivotWork::run_sparse`] with fresh buffers: the pivot rows and columns and the work.
     fn pivots(m: usize, n: usize, entries: &[(usize, usize)], jac: &[f64]) -> (Vec<usize>, Vec<usize>, usize) {
         let mut w = PivotWork::default();
         let work = w.run_sparse(m, n, entries, jac);
@@ -1711,7 +1714,10 @@ mod tests {
                 }
             }
         }
-        let (rows, cols, _) = pivots(rows.len(), n, &entries, &values);
+        let (m, (rows, cols, _)) = (rows.len(), pivots(rows.len(), n, &entries, &values));
+        let mut dense = PivotWork::default();
+        dense.run_dense(m, n, &entries, &values);
+        assert_eq!((&dense.prow, &dense.pcol), (&rows, &cols), "the dense path chooses as the sparse one");
         (rows, cols)
     }
 
@@ -1749,10 +1755,11 @@ mod tests {
             if largest <= zero || largest.is_nan() {
                 break;
             }
-            let limit = PIVOT_THRESHOLD * largest;
             let len = |row: &[Option<f64>]| row.iter().flatten().count();
-            let mut candidates: Vec<(usize, usize)> =
-                (0..m).filter(|&r| active[r] && row_max(&a[r]) >= limit).map(|r| (len(&a[r]), r)).collect();
+            let mut candidates: Vec<(usize, usize)> = (0..m)
+                .filter(|&r| active[r] && row_max(&a[r]) / largest >= PIVOT_THRESHOLD)
+                .map(|r| (len(&a[r]), r))
+                .collect();
             candidates.sort_unstable();
             candidates.truncate(PIVOT_ROWS);
             let mut best: Option<(usize, usize, usize, f64)> = None;
@@ -1793,8 +1800,9 @@ mod tests {
     }
 
     /// The partition's elimination, sparse (its heaps, versions and merges) and dense, chooses as
-    /// the brute-force reference does, on 600 random sparse matrices of 2 to 24 rows: entries of one size (most
-    /// rows pass the threshold), entries over six decades (few pass), and a third with a row
+    /// the brute-force reference does, on 600 random sparse matrices of 2 to 24 rows: entries of
+    /// one size (most rows pass the threshold), entries over six decades (few pass), a fifth with
+    /// entries of 1 and 2 only (exact ties, broken by the rule's order), and a third with a row
     /// repeated as the sum of two others (redundant, left out).
     #[test]
     fn pivots_match_the_dense_reference() {
@@ -1813,7 +1821,12 @@ mod tests {
             for (r, row) in dense.iter_mut().enumerate() {
                 for (c, x) in row.iter_mut().enumerate() {
                     if random() < 0.25 || c == r {
-                        let size = if case % 2 == 0 { 0.5 + 0.5 * random() } else { 10f64.powf(6.0 * random() - 3.0) };
+                        let size = match case % 5 {
+                            // Exact ties, as a Jacobian's unit entries make them.
+                            4 => 1.0 + (random() * 2.0).floor(),
+                            _ if case % 2 == 0 => 0.5 + 0.5 * random(),
+                            _ => 10f64.powf(6.0 * random() - 3.0),
+                        };
                         *x = Some(if random() < 0.5 { size } else { -size });
                     }
                 }
