@@ -281,6 +281,8 @@ def _print_summary(results: Results) -> None:
     print(f"{s.model}: analysis '{s.analysis}' ({s.type})")
     drivers = ", ".join(s.active_drivers or []) or "none"
     print(f"  {s.bodies} bodies, {s.coordinates} coordinates; drivers: {drivers}")
+    for line in branch_lines(s.branches or []):
+        print(f"  {line}")
     print(f"  {_span(results)}")
     if stats and s.type == "dynamic":
         integrator = s.integrator or {}
@@ -530,6 +532,10 @@ def _print_system(title: str, system: dict[str, Any], bodies: list[str]) -> None
         f"  assembly             residual {_num(assembly['residual'])} after {assembly['iterations']} "
         f"iteration(s); velocity residual {_num(assembly['velocity_residual'])}"
     )
+    for line in branch_lines(system.get("branches", [])):
+        print(f"  {line}")
+    for warning in system.get("warnings", []):
+        print(f"  warning: {warning}")
     change: list[float] = assembly["change"]
     names = [f"{b}.{c}" for b in bodies for c in COORDINATES]  # = report["coordinate_names"]
     if change:
@@ -540,6 +546,20 @@ def _print_system(title: str, system: dict[str, Any], bodies: list[str]) -> None
         for i, body in enumerate(bodies):
             cells = " ".join(f"{v:+11.3e}" for v in change[3 * i : 3 * i + 3])
             print(f"    {body:{width}}  {cells}")
+
+
+def branch_lines(branches: list[dict[str, Any]]) -> list[str]:
+    """Each dyad's assembly mode in words (``branch F  right of C -> D (drawn right)``), from a
+    summary's or a check's ``branches``."""
+    lines = []
+    for b in branches:
+        e, d = b["line"]
+        side = f"{b['side']} of" if b["side"] else "on"
+        notes = [f"drawn {b['drawn']}" if b["drawn"] else "drawn on the line"]
+        if b["declared"]:
+            notes.append(f"declared {b['declared']}")
+        lines.append(f"branch {b['joint']:<11} {side} {e} -> {d} ({', '.join(notes)}; bodies {', '.join(b['bodies'])})")
+    return lines
 
 
 # --- schema --------------------------------------------------------------------------------------

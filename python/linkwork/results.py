@@ -82,6 +82,10 @@ class Summary(dict[str, Any]):
     """Degrees of freedom the joints and active drivers leave."""
     redundant_rows: _Key[list[dict[str, str]] | None] = _Key()
     """Rows that repeat earlier ones (they hold implicitly), each ``{"element": ..., "equation": ...}``."""
+    branches: _Key[list[dict[str, Any]] | None] = _Key()
+    """Each dyad's assembly mode: ``joint``, ``line``, ``bodies``, ``side``, ``drawn``, ``declared``."""
+    branch_changes: _Key[list[dict[str, Any]] | None] = _Key()
+    """Each change of a dyad's branch during the run: ``joint``, ``line``, ``time``, ``from``, ``to``."""
     indeterminate_joints: _Key[list[str] | None] = _Key()
     """Joints whose share of the reactions the equations leave open (minimum-norm reactions)."""
     assembly: _Key[dict[str, Any] | None] = _Key()

@@ -15,9 +15,10 @@ pub use summary::{
     Residuals, StaticStats, Statistics, Summary,
 };
 
-use crate::error::{Error, Problem};
+use crate::error::{Error, Problem, RowName};
 use crate::expr::functional::{EvalError, Functional, TIME};
-use crate::model::spec::OutputsSpec;
+use crate::model::spec::{BranchMode, OutputsSpec};
+use crate::model::structure::BranchWatch;
 use crate::model::{Analysis, Model};
 use indexmap::IndexMap;
 use serde::Serialize;
@@ -62,6 +63,10 @@ pub struct Results {
     stream: Option<stream::Stream>,
     /// Whether [`Results::start`] ran.
     started: bool,
+    /// The dyads' branches from one output to the next.
+    branches: BranchWatch,
+    /// Whether a change of branch fails the run (`branch: strict`).
+    strict_branches: bool,
 }
 
 /// The largest reaction of each joint and effort of each active driver, kept as rows are pushed
@@ -145,6 +150,8 @@ impl Results {
             active_drivers: analysis.drivers.iter().map(|&d| model.drivers[d].name.clone()).collect(),
             settings: analysis.settings,
         });
+        results.branches = BranchWatch::new(model, &analysis.drivers);
+        results.strict_branches = model.branch_mode == BranchMode::Strict;
         results
     }
 
@@ -178,6 +185,8 @@ impl Results {
             first_positions: Vec::new(),
             stream: None,
             started: false,
+            branches: BranchWatch::default(),
+            strict_branches: false,
         }
     }
 
@@ -247,6 +256,18 @@ impl Results {
         if let Some((k, &value)) = self.row.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             let element = names[k].clone();
             return Err(Error::NonFinite { time: t, element, expression: String::new(), value });
+        }
+        if let Some(change) = self.branches.push(t, q) {
+            if self.strict_branches {
+                let rows = ["x", "y"].map(|e| RowName { element: change.joint.clone(), equation: e.into() }).to_vec();
+                return Err(Error::Singular {
+                    time: change.time,
+                    rows,
+                    detail: format!("{} (branch: strict)", change.message()),
+                });
+            }
+            self.summary.warnings.push(change.message());
+            self.summary.branch_changes.push(change);
         }
         if self.is_empty() {
             self.first_positions = (0..bodies).flat_map(|b| [q[3 * b], q[3 * b + 1], q[3 * b + 2]]).collect();

@@ -62,6 +62,32 @@ pub fn assemble(
     t: f64,
     tolerance: f64,
 ) -> Result<Assembly> {
+    assemble_or_best(sys, q0, qdot0, given, t, tolerance).map_err(|(e, _)| e)
+}
+
+/// [`assemble`], with the positions Newton reached (its best) beside the error when it fails.
+pub(crate) fn assemble_or_best(
+    sys: &mut System<'_>,
+    q0: &[f64],
+    qdot0: &[f64],
+    given: &[bool],
+    t: f64,
+    tolerance: f64,
+) -> std::result::Result<Assembly, (Error, Vec<f64>)> {
+    let mut best = q0.to_vec();
+    assemble_tracking(sys, q0, qdot0, given, t, tolerance, &mut best).map_err(|e| (e, best))
+}
+
+/// [`assemble`], keeping in `best` the last positions Newton accepted.
+fn assemble_tracking(
+    sys: &mut System<'_>,
+    q0: &[f64],
+    qdot0: &[f64],
+    given: &[bool],
+    t: f64,
+    tolerance: f64,
+    best: &mut Vec<f64>,
+) -> Result<Assembly> {
     let (n, m) = (sys.n, sys.m);
     let free: Vec<usize> = (0..n).filter(|&k| !given[k]).collect();
     let mut q = q0.to_vec();
@@ -107,6 +133,7 @@ pub fn assemble(
             return Err(fail(sys, &phi, iterations, "Newton cannot reduce the residual further: the constraints, drivers and given coordinates conflict, or the guess is near a singular position"));
         }
         q = trial;
+        best.clone_from(&q);
     }
     let residual = maxabs(&phi);
     // Velocities: least change from the guess, given ones held.

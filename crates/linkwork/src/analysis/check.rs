@@ -6,10 +6,11 @@
 //! the redundant one, as a designer reading the file would.
 
 use super::setup::{coordinate_names, held, unmet_freedom};
-use super::{assemble, Assembly};
+use super::{assemble_on_branches, Assembly};
 use crate::constraints::ConfigBuf;
 use crate::error::{Result, RowName};
 use crate::model::spec::AnalysisKind;
+use crate::model::structure::Branch;
 use crate::model::Model;
 use crate::system::System;
 use indexmap::IndexMap;
@@ -34,6 +35,10 @@ pub struct SystemCheck {
     pub indeterminate: Vec<String>,
     /// The assembled configuration.
     pub assembly: Assembly,
+    /// The assembly mode of every dyad (docs/model-format.md, "Branches").
+    pub branches: Vec<Branch>,
+    /// What the assembly found to say: a drawing that disagrees with a declared branch.
+    pub warnings: Vec<String>,
 }
 
 /// The check of one analysis: its system with the analysis's drivers, or why it could not be
@@ -75,8 +80,9 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
     let mut sys = System::new(model, drivers);
     let n = model.n();
     let given = held(model, hold_given);
-    let assembly =
-        assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t, crate::model::SolverSettings::default().tolerance)?;
+    let tolerance = crate::model::SolverSettings::default().tolerance;
+    let (assembly, branches, warnings) =
+        assemble_on_branches(model, drivers, &mut sys, &model.q0(), &model.qdot0(), &given, t, tolerance)?;
     let jac = sys.jacobian(&ConfigBuf::new(&assembly.q).view(), t);
     let mut rows = super::row_space(&jac, t)?;
     let (keep, drop) = rows.independent_rows();
@@ -89,6 +95,8 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
         redundant: drop.iter().map(|&r| sys.row_name(r)).collect(),
         indeterminate: super::element_names(&sys, &rows.dependent_rows()),
         assembly,
+        branches,
+        warnings,
     })
 }
 

@@ -13,7 +13,7 @@
 //! loop except the growth of the output columns, reserved up front.
 
 use super::setup::{fail, held, output_times, unmet_freedom};
-use super::{assemble, residual_floor, Assembly, SINGULAR_RATIO_KINEMATIC};
+use super::{assemble_into, residual_floor, Assembly, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::{Config, ConfigBuf};
 use crate::error::{Error, Problem, RowName};
 use crate::linalg::{ColMatrix, FactorError, SparseLu};
@@ -199,10 +199,11 @@ pub(crate) fn run_driven(
     let t0 = analysis.t_start;
     // The drivers determine every coordinate, so nothing is held: least change from the guess.
     let given = held(model, false);
-    let assembly: Assembly = match assemble(&mut sys, &model.q0(), &model.qdot0(), &given, t0, settings.tolerance) {
-        Ok(a) => a,
-        Err(e) => return Err(fail(results, e)),
-    };
+    let assembly: Assembly =
+        match assemble_into(model, &analysis.drivers, &mut sys, &given, t0, settings.tolerance, &mut results.summary) {
+            Ok(a) => a,
+            Err(e) => return Err(fail(results, e)),
+        };
     let jac = sys.jacobian(&ConfigBuf::new(&assembly.q).view(), t0);
     let (rows, redundant) = match super::row_space(&jac, t0) {
         Ok(space) => space.independent_rows(),
@@ -255,7 +256,7 @@ pub(crate) fn run_driven(
     let outcome = (|| -> Result<(), Error> {
         s.factor_at(false, t0)?;
         s.velocities();
-        check_condition(&mut s, settings.singular_condition)?;
+        check_condition(&mut s, model, &analysis.drivers, settings.singular_condition)?;
         extra_values(t0, &s.q, &s.qdot, &s.qddot, &mut extra)?;
         results.push(t0, &s.q, &s.qdot, &s.qddot, &extra)?;
         let mut dt = h;
@@ -321,7 +322,7 @@ pub(crate) fn run_driven(
                     }
                 }
             }
-            check_condition(&mut s, settings.singular_condition)?;
+            check_condition(&mut s, model, &analysis.drivers, settings.singular_condition)?;
             extra_values(target, &s.q, &s.qdot, &s.qddot, &mut extra)?;
             results.push(target, &s.q, &s.qdot, &s.qddot, &extra)?;
         }
@@ -345,18 +346,25 @@ fn insert_summary(results: &mut Results, stats: &KinematicStats, assembly: &Asse
     summary.assembly = Some(assembly.report());
 }
 
-fn check_condition(s: &mut Solver<'_>, limit: f64) -> Result<(), Error> {
+fn check_condition(s: &mut Solver<'_>, model: &Model, drivers: &[usize], limit: f64) -> Result<(), Error> {
     let cond = s.lu.condition_estimate();
     s.stats.max_condition = s.stats.max_condition.max(cond);
     if cond > limit {
         let (ratio, rows) = s.diagnose();
-        return Err(Error::Singular {
-            time: s.t,
-            rows,
-            detail: format!("the driven Jacobian is nearly singular (condition estimate {cond:.3e}, smallest/largest singular value {ratio:.3e}): a dead centre or lost degree of freedom"),
-        });
+        let detail = format!("the driven Jacobian is nearly singular (condition estimate {cond:.3e}, smallest/largest singular value {ratio:.3e}): a dead centre or lost degree of freedom");
+        return Err(singular(s, model, drivers, rows, detail));
     }
     Ok(())
+}
+
+/// A singular position at the solver's last position, blamed on the group of the mechanism that
+/// locks when the structure names one ([`super::blame`]): its rows, and its reason before
+/// `detail`; otherwise the rows of the whole Jacobian's smallest singular value.
+fn singular(s: &mut Solver<'_>, model: &Model, drivers: &[usize], rows: Vec<RowName>, detail: String) -> Error {
+    match super::blame(model, drivers, &mut s.sys, &s.q, s.t) {
+        Some((rows, words)) => Error::Singular { time: s.t, rows, detail: format!("{words}; {detail}") },
+        None => Error::Singular { time: s.t, rows, detail },
+    }
 }
 
 /// Why the bodies turn too fast for a sub-step above the floor: a driver not finite now or at
@@ -386,13 +394,10 @@ fn give_up(s: &mut Solver<'_>, model: &Model, drivers: &[usize], t_new: f64, ste
     }
     let (ratio, rows) = s.diagnose();
     if ratio < SINGULAR_RATIO_KINEMATIC {
-        return Error::Singular {
-            time: s.t,
-            rows,
-            detail: format!(
-                "no assembled position beyond this time (lock-up or dead centre): the driven Jacobian is nearly singular, smallest/largest singular value {ratio:.3e}, and Newton fails with sub-steps down to {step:.3e} s"
-            ),
-        };
+        let detail = format!(
+            "no assembled position beyond this time (lock-up or dead centre): the driven Jacobian is nearly singular, smallest/largest singular value {ratio:.3e}, and Newton fails with sub-steps down to {step:.3e} s"
+        );
+        return singular(s, model, drivers, rows, detail);
     }
     match rejected {
         Attempt::Failed(f) => Error::Convergence {

@@ -4,6 +4,7 @@
 //! [`crate::model::Model`] and writes [`crate::results::Results`].
 
 mod assembly;
+mod branches;
 mod check;
 pub mod dynamic;
 mod inverse;
@@ -14,6 +15,8 @@ mod setup;
 mod statics;
 
 pub use assembly::{assemble, Assembly};
+pub(crate) use branches::assemble_into;
+pub use branches::{assemble_on_branches, blame};
 pub use check::{check, AnalysisCheck, CheckReport, SystemCheck};
 pub(crate) use inverse::reaction_columns;
 pub use inverse::run_inverse;

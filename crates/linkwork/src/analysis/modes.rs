@@ -26,7 +26,7 @@
 use super::dynamic::{factor_error, Dae};
 use super::setup::{coordinate_names, fail, held, unmet_freedom};
 use super::statics::{solve, Statics, ZERO_STIFFNESS};
-use super::{assemble, element_names, independent_rows, indeterminate_rows};
+use super::{assemble_into, element_names, independent_rows, indeterminate_rows};
 use crate::error::Error;
 use crate::model::spec::LinearisePoint;
 use crate::model::{Analysis, Model};
@@ -51,7 +51,15 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
     let equilibrium = analysis.about == LinearisePoint::Equilibrium;
     // The initial state keeps what the user gave, as dynamics does; an equilibrium moves it.
     let given = held(model, !equilibrium);
-    let assembly = match assemble(&mut dae.sys, &model.q0(), &model.qdot0(), &given, t, analysis.settings.tolerance) {
+    let assembly = match assemble_into(
+        model,
+        &analysis.drivers,
+        &mut dae.sys,
+        &given,
+        t,
+        analysis.settings.tolerance,
+        &mut results.summary,
+    ) {
         Ok(a) => a,
         Err(e) => return Err(fail(results, e)),
     };

@@ -46,7 +46,7 @@
 
 use super::dynamic::{factor_error, Dae};
 use super::setup::{coordinate_name, fail, held, output_times};
-use super::{assemble, element_names, independent_rows, indeterminate_rows, residual_floor};
+use super::{assemble, assemble_into, element_names, independent_rows, indeterminate_rows, residual_floor};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Unbalanced};
 use crate::linalg::dense::{min_norm_solve, null_space};
@@ -627,7 +627,15 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
     let t0 = analysis.t_start;
     let times = output_times(analysis);
     let given = held(model, false);
-    let assembly = match assemble(&mut dae.sys, &model.q0(), &model.qdot0(), &given, t0, analysis.settings.tolerance) {
+    let assembly = match assemble_into(
+        model,
+        &analysis.drivers,
+        &mut dae.sys,
+        &given,
+        t0,
+        analysis.settings.tolerance,
+        &mut results.summary,
+    ) {
         Ok(a) => a,
         Err(e) => return Err(fail(results, e)),
     };

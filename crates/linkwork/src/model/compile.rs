@@ -2,6 +2,7 @@
 //! resolve names to indices and build each joint's constraint.
 
 use super::spec::*;
+use super::structure::Dyad;
 use super::{
     Analysis, Body, Effort, Element, ForceElement, IntegratorSettings, Measure, MeasureKind, Model, SolverSettings,
     REACTION_QUANTITIES,
@@ -112,6 +113,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
         }
     }
     let analyses = cx.analyses();
+    let branches = cx.branches(&joints, &bodies);
     if cx.problems.is_empty() {
         let name = spec.name.clone().unwrap_or_else(|| "model".into());
         Ok(Model {
@@ -138,6 +140,8 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
             parameters: spec.parameters.clone(),
             set: Vec::new(),
             placed: cx.placed,
+            branches,
+            branch_mode: spec.branch.unwrap_or_default(),
         })
     } else {
         Err(cx.problems)
@@ -327,6 +331,45 @@ impl Cx<'_> {
 
     /// Names are shared by bodies, joints, drivers, forces and measures (they label output
     /// columns).
+    /// The declared assembly modes (`branches:`), each a dyad of the joints it names; a joint
+    /// that is missing (or was not read) or does not make a dyad is a problem at its entry.
+    fn branches(&mut self, joints: &[Element], bodies: &[Body]) -> Vec<(Dyad, Side)> {
+        let spec = self.spec;
+        let mut out = Vec::new();
+        for (name, branch) in &spec.branches {
+            let path = format!("branches.{name}");
+            let broken = |j: &str| self.broken.iter().any(|b| b.strip_prefix("joints.") == Some(j));
+            let index = |j: &str| joints.iter().position(|e| e.name == j);
+            let names = [branch.line[0].as_str(), name.as_str(), branch.line[1].as_str()];
+            let fields = [format!("{path}.line[0]"), path.clone(), format!("{path}.line[1]")];
+            let mut found = [0; 3];
+            let mut ok = true;
+            for ((j, field), slot) in names.iter().zip(&fields).zip(&mut found) {
+                match index(j) {
+                    Some(k) => *slot = k,
+                    None => {
+                        ok = false;
+                        if !broken(j) && !spec.joints.contains_key(*j) {
+                            let known: Vec<&str> = spec.joints.keys().map(String::as_str).collect();
+                            self.problem(field, format!("unknown joint '{j}'; expected one of: {}", known.join(", ")));
+                        }
+                    }
+                }
+            }
+            if !ok {
+                continue;
+            }
+            match Dyad::new(joints, bodies, found) {
+                Ok(dyad) => out.push((dyad, branch.side)),
+                Err(why) => self.problem(
+                    path,
+                    format!("{why}; expected a dyad: the entry's joint a pin between two moving bodies, `line` the pins [E, D] joining each of them to another body"),
+                ),
+            }
+        }
+        out
+    }
+
     fn unique_names(&mut self) {
         let spec = self.spec;
         let mut seen: IndexMap<&str, &str> = IndexMap::new();

@@ -8,6 +8,7 @@ mod params;
 mod parse;
 mod settings;
 pub mod spec;
+pub mod structure;
 mod tables;
 pub mod units;
 
@@ -447,6 +448,10 @@ pub struct Model {
     /// `points_global` (`bodies.<body>.points.<point>`), and each joint point and axis given
     /// by `at` and `axis` (`joints.<joint>.point_i`, `.axis_j`, ...), in file order.
     pub placed: IndexMap<String, [f64; 2]>,
+    /// The declared assembly modes (`branches:`): each dyad, by its middle pin, and its side.
+    pub branches: Vec<(structure::Dyad, spec::Side)>,
+    /// How assembly treats the drawing's branches (`branch:`).
+    pub branch_mode: spec::BranchMode,
 }
 
 impl Model {

@@ -6,8 +6,8 @@
 
 use super::params;
 use super::spec::{
-    AnalysisSpec, BodySpec, DriverSpec, ForceSpec, GroundSpec, JointSpec, MeasureSpec, ModelSpec, PointMeasure,
-    StandardMeasure, TableSpec, Tagged,
+    AnalysisSpec, BodySpec, BranchMode, BranchSpec, DriverSpec, ForceSpec, GroundSpec, JointSpec, MeasureSpec,
+    ModelSpec, PointMeasure, StandardMeasure, TableSpec, Tagged,
 };
 use crate::error::Problem;
 use indexmap::IndexMap;
@@ -128,6 +128,8 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
     let summaries = section("summaries", get("summaries"), &mut problems, &mut broken, summary);
     let tables = section("tables", get("tables"), &mut problems, &mut broken, entry::<TableSpec>);
     let analyses = section("analyses", get("analyses"), &mut problems, &mut broken, entry::<AnalysisSpec>);
+    let branches = section("branches", get("branches"), &mut problems, &mut broken, entry::<BranchSpec>);
+    let branch = get("branch").and_then(|v| entry::<BranchMode>("branch", v, &mut problems));
     // One problem a field: a number that could not be read is not reported again as a string
     // where a number was expected, nor a field that uses a parameter that could not be read (its
     // place held by an empty message) at all.
@@ -149,6 +151,8 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
         measures,
         summaries,
         tables,
+        branches,
+        branch,
         analyses,
     };
     Ok(Parsed { spec, problems, broken })

@@ -125,6 +125,16 @@ pub struct ModelSpec {
     /// Tabulated functions by name, for `spline(<name>, x)` in any expression.
     #[serde(default)]
     pub tables: IndexMap<String, TableSpec>,
+    /// Assembly modes by joint: `{F: {line: [E, D], side: right}}` puts the pin `F` to the right
+    /// of the directed line from joint `E` to joint `D`, whatever side the drawing puts it on
+    /// (docs/model-format.md, "Branches").
+    #[serde(default)]
+    pub branches: IndexMap<String, BranchSpec>,
+    /// How a disagreement between the drawing and the assembled branch is treated: `follow`
+    /// (default: the drawing's side is kept, a declared one over it with a warning) or `strict`
+    /// (every disagreement is an assembly error).
+    #[serde(default)]
+    pub branch: Option<BranchMode>,
     /// Analyses by name.
     #[serde(default)]
     pub analyses: IndexMap<String, AnalysisSpec>,
@@ -170,6 +180,42 @@ impl<'de> Deserialize<'de> for Quantity {
             }
         }
         d.deserialize_any(Visitor)
+    }
+}
+
+/// The assembly mode of the dyad whose middle pin is the entry's joint.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BranchSpec {
+    /// The dyad's end joints `[E, D]`, each a pin of one of the two bodies the middle joint
+    /// joins: the directed line from `E` to `D`.
+    pub line: [String; 2],
+    /// The side of that line the middle joint lies on, looking from `E` to `D`.
+    pub side: Side,
+}
+
+named! {
+    /// A side of a directed line, looking along it.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+    pub enum Side {
+        /// To the left (counter-clockwise of the direction).
+        "left" => Left,
+        /// To the right.
+        "right" => Right,
+    }
+}
+
+named! {
+    /// How assembly treats the drawing's branches (`branch:` in the model file).
+    #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+    pub enum BranchMode {
+        /// Keep each dyad on the side the drawing puts it, or the declared side, with a warning
+        /// when the two disagree.
+        #[default]
+        "follow" => Follow,
+        /// Every disagreement between the drawing, a declared side and the assembled pose is an
+        /// assembly error.
+        "strict" => Strict,
     }
 }
 

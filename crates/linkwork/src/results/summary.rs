@@ -24,6 +24,7 @@
 
 use crate::error::RowName;
 use crate::model::spec::{AnalysisKind, LinearisePoint};
+use crate::model::structure::{Branch, BranchChange};
 use crate::model::{IntegratorSettings, SolverSettings};
 use indexmap::IndexMap;
 use serde::Serialize;
@@ -65,6 +66,12 @@ pub struct Summary {
     /// The assembly at the start time.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub assembly: Option<AssemblyReport>,
+    /// The assembly mode of every dyad at the start (docs/model-format.md, "Branches").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branches: Option<Vec<Branch>>,
+    /// Each change of a dyad's branch during the run (through a toggle position), with its time.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub branch_changes: Vec<BranchChange>,
     /// What the solver did.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub statistics: Option<Statistics>,

@@ -35,7 +35,7 @@ pub use dae::{Dae, LinearStats, EPS_REL};
 pub(crate) use dae::{FRICTION_RTOL, NEWTON_FRICTION_ITERATIONS};
 pub use output::{factor_error, Output, ENERGY_COLUMNS};
 
-use super::assemble;
+use super::assemble_into;
 use super::setup::{fail, held};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, RowName};
@@ -359,7 +359,15 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     let t0 = analysis.t_start;
     // Assembly holds what the user marked as given.
     let given = held(model, true);
-    let assembly = match assemble(&mut dae.sys, &model.q0(), &model.qdot0(), &given, t0, analysis.settings.tolerance) {
+    let assembly = match assemble_into(
+        model,
+        &analysis.drivers,
+        &mut dae.sys,
+        &given,
+        t0,
+        analysis.settings.tolerance,
+        &mut out.results.summary,
+    ) {
         Ok(a) => a,
         Err(e) => return Err(fail(out.results, e)),
     };
