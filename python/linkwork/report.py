@@ -618,11 +618,14 @@ def bar_figure(run: Run, columns: Sequence[str], title: str = "", ylabel: str = 
 
 
 def _plot_layout(title: str, xlabel: str, ylabel: str, log: bool = False) -> dict[str, Any]:
-    # The title at the left, above the plot: the toolbar (plotly's modebar) is at the right.
+    # The title at the left, above the plot, its words in parentheses in the subtitle under it:
+    # the toolbar (plotly's modebar) is at the right, where a long title would run under it.
+    head, _, rest = title.partition(" (")
+    subtitle = rest[:-1] if rest.endswith(")") else ""
     return {
-        "title": {"text": title, "x": 0, "xref": "paper", "xanchor": "left", "y": 1, "yref": "container",
-                  "yanchor": "top", "pad": {"t": 8}},
-        "height": 340, "margin": {"l": 60, "r": 20, "t": 70 if "<br>" in title else 50, "b": 40},
+        "title": {"text": head if subtitle else title, "x": 0, "xref": "paper", "xanchor": "left",
+                  "subtitle": {"text": subtitle}},
+        "height": 340, "margin": {"l": 60, "r": 20, "t": 70 if subtitle else 50, "b": 40},
         "xaxis": {"title": {"text": xlabel}}, "yaxis": {"title": {"text": ylabel}, "type": "log" if log else "linear"},
         "legend": {"font": {"size": 10}},
     }
@@ -679,23 +682,29 @@ def plots(run: Run, against: tuple[str, np.ndarray] | None = None) -> list[dict[
         constant = [] if one_state else [c for c in columns if spread(c, False) == 0.0]
         if constant and len(constant) < len(columns):
             columns = [c for c in columns if c not in constant]
+        notes = []
         if len(columns) > MAX_CURVES:
             kept = set(sorted(columns, key=lambda c: spread(c, log), reverse=True)[:MAX_CURVES])
-            title = f"{title} (the {MAX_CURVES} of {len(columns)} that vary most)"
+            notes.append(f"the {MAX_CURVES} of {len(columns)} that vary most")
             columns = [c for c in columns if c in kept]
         if constant:
             values = ", ".join(f"{c} = {_text(float(np.asarray(cols[c], dtype=float)[0]))}" for c in constant[:MAX_CONSTANTS])
             more = f" and {len(constant) - MAX_CONSTANTS} more" if len(constant) > MAX_CONSTANTS else ""
-            title = f"{title}<br><sup>constant: {html.escape(values)}{more}</sup>"
+            notes.append(f"constant: {html.escape(values)}{more}")
         if not columns:
             return
         if one_state:
-            out.append(bar_figure(run, columns, title, ylabel))
-            return
-        fig = line_figure(run, columns, title, ylabel, log, against=against)
+            fig = bar_figure(run, columns, title, ylabel)
+        else:
+            fig = line_figure(run, columns, title, ylabel, log, against=against)
         if constant and len(constant) == len(columns):
             for trace in fig["data"]:
                 trace["showlegend"] = False
+        if notes:
+            # Under the title, in plotly's subtitle: a title runs no further right, under the toolbar.
+            subtitle = fig["layout"]["title"]["subtitle"]
+            subtitle["text"] = "; ".join([subtitle["text"], *notes] if subtitle["text"] else notes)
+            fig["layout"]["margin"]["t"] = 70
         out.append(fig)
 
     if kind == "modes":
