@@ -84,8 +84,11 @@ def test_results_are_read_only(results_a: linkwork.Results) -> None:
 
 
 def test_unknown_column(results_a: linkwork.Results) -> None:
-    with pytest.raises(KeyError, match="no column 'rocker.theta'; the columns are time, crank.x"):
+    # The closest names (difflib's): the body's own columns.
+    with pytest.raises(KeyError, match="no column 'rocker.theta'; did you mean 'rocker[.]"):
         results_a["rocker.theta"]
+    with pytest.raises(KeyError, match="no column 'nope'; there are time, crank.x"):
+        results_a["nope"]
 
 
 def test_summary(results_a: linkwork.Results) -> None:
@@ -205,6 +208,16 @@ def test_schema() -> None:
 
 def test_version() -> None:
     assert isinstance(linkwork.__version__, str) and linkwork.__version__.count(".") == 2
+
+
+def test_dir_shows_only_the_public_api() -> None:
+    assert dir(linkwork) == sorted(linkwork.__all__)
+    assert not {"json", "os", "annotations", "report", "results", "_linkwork"} & set(dir(linkwork))
+    # Each name it shows is there, and the submodules stay importable.
+    assert all(hasattr(linkwork, name) for name in dir(linkwork))
+    from linkwork import report
+
+    assert callable(report.page)
 
 
 # --- exceptions ----------------------------------------------------------------------------------

@@ -188,6 +188,16 @@ def test_check_lists_what_was_placed_from_global_coordinates(linkwork: RunLinkwo
     assert "placed from" not in linkwork("check", EXAMPLES / "fourbar.yaml").stdout
 
 
+def test_check_lists_the_analyses_in_file_order(linkwork: RunLinkwork) -> None:
+    # The file's order (tests/test_api.py checks Model.analyses gives it), which sorting would change.
+    order = ["kinematics", "dynamics", "dynamics_loaded", "inverse"]
+    assert order != sorted(order)
+    text = linkwork("check", EXAMPLES / "quick_return_a.yaml").stdout
+    assert re.findall(r"analysis '(\w+)'", text) == order
+    report = json.loads(linkwork("check", EXAMPLES / "quick_return_a.yaml", "--json").stdout)
+    assert list(report["analyses"]) == order
+
+
 def test_check_json(linkwork: RunLinkwork) -> None:
     done = linkwork("check", EXAMPLES / "parallelogram.yaml", "--json")
     assert done.code == 0, done.output

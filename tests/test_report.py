@@ -101,7 +101,11 @@ def test_every_example_report_opens_offline_with_plots_and_a_moving_mechanism(
         assert errors == []
         counts = points_per_plot(page)
         plots = {k: n for k, n in counts.items() if k.startswith("plot")}
-        assert len(plots) >= MIN_PLOTS, counts
+        # Torques that are all zero (a mechanism of pins) have no plot: one fewer for a static
+        # analysis, whose other plots are its coordinates, energy, forces and efforts.
+        torques = [c for c in results.columns if c.endswith(".torque")]
+        no_torque_plot = bool(torques) and not any(np.any(results[c]) for c in torques)
+        assert len(plots) >= MIN_PLOTS - no_torque_plot, counts
         assert all(n > 0 for n in plots.values()), counts
         drawn = [k for k in counts if k == "mechanism" or k.startswith("mode")]
         assert drawn, "no mechanism drawn"
@@ -204,6 +208,132 @@ def test_results_plot_and_animate_give_figures() -> None:
     movie = results.animate()
     assert len(movie.frames) == len(results)
     assert "quick-return" in results._repr_html_()
+
+
+def fourbar_coupler_point(theta2: np.ndarray, branch: float) -> tuple[np.ndarray, np.ndarray]:
+    """The coupler point P of examples/fourbar.yaml in closed form, from the crank's angle: A on
+    the crank's circle, B where the coupler's circle about A meets the rocker's about O4 (on the
+    side ``branch`` of the line A -> O4, +1 left), P at (0.2, 0.1) from A along and across AB."""
+    a, b, c, d = 0.1, 0.3, 0.25, 0.3
+    ax, ay = a * np.cos(theta2), a * np.sin(theta2)
+    ex, ey = d - ax, -ay
+    e = np.hypot(ex, ey)
+    along = (b**2 - c**2 + e**2) / (2 * e)
+    across = branch * np.sqrt(b**2 - along**2)
+    bx, by = ax + (along * ex - across * ey) / e, ay + (along * ey + across * ex) / e
+    ux, uy = (bx - ax) / b, (by - ay) / b
+    return ax + 0.2 * ux - 0.1 * uy, ay + 0.2 * uy + 0.1 * ux
+
+
+def test_results_path_is_the_coupler_curve_and_plot_draws_any_column_against_another() -> None:
+    go = pytest.importorskip("plotly.graph_objects")
+    model = linkwork.load(EXAMPLES / "fourbar.yaml")
+    results = model.run()
+    x, y = results.path("coupler.P")
+    assert np.array_equal(np.stack(results.path("coupler", "P")), np.stack((x, y)))
+    # The coupler sits left of A -> O4 (above the ground link) as drawn; the kinematic solver
+    # stops at 1e-12 m, 1e-9 leaves three orders for the Jacobian's amplification, and a wrong
+    # point, frame or branch is off by centimetres.
+    cx, cy = fourbar_coupler_point(results["crank.phi"], +1.0)
+    assert np.max(np.hypot(x - cx, y - cy)) < 1e-9
+    assert np.array_equal(np.stack(results.path("coupler")), np.stack((results["coupler.x"], results["coupler.y"])))
+
+    fig = results.plot(x="coupler.P.x", y="coupler.P.y")
+    assert isinstance(fig, go.Figure)
+    assert fig.layout.yaxis.scaleanchor == "x", "a path is drawn on equal axes"
+    # The figure's numbers are rounded to report.DIGITS = 6 significant digits.
+    assert list(fig.data[0].x) == pytest.approx(x.tolist(), rel=1e-5)
+    assert list(fig.data[0].y) == pytest.approx(y.tolist(), rel=1e-5)
+    body = results.plot(x="coupler.x", y="coupler.y")
+    assert body.layout.yaxis.scaleanchor == "x" and list(body.data[0].y) == pytest.approx(results["coupler.y"].tolist(), rel=1e-5)
+    against = results.plot(x="crank.phi", y=["rocker.omega", "coupler.omega"])
+    assert against.layout.xaxis.title.text == "crank.phi" and against.layout.yaxis.scaleanchor is None
+    assert [t.name for t in against.data] == ["rocker.omega", "coupler.omega"]
+    assert list(against.data[0].x) == pytest.approx(results["crank.phi"].tolist(), rel=1e-5)
+    with pytest.raises(TypeError, match="not both"):
+        results.plot("rocker.phi", y="crank.phi")
+    with pytest.raises(KeyError, match="no point 'Q' of body 'coupler'; there are A, B, P"):
+        results.path("coupler.Q")
+    with pytest.raises(KeyError, match="no moving body 'ground'"):
+        results.path("ground.O2")
+    with pytest.raises(KeyError, match="did you mean 'rocker.phi'"):
+        results.plot(x="rocker.ph")
+
+
+def test_an_unknown_column_names_the_closest() -> None:
+    results = linkwork.load(EXAMPLES / "fourbar.yaml").run()
+    with pytest.raises(KeyError, match="no column 'rocker.omga'; did you mean 'rocker.omega'"):
+        results["rocker.omga"]
+    # Nothing close: every column is named.
+    with pytest.raises(KeyError, match="no column 'nope'; there are time, crank.x"):
+        results["nope"]
+
+
+def test_the_report_draws_the_named_paths_and_plots_against_the_crank_angle(tmp_path: Path, browser: Any) -> None:
+    results = linkwork.load(EXAMPLES / "fourbar.yaml").run()
+    results.write(tmp_path)
+    page, _, errors = open_report(browser, tmp_path / "report.html")
+    try:
+        assert errors == []
+        mechanism = page.evaluate("() => document.getElementById('mechanism').data.map(t => [t.name, t.line && t.line.dash])")
+        assert ["coupler.P path", None] in mechanism, "the named path is drawn solid"
+        assert not any(dash == "dot" for _, dash in mechanism), "no faint trail beside the named path"
+        # The paths panel: the path, then the point's place now, which follows the slider.
+        traces = page.evaluate("() => document.getElementById('paths').data.map(t => [t.name, t.x, t.y])")
+        assert [t[0] for t in traces] == ["coupler.P", "now"]
+        x, y = results.path("coupler.P")
+        assert traces[1][1][0] == pytest.approx(x[0], rel=1e-5) and traces[1][2][0] == pytest.approx(y[0], rel=1e-5)
+        frame = page.evaluate(
+            """() => { const d = document.getElementById('mechanism'); const steps = d.layout.sliders[0].steps;
+                const k = Math.floor(0.37 * steps.length); const step = steps[k];
+                return Plotly.animate(d, step.args[0], step.args[1]).then(() => Number(step.args[0][0])); }"""
+        )
+        page.wait_for_timeout(200)
+        row = int(report._frame_rows(len(results))[frame])
+        moved = page.evaluate("() => { const t = document.getElementById('paths').data[1]; return [t.x[0], t.y[0]]; }")
+        assert moved == pytest.approx([x[row], y[row]], rel=1e-5)
+        # Against the crank's angle: the x of every curve is crank.phi at its rows, and the time
+        # line moves to the crank's angle now; back to time, the curves' x is time again.
+        time_x = page.evaluate("() => document.getElementById('plot0').data[0].x")
+        page.check("input[value=driver]")
+        page.wait_for_timeout(200)
+        plot = page.evaluate("() => { const d = document.getElementById('plot0'); return [d.data[0].x, d.data[0].customdata, d.layout.xaxis.title.text, d.layout.shapes[0].x0]; }")
+        phi = np.interp(plot[1], results.time, results["crank.phi"])
+        assert plot[0] == pytest.approx(phi.tolist(), rel=1e-5, abs=1e-9)
+        assert plot[2] == "angle of crank (rad), driver motor"
+        assert plot[3] == pytest.approx(results["crank.phi"][row], rel=1e-5)
+        page.check("input[value=time]")
+        page.wait_for_timeout(200)
+        assert page.evaluate("() => document.getElementById('plot0').data[0].x") == time_x
+        page.screenshot(path=str(tmp_path / "report.png"), full_page=True)
+    finally:
+        page.close()
+
+
+def test_the_report_leaves_out_zero_torques_and_names_constant_columns(tmp_path: Path, browser: Any) -> None:
+    results = linkwork.load(EXAMPLES / "fourbar_measures.yaml").run()
+    assert np.all(results["O2.torque"] == 0.0), "a pin's reaction torque, the case left out"
+    results.write(tmp_path)
+    page, _, errors = open_report(browser, tmp_path / "report.html")
+    try:
+        assert errors == []
+        names = page.evaluate("() => [...document.querySelectorAll('.js-plotly-plot')].flatMap(d => d.data.map(t => t.name))")
+        assert not any(str(n).endswith(".torque") for n in names), names
+        assert ".torque" not in page.inner_text("table:last-of-type")
+        # crank.omega is 2 rad/s throughout: named under the title, not in the legend.
+        notes = page.evaluate(
+            "() => [...document.querySelectorAll('.plots .js-plotly-plot')].map(d => (d.layout.title.subtitle || {}).text)"
+        )
+        assert any("constant: crank.omega = 2" in str(t) for t in notes), notes
+        # The title stays clear of the toolbar (plotly's modebar, top right), here and in every plot.
+        for k in range(len(notes)):
+            page.hover(f"#plot{k}")
+            title, bar = (page.locator(f"#plot{k} {s}").bounding_box() for s in (".gtitle", ".modebar"))
+            assert title is not None and bar is not None
+            assert title["x"] + title["width"] < bar["x"] or title["y"] + title["height"] < bar["y"], k
+        assert "crank.omega" not in names
+    finally:
+        page.close()
 
 
 def test_model_draw_shows_the_assembled_pose_and_the_guess() -> None:

@@ -72,6 +72,12 @@ __all__ = [
 ]
 
 
+def __dir__() -> list[str]:
+    """``dir(linkwork)``: the public API, :data:`__all__` (not the submodules and names the
+    package imports for itself, which stay importable)."""
+    return sorted(__all__)
+
+
 def load(path: str | os.PathLike[str], parameters: Mapping[str, float | str] | None = None) -> Model:
     """Read and compile the model file at ``path``, with ``parameters`` over the values of its
     ``parameters:`` section (a number is SI; a string may carry a unit, ``"300 mm"``).

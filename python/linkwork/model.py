@@ -137,7 +137,7 @@ class Model:
 
         Returns a dict with ``model``, ``bodies``, ``coordinates``, ``mechanism`` (the joints
         alone, with the coordinates the file marks as given held), ``coordinate_names`` and
-        ``analyses`` (a dict by analysis name, each with its drivers active, its ``kind``, a
+        ``analyses`` (a dict by analysis name, in file order, each with its drivers active, its ``kind``, a
         ``warning`` when it cannot run as set up, and an ``error`` instead of the system fields
         when it cannot be assembled). Each system has ``drivers``,
         ``equations``, ``gruebler_dof``, ``rank``, ``dof``, ``redundant`` (a list of
@@ -148,6 +148,8 @@ class Model:
         Raises :class:`AssemblyError` if the mechanism alone cannot be assembled.
         """
         report: dict[str, Any] = self._native.check()
+        # The engine's map arrives sorted by name: the analyses in file order, as the file has them.
+        report["analyses"] = {name: report["analyses"][name] for name in self.analyses}
         return report
 
     def drawing(self) -> dict[str, Any]:
@@ -155,7 +157,10 @@ class Model:
         its ``joint_points``, in its own frame, m) and ``joints`` (each with ``name``, ``type``,
         ``body_i``, ``p``, ``body_j``, ``q`` and its ``shape``: ``pin``, ``slide`` with ``axis``
         and ``offset``, ``rod``, ``gears`` with ``r_i``, ``r_j`` and ``internal``, ``disc`` with
-        ``axis`` and ``radius``, or ``held``)."""
+        ``axis`` and ``radius``, or ``held``), ``paths`` (the points whose paths are drawn: the
+        file's ``paths:``, else its point measures' points; each with ``name``, ``body`` and
+        ``point``) and ``drivers`` (each driver's coordinate: ``name``, ``type``, ``body_i``,
+        ``p``, ``body_j``, ``q``)."""
         return self._native.drawing()
 
     def draw(self) -> Any:

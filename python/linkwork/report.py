@@ -43,6 +43,9 @@ MAX_CURVES = 12
 #: Points of each path of a named point: a smooth curve at any zoom a screen allows.
 MAX_PATH_POINTS = 1000
 
+#: Constant columns a plot names under its title, at most: two lines of a plot's width.
+MAX_CONSTANTS = 4
+
 #: Significant digits of the numbers drawn: a hundredth of a pixel on a 4000-pixel-wide plot.
 DIGITS = 6
 
@@ -221,6 +224,77 @@ def _circle(
     return xs, ys
 
 
+def _path_rows(n: int) -> np.ndarray:
+    """At most :data:`MAX_PATH_POINTS` of ``n`` rows, evenly spread, the first and last included."""
+    return np.unique(np.linspace(0, n - 1, min(n, MAX_PATH_POINTS)).round().astype(int))
+
+
+def named_paths(run: Run, rows: np.ndarray) -> list[tuple[str, int, np.ndarray, np.ndarray]]:
+    """The paths the model names (``Model.drawing()["paths"]``) whose bodies the run kept: each
+    ``(name, body's colour index, x, y)`` over ``rows``."""
+    index = {b["name"]: k for k, b in enumerate(run.drawing["bodies"])}
+    poses = _Poses(run, rows)
+    return [(p["name"], index[p["body"]], *poses.point(p["body"], p["point"]))
+            for p in run.drawing["paths"] if p["body"] in index]
+
+
+def paths_figure(run: Run) -> dict[str, Any] | None:
+    """The paths the model names, solid, on equal axes, with each point's place at the
+    mechanism's frames in ``marks`` (the page moves the last trace's markers there); ``None``
+    when the model names none."""
+    frames = _frame_rows(len(run.time))
+    now = named_paths(run, frames)
+    if not now:
+        return None
+    data: list[dict[str, Any]] = [
+        {"type": "scatter", "mode": "lines", "name": name, "x": _num(x), "y": _num(y),
+         "line": {"color": PALETTE[b % len(PALETTE)], "width": 2}}
+        for name, b, x, y in named_paths(run, _path_rows(len(run.time)))
+    ]
+    data.append({"type": "scatter", "mode": "markers", "name": "now", "text": [p[0] for p in now], "hoverinfo": "text",
+                 "x": _num([x[0] for _, _, x, _ in now]), "y": _num([y[0] for _, _, _, y in now]),
+                 "marker": {"symbol": "circle", "size": 10, "color": [PALETTE[b % len(PALETTE)] for _, b, _, _ in now],
+                            "line": {"color": INK, "width": 1.5}}, "showlegend": False})
+    layout = _plot_layout("paths of the named points", "x (m)", "y (m)")
+    layout["xaxis"].update(constrain="domain", zeroline=False)
+    layout["yaxis"].update(scaleanchor="x", scaleratio=1, constrain="domain", zeroline=False)
+    layout["height"] = 520
+    marks = {"x": [_num([x[f] for _, _, x, _ in now]) for f in range(len(frames))],
+             "y": [_num([y[f] for _, _, _, y in now]) for f in range(len(frames))]}
+    return {"data": data, "layout": layout, "marks": marks}
+
+
+def driver_coordinate(run: Run) -> tuple[str, np.ndarray] | None:
+    """The coordinate of the first of the analysis' active drivers that moves (a crank's angle),
+    with its label, at every row: what the plots are also drawn against. ``None`` when no active
+    driver moves (a dynamic analysis, a driver holding a coordinate fixed) or the analysis' outputs
+    left its bodies out."""
+    if len(run.time) < 2:
+        return None
+    kept = {b["name"] for b in run.drawing["bodies"]}
+    poses = _Poses(run, np.arange(len(run.time)))
+
+    def angle(body: str) -> np.ndarray:
+        return np.asarray(run.columns[f"{body}.phi"], dtype=float) if body in kept else np.zeros(len(run.time))
+
+    for d in run.drawing["drivers"]:
+        kind, bi, bj = d["type"], d["body_i"], d["body_j"]
+        if d["name"] not in (run.summary.active_drivers or []) or not {bi, bj} <= kept | {"ground"}:
+            continue
+        if kind in ("angle", "relative_angle"):
+            value = angle(bi) - angle(bj)
+            label = f"angle of {bi}" + (f" relative to {bj}" if kind == "relative_angle" else "") + " (rad)"
+        elif kind == "distance":
+            (px, py), (qx, qy) = poses.point(bi, d["p"]), poses.point(bj, d["q"])
+            value, label = np.hypot(qx - px, qy - py), f"distance from {bi} to {bj} (m)"
+        else:
+            value, label = poses.point(bi, d["p"])["xy".index(kind)], f"{kind} of the driven point of {bi} (m)"
+        finite = value[np.isfinite(value)]
+        if len(finite) and np.ptp(finite) > 0.0:
+            return f"{label}, driver {d['name']}", value
+    return None
+
+
 def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray | None = None) -> dict[str, Any]:
     """The animated mechanism over ``rows`` of the run (default: every frame up to
     :data:`MAX_FRAMES`), with play, pause, speeds and a time slider; ``times`` labels the frames
@@ -265,26 +339,40 @@ def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray
             x, y = xy(f)
             per_frame[f].append({"x": x, "y": y})
 
-    # Paths of the named points (coupler curves), over the whole run, faint: through at most
-    # MAX_PATH_POINTS rows, and of the MAX_CURVES points that travel furthest.
-    n = len(run.time)
-    path_rows = np.unique(np.linspace(0, n - 1, min(n, MAX_PATH_POINTS)).round().astype(int))
-    all_poses = _Poses(run, path_rows)
-    paths: list[tuple[float, int, str, np.ndarray, np.ndarray]] = []
-    for b, body in enumerate(bodies):
-        for name, s in body["points"].items():
-            x, y = all_poses.point(body["name"], s)
-            length = float(np.nansum(np.hypot(np.diff(x), np.diff(y))))
-            if length > 0.0:
-                paths.append((length, b, f"{body['name']}.{name}", x, y))
-    for _, b, name, x, y in sorted(paths, key=lambda p: -p[0])[:MAX_CURVES]:
-        static.append(
-            {
-                "type": "scatter", "mode": "lines", "x": _num(x), "y": _num(y),
-                "line": {"color": PALETTE[b % len(PALETTE)], "width": 1, "dash": "dot"},
-                "opacity": 0.5, "name": f"{name} path", "hoverinfo": "name", "showlegend": False,
-            }
-        )
+    # The paths the file names (`paths:`, or its point measures' points), solid, each with its
+    # point marked where it is now. Without any, the paths of the named points (coupler curves),
+    # faint, of the MAX_CURVES points that travel furthest.
+    named = named_paths(run, rows)
+    if named:
+        for name, b, x, y in named_paths(run, _path_rows(len(run.time))):
+            static.append(
+                {
+                    "type": "scatter", "mode": "lines", "x": _num(x), "y": _num(y),
+                    "line": {"color": PALETTE[b % len(PALETTE)], "width": 2},
+                    "name": f"{name} path", "hoverinfo": "name", "showlegend": False,
+                }
+            )
+        marks = (np.array([x for _, _, x, _ in named]), np.array([y for _, _, _, y in named]))
+        animate({"type": "scatter", "mode": "markers", "name": "path points", "text": [p[0] for p in named],
+                 "hoverinfo": "text", "marker": {"symbol": "x-thin", "size": 11, "line": {"color": INK, "width": 2}},
+                 "showlegend": False}, lambda f: (_num(marks[0][:, f]), _num(marks[1][:, f])))
+    else:
+        all_poses = _Poses(run, _path_rows(len(run.time)))
+        paths: list[tuple[float, int, str, np.ndarray, np.ndarray]] = []
+        for b, body in enumerate(bodies):
+            for name, s in body["points"].items():
+                x, y = all_poses.point(body["name"], s)
+                length = float(np.nansum(np.hypot(np.diff(x), np.diff(y))))
+                if length > 0.0:
+                    paths.append((length, b, f"{body['name']}.{name}", x, y))
+        for _, b, name, x, y in sorted(paths, key=lambda p: -p[0])[:MAX_CURVES]:
+            static.append(
+                {
+                    "type": "scatter", "mode": "lines", "x": _num(x), "y": _num(y),
+                    "line": {"color": PALETTE[b % len(PALETTE)], "width": 1, "dash": "dot"},
+                    "opacity": 0.5, "name": f"{name} path", "hoverinfo": "name", "showlegend": False,
+                }
+            )
 
     # Ground: a hatched base under each ground point of a pin, and fixed guides.
     hatch = _Paths()
@@ -441,8 +529,11 @@ def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray
                        "transition": {"duration": 0}, "mode": "immediate"}]
 
     layout: dict[str, Any] = {
-        "xaxis": {"range": x_range, "title": {"text": "x (m)"}, "zeroline": False},
-        "yaxis": {"range": y_range, "title": {"text": "y (m)"}, "scaleanchor": "x", "scaleratio": 1, "zeroline": False},
+        # Equal scales on ranges that hold the motion: the plot's area shrinks to their shape
+        # (constrain "domain") rather than one range growing to fill the page's width.
+        "xaxis": {"range": x_range, "title": {"text": "x (m)"}, "zeroline": False, "constrain": "domain"},
+        "yaxis": {"range": y_range, "title": {"text": "y (m)"}, "scaleanchor": "x", "scaleratio": 1, "zeroline": False,
+                  "constrain": "domain"},
         "margin": {"l": 60, "r": 20, "t": 30, "b": 40},
         "hovermode": "closest",
         "legend": {"orientation": "h", "y": 1.02, "yanchor": "bottom"},
@@ -451,6 +542,10 @@ def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray
         "height": 520,
     }
     if frames > 1:
+        # The slider's labels to the decimals that tell one frame from the next (0.02 s apart:
+        # 0.28, 0.3; 1/30 s apart: 0.03, 0.07), not the frames' times to round-off.
+        spacing = float(np.min(np.diff(times)))
+        decimals = max(0, math.ceil(-math.log10(spacing))) if spacing > 0 else DIGITS
         layout["updatemenus"] = [
             {
                 "type": "buttons", "direction": "left", "x": 0.0, "y": -0.12, "xanchor": "left", "yanchor": "top",
@@ -470,7 +565,7 @@ def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray
                 "active": 0, "x": 0.32, "len": 0.68, "y": -0.12, "yanchor": "top", "pad": {"t": 6},
                 "currentvalue": {"prefix": "t = ", "suffix": " s", "visible": True},
                 "steps": [
-                    {"label": f"{times[f]:.4g}", "method": "animate",
+                    {"label": f"{times[f]:.{decimals}f}", "method": "animate",
                      "args": [[names[f]], {"mode": "immediate", "frame": {"duration": 0, "redraw": False},
                                            "transition": {"duration": 0}}]}
                     for f in range(frames)
@@ -485,18 +580,33 @@ def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray
 # --- plots ---------------------------------------------------------------------------------------
 
 
-def line_figure(run: Run, columns: Sequence[str], title: str = "", ylabel: str = "", log: bool = False) -> dict[str, Any]:
-    """A plot of ``columns`` against time, each curve decimated to :data:`MAX_PLOT_POINTS`."""
+def line_figure(
+    run: Run, columns: Sequence[str], title: str = "", ylabel: str = "", log: bool = False, x: str = "time",
+    against: tuple[str, np.ndarray] | None = None,
+) -> dict[str, Any]:
+    """A plot of ``columns`` against the column ``x`` (default: time), each curve decimated to
+    :data:`MAX_PLOT_POINTS`. With ``against`` (a label and a value per row: the driver's
+    coordinate), each trace's times are its ``customdata`` and the figure's ``against`` holds
+    the label and each trace's x values against that coordinate, for the page to switch to."""
     t = np.asarray(run.time, dtype=float)
+    xs = t if x == "time" else np.asarray(run.columns[x], dtype=float)
     data = []
+    other: list[list[float | None]] = []
     for name in columns:
         y = np.asarray(run.columns[name], dtype=float)
         if log:
             y = np.abs(y)
         rows = _plot_rows(y)
-        data.append({"type": "scatter", "mode": "lines" if len(t) > 1 else "markers", "name": name,
-                     "x": _num(t[rows]), "y": _num(y[rows])})
-    return {"data": data, "layout": _plot_layout(title, "time (s)", ylabel, log)}
+        trace = {"type": "scatter", "mode": "lines" if len(t) > 1 else "markers", "name": name,
+                 "x": _num(xs[rows]), "y": _num(y[rows])}
+        if against is not None:
+            trace["customdata"] = _num(t[rows])
+            other.append(_num(against[1][rows]))
+        data.append(trace)
+    fig: dict[str, Any] = {"data": data, "layout": _plot_layout(title, "time (s)" if x == "time" else x, ylabel, log)}
+    if against is not None:
+        fig["against"] = {"label": against[0], "x": other}
+    return fig
 
 
 def bar_figure(run: Run, columns: Sequence[str], title: str = "", ylabel: str = "") -> dict[str, Any]:
@@ -508,8 +618,14 @@ def bar_figure(run: Run, columns: Sequence[str], title: str = "", ylabel: str = 
 
 
 def _plot_layout(title: str, xlabel: str, ylabel: str, log: bool = False) -> dict[str, Any]:
+    # The title at the left, above the plot, its words in parentheses in the subtitle under it:
+    # the toolbar (plotly's modebar) is at the right, where a long title would run under it.
+    head, _, rest = title.partition(" (")
+    subtitle = rest[:-1] if rest.endswith(")") else ""
     return {
-        "title": {"text": title}, "height": 340, "margin": {"l": 60, "r": 20, "t": 40, "b": 40},
+        "title": {"text": head if subtitle else title, "x": 0, "xref": "paper", "xanchor": "left",
+                  "subtitle": {"text": subtitle}},
+        "height": 340, "margin": {"l": 60, "r": 20, "t": 70 if subtitle else 50, "b": 40},
         "xaxis": {"title": {"text": xlabel}}, "yaxis": {"title": {"text": ylabel}, "type": "log" if log else "linear"},
         "legend": {"font": {"size": 10}},
     }
@@ -540,8 +656,9 @@ def _body_columns(run: Run, quantities: Sequence[str]) -> list[str]:
     return [f"{b['name']}.{q}" for b in run.drawing["bodies"] for q in quantities if f"{b['name']}.{q}" in run.columns]
 
 
-def plots(run: Run) -> list[dict[str, Any]]:
-    """The plots suited to the run's analysis, each with data."""
+def plots(run: Run, against: tuple[str, np.ndarray] | None = None) -> list[dict[str, Any]]:
+    """The plots suited to the run's analysis, each with data; those against time also hold
+    their curves against ``against`` (:func:`driver_coordinate`), for the page to switch to."""
     kind = run.summary.type or ""
     cols = run.columns
     out: list[dict[str, Any]] = []
@@ -558,12 +675,37 @@ def plots(run: Run) -> list[dict[str, Any]]:
     def add(columns: Sequence[str], title: str, ylabel: str, log: bool = False) -> None:
         columns = [c for c in columns if c in cols]
         used.update(columns)
+        # A torque that is zero throughout (a pin's) says nothing.
+        columns = [c for c in columns if not (c.endswith(".torque") and not np.any(np.asarray(cols[c], dtype=float)))]
+        # Constant columns are named under the title, with their value, rather than drawn (unless
+        # every one is): a flat line in the legend reads as one more curve to look for.
+        constant = [] if one_state else [c for c in columns if spread(c, False) == 0.0]
+        if constant and len(constant) < len(columns):
+            columns = [c for c in columns if c not in constant]
+        notes = []
         if len(columns) > MAX_CURVES:
             kept = set(sorted(columns, key=lambda c: spread(c, log), reverse=True)[:MAX_CURVES])
-            title = f"{title} (the {MAX_CURVES} of {len(columns)} that vary most)"
+            notes.append(f"the {MAX_CURVES} of {len(columns)} that vary most")
             columns = [c for c in columns if c in kept]
-        if columns:
-            out.append(bar_figure(run, columns, title, ylabel) if one_state else line_figure(run, columns, title, ylabel, log))
+        if constant:
+            values = ", ".join(f"{c} = {_text(float(np.asarray(cols[c], dtype=float)[0]))}" for c in constant[:MAX_CONSTANTS])
+            more = f" and {len(constant) - MAX_CONSTANTS} more" if len(constant) > MAX_CONSTANTS else ""
+            notes.append(f"constant: {html.escape(values)}{more}")
+        if not columns:
+            return
+        if one_state:
+            fig = bar_figure(run, columns, title, ylabel)
+        else:
+            fig = line_figure(run, columns, title, ylabel, log, against=against)
+        if constant and len(constant) == len(columns):
+            for trace in fig["data"]:
+                trace["showlegend"] = False
+        if notes:
+            # Under the title, in plotly's subtitle: a title runs no further right, under the toolbar.
+            subtitle = fig["layout"]["title"]["subtitle"]
+            subtitle["text"] = "; ".join([subtitle["text"], *notes] if subtitle["text"] else notes)
+            fig["layout"]["margin"]["t"] = 70
+        out.append(fig)
 
     if kind == "modes":
         out += mode_plots(run.summary.modes or [])
@@ -694,7 +836,9 @@ def summary_html(summary: Summary) -> str:
         parts.append("<h3>Solver statistics</h3>" + _table(list(stats.items())))
     peaks = s.peaks
     if isinstance(peaks, dict) and peaks:
-        rows = [(k, f"{v.get('max_abs', 0.0):.6g} at t = {v.get('time')} s") for k, v in peaks.items()]
+        # A torque that stays zero (a pin's) is left out: it says nothing.
+        rows = [(k, f"{v.get('max_abs', 0.0):.6g} at t = {v.get('time')} s") for k, v in peaks.items()
+                if not (k.endswith(".torque") and v.get("max_abs") == 0.0)]
         parts.append("<h3>Peaks</h3>" + _table(rows))
     return "\n".join(parts)
 
@@ -707,11 +851,13 @@ table { border-collapse: collapse; font-size: 0.9em; } th, td { padding: 2px 10p
 text-align: left; vertical-align: top; } th { font-weight: 600; white-space: nowrap; }
 .failure { background: #fde8e8; border: 1px solid #e0a0a0; padding: 0.6em; margin: 0.6em 0; }
 .warning { background: #fff6dc; border: 1px solid #e8d48a; padding: 0.6em; margin: 0.6em 0; }
-.plots { display: grid; grid-template-columns: repeat(auto-fit, minmax(520px, 1fr)); gap: 8px; }
+.plots { display: grid; grid-template-columns: repeat(auto-fit, minmax(520px, 1fr)); gap: 20px 8px; }
 #now { font-variant-numeric: tabular-nums; }
 """
 
-# Every plot gets a vertical line at the animation's time; clicking a plot moves the animation.
+# Every plot gets a vertical line at the animation's time (or at the driver's coordinate then, when
+# the plots are drawn against it), the paths panel a marker at each point's place; clicking a
+# plot moves the animation.
 _SCRIPT = """
 // plotly's source and the figures are stored gzipped (base64): the page is a third of its size.
 const unpack = id => {
@@ -730,29 +876,48 @@ unpack('plotly').then(source => {
   const mech = figures.mechanism;
   const times = mech ? mech.times : [];
   const plotIds = figures.plots.map((_, k) => 'plot' + k);
-  const marker = t => ({shapes: [{type: 'line', xref: 'x', yref: 'paper', x0: t, x1: t, y0: 0, y1: 1,
+  // The plots' x: time, or the driver's coordinate (the radio buttons of #against).
+  const timeX = figures.plots.map(fig => fig.data.map(t => t.x));
+  let against = false;
+  let frame = 0;
+  const marker = x => ({shapes: [{type: 'line', xref: 'x', yref: 'paper', x0: x, x1: x, y0: 0, y1: 1,
                                   line: {color: '#888', width: 1, dash: 'dot'}}]});
-  const setTime = t => {
-    document.getElementById('now').textContent = 't = ' + t.toPrecision(6) + ' s';
-    plotIds.forEach(id => Plotly.relayout(id, marker(t)));
+  const setFrame = k => {
+    frame = k;
+    document.getElementById('now').textContent = 't = ' + times[k].toPrecision(6) + ' s';
+    figures.plots.forEach((fig, p) => Plotly.relayout(plotIds[p], marker(against && fig.against ? mech.against[k] : times[k])));
+    const paths = figures.paths;
+    if (paths) Plotly.restyle('paths', {x: [paths.marks.x[k]], y: [paths.marks.y[k]]}, [paths.data.length - 1]);
   };
+  document.querySelectorAll('input[name=against]').forEach(input => input.addEventListener('change', () => {
+    against = input.value === 'driver' && input.checked;
+    figures.plots.forEach((fig, p) => {
+      if (!fig.against) return;
+      Plotly.restyle(plotIds[p], {x: against ? fig.against.x : timeX[p]});
+      Plotly.relayout(plotIds[p], {'xaxis.title.text': against ? fig.against.label : 'time (s)', 'xaxis.autorange': true});
+    });
+    if (mech && times.length) setFrame(frame);
+  }));
   const jobs = [];
   if (mech) jobs.push(draw('mechanism', mech));
+  if (figures.paths) jobs.push(draw('paths', figures.paths));
   figures.plots.forEach((fig, k) => jobs.push(draw(plotIds[k], fig)));
   figures.modes.forEach((fig, k) => jobs.push(draw('mode' + k, fig)));
   Promise.all(jobs).then(() => {
     if (!mech || times.length === 0) { document.body.dataset.ready = 'true'; return; }
     const div = document.getElementById('mechanism');
-    div.on('plotly_animatingframe', e => setTime(times[Number(e.name)]));
-    div.on('plotly_sliderchange', e => setTime(times[Number(e.step.args[0][0])]));
+    div.on('plotly_animatingframe', e => setFrame(Number(e.name)));
+    div.on('plotly_sliderchange', e => setFrame(Number(e.step.args[0][0])));
     const nearest = t => times.reduce((best, s, k) => Math.abs(s - t) < Math.abs(times[best] - t) ? k : best, 0);
     plotIds.forEach(id => document.getElementById(id).on('plotly_click', e => {
-      const k = nearest(e.points[0].x);
+      // A curve's points carry their time when the plot can be drawn against the driver.
+      const point = e.points[0];
+      const k = nearest(point.customdata !== undefined ? point.customdata : point.x);
       Plotly.animate('mechanism', [String(k)], {mode: 'immediate', frame: {duration: 0, redraw: false},
                                                   transition: {duration: 0}});
-      setTime(times[k]);
+      setFrame(k);
     }));
-    setTime(times[0]);
+    setFrame(0);
     document.body.dataset.ready = 'true';
   });
 }).catch(error => console.error(error));
@@ -765,8 +930,14 @@ def page(run: Run, plotly_js: str) -> str:
     s = run.summary
     modes = mode_figures(run) if s.type == "modes" else []
     mech = None if modes or not len(run.time) else mechanism_figure(run)
-    plot_list = plots(run) if len(run.time) else []
-    figures = {"mechanism": mech, "plots": plot_list, "modes": [fig for _, fig in modes]}
+    paths = None if mech is None else paths_figure(run)
+    coordinate = driver_coordinate(run)
+    plot_list = plots(run, coordinate) if len(run.time) else []
+    against = coordinate[0] if coordinate is not None and any("against" in fig for fig in plot_list) else None
+    if mech is not None and coordinate is not None:
+        # Where the time line goes on plots drawn against the driver's coordinate, frame by frame.
+        mech["against"] = _num(coordinate[1][_frame_rows(len(run.time))])
+    figures = {"mechanism": mech, "paths": paths, "plots": plot_list, "modes": [fig for _, fig in modes]}
     title = run.title or f"{s.model}: {s.analysis or ''}"
     body = [f"<h1>{html.escape(title)}</h1>",
             f"<div>{html.escape(s.type or 'no')} analysis, status {html.escape(s.status or 'ok')}</div>",
@@ -777,11 +948,17 @@ def page(run: Run, plotly_js: str) -> str:
         body.append('<h2>The mechanism</h2><p>No output point was computed, so there is no pose to draw.</p><span id="now"></span>')
     else:
         body.append('<span id="now"></span>')
+    if paths is not None:
+        body.append('<h2>Paths</h2><div id="paths"></div>')
     for k, (label, _) in enumerate(modes):
         body += [f"<h2>{html.escape(label)}</h2>", f'<div id="mode{k}"></div>']
     if plot_list:
         hint = "<p>Click a plot to move the mechanism to that time.</p>" if mech is not None else ""
         body.append(f"<h2>Plots</h2>{hint}")
+        if against is not None:
+            body.append('<p id="against">Plot against <label><input type="radio" name="against" value="time" checked> '
+                        f'time</label> <label><input type="radio" name="against" value="driver"> {html.escape(against)}'
+                        "</label></p>")
         body.append('<div class="plots">' + "".join(f'<div id="plot{k}"></div>' for k in range(len(plot_list))) + "</div>")
     body += ["<h2>Summary</h2>", summary_html(s)]
     # `</` cannot appear inside a script element: escape it in the JSON.

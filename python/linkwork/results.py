@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import os
 import shutil
-from collections.abc import Iterator
+import difflib
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast, overload
 
@@ -16,6 +17,7 @@ if TYPE_CHECKING:
     import pandas
 
     from .model import Model
+    from .report import Run
 
 _T = TypeVar("_T")
 
@@ -203,13 +205,14 @@ class Results:
         return self.summary.summaries or {}
 
     def __getitem__(self, name: str) -> np.ndarray:
-        """The column called ``name`` (``"time"`` included), as a read-only numpy array."""
+        """The column called ``name`` (``"time"`` included), as a read-only numpy array. A name
+        that is no column raises a :class:`KeyError` naming the closest columns."""
         if name == "time":
             return self._time
         try:
             return self._values[:, self._index[name]]
         except KeyError:
-            raise KeyError(f"no column {name!r}; the columns are time, {', '.join(self._columns)}") from None
+            raise KeyError(_unknown("column", name, ["time", *self._columns])) from None
 
     def __contains__(self, name: object) -> bool:
         return name == "time" or name in self._index
@@ -290,7 +293,7 @@ class Results:
             copy.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(source, copy)
 
-    def _run(self) -> Any:
+    def _run(self) -> Run:
         from . import stream
         from .report import Run
 
@@ -300,14 +303,58 @@ class Results:
         columns = {name: self._values[:, k] for k, name in enumerate(self._columns)}
         return Run(self.model.drawing(), self._time, columns, self.summary)
 
-    def plot(self, *columns: str) -> Any:
-        """A ``plotly`` figure of ``columns`` (default: every body's angle) against time."""
+    def path(self, body: str, point: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(x, y)``, global frame, m, of a point of a moving body at every output time:
+        ``path("foot", "G")`` or ``path("foot.G")`` for the named point ``G`` of the body
+        ``foot``; ``path("foot")`` for its centre of mass (the columns ``foot.x``, ``foot.y``).
+        Computed from the body's columns ``x``, ``y``, ``phi``, as the report draws it. An
+        unknown body or point raises a :class:`KeyError` naming the closest ones."""
+        from .report import _Poses
+
+        if point is None and "." in body:
+            body, point = body.split(".", 1)
+        drawn = {b["name"]: b for b in self.model.drawing()["bodies"]}
+        if body not in drawn:
+            raise KeyError(_unknown("moving body", body, list(drawn)))
+        points: dict[str, list[float]] = drawn[body]["points"]
+        if point is not None and point not in points:
+            raise KeyError(_unknown("point", point, list(points), f" of body {body!r}"))
+        for c in ("x", "y", "phi"):
+            self[f"{body}.{c}"]  # a KeyError when the analysis' outputs left the body out
+        poses = _Poses(self._run(), np.arange(len(self)))
+        return poses.point(body, points[point] if point is not None else (0.0, 0.0))
+
+    def _series(self, name: str) -> np.ndarray:
+        """The column ``name``, or the coordinate ``<body>.<point>.x`` (``.y``) of a point's
+        :meth:`path`."""
+        if name in self:
+            return self[name]
+        head, _, coordinate = name.rpartition(".")
+        if coordinate in ("x", "y") and head.count(".") == 1:
+            return self.path(head)["xy".index(coordinate)]
+        return self[name]  # a KeyError naming the closest columns
+
+    def plot(self, *columns: str, x: str = "time", y: str | Sequence[str] | None = None) -> Any:
+        """A ``plotly`` figure of ``columns`` (or ``y``: a name or a list of names; default:
+        every body's angle) against ``x`` (default ``time``): any column against any other, such
+        as a torque against the crank's angle (``x="crank.phi", y="motor.effort"``). A name is
+        a column, ``time``, or a point's coordinate ``<body>.<point>.x`` or ``.y`` (its
+        :meth:`path`). ``x`` and one ``y`` that are the ``x`` and ``y`` of the same point
+        (``x="foot.x", y="foot.y"``, ``x="foot.G.x", y="foot.G.y"``) plot its path, with equal
+        scales on both axes."""
         from . import report
 
-        names = list(columns) or [f"{b}.phi" for b in self.model.bodies]
-        for name in names:
-            self[name]  # a KeyError naming the columns there are
-        return report.figure(report.line_figure(self._run(), names))
+        if columns and y is not None:
+            raise TypeError("plot() takes the curves either as positional names or as y=, not both")
+        names = [y] if isinstance(y, str) else list(y if y is not None else columns)
+        names = names or [f"{b}.phi" for b in self.model.bodies]
+        series = {name: self._series(name) for name in [x, *names] if name != "time"}
+        run = self._run()
+        run = report.Run(run.drawing, run.time, {**run.columns, **series}, run.summary)
+        fig = report.line_figure(run, names, x=x)
+        if len(names) == 1 and x.endswith(".x") and names[0] == x[:-2] + ".y":
+            fig["layout"]["yaxis"].update(scaleanchor="x", scaleratio=1)
+        return report.figure(fig)
 
     def animate(self) -> Any:
         """The mechanism moving through the results, with play, pause and a time slider, as a
@@ -335,3 +382,14 @@ class Results:
             f"<linkwork.Results {summary.analysis or ''!r} ({summary.status}): {len(self)} points, {span}, "
             f"{len(self._columns)} columns>"
         )
+
+
+def _unknown(what: str, name: str, known: Sequence[str], where: str = "") -> str:
+    """The message for a ``name`` that is none of ``known`` (``what``, ``where``: "no point 'Q'
+    of body 'coupler'"): the closest of them when some are close, else all of them."""
+    # difflib's default cutoff, a similarity of 0.6: a typo or a missing letter ("rocker.ph") is
+    # close, another quantity of another body mostly not.
+    close = difflib.get_close_matches(name, known, n=3)
+    if close:
+        return f"no {what} {name!r}{where}; did you mean {' or '.join(repr(c) for c in close)}?"
+    return f"no {what} {name!r}{where}; there are {', '.join(known) or 'none'}"

@@ -362,3 +362,51 @@ fn a_ground_point_without_a_ground_section_is_unknown() {
     has(&list, "joints.O.point_j", "unknown point 'O' of body 'ground' (it has no named points)");
     has(&list, "forces.spring.point_j", "unknown point 'C' of body 'ground' (it has no named points)");
 }
+
+/// A `paths:` entry names a point of a moving body, `<body>.<point>` or `<body>`; an unknown body
+/// or point, ground, a duplicate or an entry that is no string is a problem at the entry.
+#[test]
+fn a_bad_path_is_a_problem_at_its_entry() {
+    let model = |paths: &str| {
+        format!(
+            "bodies:\n  crank: {{mass: 1, inertia: 1, position: [0, 0], angle: 0, points: {{A: [1, 0], B: [2, 0]}}}}\n\
+             joints:\n  O: {{type: revolute, body_i: crank, point_i: [0, 0], body_j: ground, point_j: [0, 0]}}\n\
+             paths: {paths}\n"
+        )
+    };
+    let list = problems(&model("[crank.A, crank.Q, rocker.A, ground, crank.A]"));
+    has_each(
+        &list,
+        &[
+            ("paths[1]", "unknown point 'Q' of body 'crank' (it has A, B); expected <body>.<point>"),
+            ("paths[2]", "unknown body 'rocker'"),
+            ("paths[3]", "ground does not move"),
+            ("paths[4]", "'crank.A' is already paths[0]"),
+        ],
+    );
+    assert_eq!(list.len(), 4, "{list:#?}");
+    has(&problems(&model("[crank.A, [1, 2]]")), "paths[1]", "expected a string");
+    let paths = |text: &str| Model::from_yaml(text).unwrap_or_else(|e| panic!("{e}")).drawing().paths;
+    let drawn = paths(&model("[crank.B, crank]"));
+    let expected = [("crank.B", [2.0, 0.0]), ("crank", [0.0, 0.0])];
+    assert_eq!(drawn.iter().map(|p| (p.name.as_str(), p.point)).collect::<Vec<_>>(), expected);
+}
+
+/// Without `paths:`, the paths are the point measures' points, each once, named by the point's
+/// name where it has one (given by name or by its coordinates), else by its coordinates.
+#[test]
+fn the_paths_default_to_the_point_measures_points() {
+    let text = "bodies:\n  crank: {mass: 1, inertia: 1, position: [0, 0], angle: 0, points: {A: [1, 0]}}\n\
+                joints:\n  O: {type: revolute, body_i: crank, point_i: [0, 0], body_j: ground, point_j: [0, 0]}\n\
+                measures:\n  \
+                  ax: {body: crank, point: A, component: x}\n  \
+                  ay: {body: crank, point: [1, 0], component: y}\n  \
+                  tip: {body: crank, point: [0.5, 0.25], component: vx}\n  \
+                  cx: {body: crank, component: x}\n  \
+                  twice: \"2*crank.x\"\n";
+    let drawing = Model::from_yaml(text).unwrap_or_else(|e| panic!("{e}")).drawing();
+    let drawn: Vec<_> = drawing.paths.iter().map(|p| (p.name.as_str(), p.body.as_str(), p.point)).collect();
+    let expected =
+        [("crank.A", "crank", [1.0, 0.0]), ("crank [0.5, 0.25]", "crank", [0.5, 0.25]), ("crank", "crank", [0.0, 0.0])];
+    assert_eq!(drawn, expected);
+}

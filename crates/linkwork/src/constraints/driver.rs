@@ -73,6 +73,9 @@ impl Constraint for Driver {
     fn time_function(&self) -> Option<&TimeFunction> {
         Some(&self.f)
     }
+    fn driven(&self) -> Option<&DriverKind> {
+        Some(&self.kind)
+    }
     fn anchor(&self) -> Anchor {
         self.g.anchor()
     }

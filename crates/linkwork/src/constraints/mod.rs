@@ -136,6 +136,10 @@ pub trait Constraint: Debug + Send + Sync {
     fn sketch(&self) -> Option<Sketch> {
         None
     }
+    /// The coordinate a driver prescribes (the report plots against it); `None` for a joint.
+    fn driven(&self) -> Option<&DriverKind> {
+        None
+    }
 }
 
 /// A joint as a picture: the point `p` of body i and the point `q` of body j it joins (each in

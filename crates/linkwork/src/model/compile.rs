@@ -4,8 +4,8 @@
 use super::spec::*;
 use super::structure::Dyad;
 use super::{
-    Analysis, Body, Effort, Element, ForceElement, IntegratorSettings, Measure, MeasureKind, Model, SolverSettings,
-    REACTION_QUANTITIES,
+    Analysis, Body, Effort, Element, ForceElement, IntegratorSettings, Measure, MeasureKind, Model, PathPoint,
+    SolverSettings, REACTION_QUANTITIES,
 };
 use crate::constraints::{
     Absolute, AbsoluteKind, BodyIx, Cam, CamProfile, CamRow, Constraint, Curve, Distance, Driver, DriverKind, Frame,
@@ -95,6 +95,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
     let measures = cx.entries("measures", &spec.measures, |cx, name, path, m| {
         Some(Measure { name: name.into(), kind: cx.measure(path, m, &joints)? })
     });
+    let paths = cx.paths();
     let summaries = cx.entries("summaries", &spec.summaries, |cx, name, path, source| {
         Some((name.to_string(), cx.summary(path, source)?))
     });
@@ -124,6 +125,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
             gravity,
             forces,
             measures,
+            paths,
             summaries: summaries.into_iter().collect(),
             analyses,
             source: String::new(),
@@ -441,6 +443,66 @@ impl Cx<'_> {
                 }
             }
         }
+    }
+
+    /// The points of `paths:` (each `<body>.<point>` or `<body>`), or when it names none the
+    /// points of the point measures, each once (a measure's own problems are reported at it).
+    fn paths(&mut self) -> Vec<PathPoint> {
+        let spec = self.spec;
+        let mut out: Vec<PathPoint> = Vec::new();
+        if spec.paths.is_empty() {
+            for m in spec.measures.values() {
+                let MeasureSpec::Point(PointMeasure { body, point, .. }) = m else { continue };
+                let Some(points) = self.points.get(body) else { continue };
+                let (named, s) = match point {
+                    PointRef::Name(n) => (points.get_key_value(n), points.get(n).copied()),
+                    PointRef::Coords(v) => (points.iter().find(|(_, s)| *s == v), Some(*v)),
+                };
+                let Some(s) = s.filter(|s| s.iter().all(|x| x.is_finite())) else { continue };
+                let name = match named {
+                    Some((n, _)) => format!("{body}.{n}"),
+                    None if s == [0.0; 2] => body.clone(),
+                    None => format!("{body} [{}, {}]", s[0], s[1]),
+                };
+                if !out.iter().any(|p| p.body == *body && p.point == s) {
+                    out.push(PathPoint { name, body: body.clone(), point: s });
+                }
+            }
+            return out;
+        }
+        for (k, entry) in spec.paths.iter().enumerate() {
+            let path = format!("paths[{k}]");
+            let (body, point) = match entry.split_once('.') {
+                Some((body, point)) => (body, Some(point)),
+                None => (entry.as_str(), None),
+            };
+            if self.moving(&path, body).is_none() {
+                continue;
+            }
+            let Some(points) = self.points.get(body) else { continue };
+            let s = match point {
+                None => [0.0; 2],
+                Some(p) => match points.get(p) {
+                    Some(s) => *s,
+                    None => {
+                        let known: Vec<&str> = points.keys().map(String::as_str).collect();
+                        let list = if known.is_empty() {
+                            "it has no named points".to_string()
+                        } else {
+                            format!("it has {}", known.join(", "))
+                        };
+                        self.problem(&path, format!("unknown point '{p}' of body '{body}' ({list}); expected <body>.<point>, or <body> for its centre of mass"));
+                        continue;
+                    }
+                },
+            };
+            if let Some(first) = spec.paths[..k].iter().position(|e| e == entry) {
+                self.problem(&path, format!("'{entry}' is already paths[{first}]: name each point once"));
+                continue;
+            }
+            out.push(PathPoint { name: entry.clone(), body: body.to_string(), point: s });
+        }
+        out
     }
 
     /// The centre of mass of body `b` at `path`: `position` as coordinates, or the point of

@@ -1,10 +1,11 @@
 //! The mechanism as a picture, for the report and notebooks: each body's points in its own frame
 //! (its named points and every joint point on it), and each joint's [`Sketch`] with its bodies by
-//! name. The picture at time `t` follows from the body coordinates of `results.csv`:
-//! `r_P = (x, y) + A(phi) s'_P`. Ground's points are global.
+//! name, the points whose paths are drawn, and the coordinate each driver prescribes. The picture
+//! at time `t` follows from the body coordinates of `results.csv`: `r_P = (x, y) + A(phi) s'_P`.
+//! Ground's points are global.
 
 use super::Model;
-use crate::constraints::{BodyIx, Shape, Sketch};
+use crate::constraints::{BodyIx, DriverKind, Shape, Sketch};
 use indexmap::IndexMap;
 use serde::Serialize;
 
@@ -15,6 +16,43 @@ pub struct Drawing {
     pub bodies: Vec<BodyDrawing>,
     /// The joints with a picture, in file order.
     pub joints: Vec<JointDrawing>,
+    /// The points whose paths are drawn ([`Model::paths`]).
+    pub paths: Vec<PathPoint>,
+    /// Each driver's coordinate, in file order.
+    pub drivers: Vec<DriverDrawing>,
+}
+
+/// A point whose path the report draws: one of the model file's `paths:`, or by default a point
+/// of a point measure.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PathPoint {
+    /// `<body>.<point>`, `<body>` for its centre of mass, or `<body> [x, y]` for a point a
+    /// measure gives by coordinates that no named point has.
+    pub name: String,
+    /// The moving body.
+    pub body: String,
+    /// The point, body frame, m.
+    pub point: [f64; 2],
+}
+
+/// The coordinate a driver prescribes, as its bodies' coordinates give it: `angle` is `phi` of
+/// `body_i`; `relative_angle` `phi_i - phi_j`; `x` and `y` the global coordinate of the point `p`
+/// of `body_i`; `distance` the distance from `p` of `body_i` to `q` of `body_j`.
+#[derive(Debug, Clone, Serialize)]
+pub struct DriverDrawing {
+    /// Name in the model file.
+    pub name: String,
+    /// Its `type` in the model file.
+    #[serde(rename = "type")]
+    pub kind: &'static str,
+    /// The first (or only) body, or `ground`.
+    pub body_i: String,
+    /// Its point, body i frame, m (`[0, 0]` for an angle).
+    pub p: [f64; 2],
+    /// The second body (`ground` where there is none).
+    pub body_j: String,
+    /// Its point, body j frame, m (`[0, 0]` but for a distance).
+    pub q: [f64; 2],
 }
 
 /// One body's points, body frame, m.
@@ -80,6 +118,21 @@ impl Model {
                 shape,
             });
         }
-        Drawing { bodies, joints }
+        let drivers = self
+            .drivers
+            .iter()
+            .filter_map(|d| {
+                let (i, p, j, q) = match *d.constraint.driven()? {
+                    DriverKind::Angle { body } => (body, [0.0; 2], BodyIx::GROUND, [0.0; 2]),
+                    DriverKind::RelativeAngle { i, j } => (i, [0.0; 2], j, [0.0; 2]),
+                    DriverKind::Distance { i, s_p, j, s_q } => (i, s_p, j, s_q),
+                    DriverKind::X { body, point } | DriverKind::Y { body, point } => {
+                        (body, point, BodyIx::GROUND, [0.0; 2])
+                    }
+                };
+                Some(DriverDrawing { name: d.name.clone(), kind: d.kind, body_i: name(i), p, body_j: name(j), q })
+            })
+            .collect();
+        Drawing { bodies, joints, paths: self.paths.clone(), drivers }
     }
 }

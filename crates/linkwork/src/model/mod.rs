@@ -14,7 +14,7 @@ pub mod units;
 
 pub(crate) use compile::revise;
 pub use compile::{compile, compile_partial};
-pub use drawing::{BodyDrawing, Drawing, JointDrawing};
+pub use drawing::{BodyDrawing, Drawing, DriverDrawing, JointDrawing, PathPoint};
 pub use parse::{parse_partial, parse_partial_with, parse_spec, Parsed};
 pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
 
@@ -427,6 +427,9 @@ pub struct Model {
     pub forces: Vec<ForceElement>,
     /// Named outputs.
     pub measures: Vec<Measure>,
+    /// The points whose paths the report draws: the file's `paths:`, else the points of its
+    /// point measures (each once), in file order.
+    pub paths: Vec<PathPoint>,
     /// Whole-run quantities by name, evaluated after a run (`Results`' summary, `summaries`).
     pub summaries: IndexMap<String, Functional>,
     /// Analyses by name, in file order.

@@ -126,6 +126,7 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
     let forces = section("forces", get("forces"), &mut problems, &mut broken, tagged::<ForceSpec>());
     let measures = section("measures", get("measures"), &mut problems, &mut broken, measure);
     let summaries = section("summaries", get("summaries"), &mut problems, &mut broken, summary);
+    let paths = get("paths").and_then(|v| entry::<Vec<String>>("paths", v, &mut problems)).unwrap_or_default();
     let tables = section("tables", get("tables"), &mut problems, &mut broken, entry::<TableSpec>);
     let analyses = section("analyses", get("analyses"), &mut problems, &mut broken, entry::<AnalysisSpec>);
     let branches = section("branches", get("branches"), &mut problems, &mut broken, entry::<BranchSpec>);
@@ -149,6 +150,7 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
         drivers,
         forces,
         measures,
+        paths,
         summaries,
         tables,
         branches,

@@ -115,6 +115,11 @@ pub struct ModelSpec {
     /// Named output quantities, written as extra columns of `results.csv`.
     #[serde(default)]
     pub measures: IndexMap<String, MeasureSpec>,
+    /// The points whose paths the report draws (solid, on the mechanism and in a panel of their
+    /// own), in order: `<body>.<point>` (a named point of a moving body) or `<body>` (its centre
+    /// of mass). Default: the points of the point measures.
+    #[serde(default)]
+    pub paths: Vec<String>,
     /// Whole-run quantities by name, each one number written to `summary.json` under
     /// `summaries`: an expression of aggregations of the result columns over the run
     /// (`integral`, `mean`, `rms`, `min`, `max`, `peak`, `initial`, `final`, `at(time, f)`) and
