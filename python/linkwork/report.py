@@ -20,12 +20,13 @@ import html
 import json
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from .results import Summary
+from .units import UNKNOWN, Units
 
 #: Animation frames drawn at most: 30 frames a second for 10 s of playback. Each frame carries every
 #: moving trace, so the page grows with the frames; more than a few hundred only make the slider
@@ -70,6 +71,8 @@ class Run:
     columns: Mapping[str, np.ndarray]
     summary: Summary
     title: str = ""
+    #: The units the report shows (the model's ``display:`` section), for its axes and tables.
+    units: Units = field(default_factory=Units.si)
 
     def __post_init__(self) -> None:
         # An analysis that keeps only some columns (`outputs:`) draws the bodies whose
@@ -226,6 +229,7 @@ def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray
     :data:`MAX_FRAMES`), with play, pause, speeds and a time slider; ``times`` labels the frames
     (default: the rows' times)."""
     rows = _frame_rows(len(run.time)) if rows is None else rows
+    own_times = times is None
     times = np.asarray(run.time, dtype=float)[rows] if times is None else times
     frames = len(rows)
     poses = _Poses(run, rows)
@@ -479,32 +483,76 @@ def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray
         ]
         layout["margin"]["b"] = 110
         layout["height"] = 600
-    return {"data": data, "layout": layout, "frames": frame_list, "times": _num(times)}
+    return _shown({"data": data, "layout": layout, "frames": frame_list, "times": _num(times)}, run.units, own_times)
+
+
+def _shown(fig: dict[str, Any], units: Units, own_times: bool) -> dict[str, Any]:
+    """The mechanism figure ``fig``, drawn in metres and seconds, in the length and time units
+    ``units`` shows: every trace's and frame's points, the axes' ranges and titles, and the
+    slider's times when they are the run's (``own_times``; a mode's are phases)."""
+    length, time = units.unit("length"), units.unit("time")
+    to_length, to_time = units.value("length", 1.0), units.value("time", 1.0)
+
+    def scaled(values: Any, factor: float) -> Any:
+        return [None if v is None else float(f"{v * factor:.{DIGITS}g}") for v in values]
+
+    if to_length != 1.0:
+        for trace in [*fig["data"], *(t for frame in fig["frames"] for t in frame["data"])]:
+            for axis in ("x", "y"):
+                if axis in trace:
+                    trace[axis] = scaled(trace[axis], to_length)
+        for axis in ("xaxis", "yaxis"):
+            if "range" in fig["layout"][axis]:
+                fig["layout"][axis]["range"] = scaled(fig["layout"][axis]["range"], to_length)
+    for axis in ("x", "y"):
+        fig["layout"][f"{axis}axis"]["title"] = {"text": f"{axis} ({length})"}
+    if not own_times:
+        return fig
+    fig["times"] = scaled(fig["times"], to_time)
+    fig["time_unit"] = time
+    for slider in fig["layout"].get("sliders", []):
+        slider["currentvalue"]["suffix"] = f" {time}"
+        for step, t in zip(slider["steps"], fig["times"], strict=True):
+            step["label"] = f"{t:.4g}"
+    return fig
 
 
 # --- plots ---------------------------------------------------------------------------------------
 
 
 def line_figure(run: Run, columns: Sequence[str], title: str = "", ylabel: str = "", log: bool = False) -> dict[str, Any]:
-    """A plot of ``columns`` against time, each curve decimated to :data:`MAX_PLOT_POINTS`."""
-    t = np.asarray(run.time, dtype=float)
+    """A plot of ``columns`` against time, each curve decimated to :data:`MAX_PLOT_POINTS`, in
+    the units the run shows."""
+    units = run.units
+    t = units.shown("time", run.time)
+    # Each curve names its unit where the plot's curves are not all in one.
+    mixed = len({units.column_unit(c) for c in columns}) > 1
     data = []
     for name in columns:
-        y = np.asarray(run.columns[name], dtype=float)
+        y = units.shown(name, run.columns[name])
         if log:
             y = np.abs(y)
         rows = _plot_rows(y)
-        data.append({"type": "scatter", "mode": "lines" if len(t) > 1 else "markers", "name": name,
+        data.append({"type": "scatter", "mode": "lines" if len(t) > 1 else "markers", "name": units.label(name) if mixed else name,
                      "x": _num(t[rows]), "y": _num(y[rows])})
-    return {"data": data, "layout": _plot_layout(title, "time (s)", ylabel, log)}
+    time = f"time ({units.unit('time')})"
+    return {"data": data, "layout": _plot_layout(title, time, _axis_label(units, columns, ylabel), log)}
 
 
 def bar_figure(run: Run, columns: Sequence[str], title: str = "", ylabel: str = "") -> dict[str, Any]:
     """The last row's values of ``columns``, one bar each: a run of one state (a static
     equilibrium, the state modes are taken about) has nothing to draw against time."""
-    values = [float(np.asarray(run.columns[c], dtype=float)[-1]) for c in columns]
-    data = [{"type": "bar", "x": list(columns), "y": _num(values), "name": title}]
-    return {"data": data, "layout": _plot_layout(title, "", ylabel)}
+    values = [float(run.units.shown(c, run.columns[c])[-1]) for c in columns]
+    mixed = len({run.units.column_unit(c) for c in columns}) > 1
+    data = [{"type": "bar", "x": [run.units.label(c) if mixed else c for c in columns], "y": _num(values), "name": title}]
+    return {"data": data, "layout": _plot_layout(title, "", _axis_label(run.units, columns, ylabel))}
+
+
+def _axis_label(units: Units, columns: Sequence[str], fallback: str) -> str:
+    """The units of ``columns``, each once in order (``mm, deg``); ``fallback`` when the
+    quantity of none of them is known."""
+    shown = list(dict.fromkeys(units.column_unit(c) for c in columns))
+    return fallback if shown == [UNKNOWN] and fallback else ", ".join(shown)
 
 
 def _plot_layout(title: str, xlabel: str, ylabel: str, log: bool = False) -> dict[str, Any]:
@@ -622,7 +670,7 @@ def mode_figures(run: Run) -> list[tuple[str, dict[str, Any]]]:
         for name in base:
             if name not in shape and name.split(".")[-1] in ("x", "y", "phi"):
                 columns[name] = np.full(len(phases), base[name][0])
-        moving = Run(run.drawing, phases, columns, run.summary)
+        moving = Run(run.drawing, phases, columns, run.summary, units=run.units)
         fig = mechanism_figure(moving, rows=np.arange(len(phases)), times=phases)
         fig["layout"]["sliders"][0]["currentvalue"] = {"prefix": "phase ", "suffix": " rad", "visible": True}
         freq = mode.get("frequency")
@@ -677,10 +725,11 @@ def failure_html(summary: Summary) -> str:
 def summaries_html(summary: Summary) -> str:
     """The model's summaries (whole-run quantities) as a table; nothing when the run has none."""
     values = summary.summaries or {}
-    return "<h3>Summaries</h3>" + _table(list(values.items())) if values else ""
+    # A summary is an expression of its own: its value is as computed, from SI columns.
+    return "<h3>Summaries</h3>" + _table([(f"{k} ({UNKNOWN})", v) for k, v in values.items()]) if values else ""
 
 
-def summary_html(summary: Summary) -> str:
+def summary_html(summary: Summary, units: Units | None = None) -> str:
     """The model summary and the solver statistics, as HTML."""
     s = summary
     parts = []
@@ -694,7 +743,13 @@ def summary_html(summary: Summary) -> str:
         parts.append("<h3>Solver statistics</h3>" + _table(list(stats.items())))
     peaks = s.peaks
     if isinstance(peaks, dict) and peaks:
-        rows = [(k, f"{v.get('max_abs', 0.0):.6g} at t = {v.get('time')} s") for k, v in peaks.items()]
+        units = units or Units.si()
+        rows = []
+        for k, v in peaks.items():
+            # A joint's peak is that of its force's resultant, a driver's of its effort column.
+            column = f"{k.removesuffix('.force')}.fx" if k.endswith(".force") else k
+            time = "" if v.get("time") is None else f" at t = {units.value('time', v['time']):.6g} {units.unit('time')}"
+            rows.append((k, f"{units.shown(column, v.get('max_abs', 0.0)):.6g} {units.column_unit(column)}{time}"))
         parts.append("<h3>Peaks</h3>" + _table(rows))
     return "\n".join(parts)
 
@@ -729,11 +784,12 @@ unpack('plotly').then(source => {
       .then(() => fig.frames ? Plotly.addFrames(id, fig.frames) : null);
   const mech = figures.mechanism;
   const times = mech ? mech.times : [];
+  const timeUnit = mech ? mech.time_unit : 's';
   const plotIds = figures.plots.map((_, k) => 'plot' + k);
   const marker = t => ({shapes: [{type: 'line', xref: 'x', yref: 'paper', x0: t, x1: t, y0: 0, y1: 1,
                                   line: {color: '#888', width: 1, dash: 'dot'}}]});
   const setTime = t => {
-    document.getElementById('now').textContent = 't = ' + t.toPrecision(6) + ' s';
+    document.getElementById('now').textContent = 't = ' + t.toPrecision(6) + ' ' + timeUnit;
     plotIds.forEach(id => Plotly.relayout(id, marker(t)));
   };
   const jobs = [];
@@ -783,7 +839,7 @@ def page(run: Run, plotly_js: str) -> str:
         hint = "<p>Click a plot to move the mechanism to that time.</p>" if mech is not None else ""
         body.append(f"<h2>Plots</h2>{hint}")
         body.append('<div class="plots">' + "".join(f'<div id="plot{k}"></div>' for k in range(len(plot_list))) + "</div>")
-    body += ["<h2>Summary</h2>", summary_html(s)]
+    body += ["<h2>Summary</h2>", summary_html(s, run.units)]
     # `</` cannot appear inside a script element: escape it in the JSON.
     data = json.dumps(figures, separators=(",", ":"), allow_nan=False)
     return (
@@ -883,7 +939,7 @@ def from_folder(folder: Any) -> Run:
         raise FileError(f"{folder}: not a results folder of `linkwork run`: {error}") from error
     # The parameters the run used (SI, given over the file's by --set or with_parameters).
     model = Model.load(folder / "model.yaml", summary.get("parameters") or None)
-    return Run(model.drawing(), time, columns, Summary(summary))
+    return Run(model.drawing(), time, columns, Summary(summary), units=Units.of(model, columns))
 
 
 def write(path: Any, run: Run) -> None:

@@ -289,15 +289,19 @@ class Results:
     def _run(self) -> Any:
         from . import stream
         from .report import Run
+        from .units import Units
 
+        units = Units.of(self.model, self._columns)
         if self.streamed_to is not None:
             time, columns = stream.read(self.streamed_to)
-            return Run(self.model.drawing(), time, columns, self.summary)
+            return Run(self.model.drawing(), time, columns, self.summary, units=units)
         columns = {name: self._values[:, k] for k, name in enumerate(self._columns)}
-        return Run(self.model.drawing(), self._time, columns, self.summary)
+        return Run(self.model.drawing(), self._time, columns, self.summary, units=units)
 
     def plot(self, *columns: str) -> Any:
-        """A ``plotly`` figure of ``columns`` (default: every body's angle) against time."""
+        """A ``plotly`` figure of ``columns`` (default: every body's angle) against time, in the
+        units of the model's ``display:`` section (SI without one); the axes and the legend say
+        which."""
         from . import report
 
         names = list(columns) or [f"{b}.phi" for b in self.model.bodies]

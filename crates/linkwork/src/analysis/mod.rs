@@ -16,7 +16,7 @@ mod statics;
 pub use assembly::{assemble, Assembly};
 pub use check::{check, AnalysisCheck, CheckReport, SystemCheck};
 pub(crate) use inverse::reaction_columns;
-pub use inverse::run_inverse;
+pub use inverse::{run_inverse, INVERSE_COLUMNS};
 pub use kinematic::run_kinematic;
 pub use modes::run_modes;
 pub use run::Overrides;
