@@ -13,6 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = [
+    "AGGREGATIONS",
     "AssemblyError",
     "ConvergenceError",
     "EquilibriumError",
@@ -29,7 +30,11 @@ __all__ = [
     "SolverError",
     "__version__",
     "_panic_for_tests",
+    "quantity",
     "schema",
+    "si_unit",
+    "si_units",
+    "unit",
 ]
 
 __version__: str

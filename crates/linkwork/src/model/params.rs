@@ -146,7 +146,7 @@ fn parameter(
             Ok(v) => {
                 let ratio = (v / file).abs();
                 if let (Some(d), Some(written)) = (dim, value.as_str().filter(|t| unit_text(t).is_some())) {
-                    if ratio.is_finite() && ratio != 0.0 && (ratio > FAR_FACTOR || ratio < 1.0 / FAR_FACTOR) {
+                    if ratio.is_finite() && ratio != 0.0 && !(1.0 / FAR_FACTOR..=FAR_FACTOR).contains(&ratio) {
                         let unit = unit_text(written).unwrap_or_default();
                         let far =
                             if ratio > 1.0 { format!("{ratio:.0} times") } else { format!("1/{:.0} of", 1.0 / ratio) };
