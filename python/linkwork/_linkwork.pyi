@@ -13,6 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = [
+    "AGGREGATIONS",
     "AssemblyError",
     "ConvergenceError",
     "EquilibriumError",
@@ -29,7 +30,11 @@ __all__ = [
     "SolverError",
     "__version__",
     "_panic_for_tests",
+    "quantity",
     "schema",
+    "si_unit",
+    "si_units",
+    "unit",
 ]
 
 __version__: str
@@ -51,6 +56,13 @@ class PyModel:
     ) -> list[tuple[str, list[float] | None]]: ...
     @property
     def parameters(self) -> list[tuple[str, float]]: ...
+    @property
+    def parameter_units(self) -> list[tuple[str, str]]: ...
+    @property
+    def warnings(self) -> list[str]: ...
+    @property
+    def display(self) -> list[tuple[str, str, float]]: ...
+    def column_quantities(self, names: list[str]) -> list[str | None]: ...
     @property
     def set(self) -> list[tuple[str, str]]: ...
     @property
@@ -108,6 +120,12 @@ class PyResults:
     def write(self, directory: str) -> None: ...
 
 def schema() -> str: ...
+def quantity(text: str) -> tuple[float, str] | None: ...
+def unit(text: str) -> float: ...
+AGGREGATIONS: list[str]
+
+def si_unit(text: str) -> str | None: ...
+def si_units() -> list[tuple[str, str]]: ...
 def _panic_for_tests() -> None: ...
 
 # The exceptions. Their attributes are set on each instance when the engine raises it; `results`

@@ -15,6 +15,11 @@
     linkwork check MODEL [--json]                      degrees of freedom, redundant rows, assembly
     linkwork schema                                    the JSON Schema of model files
 
+A parameter's value from outside (--set, --grid, --range) is a number with a unit (``m="16 mm"``)
+or a bare number, which is SI whatever unit the file writes it in; a bare number more than 100
+times from the file's value is warned of (``--set m=16`` for ``m: 15 mm`` is 16 m). The output
+shows the units of the model's ``display:`` section; the files stay SI.
+
 Exit status: 0 success; 2 an invalid model, a file that cannot be read or written, or a bad command
 line (every problem is printed as ``path: message``); 3 a solver failure (what failed, when, in
 which joints; the results computed until then are still written); 130 interrupted by Ctrl-C (the
@@ -26,6 +31,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -34,6 +40,7 @@ from . import _linkwork
 from .errors import AssemblyError, FileError, InternalError, LinkworkError, ModelError, SolverError, model_error
 from .model import Model
 from .results import Results, Summary
+from .units import Units
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
@@ -132,7 +139,8 @@ def _parser() -> argparse.ArgumentParser:
         "points of a Latin hypercube over the --range intervals), reduce each run to the --output expressions, "
         "and write DIR/sweep.parquet: one row per variant with its parameters (SI), its status (ok, or the "
         "error class and message) and its outputs. The variants run on this machine's cores, or on a Dask "
-        "cluster (--dask).",
+        "cluster (--dask). A bare number is SI; give a unit on both ends to sweep in it. Exit status 3 when "
+        "every variant fails.",
     )
     sweep.add_argument("model", metavar="MODEL", help="model file (YAML)")
     sweep.add_argument("--analysis", "-a", metavar="NAME", help="analysis to run (default: the first in the file)")
@@ -142,7 +150,8 @@ def _parser() -> argparse.ArgumentParser:
         default=[],
         type=_grid,
         metavar="NAME=START:STOP:COUNT",
-        help="COUNT evenly spaced values (SI) of the parameter NAME, ends included; repeatable (all combinations)",
+        help="COUNT evenly spaced values of the parameter NAME, ends included: numbers (SI) or both ends with a unit "
+        "(m='12 mm:18 mm:7'); repeatable (all combinations)",
     )
     sweep.add_argument("--sample", type=int, metavar="N", help="N points of a Latin hypercube over the --range intervals")
     sweep.add_argument(
@@ -151,7 +160,8 @@ def _parser() -> argparse.ArgumentParser:
         default=[],
         type=_range,
         metavar="NAME=LOW:HIGH",
-        help="the interval (SI) of the parameter NAME for --sample; repeatable",
+        help="the interval of the parameter NAME for --sample: numbers (SI) or both ends with a unit (m='12 mm:18 mm'); "
+        "repeatable",
     )
     sweep.add_argument("--seed", type=int, metavar="S", help="seed of the --sample (default: a fresh one, printed)")
     sweep.add_argument(
@@ -161,8 +171,8 @@ def _parser() -> argparse.ArgumentParser:
         type=_output,
         required=True,
         metavar="NAME=EXPR",
-        help="an output: an expression of max, min, peak, mean, rms, initial, final or at(time, ...) "
-        "of result columns, such as stroke='max(slider.x) - min(slider.x)'; repeatable",
+        help=f"an output: an expression of the aggregations {', '.join(_linkwork.AGGREGATIONS)} (at(time, ...)) "
+        "of result columns (SI), such as stroke='max(slider.x) - min(slider.x)'; repeatable",
     )
     sweep.add_argument("--out", "-o", metavar="DIR", type=Path, help="output folder (default: out/<model file stem>_sweep/)")
     sweep.add_argument("--workers", "-j", type=int, metavar="K", help="threads (default: every core)")
@@ -201,7 +211,8 @@ def _add_set(command: argparse.ArgumentParser) -> None:
         default=[],
         type=_setting,
         metavar="NAME=VALUE",
-        help="a parameter's value over the file's: a number (SI) or a number with a unit (r=0.12, L='300 mm'); repeatable",
+        help="a parameter's value over the file's: a number with a unit (L='300 mm'), or a bare number, SI whatever "
+        "unit the file uses (r=0.12), warned of when more than 100 times from the file's value; repeatable",
     )
 
 
@@ -214,8 +225,29 @@ def _setting(text: str) -> tuple[str, str]:
     return name.strip(), value.strip()
 
 
+def _load(path: str, given: list[tuple[str, str]]) -> Model:
+    """The model at ``path`` with the values ``given`` over its parameters, each of them printed
+    (the header of a run or a sweep) with its unit, and any warning about them."""
+    with warnings.catch_warnings():
+        # Printed here, in the run's words, rather than as Python warnings.
+        warnings.simplefilter("ignore")
+        model = Model.load(path, dict(given))
+    if given:
+        units = dict(model._native.parameter_units)
+        shown = []
+        for name, text in dict(given).items():
+            value = model.parameters[name]
+            unit = units.get(name)
+            in_unit = f"{value:.6g} SI" if unit is None else f"{value / _linkwork.unit(unit):.6g} {unit}"
+            shown.append(f"{name} = {in_unit} (given {text})")
+        print(f"parameters set: {'; '.join(shown)}")
+    for warning in model._native.warnings:
+        _err(f"warning: {warning}")
+    return model
+
+
 def _run(args: argparse.Namespace) -> int:
-    model = Model.load(args.model, dict(args.set))
+    model = _load(args.model, args.set)
     out: Path = args.out if args.out is not None else Path("out") / Path(args.model).stem
     stream = out / f"results.{args.stream}" if args.stream else None
     if args.stream == "parquet":
@@ -278,12 +310,16 @@ def _report(args: argparse.Namespace) -> int:
 def _print_summary(results: Results) -> None:
     s = results.summary
     stats = s.statistics or {}
+    units = Units.of(results.model, results.columns)
     print(f"{s.model}: analysis '{s.analysis}' ({s.type})")
     drivers = ", ".join(s.active_drivers or []) or "none"
     print(f"  {s.bodies} bodies, {s.coordinates} coordinates; drivers: {drivers}")
     for line in branch_lines(s.branches or []):
         print(f"  {line}")
-    print(f"  {_span(results)}")
+    print(f"  {_span(results, units)}")
+    if not units.is_si():
+        shown = ", ".join(f"{q} {units.unit(q)}" for q in ("length", "angle", "time", "force", "torque"))
+        print(f"  shown in the model's display units ({shown}); the files are SI")
     if stats and s.type == "dynamic":
         integrator = s.integrator or {}
         print(
@@ -324,8 +360,8 @@ def _print_summary(results: Results) -> None:
         if redundant:
             print(f"  redundant rows (hold implicitly): {', '.join(redundant)}")
     for name, value in results.summaries.items():
-        print(f"  summary {name:<21} {value:.6g}")
-    _print_peaks(s)
+        print(f"  summary {name:<21} {value:.6g} (SI)")
+    _print_peaks(s, units, results.model._native.warnings)
 
 
 def _describe_mode(mode: dict[str, Any]) -> str:
@@ -346,14 +382,19 @@ def _describe_mode(mode: dict[str, Any]) -> str:
     return f"{mode['frequency']:.6g} Hz{damping}"
 
 
-def _print_peaks(s: Summary) -> None:
-    """The largest driver efforts and joint forces, and the joints whose shares are open."""
+def _print_peaks(s: Summary, units: Units, printed: list[str]) -> None:
+    """The largest driver efforts and joint forces (in ``units``), the joints whose shares are
+    open, and the warnings not ``printed`` before the run."""
     peaks = s.peaks or {}
     efforts = [name for name in peaks if name.endswith(".effort")]
     forces = sorted((n for n in peaks if n.endswith(".force")), key=lambda n: -peaks[n]["max_abs"])
     for name in efforts + forces[:5]:
         peak = peaks[name]
-        print(f"  peak {name:<24} {_num(peak['max_abs'])} at t = {peak['time'] or 0:g} s")
+        # A joint's peak is its force's resultant, of the quantity of its fx column.
+        column = f"{name.removesuffix('.force')}.fx" if name.endswith(".force") else name
+        value = float(units.shown(column, peak["max_abs"]))
+        time = units.value("time", peak["time"] or 0.0)
+        print(f"  peak {name:<24} {_num(value)} {units.column_unit(column)} at t = {time:g} {units.unit('time')}")
     if len(forces) > 5:
         print(f"  ({len(forces) - 5} more joints' peaks in summary.json)")
     indeterminate = s.indeterminate_joints or []
@@ -362,7 +403,8 @@ def _print_peaks(s: Summary) -> None:
             f"  indeterminate joints (redundant supports; minimum-norm reactions): {', '.join(indeterminate)}"
         )
     for warning in s.warnings:
-        print(f"  warning: {warning}")
+        if warning not in printed:
+            print(f"  warning: {warning}")
 
 
 def _print_failure(error: SolverError | AssemblyError) -> None:
@@ -382,13 +424,15 @@ def _print_failure(error: SolverError | AssemblyError) -> None:
         _err(f"  {what} {' '.join(where)}")
 
 
-def _span(results: Results) -> str:
+def _span(results: Results, units: Units | None = None) -> str:
     if results.streamed_to is not None:
         # The rows are in the file, not in memory: their count is the summary's.
         return f"{results.summary.output_points} output points, streamed"
     if len(results) == 0:
         return "no output points"
-    return f"{len(results)} output points, t = {results.time[0]:g} .. {results.time[-1]:g} s"
+    units = units or Units.si()
+    t0, t1 = (units.value("time", t) for t in (results.time[0], results.time[-1]))
+    return f"{len(results)} output points, t = {t0:g} .. {t1:g} {units.unit('time')}"
 
 
 def _folder(path: Path) -> str:
@@ -399,7 +443,7 @@ def _folder(path: Path) -> str:
 # --- sweep ---------------------------------------------------------------------------------------
 
 
-def _grid(text: str) -> tuple[str, list[float]]:
+def _grid(text: str) -> tuple[str, list[float | str]]:
     from .sweep import grid_values
 
     try:
@@ -408,7 +452,7 @@ def _grid(text: str) -> tuple[str, list[float]]:
         raise argparse.ArgumentTypeError(str(error)) from None
 
 
-def _range(text: str) -> tuple[str, tuple[float, float]]:
+def _range(text: str) -> tuple[str, tuple[float | str, float | str]]:
     from .sweep import range_values
 
     try:
@@ -433,16 +477,20 @@ def _sweep(args: argparse.Namespace) -> int:
     if (args.sample is None) != (not args.range) or (args.seed is not None and args.sample is None):
         _err("error: --sample, --range and --seed go together (--seed is optional)")
         return EXIT_MODEL
-    model = Model.load(args.model, dict(args.set))
+    model = _load(args.model, args.set)
     analysis = args.analysis if args.analysis is not None else model.analyses[0]
     out: Path = args.out if args.out is not None else Path("out") / (Path(args.model).stem + "_sweep")
     client = _dask_client(args.dask) if args.dask is not None else None
     try:
-        table = sweep(
-            model, analysis, dict(args.grid) if args.grid else None, dict(args.output),
-            sample=args.sample, ranges=dict(args.range) if args.range else None, seed=args.seed,
-            workers=args.workers, client=client, progress=sys.stderr.isatty() and not args.quiet,
-        )
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            table = sweep(
+                model, analysis, dict(args.grid) if args.grid else None, dict(args.output),
+                sample=args.sample, ranges=dict(args.range) if args.range else None, seed=args.seed,
+                workers=args.workers, client=client, progress=sys.stderr.isatty() and not args.quiet,
+            )
+        for warning in dict.fromkeys(str(w.message) for w in caught):
+            _err(f"warning: {warning}")
     except KeyboardInterrupt as interrupt:
         partial = getattr(interrupt, "table", None)
         if partial is None:
@@ -457,11 +505,16 @@ def _sweep(args: argparse.Namespace) -> int:
             client.close()
     out.mkdir(parents=True, exist_ok=True)
     table.to_parquet(out / "sweep.parquet", index=False)
-    failed = int((table[STATUS] != "ok").sum())
-    print(f"{model.name}: analysis '{analysis}', {len(table)} variants, {len(table) - failed} ok, {failed} failed")
+    failed = table[STATUS] != "ok"
+    print(f"{model.name}: analysis '{analysis}', {len(table)} variants, {len(table) - int(failed.sum())} ok, {int(failed.sum())} failed")
     if "seed" in table.attrs:
         print(f"Latin hypercube seed {table.attrs['seed']} (--seed {table.attrs['seed']} draws the same sample)")
     print(f"wrote {out / 'sweep.parquet'}")
+    if len(table) and failed.all():
+        _err(f"error: every variant failed; the first: {table[STATUS].iloc[0]}")
+        return EXIT_SOLVER
+    if failed.any():
+        _err(f"warning: {int(failed.sum())} of {len(table)} variants failed (their status in the table)")
     return EXIT_OK
 
 

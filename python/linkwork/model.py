@@ -6,6 +6,7 @@ import numbers
 import os
 import sys
 import time
+import warnings
 from pathlib import Path
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -57,6 +58,14 @@ def _parameter_texts(values: Mapping[str, float | str]) -> list[tuple[str, str]]
     return texts
 
 
+def _warned(native: _linkwork.PyModel) -> _linkwork.PyModel:
+    """``native``, once its warnings about the parameter values given are issued as
+    ``UserWarning`` (to the caller of the public function)."""
+    for message in native.warnings:
+        warnings.warn(message, UserWarning, stacklevel=3)
+    return native
+
+
 class Model:
     """A mechanism read from a model file, compiled and immutable.
 
@@ -83,18 +92,20 @@ class Model:
     def load(cls, path: str | os.PathLike[str], parameters: Mapping[str, float | str] | None = None) -> Model:
         """Read and compile the model file at ``path`` (same as :func:`linkwork.load`)."""
         native = _linkwork.PyModel.load(os.fspath(path), _parameter_texts(parameters or {}))
-        return cls._wrap(native, path=os.fspath(path))
+        return cls._wrap(_warned(native), path=os.fspath(path))
 
     @classmethod
     def from_yaml(cls, text: str, parameters: Mapping[str, float | str] | None = None) -> Model:
         """Compile a model from the text of a model file (same as :func:`linkwork.from_yaml`)."""
-        return cls._wrap(_linkwork.PyModel.from_yaml(text, _parameter_texts(parameters or {})))
+        return cls._wrap(_warned(_linkwork.PyModel.from_yaml(text, _parameter_texts(parameters or {}))))
 
     def with_parameters(self, **values: float | str) -> Model:
         """A new model: the same file with ``values`` over its parameters (a number is SI, a
         string may carry a unit: ``model.with_parameters(r=0.12, L="300 mm")``). Parameters
-        computed from others follow them; values given before and not named again stay."""
-        return self._wrap(self._native.with_parameters(_parameter_texts(values)), path=self.path)
+        computed from others follow them; values given before and not named again stay. A bare
+        number more than 100 times from the value the file writes with a unit (``m=16`` for
+        ``m: 15 mm``) gives a ``UserWarning``."""
+        return self._wrap(_warned(self._native.with_parameters(_parameter_texts(values))), path=self.path)
 
     @property
     def parameters(self) -> dict[str, float]:

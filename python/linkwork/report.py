@@ -20,12 +20,13 @@ import html
 import json
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from .results import Summary
+from .units import UNKNOWN, Units
 
 #: Animation frames drawn at most: 30 frames a second for 10 s of playback. Each frame carries every
 #: moving trace, so the page grows with the frames; more than a few hundred only make the slider
@@ -73,6 +74,8 @@ class Run:
     columns: Mapping[str, np.ndarray]
     summary: Summary
     title: str = ""
+    #: The units the report shows (the model's ``display:`` section), for its axes and tables.
+    units: Units = field(default_factory=Units.si)
 
     def __post_init__(self) -> None:
         # An analysis that keeps only some columns (`outputs:`) draws the bodies whose
@@ -243,11 +246,13 @@ def paths_figure(run: Run) -> dict[str, Any] | None:
     mechanism's frames in ``marks`` (the page moves the last trace's markers there); ``None``
     when the model names none."""
     frames = _frame_rows(len(run.time))
-    now = named_paths(run, frames)
+    # In the display's length unit, as the mechanism's own axes are.
+    k, unit = run.units.value("length", 1.0), run.units.unit("length")
+    now = [(name, b, np.asarray(x) * k, np.asarray(y) * k) for name, b, x, y in named_paths(run, frames)]
     if not now:
         return None
     data: list[dict[str, Any]] = [
-        {"type": "scatter", "mode": "lines", "name": name, "x": _num(x), "y": _num(y),
+        {"type": "scatter", "mode": "lines", "name": name, "x": _num(np.asarray(x) * k), "y": _num(np.asarray(y) * k),
          "line": {"color": PALETTE[b % len(PALETTE)], "width": 2}}
         for name, b, x, y in named_paths(run, _path_rows(len(run.time)))
     ]
@@ -255,7 +260,7 @@ def paths_figure(run: Run) -> dict[str, Any] | None:
                  "x": _num([x[0] for _, _, x, _ in now]), "y": _num([y[0] for _, _, _, y in now]),
                  "marker": {"symbol": "circle", "size": 10, "color": [PALETTE[b % len(PALETTE)] for _, b, _, _ in now],
                             "line": {"color": INK, "width": 1.5}}, "showlegend": False})
-    layout = _plot_layout("paths of the named points", "x (m)", "y (m)")
+    layout = _plot_layout("paths of the named points", f"x ({unit})", f"y ({unit})")
     layout["xaxis"].update(constrain="domain", zeroline=False)
     layout["yaxis"].update(scaleanchor="x", scaleratio=1, constrain="domain", zeroline=False)
     layout["height"] = 520
@@ -281,14 +286,17 @@ def driver_coordinate(run: Run) -> tuple[str, np.ndarray] | None:
         kind, bi, bj = d["type"], d["body_i"], d["body_j"]
         if d["name"] not in (run.summary.active_drivers or []) or not {bi, bj} <= kept | {"ground"}:
             continue
+        units = run.units
         if kind in ("angle", "relative_angle"):
-            value = angle(bi) - angle(bj)
-            label = f"angle of {bi}" + (f" relative to {bj}" if kind == "relative_angle" else "") + " (rad)"
+            value = (angle(bi) - angle(bj)) * units.value("angle", 1.0)
+            label = f"angle of {bi}" + (f" relative to {bj}" if kind == "relative_angle" else "") + f" ({units.unit('angle')})"
         elif kind == "distance":
             (px, py), (qx, qy) = poses.point(bi, d["p"]), poses.point(bj, d["q"])
-            value, label = np.hypot(qx - px, qy - py), f"distance from {bi} to {bj} (m)"
+            value = np.hypot(qx - px, qy - py) * units.value("length", 1.0)
+            label = f"distance from {bi} to {bj} ({units.unit('length')})"
         else:
-            value, label = poses.point(bi, d["p"])["xy".index(kind)], f"{kind} of the driven point of {bi} (m)"
+            value = poses.point(bi, d["p"])["xy".index(kind)] * units.value("length", 1.0)
+            label = f"{kind} of the driven point of {bi} ({units.unit('length')})"
         finite = value[np.isfinite(value)]
         if len(finite) and np.ptp(finite) > 0.0:
             return f"{label}, driver {d['name']}", value
@@ -300,6 +308,7 @@ def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray
     :data:`MAX_FRAMES`), with play, pause, speeds and a time slider; ``times`` labels the frames
     (default: the rows' times)."""
     rows = _frame_rows(len(run.time)) if rows is None else rows
+    own_times = times is None
     times = np.asarray(run.time, dtype=float)[rows] if times is None else times
     frames = len(rows)
     poses = _Poses(run, rows)
@@ -574,7 +583,38 @@ def mechanism_figure(run: Run, rows: np.ndarray | None = None, times: np.ndarray
         ]
         layout["margin"]["b"] = 110
         layout["height"] = 600
-    return {"data": data, "layout": layout, "frames": frame_list, "times": _num(times)}
+    return _shown({"data": data, "layout": layout, "frames": frame_list, "times": _num(times)}, run.units, own_times)
+
+
+def _shown(fig: dict[str, Any], units: Units, own_times: bool) -> dict[str, Any]:
+    """The mechanism figure ``fig``, drawn in metres and seconds, in the length and time units
+    ``units`` shows: every trace's and frame's points, the axes' ranges and titles, and the
+    slider's times when they are the run's (``own_times``; a mode's are phases)."""
+    length, time = units.unit("length"), units.unit("time")
+    to_length, to_time = units.value("length", 1.0), units.value("time", 1.0)
+
+    def scaled(values: Any, factor: float) -> Any:
+        return [None if v is None else float(f"{v * factor:.{DIGITS}g}") for v in values]
+
+    if to_length != 1.0:
+        for trace in [*fig["data"], *(t for frame in fig["frames"] for t in frame["data"])]:
+            for axis in ("x", "y"):
+                if axis in trace:
+                    trace[axis] = scaled(trace[axis], to_length)
+        for axis in ("xaxis", "yaxis"):
+            if "range" in fig["layout"][axis]:
+                fig["layout"][axis]["range"] = scaled(fig["layout"][axis]["range"], to_length)
+    for axis in ("x", "y"):
+        fig["layout"][f"{axis}axis"]["title"] = {"text": f"{axis} ({length})"}
+    if not own_times:
+        return fig
+    fig["times"] = scaled(fig["times"], to_time)
+    fig["time_unit"] = time
+    for slider in fig["layout"].get("sliders", []):
+        slider["currentvalue"]["suffix"] = f" {time}"
+        for step, t in zip(slider["steps"], fig["times"], strict=True):
+            step["label"] = f"{t:.4g}"
+    return fig
 
 
 # --- plots ---------------------------------------------------------------------------------------
@@ -585,25 +625,30 @@ def line_figure(
     against: tuple[str, np.ndarray] | None = None,
 ) -> dict[str, Any]:
     """A plot of ``columns`` against the column ``x`` (default: time), each curve decimated to
-    :data:`MAX_PLOT_POINTS`. With ``against`` (a label and a value per row: the driver's
-    coordinate), each trace's times are its ``customdata`` and the figure's ``against`` holds
-    the label and each trace's x values against that coordinate, for the page to switch to."""
-    t = np.asarray(run.time, dtype=float)
-    xs = t if x == "time" else np.asarray(run.columns[x], dtype=float)
+    :data:`MAX_PLOT_POINTS`, in the units the run shows. With ``against`` (a label and a value
+    per row: the driver's coordinate), each trace's times are its ``customdata`` and the figure's
+    ``against`` holds the label and each trace's x values against that coordinate, for the page
+    to switch to."""
+    units = run.units
+    t = units.shown("time", run.time)
+    xs = t if x == "time" else units.shown(x, run.columns[x])
+    # Each curve names its unit where the plot's curves are not all in one.
+    mixed = len({units.column_unit(c) for c in columns}) > 1
     data = []
     other: list[list[float | None]] = []
     for name in columns:
-        y = np.asarray(run.columns[name], dtype=float)
+        y = units.shown(name, run.columns[name])
         if log:
             y = np.abs(y)
         rows = _plot_rows(y)
-        trace = {"type": "scatter", "mode": "lines" if len(t) > 1 else "markers", "name": name,
-                 "x": _num(xs[rows]), "y": _num(y[rows])}
+        trace = {"type": "scatter", "mode": "lines" if len(t) > 1 else "markers",
+                 "name": units.label(name) if mixed else name, "x": _num(xs[rows]), "y": _num(y[rows])}
         if against is not None:
             trace["customdata"] = _num(t[rows])
             other.append(_num(against[1][rows]))
         data.append(trace)
-    fig: dict[str, Any] = {"data": data, "layout": _plot_layout(title, "time (s)" if x == "time" else x, ylabel, log)}
+    xlabel = f"time ({units.unit('time')})" if x == "time" else units.label(x)
+    fig: dict[str, Any] = {"data": data, "layout": _plot_layout(title, xlabel, _axis_label(units, columns, ylabel), log)}
     if against is not None:
         fig["against"] = {"label": against[0], "x": other}
     return fig
@@ -612,9 +657,17 @@ def line_figure(
 def bar_figure(run: Run, columns: Sequence[str], title: str = "", ylabel: str = "") -> dict[str, Any]:
     """The last row's values of ``columns``, one bar each: a run of one state (a static
     equilibrium, the state modes are taken about) has nothing to draw against time."""
-    values = [float(np.asarray(run.columns[c], dtype=float)[-1]) for c in columns]
-    data = [{"type": "bar", "x": list(columns), "y": _num(values), "name": title}]
-    return {"data": data, "layout": _plot_layout(title, "", ylabel)}
+    values = [float(run.units.shown(c, run.columns[c])[-1]) for c in columns]
+    mixed = len({run.units.column_unit(c) for c in columns}) > 1
+    data = [{"type": "bar", "x": [run.units.label(c) if mixed else c for c in columns], "y": _num(values), "name": title}]
+    return {"data": data, "layout": _plot_layout(title, "", _axis_label(run.units, columns, ylabel))}
+
+
+def _axis_label(units: Units, columns: Sequence[str], fallback: str) -> str:
+    """The units of ``columns``, each once in order (``mm, deg``); ``fallback`` when the
+    quantity of none of them is known."""
+    shown = list(dict.fromkeys(units.column_unit(c) for c in columns))
+    return fallback if shown == [UNKNOWN] and fallback else ", ".join(shown)
 
 
 def _plot_layout(title: str, xlabel: str, ylabel: str, log: bool = False) -> dict[str, Any]:
@@ -764,7 +817,7 @@ def mode_figures(run: Run) -> list[tuple[str, dict[str, Any]]]:
         for name in base:
             if name not in shape and name.split(".")[-1] in ("x", "y", "phi"):
                 columns[name] = np.full(len(phases), base[name][0])
-        moving = Run(run.drawing, phases, columns, run.summary)
+        moving = Run(run.drawing, phases, columns, run.summary, units=run.units)
         fig = mechanism_figure(moving, rows=np.arange(len(phases)), times=phases)
         fig["layout"]["sliders"][0]["currentvalue"] = {"prefix": "phase ", "suffix": " rad", "visible": True}
         freq = mode.get("frequency")
@@ -819,10 +872,11 @@ def failure_html(summary: Summary) -> str:
 def summaries_html(summary: Summary) -> str:
     """The model's summaries (whole-run quantities) as a table; nothing when the run has none."""
     values = summary.summaries or {}
-    return "<h3>Summaries</h3>" + _table(list(values.items())) if values else ""
+    # A summary is an expression of its own: its value is as computed, from SI columns.
+    return "<h3>Summaries</h3>" + _table([(f"{k} ({UNKNOWN})", v) for k, v in values.items()]) if values else ""
 
 
-def summary_html(summary: Summary) -> str:
+def summary_html(summary: Summary, units: Units | None = None) -> str:
     """The model summary and the solver statistics, as HTML."""
     s = summary
     parts = []
@@ -836,9 +890,16 @@ def summary_html(summary: Summary) -> str:
         parts.append("<h3>Solver statistics</h3>" + _table(list(stats.items())))
     peaks = s.peaks
     if isinstance(peaks, dict) and peaks:
-        # A torque that stays zero (a pin's) is left out: it says nothing.
-        rows = [(k, f"{v.get('max_abs', 0.0):.6g} at t = {v.get('time')} s") for k, v in peaks.items()
-                if not (k.endswith(".torque") and v.get("max_abs") == 0.0)]
+        units = units or Units.si()
+        rows = []
+        for k, v in peaks.items():
+            # A torque that stays zero (a pin's) is left out: it says nothing.
+            if k.endswith(".torque") and v.get("max_abs") == 0.0:
+                continue
+            # A joint's peak is that of its force's resultant, a driver's of its effort column.
+            column = f"{k.removesuffix('.force')}.fx" if k.endswith(".force") else k
+            time = "" if v.get("time") is None else f" at t = {units.value('time', v['time']):.6g} {units.unit('time')}"
+            rows.append((k, f"{units.shown(column, v.get('max_abs', 0.0)):.6g} {units.column_unit(column)}{time}"))
         parts.append("<h3>Peaks</h3>" + _table(rows))
     return "\n".join(parts)
 
@@ -875,6 +936,7 @@ unpack('plotly').then(source => {
       .then(() => fig.frames ? Plotly.addFrames(id, fig.frames) : null);
   const mech = figures.mechanism;
   const times = mech ? mech.times : [];
+  const timeUnit = mech ? mech.time_unit : 's';
   const plotIds = figures.plots.map((_, k) => 'plot' + k);
   // The plots' x: time, or the driver's coordinate (the radio buttons of #against).
   const timeX = figures.plots.map(fig => fig.data.map(t => t.x));
@@ -884,7 +946,7 @@ unpack('plotly').then(source => {
                                   line: {color: '#888', width: 1, dash: 'dot'}}]});
   const setFrame = k => {
     frame = k;
-    document.getElementById('now').textContent = 't = ' + times[k].toPrecision(6) + ' s';
+    document.getElementById('now').textContent = 't = ' + times[k].toPrecision(6) + ' ' + timeUnit;
     figures.plots.forEach((fig, p) => Plotly.relayout(plotIds[p], marker(against && fig.against ? mech.against[k] : times[k])));
     const paths = figures.paths;
     if (paths) Plotly.restyle('paths', {x: [paths.marks.x[k]], y: [paths.marks.y[k]]}, [paths.data.length - 1]);
@@ -894,7 +956,7 @@ unpack('plotly').then(source => {
     figures.plots.forEach((fig, p) => {
       if (!fig.against) return;
       Plotly.restyle(plotIds[p], {x: against ? fig.against.x : timeX[p]});
-      Plotly.relayout(plotIds[p], {'xaxis.title.text': against ? fig.against.label : 'time (s)', 'xaxis.autorange': true});
+      Plotly.relayout(plotIds[p], {'xaxis.title.text': against ? fig.against.label : 'time (' + timeUnit + ')', 'xaxis.autorange': true});
     });
     if (mech && times.length) setFrame(frame);
   }));
@@ -960,7 +1022,7 @@ def page(run: Run, plotly_js: str) -> str:
                         f'time</label> <label><input type="radio" name="against" value="driver"> {html.escape(against)}'
                         "</label></p>")
         body.append('<div class="plots">' + "".join(f'<div id="plot{k}"></div>' for k in range(len(plot_list))) + "</div>")
-    body += ["<h2>Summary</h2>", summary_html(s)]
+    body += ["<h2>Summary</h2>", summary_html(s, run.units)]
     # `</` cannot appear inside a script element: escape it in the JSON.
     data = json.dumps(figures, separators=(",", ":"), allow_nan=False)
     return (
@@ -1060,7 +1122,7 @@ def from_folder(folder: Any) -> Run:
         raise FileError(f"{folder}: not a results folder of `linkwork run`: {error}") from error
     # The parameters the run used (SI, given over the file's by --set or with_parameters).
     model = Model.load(folder / "model.yaml", summary.get("parameters") or None)
-    return Run(model.drawing(), time, columns, Summary(summary))
+    return Run(model.drawing(), time, columns, Summary(summary), units=Units.of(model, columns))
 
 
 def write(path: Any, run: Run) -> None:

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import dataclasses
+import difflib
 import os
 import shutil
-import difflib
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast, overload
@@ -296,12 +297,14 @@ class Results:
     def _run(self) -> Run:
         from . import stream
         from .report import Run
+        from .units import Units
 
+        units = Units.of(self.model, self._columns)
         if self.streamed_to is not None:
             time, columns = stream.read(self.streamed_to)
-            return Run(self.model.drawing(), time, columns, self.summary)
+            return Run(self.model.drawing(), time, columns, self.summary, units=units)
         columns = {name: self._values[:, k] for k, name in enumerate(self._columns)}
-        return Run(self.model.drawing(), self._time, columns, self.summary)
+        return Run(self.model.drawing(), self._time, columns, self.summary, units=units)
 
     def path(self, body: str, point: str | None = None) -> tuple[np.ndarray, np.ndarray]:
         """``(x, y)``, global frame, m, of a point of a moving body at every output time:
@@ -341,7 +344,8 @@ class Results:
         a column, ``time``, or a point's coordinate ``<body>.<point>.x`` or ``.y`` (its
         :meth:`path`). ``x`` and one ``y`` that are the ``x`` and ``y`` of the same point
         (``x="foot.x", y="foot.y"``, ``x="foot.G.x", y="foot.G.y"``) plot its path, with equal
-        scales on both axes."""
+        scales on both axes. Values are in the units of the model's ``display:`` section (SI
+        without one); the axes and the legend say which."""
         from . import report
 
         if columns and y is not None:
@@ -350,7 +354,7 @@ class Results:
         names = names or [f"{b}.phi" for b in self.model.bodies]
         series = {name: self._series(name) for name in [x, *names] if name != "time"}
         run = self._run()
-        run = report.Run(run.drawing, run.time, {**run.columns, **series}, run.summary)
+        run = dataclasses.replace(run, columns={**run.columns, **series})
         fig = report.line_figure(run, names, x=x)
         if len(names) == 1 and x.endswith(".x") and names[0] == x[:-2] + ".y":
             fig["layout"]["yaxis"].update(scaleanchor="x", scaleratio=1)

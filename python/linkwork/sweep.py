@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from tqdm import tqdm
 
+from . import _linkwork
 from .model import Model, ProgressBar, _parameter_texts
 
 if TYPE_CHECKING:
@@ -46,7 +47,7 @@ def sweep(
     outputs: Mapping[str, str] | None = None,
     *,
     sample: int | None = None,
-    ranges: Mapping[str, tuple[float, float]] | None = None,
+    ranges: Mapping[str, tuple[float | str, float | str]] | None = None,
     seed: int | None = None,
     workers: int | None = None,
     client: Any = None,
@@ -57,8 +58,9 @@ def sweep(
 
     The variants are either every combination of the values in ``grid`` (a parameter's name to
     its values: numbers in SI, or strings with units), in the order of ``itertools.product``, or
-    ``sample`` points of a Latin hypercube over ``ranges`` (a name to ``(low, high)``, SI) drawn
-    with ``seed`` (a fresh one when ``None``; the table's ``attrs["seed"]`` says which).
+    ``sample`` points of a Latin hypercube over ``ranges`` (a name to ``(low, high)``, numbers in
+    SI or both strings with units, ``("12 mm", "18 mm")``) drawn with ``seed`` (a fresh one when
+    ``None``; the table's ``attrs["seed"]`` says which).
 
     They run on ``workers`` threads of this machine (default: every core), or, given a Dask
     ``client`` (``distributed.Client``), in chunks on its workers. ``progress=True`` shows a
@@ -66,7 +68,8 @@ def sweep(
     ``progress(finished, total)``.
 
     One row per variant: the parameters' values (SI), ``status``, and each output, missing
-    (``<NA>``) where the variant failed. A failed variant is a row, not the end of the sweep.
+    (``<NA>``) where the variant failed; ``attrs["units"]`` gives each column's unit (the
+    parameters' SI units; outputs ``SI``, as computed from SI columns). A failed variant is a row, not the end of the sweep.
     Ctrl-C stops the sweep (within 0.2 s on this machine) and raises ``KeyboardInterrupt`` with
     ``table``: every row, those not finished with a ``KeyboardInterrupt: ...`` status. An
     exception raised by ``progress`` stops it the same way and is raised with ``table``.
@@ -77,7 +80,7 @@ def sweep(
         raise ImportError("sweep() needs pandas: pip install 'linkwork[sweep]'") from error
     if not isinstance(model, Model):
         model = Model.load(model)
-    attrs: dict[str, int] = {}
+    attrs: dict[str, object] = {}
     if grid is not None and (sample is not None or ranges is not None):
         raise ValueError("give either grid, or sample with ranges, not both")
     if grid is not None:
@@ -85,9 +88,12 @@ def sweep(
         combinations: list[tuple[float | str, ...]] = list(itertools.product(*(grid[name] for name in names)))
     elif sample is not None and ranges is not None:
         attrs["seed"] = seed = secrets.randbits(63) if seed is None else seed
-        columns = latin_hypercube(ranges, sample, seed)
+        intervals = {name: interval(name, low, high) for name, (low, high) in ranges.items()}
+        columns = latin_hypercube({name: (low, high) for name, (low, high, _) in intervals.items()}, sample, seed)
         names = list(columns)
-        combinations = list(zip(*columns.values())) if names else [() for _ in range(sample)]
+        # Drawn in the unit the range is written in, and given in it, so the engine checks it.
+        texts = {n: [v if intervals[n][2] is None else f"{v!r} {intervals[n][2]}" for v in vs] for n, vs in columns.items()}
+        combinations = list(zip(*texts.values())) if names else [() for _ in range(sample)]
     else:
         raise ValueError("give grid (values of each parameter), or sample (a count) with ranges")
     variants = [_parameter_texts(dict(zip(names, values))) for values in combinations]
@@ -98,9 +104,19 @@ def sweep(
     bar = _VariantBar(len(variants)) if progress is True else None
     report = bar.update if bar is not None else progress if callable(progress) else None
 
-    # The SI value the engine reads of each grid value: a bare number is itself; a value with a
-    # unit is converted, once for each distinct one (it compiles the model).
+    # The SI value the engine reads of each value: a bare number is itself; a value with a unit
+    # is converted. The first value of each parameter read once here: a wrong dimension is a
+    # ModelError, and a bare number far from the file's value a UserWarning, before any run.
+    for k, name in enumerate(names):
+        first = next((c[k] for c in combinations if isinstance(c[k], str)), combinations[0][k] if combinations else None)
+        if first is not None:
+            model.with_parameters(**{name: first})
     si = {(name, v): _si(model, name, v) for k, name in enumerate(names) for v in {c[k] for c in combinations}}
+    units = dict.fromkeys(names, "SI") | dict.fromkeys(dict(output_list), "SI")
+    for name, unit in model._native.parameter_units:
+        if name in names:
+            units[name] = _linkwork.si_unit(unit) or "SI"
+    attrs["units"] = units
 
     def table(rows: list[Row]) -> pandas.DataFrame:
         data: dict[str, object] = {}
@@ -185,10 +201,37 @@ class _VariantBar:
 
 
 def _si(model: Model, name: str, value: float | str) -> float:
-    """A grid value in SI, as the engine reads it."""
+    """A grid value in SI, as the engine reads it: a number with a unit converted, an
+    expression of other parameters evaluated by the engine."""
     if isinstance(value, str):
-        return model.with_parameters(**{name: value}).parameters[name]
+        read = _linkwork.quantity(value)
+        return read[0] if read is not None else model.with_parameters(**{name: value}).parameters[name]
     return float(value)
+
+
+def _end(text: str) -> tuple[float, str | None]:
+    """One end of a ``--grid`` or ``--range``: the number as written and its unit (``None`` for a
+    bare number, SI). ``ValueError`` for anything else."""
+    try:
+        read = _linkwork.quantity(text)
+    except ValueError as error:
+        raise ValueError(f"'{text.strip()}': {error}") from None
+    if read is None:
+        return float(text), None
+    unit = read[1]
+    return float(text.strip()[: -len(unit)]), unit
+
+
+def interval(name: str, low: float | str, high: float | str) -> tuple[float, float, str | None]:
+    """The ends of a grid's or a range's interval as numbers in one unit, and that unit (``None``:
+    SI numbers): ``("12 mm", "1.8 cm")`` is ``(12, 18, "mm")``. A unit on one end only is
+    refused (a bare number is SI, so ``12:18 mm`` would run from 12 m)."""
+    (a, unit_a), (b, unit_b) = (_end(v) if isinstance(v, str) else (float(v), None) for v in (low, high))
+    if (unit_a is None) != (unit_b is None):
+        raise ValueError(f"{name}: a unit on one end only; write it on both, such as {name}=12 mm:18 mm")
+    if unit_a is not None and unit_b is not None and unit_b != unit_a:
+        b = b * _linkwork.unit(unit_b) / _linkwork.unit(unit_a)
+    return a, b, unit_a
 
 
 def latin_hypercube(ranges: Mapping[str, tuple[float, float]], count: int, seed: int) -> dict[str, list[float]]:
@@ -209,37 +252,44 @@ def latin_hypercube(ranges: Mapping[str, tuple[float, float]], count: int, seed:
     return points
 
 
-def grid_values(text: str) -> tuple[str, list[float]]:
+def grid_values(text: str) -> tuple[str, list[float | str]]:
     """``NAME=START:STOP:COUNT`` as the name and ``COUNT`` evenly spaced values from ``START`` to
-    ``STOP`` (both included)."""
+    ``STOP`` (both included): numbers (SI), or, where the ends carry a unit
+    (``m=12 mm:18 mm:7``), numbers with that unit."""
     name, sep, spec = text.partition("=")
     parts = spec.split(":")
     try:
         if not sep or not name.strip() or len(parts) != 3:
             raise ValueError
-        start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
+        count = int(parts[2])
         if count < 1:
             raise ValueError
-    except ValueError:
-        raise ValueError(f"expected NAME=START:STOP:COUNT (COUNT >= 1), such as r=0.05:0.15:5, got '{text}'") from None
-    if count == 1:
-        return name.strip(), [start]
+        start, stop, unit = interval(name.strip(), parts[0], parts[1])
+    except ValueError as error:
+        why = f" ({error})" if str(error) else ""
+        raise ValueError(
+            f"expected NAME=START:STOP:COUNT (COUNT >= 1), such as r=0.05:0.15:5 or r=50 mm:150 mm:5, got '{text}'{why}"
+        ) from None
     # START + k (STOP - START) / (COUNT - 1): the ends are exactly START and STOP.
-    return name.strip(), [start + k * (stop - start) / (count - 1) if k < count - 1 else stop for k in range(count)]
+    values = [start + k * (stop - start) / (count - 1) if 0 < k < count - 1 else (start, stop)[k > 0] for k in range(count)]
+    return name.strip(), [v if unit is None else f"{v!r} {unit}" for v in values]
 
 
-def range_values(text: str) -> tuple[str, tuple[float, float]]:
-    """``NAME=LOW:HIGH`` as the name and ``(LOW, HIGH)``."""
+def range_values(text: str) -> tuple[str, tuple[float | str, float | str]]:
+    """``NAME=LOW:HIGH`` as the name and ``(LOW, HIGH)``: numbers (SI), or both with a unit."""
     name, sep, spec = text.partition("=")
     parts = spec.split(":")
     try:
         if not sep or not name.strip() or len(parts) != 2:
             raise ValueError
-        low, high = float(parts[0]), float(parts[1])
-    except ValueError:
-        raise ValueError(f"expected NAME=LOW:HIGH, such as r=0.05:0.15, got '{text}'") from None
+        low, high, unit = interval(name.strip(), parts[0], parts[1])
+    except ValueError as error:
+        why = f" ({error})" if str(error) else ""
+        raise ValueError(f"expected NAME=LOW:HIGH, such as r=0.05:0.15 or r=50 mm:150 mm, got '{text}'{why}") from None
     _check_range(name.strip(), low, high)
-    return name.strip(), (low, high)
+    if unit is None:
+        return name.strip(), (low, high)
+    return name.strip(), (f"{low!r} {unit}", f"{high!r} {unit}")
 
 
 def _check_range(name: str, low: float, high: float) -> None:

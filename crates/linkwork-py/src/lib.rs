@@ -164,6 +164,31 @@ impl PyModel {
         self.model.parameters.iter().map(|(n, v)| (n.clone(), *v)).collect()
     }
 
+    /// The unit the file writes each parameter in, for those it writes with one (`(name, unit)`).
+    #[getter]
+    fn parameter_units(&self) -> Vec<(String, String)> {
+        self.model.parameter_units.iter().map(|(n, u)| (n.clone(), u.clone())).collect()
+    }
+
+    /// Warnings about the parameter values given from outside, each `parameters.<name>: ...`.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.model.warnings.clone()
+    }
+
+    /// The units results are shown in (the file's `display:` section, SI without one): each
+    /// quantity's `(quantity, unit, factor to SI)`.
+    #[getter]
+    fn display(&self) -> Vec<(String, String, f64)> {
+        self.model.display.units.iter().map(|(q, u, f)| (q.to_string(), u.clone(), *f)).collect()
+    }
+
+    /// The quantity of each result column of `names` (`length`, `angle`, `force` ...; `None` for
+    /// a pure number or a column whose quantity is not known).
+    fn column_quantities(&self, names: Vec<String>) -> Vec<Option<String>> {
+        names.iter().map(|n| self.model.column_quantity(n).map(str::to_string)).collect()
+    }
+
     /// The parameter values given over the file's (`(name, text)`), as `from_yaml` takes them.
     #[getter]
     fn set(&self) -> Vec<(String, String)> {
@@ -419,6 +444,41 @@ fn schema() -> PyResult<String> {
     guard(linkwork::Model::json_schema)
 }
 
+/// A number with a unit (`"12 mm"`) as `(value in SI, unit)`; `None` when `text` is not a number
+/// followed by a unit. A unit that cannot be read raises `ValueError` saying why.
+#[pyfunction]
+fn quantity(text: &str) -> PyResult<Option<(f64, String)>> {
+    match linkwork::model::units::quantity(text) {
+        None => Ok(None),
+        Some(Ok((value, _))) => {
+            let unit = linkwork::model::units::unit_text(text).unwrap_or_default();
+            Ok(Some((value, unit.to_string())))
+        }
+        Some(Err(e)) => Err(pyo3::exceptions::PyValueError::new_err(e)),
+    }
+}
+
+/// Each quantity of results with its SI unit (`("length", "m")`, ...), as a model without a
+/// `display:` section shows them.
+#[pyfunction]
+fn si_units() -> Vec<(String, String)> {
+    linkwork::model::units::QUANTITIES.iter().map(|(q, _, u)| (q.to_string(), u.to_string())).collect()
+}
+
+/// The SI unit of the dimension of a unit (`"mm"`: `"m"`), `None` when results have no quantity
+/// of it; `ValueError` saying why a unit cannot be read.
+#[pyfunction]
+fn si_unit(text: &str) -> PyResult<Option<&'static str>> {
+    let (_, dim) = linkwork::model::units::unit(text).map_err(pyo3::exceptions::PyValueError::new_err)?;
+    Ok(linkwork::model::units::si_unit(dim))
+}
+
+/// The factor to SI of a unit (`"mm"`: 0.001); `ValueError` saying why one cannot be read.
+#[pyfunction]
+fn unit(text: &str) -> PyResult<f64> {
+    linkwork::model::units::unit(text).map(|(f, _)| f).map_err(pyo3::exceptions::PyValueError::new_err)
+}
+
 /// Panic inside the guard that wraps every engine call, so that tests can see the panic arrive as
 /// `InternalError` rather than crash the interpreter.
 #[pyfunction]
@@ -432,6 +492,11 @@ fn _linkwork(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyModel>()?;
     m.add_class::<PyResults>()?;
     m.add_function(wrap_pyfunction!(schema, m)?)?;
+    m.add_function(wrap_pyfunction!(quantity, m)?)?;
+    m.add_function(wrap_pyfunction!(unit, m)?)?;
+    m.add_function(wrap_pyfunction!(si_units, m)?)?;
+    m.add_function(wrap_pyfunction!(si_unit, m)?)?;
+    m.add("AGGREGATIONS", linkwork::expr::functional::AGGREGATIONS.to_vec())?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     errors::register(m)
 }

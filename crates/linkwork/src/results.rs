@@ -7,6 +7,7 @@
 //! holds the model's summaries, functionals of the columns
 //! ([`functional`](crate::expr::functional)) evaluated once a run ends well.
 
+pub mod columns;
 pub mod stream;
 pub mod summary;
 
@@ -166,6 +167,8 @@ impl Results {
             coordinates: model.n(),
             joints: model.joints.iter().map(|j| j.name.clone()).collect(),
             parameters: model.parameters.clone(),
+            // A doubtful value given from outside stays on the run's record.
+            warnings: model.warnings.clone(),
             ..Summary::default()
         };
         Results::with_columns(names, summary)

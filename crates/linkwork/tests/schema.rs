@@ -139,6 +139,6 @@ fn integrator_and_analysis_names_are_serdes() {
 fn an_unknown_section_lists_the_sections() {
     let Err(problems) = parse_spec("bodies: {}\nbogus: 1\n") else { panic!("`bogus` was read") };
     let sections =
-        "name, parameters, description, gravity, ground, bodies, joints, drivers, forces, measures, paths, summaries, tables, branches, branch, analyses";
+        "name, parameters, display, description, gravity, ground, bodies, joints, drivers, forces, measures, paths, summaries, tables, branches, branch, analyses";
     assert_eq!(problems[0].to_string(), format!("bogus: unknown section; expected one of {sections}"));
 }

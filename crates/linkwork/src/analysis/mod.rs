@@ -19,7 +19,7 @@ pub(crate) use branches::assemble_into;
 pub use branches::{assemble_on_branches, blame};
 pub use check::{check, AnalysisCheck, CheckReport, SystemCheck};
 pub(crate) use inverse::reaction_columns;
-pub use inverse::run_inverse;
+pub use inverse::{run_inverse, INVERSE_COLUMNS};
 pub use kinematic::run_kinematic;
 pub use modes::run_modes;
 pub use run::Overrides;

@@ -42,7 +42,7 @@ use crate::error::seconds;
 pub const TIME: &str = "time";
 
 /// The aggregations, by name.
-const AGGREGATIONS: &[&str] = &["max", "min", "peak", "integral", "mean", "rms", "initial", "final", "at"];
+pub const AGGREGATIONS: &[&str] = &["max", "min", "peak", "integral", "mean", "rms", "initial", "final", "at"];
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Kind {

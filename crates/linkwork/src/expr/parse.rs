@@ -668,8 +668,9 @@ impl<'a> Parser<'a, '_> {
     /// Emits a name used as an operand: a built-in constant, a named value of the caller's or a
     /// resolved variable.
     fn name(&mut self, name: &str, start: usize) -> Result<(), ExprError> {
+        // The caller's names first: a model's parameter may be called `e` (it may not be `pi`).
         let constant = CONSTANTS.iter().find(|(n, _)| *n == name).map(|&(_, v)| v);
-        if let Some(v) = constant.or_else(|| self.names.constant(name)) {
+        if let Some(v) = self.names.constant(name).or(constant) {
             self.code.push(Op::Const(v));
             return Ok(());
         }

@@ -140,6 +140,9 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
                 }))
                 .collect(),
             parameters: spec.parameters.clone(),
+            parameter_units: IndexMap::new(),
+            display: super::units::Display::read(&spec.display).unwrap_or_default(),
+            warnings: Vec::new(),
             set: Vec::new(),
             placed: cx.placed,
             branches,

@@ -444,6 +444,14 @@ pub struct Model {
     pub table_files: Vec<String>,
     /// The parameters' values used, SI, in file order (the file's, with [`Model::set`] over them).
     pub parameters: IndexMap<String, f64>,
+    /// The unit the file writes each parameter in, for those it writes with one (`r: mm` for
+    /// `r: 100 mm`): what a value given from outside is shown in.
+    pub parameter_units: IndexMap<String, String>,
+    /// The units results are shown in (the file's `display:` section; SI without one).
+    pub display: units::Display,
+    /// Warnings about the parameter values given from outside ([`Model::set`]): a bare number
+    /// far from the value the file writes with a unit, each `parameters.<name>: ...`.
+    pub warnings: Vec<String>,
     /// Parameter values given from outside (`--set`, [`Model::with_parameters`]) over the file's:
     /// `(name, text)`, the text a bare number (SI) or a number with a unit.
     pub set: Vec<(String, String)>,
@@ -506,7 +514,8 @@ impl Model {
         let parsed = parse::parse_document_with(document, set).map_err(Error::Model)?;
         match compile_partial(&parsed.spec, &parsed.broken, &folder) {
             Ok(model) if parsed.problems.is_empty() => {
-                Ok(Model { source: text.to_string(), set: set.to_vec(), folder, ..model })
+                let (parameter_units, warnings) = (parsed.parameter_units, parsed.warnings);
+                Ok(Model { source: text.to_string(), set: set.to_vec(), folder, parameter_units, warnings, ..model })
             }
             Ok(_) => Err(Error::Model(parsed.problems)),
             // A problem the reading already reported is not reported again by the compilation

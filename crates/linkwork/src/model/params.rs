@@ -8,22 +8,32 @@
 //! (drivers, forces, measures, expression joints) keep their text and see the parameters as
 //! named numbers when they are compiled ([`crate::expr::Expr::parse_with`]).
 
-use super::units::{quantity, Dim};
+use super::units::{quantity, si_unit, unit_text, Dim};
 use crate::error::Problem;
 use crate::expr::Expr;
 use serde_yaml_ng::{Mapping, Value};
 
-/// A parameter: its name, its value in SI and the dimension of the unit it was written with
-/// (`None` for a bare number or an expression, whose dimension is not inferred).
+/// A parameter: its name, its value in SI, the dimension of the unit it was written with
+/// (`None` for a bare number or an expression, whose dimension is not inferred), the unit the
+/// file writes it in (`mm` for `r: 100 mm`), and a warning about the value given from outside.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Parameter {
     pub name: String,
     pub value: f64,
     pub dim: Option<Dim>,
+    pub unit: Option<String>,
+    pub warning: Option<String>,
 }
 
-/// Names a parameter may not take: time, the built-in constants.
-const RESERVED: &[&str] = &["t", "pi", "e"];
+/// Names a parameter may not take: time, and pi. Euler's number `e` may be a parameter's name
+/// when nothing in the parameters before it uses `e` (it then means the parameter everywhere).
+const RESERVED: &[&str] = &["t", "pi"];
+
+/// A bare number given from outside for a parameter the file writes with a unit is SI; more than
+/// this factor from the file's value (either way) it is most likely meant in the file's unit
+/// (`--set r=120` for `r: 100 mm`, a factor of 1200), and a warning says so. A real change of
+/// design is rarely a hundredfold; mm against m is a thousandfold.
+const FAR_FACTOR: f64 = 100.0;
 
 /// The value of a parameter list (names in `params`) as an expression's named constant.
 pub fn lookup(params: &[Parameter]) -> impl Fn(&str) -> Option<f64> + '_ {
@@ -48,6 +58,8 @@ pub fn evaluate(
         }
     };
     let names: Vec<String> = entries.keys().filter_map(|k| k.as_str().map(str::to_string)).collect();
+    // The parameters that use Euler's number `e` (any before a parameter called `e`).
+    let mut euler_users: Vec<String> = Vec::new();
     for (name, _) in overrides {
         if !names.contains(name) {
             let known = if names.is_empty() { "none".to_string() } else { names.join(", ") };
@@ -68,41 +80,88 @@ pub fn evaluate(
         if !identifier || RESERVED.contains(&name) {
             problems.push(Problem::new(
                 &path,
-                "a parameter's name must be an identifier (letters, digits, _) other than t, pi and e",
+                "a parameter's name must be an identifier (letters, digits, _) other than t and pi",
             ));
             continue;
         }
+        if name == "e" {
+            if let Some(user) = euler_users.first() {
+                problems.push(Problem::new(
+                    &path,
+                    format!(
+                        "parameters.{} before it uses e as Euler's number, and a parameter e would mean it \
+                         there too; rename this parameter (e_ or ecc, say) or write exp(1) for Euler's number",
+                        user
+                    ),
+                ));
+                continue;
+            }
+        }
         let given = overrides.iter().rev().find(|(n, _)| n == name).map(|(_, text)| text.as_str());
-        let (value, dim) = match parameter(value, given, &params, name, &names) {
+        let euler = std::cell::Cell::new(false);
+        // The unit the file writes the value in: its own (`100 mm`), or that of the one
+        // parameter it names (`L2: L`).
+        let unit = match value.as_str().map(str::trim) {
+            Some(text) => unit_text(text)
+                .map(str::to_string)
+                .or_else(|| params.iter().find(|p| p.name == text).and_then(|p| p.unit.clone())),
+            None => None,
+        };
+        let (value, dim, warning) = match parameter(value, given, &params, name, &names, &euler) {
             Ok(v) => v,
             Err(e) => {
                 // Kept as not a number, so that what uses it is not reported again.
                 if !e.is_empty() {
                     problems.push(Problem::new(&path, e));
                 }
-                (f64::NAN, None)
+                (f64::NAN, None, None)
             }
         };
-        params.push(Parameter { name: name.to_string(), value, dim });
+        if euler.get() {
+            euler_users.push(name.to_string());
+        }
+        let warning = warning.map(|w| format!("{path}: {w}"));
+        params.push(Parameter { name: name.to_string(), value, dim, unit, warning });
     }
     params
 }
 
 /// One parameter's value and dimension: the file's `value`, or `given` from outside over it (a
-/// bare number SI with the file's dimension; with a unit, of the file's dimension).
+/// bare number SI with the file's dimension; with a unit, of the file's dimension), and a warning
+/// when a bare number is far from the value the file writes with a unit ([`FAR_FACTOR`]).
+/// `euler` is set when the file's value uses Euler's number `e`.
 fn parameter(
     value: &Value,
     given: Option<&str>,
     params: &[Parameter],
     name: &str,
     names: &[String],
-) -> Result<(f64, Option<Dim>), String> {
-    let (file, dim) = number(value, params, name, names)?;
+    euler: &std::cell::Cell<bool>,
+) -> Result<(f64, Option<Dim>, Option<String>), String> {
+    let (file, dim) = number(value, params, name, names, euler)?;
+    let mut warning = None;
     let (v, d) = match given {
         None => (file, dim),
         Some(text) => match text.trim().parse::<f64>() {
-            Ok(v) => (v, dim),
-            Err(_) => match number(&Value::String(text.to_string()), params, name, names)? {
+            Ok(v) => {
+                let ratio = (v / file).abs();
+                if let (Some(d), Some(written)) = (dim, value.as_str().filter(|t| unit_text(t).is_some())) {
+                    if ratio.is_finite() && ratio != 0.0 && !(1.0 / FAR_FACTOR..=FAR_FACTOR).contains(&ratio) {
+                        let unit = unit_text(written).unwrap_or_default();
+                        let far =
+                            if ratio > 1.0 { format!("{ratio:.0} times") } else { format!("1/{:.0} of", 1.0 / ratio) };
+                        let si = si_unit(d).map_or(String::new(), |u| format!(" {u}"));
+                        let text = text.trim();
+                        warning = Some(format!(
+                            "the bare number {text} is read as SI, {text}{si}, {far} the file's value {}; \
+                             write {name}='{text} {unit}' to give it in {unit}",
+                            written.trim()
+                        ));
+                    }
+                }
+                (v, dim)
+            }
+            Err(_) => match number(&Value::String(text.to_string()), params, name, names, euler)? {
                 (_, Some(d)) if dim.is_some_and(|f| f != d) => {
                     let expected = dim.map_or(String::new(), |f| f.to_string());
                     return Err(format!("'{text}' is {d}, expected {expected} (the dimension of the file's value)"));
@@ -112,7 +171,7 @@ fn parameter(
         },
     };
     if v.is_finite() {
-        Ok((v, d))
+        Ok((v, d, warning))
     } else {
         Err(format!("evaluates to {v}; expected a finite number"))
     }
@@ -120,8 +179,14 @@ fn parameter(
 
 /// A value written where a number goes: a number, a number with a unit, or an expression of the
 /// parameters `params` (`own` is the parameter being defined, if any, for the message of a
-/// cycle). The SI value and the unit's dimension.
-fn number(value: &Value, params: &[Parameter], own: &str, names: &[String]) -> Result<(f64, Option<Dim>), String> {
+/// cycle). The SI value and the unit's dimension; `euler` is set when it uses Euler's number `e`.
+fn number(
+    value: &Value,
+    params: &[Parameter],
+    own: &str,
+    names: &[String],
+    euler: &std::cell::Cell<bool>,
+) -> Result<(f64, Option<Dim>), String> {
     match value {
         Value::Number(n) => n.as_f64().map(|v| (v, None)).ok_or_else(|| format!("expected a number, found {n}")),
         Value::String(text) => {
@@ -135,6 +200,7 @@ fn number(value: &Value, params: &[Parameter], own: &str, names: &[String]) -> R
             let known = |name: &str| {
                 let v = lookup(params)(name);
                 failed.set(failed.get() || v.is_some_and(f64::is_nan));
+                euler.set(euler.get() || (name == "e" && v.is_none()));
                 v
             };
             let expr = Expr::parse_with(text, &known, &mut |name| {
@@ -288,7 +354,7 @@ fn numbers(path: &str, value: &mut Value, f: Field, params: &[Parameter], proble
             if matches!(path.rsplit('.').next(), Some("point" | "point_i" | "point_j" | "position")) {
                 return;
             }
-            match number(value, params, "", &[]) {
+            match number(value, params, "", &[], &std::cell::Cell::new(false)) {
                 Ok((v, dim)) => {
                     let wrong = match (f, dim) {
                         (Field::Dim(want), Some(d)) if d != want => Some(format!("is {d}, expected {want}")),
@@ -352,7 +418,7 @@ mod tests {
             ("{a: 2*b, b: 1}", "parameters.a", "written before it"),
             ("{a: a + 1}", "parameters.a", "cannot use itself"),
             ("{a: 1, b: 2*c}", "parameters.b", "unknown name 'c'"),
-            ("{t: 1}", "parameters.t", "other than t, pi and e"),
+            ("{t: 1}", "parameters.t", "other than t and pi"),
             ("{a: 1e308, b: a*10}", "parameters.b", "finite"),
             ("{a: 3 furlongs}", "parameters.a", "unknown unit"),
         ] {
@@ -372,6 +438,47 @@ mod tests {
         assert!(problems[0].message.contains("is a mass, expected a length"), "{problems:?}");
         let (_, problems) = params("{r: 100 mm}", &[("s", "1")]);
         assert!(problems[0].path == "parameters.s" && problems[0].message.contains("defines: r"), "{problems:?}");
+    }
+
+    /// The rule for a bare number from outside: SI, with a warning beyond a factor of 100 from
+    /// the value the file writes with a unit, and none within it, none for a value with a unit
+    /// and none for a parameter the file writes bare.
+    #[test]
+    fn a_bare_number_is_si_and_far_from_the_files_value_is_warned_of() {
+        let (p, problems) = params("{m: 15 mm, L: 0.3, a: 20 deg}", &[("m", "16"), ("L", "300"), ("a", "0.5")]);
+        assert!(problems.is_empty(), "{problems:?}");
+        assert_eq!(p[0].value, 16.0);
+        assert_eq!(p[0].unit.as_deref(), Some("mm"));
+        let w = p[0].warning.as_deref().expect("16 m is 1067 times 15 mm");
+        assert!(w.contains("read as SI, 16 m, 1067 times the file's value 15 mm") && w.contains("m='16 mm'"), "{w}");
+        // L is written bare (SI): 300 is what it says. 0.5 rad is 1.4 times 20 deg.
+        assert_eq!((p[1].warning.as_ref(), p[2].warning.as_ref()), (None, None));
+        let (p, _) = params("{m: 15 mm}", &[("m", "0.016"), ("m", "16 mm")]);
+        assert!(p[0].warning.is_none() && (p[0].value - 0.016).abs() < 1e-17, "{p:?}");
+        // Just inside and just outside the factor, both ways: 15 mm * 100 = 1.5 m.
+        for (given, warned) in [("1.5", false), ("1.51", true), ("0.00015", false), ("0.000149", true)] {
+            let (p, _) = params("{m: 15 mm}", &[("m", given)]);
+            assert_eq!(p[0].warning.is_some(), warned, "{given}: {:?}", p[0].warning);
+        }
+        let (p, _) = params("{m: 15 mm}", &[("m", "0.0001")]);
+        assert!(p[0].warning.as_deref().unwrap_or_default().contains("1/150 of the file's value"), "{p:?}");
+    }
+
+    #[test]
+    fn e_is_a_parameter_unless_one_before_it_uses_eulers_number() {
+        let (p, problems) = params("{e: 12 mm, d: 2*e}", &[]);
+        assert!(problems.is_empty(), "{problems:?}");
+        assert!((p[1].value - 0.024).abs() < 1e-17);
+        let (p, problems) = params("{g: e^2}", &[]);
+        assert!(problems.is_empty() && (p[0].value - std::f64::consts::E.powi(2)).abs() < 1e-15);
+        let (_, problems) = params("{g: 2*e, e: 12 mm}", &[]);
+        assert_eq!(problems.len(), 1, "{problems:?}");
+        assert_eq!(problems[0].path, "parameters.e");
+        assert!(problems[0].message.contains("parameters.g before it uses e as Euler's number"), "{problems:?}");
+        assert!(problems[0].message.contains("rename this parameter"), "{problems:?}");
+        // A number's exponent is no use of e.
+        let (_, problems) = params("{g: 3e2, e: 1}", &[]);
+        assert!(problems.is_empty(), "{problems:?}");
     }
 
     #[test]

@@ -9,6 +9,7 @@ use super::spec::{
     AnalysisSpec, BodySpec, BranchMode, BranchSpec, DriverSpec, ForceSpec, GroundSpec, JointSpec, MeasureSpec,
     ModelSpec, PointMeasure, StandardMeasure, TableSpec, Tagged,
 };
+use super::units::Display;
 use crate::error::Problem;
 use indexmap::IndexMap;
 use serde::de::DeserializeOwned;
@@ -53,6 +54,10 @@ pub struct Parsed {
     pub problems: Vec<Problem>,
     /// `section.name` of each entry that did not deserialize.
     pub broken: Vec<String>,
+    /// The unit the file writes each parameter in, for those it writes with one (`r: mm`).
+    pub parameter_units: IndexMap<String, String>,
+    /// Warnings about the values given from outside, each `parameters.<name>: ...`.
+    pub warnings: Vec<String>,
 }
 
 /// Parse a model file's text. `Err` lists every problem found.
@@ -100,6 +105,8 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
     let parameters = params::evaluate(map.get("parameters"), set, &mut problems);
     params::resolve(&mut map, &parameters, &mut problems);
     let of_numbers = problems.len();
+    let parameter_units = parameters.iter().filter_map(|p| Some((p.name.clone(), p.unit.clone()?))).collect();
+    let warnings = parameters.iter().filter_map(|p| p.warning.clone()).collect();
     let parameters = parameters.into_iter().map(|p| (p.name, p.value)).collect();
     let sections = fields::<ModelSpec>();
     for key in map.keys() {
@@ -116,6 +123,10 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
     let description = get("description").and_then(|v| entry::<String>("description", v, &mut problems));
     let gravity = get("gravity").and_then(|v| entry::<[f64; 2]>("gravity", v, &mut problems));
     let ground = get("ground").and_then(|v| entry::<GroundSpec>("ground", v, &mut problems));
+    let display = get("display").and_then(|v| entry::<IndexMap<String, String>>("display", v, &mut problems));
+    if let Some(Err(more)) = display.as_ref().map(Display::read) {
+        problems.extend(more);
+    }
     if get("bodies").is_none() {
         problems.push(Problem::new("bodies", "missing section: at least one moving body is required"));
     }
@@ -142,6 +153,7 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
     let spec = ModelSpec {
         name,
         parameters,
+        display: display.unwrap_or_default(),
         description,
         gravity,
         ground,
@@ -157,7 +169,7 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
         branch,
         analyses,
     };
-    Ok(Parsed { spec, problems, broken })
+    Ok(Parsed { spec, problems, broken, parameter_units, warnings })
 }
 
 /// A duplicate key's own line: the YAML parser's message (`<path>: duplicate entry with key "a"

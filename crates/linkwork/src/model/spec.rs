@@ -91,6 +91,14 @@ pub struct ModelSpec {
     /// and expressions of time and the state may use them. After reading: the SI values.
     #[serde(default)]
     pub parameters: IndexMap<String, f64>,
+    /// The units results are shown in (the command line's output, the report, `Results.plot`),
+    /// by quantity: `{length: mm, angle: deg, force: N, torque: N m}`; the quantities are
+    /// `length`, `angle`, `time`, `velocity`, `angular_velocity`, `acceleration`,
+    /// `angular_acceleration`, `force`, `torque`, `energy`, `power` and `mass`. A velocity or an
+    /// acceleration not named follows the length (angle) and time shown (`mm/s`). Files stay SI
+    /// (`linkwork run --units display` writes `results.csv` in these units).
+    #[serde(default)]
+    pub display: IndexMap<String, String>,
     /// Free text.
     #[serde(default)]
     pub description: Option<String>,

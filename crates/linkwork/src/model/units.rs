@@ -37,6 +37,14 @@ impl Dim {
     pub const ROTATIONAL_STIFFNESS: Dim = Dim([2, 1, -2, -1]);
     /// N m s/rad.
     pub const ROTATIONAL_DAMPING: Dim = Dim([2, 1, -1, -1]);
+    /// rad/s^2.
+    pub const ANGULAR_ACCELERATION: Dim = Dim([0, 0, -2, 1]);
+    /// N = kg m/s^2.
+    pub const FORCE: Dim = Dim([1, 1, -2, 0]);
+    /// N m, and J: a torque and an energy have the same dimension.
+    pub const TORQUE: Dim = Dim([2, 1, -2, 0]);
+    /// W = J/s.
+    pub const POWER: Dim = Dim([2, 1, -3, 0]);
 
     /// `self` times `other^power`; `None` when an exponent leaves the `i8` range.
     fn times(self, other: Dim, power: i8) -> Option<Dim> {
@@ -63,8 +71,10 @@ const NAMES: &[(Dim, &str)] = &[
     (Dim::DAMPING, "a damping (force per velocity)"),
     (Dim::ROTATIONAL_STIFFNESS, "a rotational stiffness (torque per angle)"),
     (Dim::ROTATIONAL_DAMPING, "a rotational damping (torque per angular velocity)"),
-    (Dim([1, 1, -2, 0]), "a force"),
-    (Dim([2, 1, -2, 0]), "a torque or an energy"),
+    (Dim::ANGULAR_ACCELERATION, "an angular acceleration"),
+    (Dim::FORCE, "a force"),
+    (Dim::TORQUE, "a torque or an energy"),
+    (Dim::POWER, "a power"),
 ];
 
 impl fmt::Display for Dim {
@@ -86,7 +96,7 @@ const L: Dim = Dim::LENGTH;
 const M: Dim = Dim::MASS;
 const T: Dim = Dim::TIME;
 const A: Dim = Dim::ANGLE;
-const N: Dim = Dim([1, 1, -2, 0]);
+const N: Dim = Dim::FORCE;
 const PI: f64 = std::f64::consts::PI;
 
 /// Every unit a model file may write: its name, its factor to SI and its dimension. Factors are
@@ -113,8 +123,108 @@ pub const UNITS: &[(&str, f64, Dim)] = &[
     ("N", 1.0, N),
     ("kN", 1e3, N),
     ("mN", 1e-3, N),
-    ("J", 1.0, Dim([2, 1, -2, 0])),
+    ("J", 1.0, Dim::TORQUE),
+    ("W", 1.0, Dim::POWER),
+    ("kW", 1e3, Dim::POWER),
 ];
+
+/// The quantities of results, each with its dimension and its SI unit: what a result column
+/// holds ([`crate::Model::column_quantity`]) and what a model file's `display:` section may show
+/// in other units. A torque and an energy share a dimension and are told apart by the column.
+pub const QUANTITIES: &[(&str, Dim, &str)] = &[
+    ("length", Dim::LENGTH, "m"),
+    ("angle", Dim::ANGLE, "rad"),
+    ("time", Dim::TIME, "s"),
+    ("velocity", Dim::VELOCITY, "m/s"),
+    ("angular_velocity", Dim::ANGULAR_VELOCITY, "rad/s"),
+    ("acceleration", Dim::ACCELERATION, "m/s^2"),
+    ("angular_acceleration", Dim::ANGULAR_ACCELERATION, "rad/s^2"),
+    ("force", Dim::FORCE, "N"),
+    ("torque", Dim::TORQUE, "N m"),
+    ("energy", Dim::TORQUE, "J"),
+    ("power", Dim::POWER, "W"),
+    ("mass", Dim::MASS, "kg"),
+];
+
+/// Quantities a `display:` section derives from two others when it does not name them: a
+/// velocity in the length and time units shown (`mm/s` from `length: mm`), and so on.
+const DERIVED: &[(&str, &str, &str)] = &[
+    ("velocity", "length", "time"),
+    ("angular_velocity", "angle", "time"),
+    ("acceleration", "length", "time^2"),
+    ("angular_acceleration", "angle", "time^2"),
+];
+
+/// The units results are shown in: each of [`QUANTITIES`] with its unit and that unit's factor
+/// to SI (a value shown is the SI value divided by the factor). SI unless a model file's
+/// `display:` section says otherwise.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Display {
+    /// `(quantity, unit, factor to SI)` in the order of [`QUANTITIES`].
+    pub units: Vec<(&'static str, String, f64)>,
+}
+
+impl Default for Display {
+    fn default() -> Self {
+        Display { units: QUANTITIES.iter().map(|&(q, _, si)| (q, si.to_string(), 1.0)).collect() }
+    }
+}
+
+impl Display {
+    /// The units of a `display:` section (a quantity's name to a unit). `Err` lists every entry
+    /// that is not a quantity or whose unit cannot be read or is not of the quantity's dimension,
+    /// at `display.<quantity>`.
+    pub fn read(section: &indexmap::IndexMap<String, String>) -> Result<Display, Vec<crate::error::Problem>> {
+        use crate::error::Problem;
+        let mut problems = Vec::new();
+        let mut display = Display::default();
+        for (name, text) in section {
+            let path = format!("display.{name}");
+            let Some(&(quantity, dim, _)) = QUANTITIES.iter().find(|(q, _, _)| q == name) else {
+                let known: Vec<&str> = QUANTITIES.iter().map(|(q, _, _)| *q).collect();
+                problems.push(Problem::new(path, format!("unknown quantity; expected one of {}", known.join(", "))));
+                continue;
+            };
+            match unit(text) {
+                Ok((factor, d)) if d == dim => display.set(quantity, text.trim(), factor),
+                Ok((_, d)) => problems.push(Problem::new(path, format!("'{text}' is {d}, expected {dim}"))),
+                Err(e) => problems.push(Problem::new(path, e)),
+            }
+        }
+        // Derived units: `mm/s` read by the same parser as any unit, so its factor is its own.
+        for &(quantity, of, per) in DERIVED {
+            if section.contains_key(quantity) {
+                continue;
+            }
+            let (top, bottom) = (display.unit(of).to_string(), per.replace("time", display.unit("time")));
+            if let Ok((factor, _)) = unit(&format!("{top}/{bottom}")) {
+                display.set(quantity, &format!("{top}/{bottom}"), factor);
+            }
+        }
+        if problems.is_empty() {
+            Ok(display)
+        } else {
+            Err(problems)
+        }
+    }
+
+    /// The unit `quantity` is shown in (one of [`QUANTITIES`]).
+    pub fn unit(&self, quantity: &str) -> &str {
+        self.units.iter().find(|(q, _, _)| *q == quantity).map_or("", |(_, u, _)| u.as_str())
+    }
+
+    fn set(&mut self, quantity: &str, text: &str, factor: f64) {
+        if let Some(entry) = self.units.iter_mut().find(|(q, _, _)| *q == quantity) {
+            entry.1 = text.to_string();
+            entry.2 = factor;
+        }
+    }
+}
+
+/// The SI unit of the dimension `dim` (`m` for a length), if results have a quantity of it.
+pub fn si_unit(dim: Dim) -> Option<&'static str> {
+    QUANTITIES.iter().find(|(_, d, _)| *d == dim).map(|(_, _, u)| *u)
+}
 
 /// The factor to SI and the dimension of a unit such as `kg m^2`, `N/m`, `N*m`, `m/s^2`,
 /// `N m s/rad`. `Err` says what is wrong.
@@ -170,6 +280,15 @@ pub fn quantity(text: &str) -> Option<Result<(f64, Dim), String>> {
     }
     let value: f64 = text[..end].parse().ok()?;
     Some(unit(rest).map(|(f, d)| (value * f, d)))
+}
+
+/// The unit of a number followed by a unit (`mm` of `"40 mm"`), `None` when `text` is not one
+/// that reads.
+pub fn unit_text(text: &str) -> Option<&str> {
+    let text = text.trim();
+    let end = number_end(text)?;
+    quantity(text)?.ok()?;
+    Some(text[end..].trim())
 }
 
 /// The end of a leading decimal number (sign, digits, point, exponent), if `text` starts with
@@ -253,6 +372,28 @@ mod tests {
         for text in ["L/2", "2*L", "L", "3", "3e4", "-0.5", "(2) mm", "pi/2"] {
             assert!(quantity(text).is_none(), "{text}");
         }
+    }
+
+    #[test]
+    fn a_display_section_sets_units_and_derives_rates() {
+        let section: indexmap::IndexMap<String, String> =
+            [("length", "mm"), ("angle", "deg"), ("torque", "N mm")].map(|(a, b)| (a.into(), b.into())).into();
+        let d = Display::read(&section).unwrap();
+        let factor = |q: &str| d.units.iter().find(|u| u.0 == q).unwrap().2;
+        assert_eq!((d.unit("length"), factor("length")), ("mm", 1e-3));
+        assert_eq!((d.unit("velocity"), d.unit("angular_acceleration")), ("mm/s", "deg/s^2"));
+        // Against the definitions: a degree a second is pi/180 rad/s; a N mm is 1e-3 N m.
+        assert!((factor("angular_velocity") - PI / 180.0).abs() < 1e-18);
+        assert!((factor("torque") - 1e-3).abs() < 1e-18);
+        assert_eq!((d.unit("force"), factor("force"), d.unit("time")), ("N", 1.0, "s"));
+        assert_eq!(Display::read(&indexmap::IndexMap::new()).unwrap(), Display::default());
+        let bad: indexmap::IndexMap<String, String> =
+            [("length", "deg"), ("speed", "mm/s"), ("angle", "furlong")].map(|(a, b)| (a.into(), b.into())).into();
+        let problems = Display::read(&bad).unwrap_err();
+        let said: Vec<(String, String)> = problems.into_iter().map(|p| (p.path, p.message)).collect();
+        assert_eq!(said[0], ("display.length".into(), "'deg' is an angle, expected a length".into()));
+        assert!(said[1].0 == "display.speed" && said[1].1.contains("expected one of length, angle"), "{said:?}");
+        assert!(said[2].0 == "display.angle" && said[2].1.contains("unknown unit 'furlong'"), "{said:?}");
     }
 
     #[test]

@@ -33,7 +33,7 @@ mod output;
 pub use crate::model::spec::{Formulation, IntegratorKind};
 pub use dae::{Dae, LinearStats, EPS_REL};
 pub(crate) use dae::{FRICTION_RTOL, NEWTON_FRICTION_ITERATIONS};
-pub use output::{factor_error, Output, ENERGY_COLUMNS};
+pub use output::{factor_error, Output, CONTACT_QUANTITIES, ENERGY_COLUMNS};
 
 use super::assemble_into;
 use super::setup::{fail, held};
