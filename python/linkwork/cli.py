@@ -39,7 +39,7 @@ from typing import Any
 from . import _linkwork
 from .errors import AssemblyError, FileError, InternalError, LinkworkError, ModelError, SolverError, model_error
 from .model import Model
-from .results import Results, Summary
+from .results import Results, Summary, branch_lines
 from .units import Units
 
 EXIT_OK = 0
@@ -599,20 +599,6 @@ def _print_system(title: str, system: dict[str, Any], bodies: list[str]) -> None
         for i, body in enumerate(bodies):
             cells = " ".join(f"{v:+11.3e}" for v in change[3 * i : 3 * i + 3])
             print(f"    {body:{width}}  {cells}")
-
-
-def branch_lines(branches: list[dict[str, Any]]) -> list[str]:
-    """Each dyad's assembly mode in words (``branch F  right of C -> D (drawn right)``), from a
-    summary's or a check's ``branches``."""
-    lines = []
-    for b in branches:
-        e, d = b["line"]
-        side = f"{b['side']} of" if b["side"] else "on"
-        notes = [f"drawn {b['drawn']}" if b["drawn"] else "drawn on the line"]
-        if b["declared"]:
-            notes.append(f"declared {b['declared']}")
-        lines.append(f"branch {b['joint']:<11} {side} {e} -> {d} ({', '.join(notes)}; bodies {', '.join(b['bodies'])})")
-    return lines
 
 
 # --- schema --------------------------------------------------------------------------------------

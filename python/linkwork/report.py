@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from .results import Summary
+from .results import Summary, branch_words
 from .units import UNKNOWN, Units
 
 #: Animation frames drawn at most: 30 frames a second for 10 s of playback. Each frame carries every
@@ -741,7 +741,9 @@ def plots(run: Run, against: tuple[str, np.ndarray] | None = None) -> list[dict[
             notes.append(f"the {MAX_CURVES} of {len(columns)} that vary most")
             columns = [c for c in columns if c in kept]
         if constant:
-            values = ", ".join(f"{c} = {_text(float(np.asarray(cols[c], dtype=float)[0]))}" for c in constant[:MAX_CONSTANTS])
+            values = ", ".join(
+                f"{c} = {_text(float(run.units.shown(c, cols[c])[0]))} {run.units.column_unit(c)}" for c in constant[:MAX_CONSTANTS]
+            )
             more = f" and {len(constant) - MAX_CONSTANTS} more" if len(constant) > MAX_CONSTANTS else ""
             notes.append(f"constant: {html.escape(values)}{more}")
         if not columns:
@@ -885,6 +887,8 @@ def summary_html(summary: Summary, units: Units | None = None) -> str:
     if "assembly" in s:
         head.append(("assembly", s["assembly"]))
     parts.append("<h3>Model</h3>" + _table(head))
+    if s.branches:
+        parts.append("<h3>Branches</h3>" + _table([(b["joint"], branch_words(b)) for b in s.branches]))
     stats = s.statistics
     if isinstance(stats, dict) and stats:
         parts.append("<h3>Solver statistics</h3>" + _table(list(stats.items())))

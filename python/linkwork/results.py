@@ -6,7 +6,7 @@ import dataclasses
 import difflib
 import os
 import shutil
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast, overload
 
@@ -397,3 +397,19 @@ def _unknown(what: str, name: str, known: Sequence[str], where: str = "") -> str
     if close:
         return f"no {what} {name!r}{where}; did you mean {' or '.join(repr(c) for c in close)}?"
     return f"no {what} {name!r}{where}; there are {', '.join(known) or 'none'}"
+
+
+def branch_words(branch: Mapping[str, Any]) -> str:
+    """A dyad's assembly mode in words, from an entry of a summary's or a check's ``branches``:
+    ``right of C -> D (drawn right, declared right; bodies linkf, foot)``."""
+    e, d = branch["line"]
+    side = f"{branch['side']} of" if branch["side"] else "on"
+    notes = [f"drawn {branch['drawn']}" if branch["drawn"] else "drawn on the line"]
+    if branch["declared"]:
+        notes.append(f"declared {branch['declared']}")
+    return f"{side} {e} -> {d} ({', '.join(notes)}; bodies {', '.join(branch['bodies'])})"
+
+
+def branch_lines(branches: Sequence[Mapping[str, Any]]) -> list[str]:
+    """Each dyad's assembly mode, a line each: ``branch F  right of C -> D (...)``."""
+    return [f"branch {b['joint']:<11} {branch_words(b)}" for b in branches]
