@@ -231,6 +231,9 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
             EquilibriumError::new_err(message),
             failure(*time, vec![])?.with("coordinates", coordinates)?.with("index", index)?.with("cause", cause)?,
         ),
+        Error::Branch { time, joint, detail } => {
+            (SolverError::new_err(message), failure(*time, vec![joint.clone()])?.with("detail", detail)?)
+        }
         Error::Friction { time, row, detail } => {
             (SolverError::new_err(message), failure(*time, vec![row.to_string()])?.with("detail", detail)?)
         }

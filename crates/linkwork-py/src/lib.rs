@@ -137,6 +137,9 @@ impl PyModel {
             .into_iter()
             .map(|row| match row {
                 Ok(values) => ("ok".to_string(), Some(values)),
+                // A variant that cannot keep the nominal model's branches: its own status, so that
+                // a table of them is read at a glance.
+                Err(error @ linkwork::Error::Branch { .. }) => (format!("other branch: {error}"), None),
                 Err(error) => {
                     let message = error.to_string();
                     // The class of each kind of error found once: making an exception takes tens

@@ -135,6 +135,18 @@ pub enum Error {
         /// What did not converge, by how much, and what it may mean.
         detail: String,
     },
+    /// A dyad left the branch it must keep: a declared branch that cannot be assembled, or a
+    /// change of branch during a run that must keep one (`branch: strict`, a sweep's variants).
+    #[error("branch of joint {joint} at t = {when} s: {detail}", when = seconds(.time))]
+    Branch {
+        /// When the dyad left its branch (the assembly's time, or when its middle pin crossed
+        /// its line), s.
+        time: f64,
+        /// The dyad's middle pin.
+        joint: String,
+        /// What happened, in words.
+        detail: String,
+    },
     /// Static equilibrium was not found: Newton with a line search, descents and load stepping
     /// all stopped short of the tolerance.
     #[error("no static equilibrium found at t = {when} s: residual {residual:.3e} (largest in {equation}) after {iterations} Newton iterations, {:.1}% of the applied load reached", 100.0 * .load_fraction, when = seconds(.time))]
@@ -264,6 +276,7 @@ impl Error {
             Error::Singular { rows, .. } | Error::Integration { rows, .. } => rows.iter().collect(),
             Error::Convergence { row, .. } | Error::Assembly { row, .. } | Error::Friction { row, .. } => vec![row],
             Error::Equilibrium { equation: Unbalanced::Row(row), .. } => vec![row],
+            Error::Branch { joint, .. } => return vec![joint.clone()],
             _ => vec![],
         };
         let mut out: Vec<String> = Vec::new();

@@ -16,7 +16,7 @@ pub use summary::{
     Residuals, StaticStats, Statistics, Summary,
 };
 
-use crate::error::{Error, Problem, RowName};
+use crate::error::{Error, Problem};
 use crate::expr::functional::{EvalError, Functional, TIME};
 use crate::model::spec::{BranchMode, OutputsSpec};
 use crate::model::structure::BranchWatch;
@@ -262,12 +262,7 @@ impl Results {
         }
         if let Some(change) = self.branches.push(t, q) {
             if self.strict_branches {
-                let rows = ["x", "y"].map(|e| RowName { element: change.joint.clone(), equation: e.into() }).to_vec();
-                return Err(Error::Singular {
-                    time: change.time,
-                    rows,
-                    detail: format!("{} (branch: strict)", change.message()),
-                });
+                return Err(change.error("branch: strict"));
             }
             self.summary.warnings.push(change.message());
             self.summary.branch_changes.push(change);
@@ -565,6 +560,7 @@ impl Results {
                 Error::Singular { time, .. }
                 | Error::Convergence { time, .. }
                 | Error::Friction { time, .. }
+                | Error::Branch { time, .. }
                 | Error::Equilibrium { time, .. }
                 | Error::NoEquilibrium { time, .. }
                 | Error::Assembly { time, .. }

@@ -11,6 +11,7 @@
 
 use crate::error::{Error, Problem};
 use crate::expr::functional::Functional;
+use crate::model::structure::Dyad;
 use crate::progress::Progress;
 use crate::{Model, Overrides, Results};
 use rayon::prelude::*;
@@ -63,14 +64,24 @@ pub fn sweep(
     let t_start = model.analysis(analysis)?.t_start;
     // The file's text parsed once; each variant reads its parameters from the document.
     let document = model.document()?;
+    // Every variant is assembled on the nominal model's branches and keeps them through its run,
+    // so that a table never mixes assembly modes unseen (docs/model-format.md, "Branches").
+    let nominal = crate::analysis::assembled_branches(model, analysis);
     let one = |values: &Vec<(String, String)>| -> Row {
         let run = || -> Row {
             // Stopped before this variant began: not compiled, not run.
             if watch.stopped() {
                 return Err(Error::Interrupted { time: t_start });
             }
-            let variant = model.with_parameters_in(&document, values)?;
+            let mut variant = model.with_parameters_in(&document, values)?;
+            variant.branches = nominal
+                .iter()
+                .filter_map(|&(joints, side)| Some((Dyad::new(&variant.joints, &variant.bodies, joints).ok()?, side)))
+                .collect();
             let results = variant.run_watched(analysis, &Overrides::default(), &watch.part()).map_err(|f| f.error)?;
+            if let Some(change) = results.summary.branch_changes.first() {
+                return Err(change.error("a sweep keeps the nominal model's branches"));
+            }
             outputs
                 .iter()
                 .map(|o| {

@@ -276,3 +276,64 @@ fn a_dyad_too_short_to_close_is_named_by_assembly() {
         other => panic!("expected an assembly error, found {other:?}"),
     }
 }
+
+#[test]
+fn a_sweep_keeps_the_nominal_branches_whatever_a_variant_draws() {
+    // The link CF's drawn angle a parameter: at -130 degrees F is drawn right of C -> D (the
+    // nominal), at -110.5 degrees left. Without `branches:` a run of the second alone folds the leg.
+    let text = patch(
+        &example_text("sixbar_leg.yaml"),
+        "branches:\n  B: {line: [A, Q], side: left}\n  F: {line: [C, D], side: right}\n",
+        "",
+    );
+    let text = patch(&text, "  speed: 60 rpm\n", "  speed: 60 rpm\n  alpha: -130 deg\n");
+    let text = patch(&text, "angle: -130 deg, points: {C:", "angle: alpha, points: {C:");
+    let model = Model::from_yaml(&text).unwrap();
+    let folded = model.with_parameters(&[("alpha".into(), "-110.5 deg".into())]).unwrap();
+    let reach = |m: &Model| {
+        let r = m.run("kinematics").unwrap();
+        r.column("foot_x").unwrap().iter().fold(f64::INFINITY, |a, &x| a.min(x))
+    };
+    let (nominal, alone) = (reach(&model), reach(&folded));
+    assert!((nominal - alone).abs() > 1e-3, "the folded leg reaches as far: {nominal} against {alone}");
+    let outputs = [linkwork::sweep::Output::parse("reach", "min(foot_x)").unwrap()];
+    let variants: Vec<Vec<(String, String)>> =
+        ["-130 deg", "-110.5 deg"].iter().map(|a| vec![("alpha".to_string(), a.to_string())]).collect();
+    let rows = linkwork::sweep::sweep(
+        &model,
+        "kinematics",
+        &variants,
+        &outputs,
+        Some(1),
+        &linkwork::progress::Progress::new(),
+    )
+    .unwrap();
+    for row in &rows {
+        let values = row.as_ref().unwrap_or_else(|e| panic!("{e}"));
+        // The same mechanism on the same branch: the same Newton iterates to round-off.
+        assert!((values[0] - nominal).abs() < 1e-12, "{} against {nominal}", values[0]);
+    }
+}
+
+#[test]
+fn a_change_of_branch_between_two_outputs_is_found_with_its_time() {
+    let model = Model::from_yaml(&example_text("sixbar_leg.yaml")).unwrap();
+    let report = linkwork::analysis::check(&model).unwrap();
+    let q = report.analyses["kinematics"].system.as_ref().unwrap().assembly.q.clone();
+    let foot = structure::dyads(&model, &[0]).into_iter().map(|(d, _)| d).find(|d| d.names(&model)[1] == "F").unwrap();
+    // The foot's dyad mirrored in its line: its sine the same size, the other sign, so that the
+    // line is crossed half way between the two outputs (linear interpolation of the sine).
+    let mirrored = foot.reflected(&q);
+    assert!((foot.sine(&mirrored) + foot.sine(&q)).abs() < 1e-12);
+    let mut watch = structure::BranchWatch::new(&model, &[0]);
+    assert_eq!(watch.push(0.5, &q), None);
+    assert_eq!(watch.push(0.5, &q), None, "no change, no report");
+    let change = watch.push(0.7, &mirrored).expect("a change of branch");
+    assert_eq!((change.joint.as_str(), change.from, change.to), ("F", Side::Right, Side::Left));
+    assert!((change.time - 0.6).abs() < 1e-12, "{}", change.time);
+    assert!(
+        change.message().starts_with("the dyad of joint F changed branch at t = 0.600000 s"),
+        "{}",
+        change.message()
+    );
+}

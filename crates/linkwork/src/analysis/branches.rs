@@ -112,7 +112,7 @@ pub fn assemble_on_branches(
             side_name(got)
         );
         if declared.is_some() || strict {
-            return Err(refuse(dyad, what));
+            return Err(Error::Branch { time: t, joint: f.to_string(), detail: what });
         }
         warnings.push(what);
     }

@@ -10,6 +10,7 @@ use super::{assemble_on_branches, Assembly};
 use crate::constraints::ConfigBuf;
 use crate::error::{Result, RowName};
 use crate::model::spec::AnalysisKind;
+use crate::model::spec::Side;
 use crate::model::structure::Branch;
 use crate::model::Model;
 use crate::system::System;
@@ -116,9 +117,7 @@ pub fn check(model: &Model) -> Result<CheckReport> {
         .analyses
         .values()
         .map(|a| {
-            // Dynamics assembles holding the given coordinates, as the mechanism alone does.
-            let hold = a.kind == AnalysisKind::Dynamic
-                || (a.kind == AnalysisKind::Modes && a.about == crate::model::spec::LinearisePoint::Initial);
+            let hold = holds_given(a);
             // The measures it cannot compute stop it as surely as a missing driver.
             let unavailable: Vec<String> = model.unavailable_measures(a).iter().map(|p| p.to_string()).collect();
             let measures = (!unavailable.is_empty()).then(|| unavailable.join("; "));
@@ -149,6 +148,29 @@ pub fn check(model: &Model) -> Result<CheckReport> {
         analyses,
         placed: model.placed.clone(),
     })
+}
+
+/// Whether `analysis` assembles holding the given coordinates: dynamics does, as the mechanism
+/// alone does, and so does a modes analysis about the initial state.
+pub(crate) fn holds_given(analysis: &crate::model::Analysis) -> bool {
+    analysis.kind == AnalysisKind::Dynamic
+        || (analysis.kind == AnalysisKind::Modes && analysis.about == crate::model::spec::LinearisePoint::Initial)
+}
+
+/// The branches `model`'s analysis `name` assembles on: each dyad's joints `[E, F, D]` and the
+/// side it is assembled on. Empty when it cannot be assembled (the variants of a sweep then
+/// keep no branch of it).
+pub fn assembled_branches(model: &Model, name: &str) -> Vec<([usize; 3], Side)> {
+    let Ok(analysis) = model.analysis(name) else { return Vec::new() };
+    let Ok(system) = check_system(model, &analysis.drivers, holds_given(analysis), analysis.t_start) else {
+        return Vec::new();
+    };
+    let index = |j: &str| model.joints.iter().position(|e| e.name == j);
+    system
+        .branches
+        .iter()
+        .filter_map(|b| Some(([index(&b.line[0])?, index(&b.joint)?, index(&b.line[1])?], b.side?)))
+        .collect()
 }
 
 /// Both warnings of an analysis, one after the other, or the one there is.

@@ -17,7 +17,7 @@ mod statics;
 pub use assembly::{assemble, Assembly};
 pub(crate) use branches::assemble_into;
 pub use branches::{assemble_on_branches, blame};
-pub use check::{check, AnalysisCheck, CheckReport, SystemCheck};
+pub use check::{assembled_branches, check, AnalysisCheck, CheckReport, SystemCheck};
 pub(crate) use inverse::reaction_columns;
 pub use inverse::{run_inverse, INVERSE_COLUMNS};
 pub use kinematic::run_kinematic;

@@ -415,6 +415,15 @@ pub struct BranchChange {
 }
 
 impl BranchChange {
+    /// The change as the error of a run that must keep its branches (`why`: what says so).
+    pub fn error(&self, why: &str) -> crate::error::Error {
+        crate::error::Error::Branch {
+            time: self.time,
+            joint: self.joint.clone(),
+            detail: format!("{} ({why})", self.message()),
+        }
+    }
+
     /// The change in words, for warnings and errors.
     pub fn message(&self) -> String {
         let (f, [e, d]) = (&self.joint, &self.line);
