@@ -104,10 +104,10 @@ pub(crate) enum Impossible {
 
 /// The point at distance `d` from `b` and `e` from `c`, on `side` of the directed line from `b` to
 /// `c` (left: counter-clockwise of it, `(c - b) x (p - b) > 0`): `b + a u + h n`, with `u` the unit
-/// vector from `b` to `c`, `n` it turned by +90 degrees (by -90 degrees on the right), `a = (|bc|^2
-/// + d^2 - e^2) / (2 |bc|)` the distance from `b` of the foot of the altitude along `u` and `h =
-/// sqrt(d^2 - a^2)` the altitude. Written with `d^2 - e^2 = (d - e)(d + e)` and `d^2 - a^2 = (d -
-/// a)(d + a)`, so that a triangle of lengths of any size loses no digits to squaring.
+/// vector from `b` to `c`, `n` it turned by +90 degrees (by -90 degrees on the right), `a` =
+/// `(|bc|^2 + d^2 - e^2) / (2 |bc|)` the distance from `b` of the foot of the altitude along `u`
+/// and `h = sqrt(d^2 - a^2)` the altitude. Written with `d^2 - e^2 = (d - e)(d + e)` and `d^2 -
+/// a^2 = (d - a)(d + a)`, so that a triangle of lengths of any size loses no digits to squaring.
 pub(crate) fn triangle(b: [f64; 2], c: [f64; 2], [d, e]: [f64; 2], side: Side) -> Result<[f64; 2], Impossible> {
     let bc = (c[0] - b[0]).hypot(c[1] - b[1]);
     // Also refuses a NaN distance.
@@ -421,7 +421,8 @@ mod tests {
     /// point on the line (to 1e-15 m, a few roundings of 0.8 m); past `FLAT` it is refused.
     #[test]
     fn a_flat_triangle_is_on_the_line_and_an_impossible_one_is_refused() {
-        assert!(0.1 + 0.7 < 0.8);
+        let (short, bc) = (std::hint::black_box(0.1) + 0.7, 0.8);
+        assert!(short < bc, "0.1 + 0.7 rounds below 0.8");
         for side in [Side::Left, Side::Right] {
             let p = triangle([0.0, 0.0], [0.8, 0.0], [0.1, 0.7], side).unwrap();
             assert!((p[0] - 0.1).abs() < 1e-15 && p[1].abs() < 1e-15, "{p:?}");
