@@ -240,3 +240,89 @@ def test_a_built_cam_runs_as_the_example() -> None:
         bad.build()
     problems = dict(error.value.problems)
     assert "expected psi" in problems["joints.contact.radius"]
+
+
+LEG = """
+parameters: {a: 38 mm, l: 7.8 mm, m: 15 mm, j: 50 mm, b: 41.5 mm, c: 39.3 mm, d: 40.1 mm, ee: 55.8 mm,
+  f: 39.4 mm, g: 36.7 mm, h: 65.7 mm, i: 49 mm, k: 61.9 mm}
+ground:
+  points: {O: [0, 0], D: [-a, -l]}
+bodies:
+  crank: {mass: 0.1, inertia: 1e-5, position: O, points_global: {O: ground.O, A: [m, 0]}}
+  upper:
+    mass: 0.2
+    inertia: 1e-4
+    position: D
+    points_global:
+      D: ground.D
+      E: {from: [D, crank.A], distances: [b, j], side: left}
+      F: {from: [D, E], distances: [d, ee], side: left}
+  leg:
+    mass: 0.3
+    inertia: 2e-4
+    position: H
+    points_global:
+      H: {from: [ground.D, crank.A], distances: [c, k], side: right}
+      G: {from: [H, upper.F], distances: [i, f], side: left}
+      P: {from: [H, G], distances: [h, g], side: left}
+joints:
+  O: {type: revolute, body_i: crank, point_i: O, body_j: ground, point_j: O}
+  D: {type: revolute, body_i: upper, point_i: D, body_j: ground, point_j: D}
+  link_j: {type: distance, body_i: crank, point_i: A, body_j: upper, point_j: E, length: j}
+  link_k: {type: distance, body_i: crank, point_i: A, body_j: leg, point_j: H, length: k}
+  link_c: {type: distance, body_i: ground, point_i: D, body_j: leg, point_j: H, length: c}
+  link_f: {type: distance, body_i: upper, point_i: F, body_j: leg, point_j: G, length: f}
+drivers:
+  motor: {type: angle, body: crank, function: 2*pi*t}
+analyses:
+  kinematics: {type: kinematic, drivers: [motor], t_end: 1, step: 0.01}
+"""
+
+
+def test_a_leg_placed_by_lengths_builds_as_its_file() -> None:
+    """The Jansen-style leg of docs/model-format.md ("Points placed by lengths", and
+    crates/linkwork/tests/placement.rs, which checks it against the law of cosines), its ternary
+    links placed by lengths with `ByLengths` and another body's point by `"body.B"`: the model the
+    file gives, its drawing and its run bit for bit."""
+    m = linkwork.Mechanism()
+    for name, value in [("a", "38 mm"), ("l", "7.8 mm"), ("m", "15 mm"), ("j", "50 mm"), ("b", "41.5 mm"),
+                        ("c", "39.3 mm"), ("d", "40.1 mm"), ("ee", "55.8 mm"), ("f", "39.4 mm"), ("g", "36.7 mm"),
+                        ("h", "65.7 mm"), ("i", "49 mm"), ("k", "61.9 mm")]:
+        m.parameter(name, value)
+    m.ground_point("O", (0, 0))
+    m.ground_point("D", ("-a", "-l"))
+
+    def by(b: str, c: str, d: str, e: str, side: str) -> linkwork.ByLengths:
+        return {"from": (b, c), "distances": (d, e), "side": side}
+
+    crank = m.body("crank", mass=0.1, inertia=1e-5, position="O", points_global={"O": "ground.O", "A": ("m", 0)})
+    upper = m.body("upper", mass=0.2, inertia=1e-4, position="D", points_global={
+        "D": "ground.D", "E": by("D", "crank.A", "b", "j", "left"), "F": by("D", "E", "d", "ee", "left")})
+    leg = m.body("leg", mass=0.3, inertia=2e-4, position="H", points_global={
+        "H": by("ground.D", "crank.A", "c", "k", "right"), "G": by("H", "upper.F", "i", "f", "left"),
+        "P": by("H", "G", "h", "g", "left")})
+    m.revolute("O", crank, "ground", point_i="O", point_j="O")
+    m.revolute("D", upper, "ground", point_i="D", point_j="D")
+    m.distance("link_j", crank, "A", upper, "E", "j")
+    m.distance("link_k", crank, "A", leg, "H", "k")
+    m.distance("link_c", "ground", "D", leg, "H", "c")
+    m.distance("link_f", upper, "F", leg, "G", "f")
+    m.driver("motor", "angle", body=crank, function="2*pi*t")
+    m.analysis("kinematics", "kinematic", drivers=["motor"], t_end=1, step=0.01)
+    built, loaded = m.build(), linkwork.from_yaml(LEG)
+    assert built.drawing() == loaded.drawing()
+    a, b = built.run(), loaded.run()
+    assert a.columns == b.columns and np.array_equal(a.values, b.values)
+
+
+def test_an_impossible_triangle_is_a_model_error_naming_the_lengths() -> None:
+    m = linkwork.Mechanism()
+    m.body("foot", mass=1, inertia=0.1, position=(0, 0), points={
+        "A": (0, 0), "B": (0.1, 0), "G": {"from": ("A", "B"), "distances": (0.03, "50 mm"), "side": "left"}})
+    with pytest.raises(linkwork.ModelError) as error:
+        m.build()
+    assert error.value.problems == [(
+        "bodies.foot.points.G.distances",
+        "no triangle has the sides d = 0.03 m (to A), e = 0.05 m (to B) and |A B| = 0.1 m: d + e = 0.08 m is "
+        "less than |A B|, so the two links cannot meet",
+    )]

@@ -36,7 +36,7 @@ from .errors import (
     SingularError,
     SolverError,
 )
-from .builder import Body, CamProfile, Mechanism, PinFriction, SlideFriction
+from .builder import Body, ByLengths, CamProfile, Mechanism, PinFriction, SlideFriction
 from .model import Model
 from .results import Results, Summary
 from .sweep import sweep
@@ -46,6 +46,7 @@ __version__: str = _linkwork.__version__
 __all__ = [
     "AssemblyError",
     "Body",
+    "ByLengths",
     "CamProfile",
     "ConvergenceError",
     "EquilibriumError",

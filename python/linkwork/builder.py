@@ -13,7 +13,8 @@
     print(m.to_yaml())
 
 Every entry is what the model file holds (docs/model-format.md): a number is SI, or text with a
-unit (``"40 mm"``) or an expression of the parameters (``"r/2"``); a point is ``(x, y)``; a body is
+unit (``"40 mm"``) or an expression of the parameters (``"r/2"``); a point is ``(x, y)`` (a named
+point may be placed from others instead: ``"body.B"``, or :class:`ByLengths`); a body is
 its name or the :class:`Body` that :meth:`Mechanism.body` returns. The typed methods cover the
 common joints and the standard measures (and :meth:`Mechanism.summary` a whole-run quantity);
 :meth:`Mechanism.joint`, :meth:`driver`, :meth:`force`, :meth:`measure` and :meth:`analysis` take
@@ -47,6 +48,21 @@ parameters (``"r/2"``)."""
 
 Point = Union[tuple[Number, Number], Sequence[Number], "np.ndarray[Any, Any]"]
 """``(x, y)``, m (or text with a unit); a numpy array of two numbers too."""
+
+# Written with the functional syntax: ``from`` is a keyword of Python's.
+ByLengths = TypedDict(
+    "ByLengths",
+    {"from": tuple[str, str] | Sequence[str], "distances": tuple[Number, Number] | Sequence[Number], "side": str},
+)
+ByLengths.__doc__ = """A named point placed by its distances to two other points (docs/model-format.md,
+"Points placed by lengths"): ``{"from": ("B", "C"), "distances": (d, e), "side": "left"}``, the
+point at ``d`` m from ``B`` and ``e`` m from ``C`` on the ``"left"`` or ``"right"`` of the directed
+line from ``B`` to ``C``; ``B`` a point of the same body (of ground, for a ground point),
+``"body.B"`` another body's or ground's."""
+
+NamedPoint = Union[Point, str, ByLengths]
+"""A named point of a body or of ground: ``(x, y)``; ``"body.B"``, where that point of another body
+(or of ground) is; or :class:`ByLengths`."""
 
 class PinFriction(TypedDict, total=False):
     """Coulomb friction in a revolute joint (docs/model-format.md, "Joint friction"): the torque
@@ -140,8 +156,9 @@ class Mechanism:
         (``"120 mm"``) or an expression of earlier parameters."""
         self._add("parameters", name, _value(f"parameters.{name}", value))
 
-    def ground_point(self, name: str, point: Point) -> None:
-        """A named point of ground, global frame, m."""
+    def ground_point(self, name: str, point: NamedPoint) -> None:
+        """A named point of ground, global frame, m (or placed from other points,
+        :data:`NamedPoint`)."""
         ground = self._doc.setdefault("ground", {"points": {}})
         if name in ground["points"]:
             raise ValueError(f"ground.points.{name}: the name is already used")
@@ -155,8 +172,8 @@ class Mechanism:
         inertia: Number,
         position: Point | str,
         angle: Number | None = None,
-        points: Mapping[str, Point] | None = None,
-        points_global: Mapping[str, Point] | None = None,
+        points: Mapping[str, NamedPoint] | None = None,
+        points_global: Mapping[str, NamedPoint] | None = None,
         velocity: Point | None = None,
         omega: Number | None = None,
         given: Iterable[str] | None = None,
@@ -167,7 +184,9 @@ class Mechanism:
         initial (guessed) global position, m, or the name of one of ``points_global``; ``angle``
         the frame's initial angle, rad (default 0: parallel to the global frame);
         ``points`` named points in the body frame, m; ``points_global`` named points where they
-        are at the initial position, global frame, m; ``velocity`` m/s and ``omega`` rad/s
+        are at the initial position, global frame, m (either may place a point from others:
+        ``"body.B"``, where another body's point is, or :class:`ByLengths`, by its distances to
+        two points); ``velocity`` m/s and ``omega`` rad/s
         initially (default 0); ``given`` the initial values assembly must hold (``"x"``, ``"y"``,
         ``"phi"``, ``"vx"``, ``"vy"``, ``"omega"``).
         """

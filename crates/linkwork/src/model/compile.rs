@@ -1,6 +1,7 @@
 //! [`ModelSpec`] => [`Model`]: check names, numbers and expressions (every problem, with its path),
 //! resolve names to indices and build each joint's constraint.
 
+use super::placement::{drawn, Drawn};
 use super::spec::*;
 use super::structure::Dyad;
 use super::{
@@ -162,7 +163,8 @@ type End = (BodyIx, [f64; 2]);
 
 struct Cx<'s> {
     spec: &'s ModelSpec,
-    /// Each body's named points in its frame: `points`, and `points_global` placed.
+    /// Each body's named points in its frame (`points`, and `points_global` and those placed by
+    /// lengths computed), and ground's (`ground`), global.
     points: IndexMap<String, IndexMap<String, [f64; 2]>>,
     /// What was placed from global coordinates ([`Model::placed`]).
     placed: IndexMap<String, [f64; 2]>,
@@ -191,6 +193,20 @@ impl Names for ModelNames<'_> {
     fn table(&self, name: &str) -> Option<Arc<Spline>> {
         self.tables.get(name).cloned()
     }
+}
+
+/// "it has A, B", the named points `names` of a body, or "it has `none`" when there are none.
+pub(super) fn it_has(names: &[&str], none: &str) -> String {
+    if names.is_empty() {
+        format!("it has {none}")
+    } else {
+        format!("it has {}", names.join(", "))
+    }
+}
+
+/// The problem with a body `name` that is none of `known`.
+pub(super) fn unknown_body(name: &str, known: &[&str]) -> String {
+    format!("unknown body '{name}'; expected ground or one of: {}", known.join(", "))
 }
 
 /// Names become CSV column prefixes and expression variables (`crank.phi`): identifiers only.
@@ -269,12 +285,10 @@ impl Cx<'_> {
             self.problem("bodies", "at least one moving body is required");
         }
         let spec = self.spec;
-        if let Some(g) = &spec.ground {
-            for (p, v) in &g.points {
-                self.vec2(&format!("ground.points.{p}"), *v);
-            }
-        }
-        spec.bodies
+        let Drawn { poses, points, placed } = drawn(spec, self.broken, &mut self.problems);
+        self.placed.extend(placed);
+        let bodies = spec
+            .bodies
             .iter()
             .enumerate()
             .map(|(k, (name, b))| {
@@ -296,26 +310,10 @@ impl Cx<'_> {
                         );
                     }
                 }
-                let pos = self.position(&path, b).unwrap_or([0.0; 2]);
-                let angle = self.finite(&format!("{path}.angle"), b.angle).unwrap_or(0.0);
+                let q0 = poses.get(name).copied().unwrap_or_default();
                 let vel = self.vec2(&format!("{path}.velocity"), b.velocity).unwrap_or([0.0; 2]);
                 let omega = self.finite(&format!("{path}.omega"), b.omega).unwrap_or(0.0);
-                for (p, v) in &b.points {
-                    self.vec2(&format!("{path}.points.{p}"), *v);
-                }
-                let mut points = b.points.clone();
-                for (p, v) in &b.points_global {
-                    let here = format!("{path}.points_global.{p}");
-                    let Some(v) = self.vec2(&here, *v) else { continue };
-                    if points.contains_key(p) {
-                        self.problem(here, format!("'{p}' is also in points: name each point once"));
-                        continue;
-                    }
-                    let local = Frame::at([pos[0], pos[1], angle]).local(v);
-                    self.placed.insert(format!("{path}.points.{p}"), local);
-                    points.insert(p.clone(), local);
-                }
-                self.points.insert(name.clone(), points.clone());
+                let points = points.get(name).cloned().unwrap_or_default();
                 let mut given = [false; 6];
                 for g in &b.given {
                     given[*g as usize] = true;
@@ -326,12 +324,14 @@ impl Cx<'_> {
                     mass: b.mass,
                     inertia: b.inertia,
                     points,
-                    q0: [pos[0], pos[1], angle],
+                    q0,
                     v0: [vel[0], vel[1], omega],
                     given,
                 }
             })
-            .collect()
+            .collect();
+        self.points = points;
+        bodies
     }
 
     /// Names are shared by bodies, joints, drivers, forces and measures (they label output
@@ -408,8 +408,8 @@ impl Cx<'_> {
             Some(k) => Some(BodyIx(Some(3 * k))),
             None if self.is_broken_body(name) => None,
             None => {
-                let known = self.body_names().join(", ");
-                self.problem(path, format!("unknown body '{name}'; expected ground or one of: {known}"));
+                let message = unknown_body(name, &self.body_names());
+                self.problem(path, message);
                 None
             }
         }
@@ -419,22 +419,11 @@ impl Cx<'_> {
         match p {
             PointRef::Coords(v) => self.vec2(path, *v),
             PointRef::Name(n) => {
-                // A file with no `ground:` section has a ground with no named points.
-                let no_points = IndexMap::new();
-                let points = if body == "ground" {
-                    Some(self.spec.ground.as_ref().map_or(&no_points, |g| &g.points))
-                } else {
-                    self.points.get(body)
-                };
-                match points.map(|ps| (ps.get(n), ps)) {
+                match self.points.get(body).map(|ps| (ps.get(n), ps)) {
                     Some((Some(v), _)) => Some(*v),
                     Some((None, ps)) => {
                         let known: Vec<&str> = ps.keys().map(String::as_str).collect();
-                        let list = if known.is_empty() {
-                            "it has no named points".to_string()
-                        } else {
-                            format!("it has {}", known.join(", "))
-                        };
+                        let list = it_has(&known, "no named points");
                         self.problem(
                             path,
                             format!("unknown point '{n}' of body '{body}' ({list}); or give coordinates [x, y]"),
@@ -506,31 +495,6 @@ impl Cx<'_> {
             out.push(PathPoint { name: entry.clone(), body: body.to_string(), point: s });
         }
         out
-    }
-
-    /// The centre of mass of body `b` at `path`: `position` as coordinates, or the point of
-    /// `points_global` it names.
-    fn position(&mut self, path: &str, b: &BodySpec) -> Option<[f64; 2]> {
-        let here = format!("{path}.position");
-        match &b.position {
-            PointRef::Coords(v) => self.vec2(&here, *v),
-            PointRef::Name(n) => {
-                match b.points_global.get(n) {
-                    // A value that is not finite is reported at the point itself.
-                    Some(v) => v.iter().all(|x| x.is_finite()).then_some(*v),
-                    None => {
-                        let known: Vec<&str> = b.points_global.keys().map(String::as_str).collect();
-                        let list = if known.is_empty() {
-                            "it has none".to_string()
-                        } else {
-                            format!("it has {}", known.join(", "))
-                        };
-                        self.problem(here, format!("unknown point '{n}': a position by name is one of points_global ({list}); or give [x, y]"));
-                        None
-                    }
-                }
-            }
-        }
     }
 
     /// Body `name`'s frame at its initial position (ground's is the global one); `None` for a
@@ -1848,7 +1812,7 @@ fn solver_settings(
 }
 
 /// `v`, or a problem at `path` when it is not finite.
-fn finite(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f64> {
+pub(super) fn finite(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f64> {
     if v.is_finite() {
         Some(v)
     } else {

@@ -6,6 +6,7 @@ mod compile;
 mod drawing;
 mod params;
 mod parse;
+mod placement;
 mod settings;
 pub mod spec;
 pub mod structure;
@@ -455,9 +456,10 @@ pub struct Model {
     /// Parameter values given from outside (`--set`, [`Model::with_parameters`]) over the file's:
     /// `(name, text)`, the text a bare number (SI) or a number with a unit.
     pub set: Vec<(String, String)>,
-    /// What was placed from global coordinates, in body frames: each point of a body's
-    /// `points_global` (`bodies.<body>.points.<point>`), and each joint point and axis given
-    /// by `at` and `axis` (`joints.<joint>.point_i`, `.axis_j`, ...), in file order.
+    /// What was placed from global coordinates or from other points, in body frames: each point
+    /// of a body's `points_global` or placed from others (`bodies.<body>.points.<point>`), each
+    /// of ground's placed from others (`ground.points.<point>`, global), and each joint point and
+    /// axis given by `at` and `axis` (`joints.<joint>.point_i`, `.axis_j`, ...), in file order.
     pub placed: IndexMap<String, [f64; 2]>,
     /// The declared assembly modes (`branches:`): each dyad, by its middle pin, and its side.
     pub branches: Vec<(structure::Dyad, spec::Side)>,

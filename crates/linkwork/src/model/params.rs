@@ -296,7 +296,8 @@ pub fn resolve(root: &mut Mapping, params: &[Parameter], problems: &mut Vec<Prob
     }
 }
 
-/// The numeric fields of one entry (and of its `solver:`, `points:` and `points_global:` mappings).
+/// The numeric fields of one entry (and of its `solver:`, `points:` and `points_global:` mappings:
+/// a point's coordinates, or the `distances` of one placed by lengths).
 fn entry(
     section: &str,
     path: &str,
@@ -328,7 +329,17 @@ fn entry(
             ("points" | "points_global", Value::Mapping(points)) => {
                 for (point, v) in points.iter_mut() {
                     let at = format!("{here}.{}", point.as_str().unwrap_or("?"));
-                    numbers(&at, v, Field::Dim(Dim::LENGTH), params, problems);
+                    match v {
+                        // A point placed by lengths: its two distances.
+                        Value::Mapping(by) => {
+                            if let Some(d) = by.get_mut("distances") {
+                                numbers(&format!("{at}.distances"), d, Field::Dim(Dim::LENGTH), params, problems);
+                            }
+                        }
+                        // Where another point is (`body.B`): a name, not a number.
+                        Value::String(_) => {}
+                        _ => numbers(&at, v, Field::Dim(Dim::LENGTH), params, problems),
+                    }
                 }
             }
             (_, value) => {

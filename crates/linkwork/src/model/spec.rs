@@ -586,9 +586,10 @@ pub enum PointComponent {
 #[derive(Debug, Clone, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct GroundSpec {
-    /// Named points in the global frame, m.
+    /// Named points in the global frame, m: `[x, y]`, or placed by their distances to two other
+    /// points.
     #[serde(default)]
-    pub points: IndexMap<String, [f64; 2]>,
+    pub points: IndexMap<String, PointSpec>,
 }
 
 /// A rigid body. Its frame's origin is its centre of mass.
@@ -612,13 +613,15 @@ pub struct BodySpec {
     /// Initial angular velocity, rad/s. Default: zero.
     #[serde(default)]
     pub omega: f64,
-    /// Named points in the body frame, m, for joints and drawing.
+    /// Named points in the body frame, m, for joints and drawing: `[x, y]`, or placed by their
+    /// distances to two other points.
     #[serde(default)]
-    pub points: IndexMap<String, [f64; 2]>,
+    pub points: IndexMap<String, PointSpec>,
     /// Named points in the global frame at the initial position, m, as a drawing gives them:
-    /// each becomes a body-frame point through `position` and `angle`.
+    /// each becomes a body-frame point through `position` and `angle`. `[x, y]`, or placed by
+    /// their distances to two other points.
     #[serde(default)]
-    pub points_global: IndexMap<String, [f64; 2]>,
+    pub points_global: IndexMap<String, PointSpec>,
     /// Initial values that assembly must keep (for example `[phi, omega]` for a crank whose angle
     /// and speed are known); the others may change. Default: none.
     #[serde(default)]
@@ -641,6 +644,74 @@ pub enum Given {
     Vy,
     /// Angular velocity.
     Omega,
+}
+
+/// A named point: its coordinates `[x, y]`, m (in the frame of the section that lists it), the
+/// place of another body's point (`body.B`), or its place by its distances to two other points
+/// (docs/model-format.md, "Points placed by lengths").
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+#[serde(untagged)]
+pub enum PointSpec {
+    /// Coordinates.
+    Coords([f64; 2]),
+    /// Where another point is at the initial position: `body.B` (a point of another body or of
+    /// `ground`), or `B`, another point of the same body.
+    At(String),
+    /// By its distances to two other points.
+    Lengths(ByLengths),
+}
+
+/// Read by hand, as [`PointRef`] is, so that a bad field keeps its path.
+impl<'de> Deserialize<'de> for PointSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = PointSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a point: [x, y], body.B (where that point is), or {from: [B, C], distances: [d, e], side: left or right}")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<PointSpec, E> {
+                Ok(PointSpec::At(v.to_string()))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<PointSpec, A::Error> {
+                pair(seq, &self).map(PointSpec::Coords)
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<PointSpec, A::Error> {
+                ByLengths::deserialize(serde::de::value::MapAccessDeserializer::new(map)).map(PointSpec::Lengths)
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
+}
+
+/// A point placed by its distances to two other points, on one side of the line through them:
+/// the third corner of the triangle whose sides are the two distances and the distance between
+/// the two points, where the drawing puts them at the initial position.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ByLengths {
+    /// The two points, B and C: `B`, a point of the same body (or of ground, for a point of
+    /// ground), or `body.B`, a point of another body or of `ground`.
+    pub from: [String; 2],
+    /// The point's distances to B and to C, m (> 0).
+    pub distances: [f64; 2],
+    /// The side of the directed line from B to C the point lies on, looking from B towards C.
+    pub side: Side,
+}
+
+/// Two numbers of a sequence, `[x, y]`; a sequence of another length is refused as not what
+/// `expected` describes.
+fn pair<'de, A: serde::de::SeqAccess<'de>>(
+    mut seq: A,
+    expected: &dyn serde::de::Expected,
+) -> Result<[f64; 2], A::Error> {
+    use serde::de::Error;
+    let x: f64 = seq.next_element()?.ok_or_else(|| A::Error::invalid_length(0, expected))?;
+    let y: f64 = seq.next_element()?.ok_or_else(|| A::Error::invalid_length(1, expected))?;
+    if seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+        return Err(A::Error::invalid_length(3, expected));
+    }
+    Ok([x, y])
 }
 
 /// A point of a body: its coordinates `[x, y]` in the body frame, m, or the name of one of the
@@ -667,14 +738,8 @@ impl<'de> Deserialize<'de> for PointRef {
             fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<PointRef, E> {
                 Ok(PointRef::Name(v.to_string()))
             }
-            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<PointRef, A::Error> {
-                use serde::de::Error;
-                let x: f64 = seq.next_element()?.ok_or_else(|| A::Error::invalid_length(0, &self))?;
-                let y: f64 = seq.next_element()?.ok_or_else(|| A::Error::invalid_length(1, &self))?;
-                if seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
-                    return Err(A::Error::invalid_length(3, &self));
-                }
-                Ok(PointRef::Coords([x, y]))
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<PointRef, A::Error> {
+                pair(seq, &self).map(PointRef::Coords)
             }
         }
         d.deserialize_any(Visitor)
