@@ -326,3 +326,50 @@ def test_an_impossible_triangle_is_a_model_error_naming_the_lengths() -> None:
         "no triangle has the sides d = 0.03 m (to A), e = 0.05 m (to B) and |A B| = 0.1 m: d + e = 0.08 m is "
         "less than |A B|, so the two links cannot meet",
     )]
+
+
+def test_the_six_bar_leg_built_with_its_branches_paths_and_units_runs_as_its_file() -> None:
+    """examples/sixbar_leg.yaml built in Python: its declared branches, paths and display units
+    give the same run, summary branches and drawing as the file; a guess drawn on the other side
+    of the foot's dyad is assembled on the declared side with the file's warning."""
+
+    def leg(link_angle: str, foot_angle: str) -> linkwork.Mechanism:
+        m = linkwork.Mechanism("six-bar leg")
+        for name, value in [("r", "15 mm"), ("ab", "50 mm"), ("bq", "40 mm"), ("ac", "35 mm"), ("bc", "30 mm"),
+                            ("cf", "40 mm"), ("fd", "37 mm"), ("fg", "40 mm"), ("dg", "55 mm"), ("speed", "60 rpm")]:
+            m.parameter(name, value)
+        m.ground_point("O", (0, 0))
+        m.ground_point("Q", ("45 mm", 0))
+        m.ground_point("D", ("10 mm", "-55 mm"))
+        crank = m.body("crank", mass=0.05, inertia=1e-6, position=("r/2", 0), angle=0, points={"O": ("-r/2", 0), "A": ("r/2", 0)})
+        coupler = m.body("coupler", mass=0.1, inertia=2e-5, position=("15 mm", 0), angle="53 deg", points={
+            "A": (0, 0), "B": ("ab", 0), "C": {"from": ("A", "B"), "distances": ("ac", "bc"), "side": "right"}})
+        rocker = m.body("rocker", mass=0.05, inertia=1e-5, position=("45 mm", 0), angle="90 deg", points={"Q": (0, 0), "B": ("bq", 0)})
+        linkf = m.body("linkf", mass=0.05, inertia=1e-5, position=("48.5 mm", "10.2 mm"), angle=link_angle,
+                       points={"C": (0, 0), "F": ("cf", 0)})
+        foot = m.body("foot", mass=0.1, inertia=2e-5, position=("10 mm", "-55 mm"), angle=foot_angle, points={
+            "D": (0, 0), "F": ("fd", 0), "G": {"from": ("F", "D"), "distances": ("fg", "dg"), "side": "right"}})
+        for name, (bi, pi), (bj, pj) in [("O", (crank, "O"), ("ground", "O")), ("A", (crank, "A"), (coupler, "A")),
+                                         ("B", (coupler, "B"), (rocker, "B")), ("Q", (rocker, "Q"), ("ground", "Q")),
+                                         ("C", (coupler, "C"), (linkf, "C")), ("F", (linkf, "F"), (foot, "F")),
+                                         ("D", (foot, "D"), ("ground", "D"))]:
+            m.revolute(name, bi, bj, point_i=pi, point_j=pj)
+        m.branch("B", ("A", "Q"), "left")
+        m.branch("F", ("C", "D"), "right")
+        m.driver("motor", "angle", body=crank, function="speed*t")
+        m.paths("foot.G", "coupler.C")
+        m.display(length="mm", angle="deg")
+        m.measure("foot_x", body=foot, point="G", component="x")
+        m.measure("foot_y", body=foot, point="G", component="y")
+        m.analysis("kinematics", "kinematic", drivers=["motor"], t_end="2*pi/speed", step="10 ms")
+        return m
+
+    built, loaded = leg("-130 deg", "70 deg").build(), linkwork.load(EXAMPLES / "sixbar_leg.yaml")
+    assert built.drawing() == loaded.drawing()
+    a, b = built.run(), loaded.run()
+    assert a.columns == b.columns and np.array_equal(a.values, b.values)
+    assert a.summary.branches == b.summary.branches and not a.summary.warnings
+    # Drawn on the other side of C -> D: the declared side, the same foot path, and the warning.
+    wrong = leg("-110.5 deg", "48.5 deg").build().run()
+    assert np.max(np.abs(wrong["foot_x"] - b["foot_x"])) < 1e-11
+    assert any(w.startswith("branches.F: the drawing puts joint F left of the line C -> D") for w in wrong.summary.warnings)

@@ -247,7 +247,7 @@ def test_results_path_is_the_coupler_curve_and_plot_draws_any_column_against_ano
     body = results.plot(x="coupler.x", y="coupler.y")
     assert body.layout.yaxis.scaleanchor == "x" and list(body.data[0].y) == pytest.approx(results["coupler.y"].tolist(), rel=1e-5)
     against = results.plot(x="crank.phi", y=["rocker.omega", "coupler.omega"])
-    assert against.layout.xaxis.title.text == "crank.phi" and against.layout.yaxis.scaleanchor is None
+    assert against.layout.xaxis.title.text == "crank.phi (rad)" and against.layout.yaxis.scaleanchor is None
     assert [t.name for t in against.data] == ["rocker.omega", "coupler.omega"]
     assert list(against.data[0].x) == pytest.approx(results["crank.phi"].tolist(), rel=1e-5)
     with pytest.raises(TypeError, match="not both"):

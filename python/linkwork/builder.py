@@ -123,10 +123,12 @@ class CamProfile(TypedDict, total=False):
 
 
 _SECTIONS = (
-    "name", "gravity", "parameters", "tables", "ground", "bodies", "joints", "drivers", "forces", "measures",
-    "summaries", "analyses",
+    "name", "gravity", "parameters", "display", "tables", "ground", "bodies", "joints", "drivers", "forces",
+    "measures", "paths", "summaries", "branches", "branch", "analyses",
 )
-_NAMED = ("parameters", "tables", "bodies", "joints", "drivers", "forces", "measures", "summaries", "analyses")
+_NAMED = (
+    "parameters", "tables", "bodies", "joints", "drivers", "forces", "measures", "summaries", "branches", "analyses",
+)
 # Bodies, joints, drivers, forces and measures share one space of names (they label the results'
 # columns); parameters, summaries and analyses have their own.
 _SHARED = ("bodies", "joints", "drivers", "forces", "measures")
@@ -409,6 +411,26 @@ class Mechanism:
         R(psi))`` on a polar pitch curve, positive while the cam pushes the follower out; for a
         cam given by its working surface as well. The usual rule is ``|phi| <= 30`` degrees."""
         return self.measure(name, type="pressure_angle", joint=joint)
+
+    def branch(self, joint: str, line: tuple[str, str], side: str, *, strict: bool = False) -> None:
+        """Declare the assembly mode of the dyad whose middle pin is ``joint``: ``side``
+        (``"left"`` or ``"right"``) of the directed line from the joint ``line[0]`` to the joint
+        ``line[1]``; assembled so whatever side the drawing puts it on, with a warning when they
+        disagree. ``strict=True`` makes every disagreement an error (``branch: strict``, for the
+        whole model)."""
+        self._add("branches", joint, {"line": list(line), "side": side})
+        if strict:
+            self._doc["branch"] = "strict"
+
+    def paths(self, *points: str) -> None:
+        """The points whose paths the report draws: ``"<body>.<point>"``, or ``"<body>"`` for its
+        centre of mass (default: the point measures' points)."""
+        self._doc.setdefault("paths", []).extend(points)
+
+    def display(self, **units: str) -> None:
+        """The units results are shown in (the command line, the report, ``Results.plot``), by
+        quantity: ``display(length="mm", angle="deg")``. Files stay SI."""
+        self._doc.setdefault("display", {}).update(units)
 
     def analysis(self, name: str, type: str, **fields: Any) -> str:
         """An analysis (``"kinematic"``, ``"dynamic"``, ``"inverse"``, ``"static"``, ``"modes"``)
