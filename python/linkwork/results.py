@@ -120,12 +120,12 @@ class Summary(dict[str, Any]):
     well and whose output spans time, when the model has any (see :attr:`Results.summaries`)."""
     unit_system: _Key[str | None] = _Key()
     """The units ``results.csv`` is written in: ``"si"``, or ``"display"`` (the model's
-    ``display:`` section); written by :meth:`Results.write`, ``None`` in :attr:`Results.summary`
-    (whose columns are SI)."""
+    ``display:`` section, ``Results.write(units="display")``); ``"si"`` in
+    :attr:`Results.summary`, whose columns are SI (``None`` in a folder written before units were
+    recorded: SI)."""
     units: _Key[dict[str, str] | None] = _Key()
     """Each column of ``results.csv`` (``time`` first) with its unit as written there (``SI``: a
-    column whose quantity is not known, as computed); written by :meth:`Results.write`, ``None``
-    in :attr:`Results.summary`."""
+    column whose quantity is not known, as computed)."""
     # Last: in the class body `type` is this attribute from here on.
     type: _Key[str | None] = _Key()
     """The analysis' type: ``kinematic``, ``inverse``, ``static``, ``modes`` or ``dynamic``."""
@@ -186,8 +186,14 @@ class Results:
     @property
     def summary(self) -> Summary:
         """What ``summary.json`` says, as a dict whose keys are also attributes (:class:`Summary`):
-        sizes, solver statistics, ``status`` and any error."""
-        return Summary(self._native.summary)
+        sizes, solver statistics, ``status`` and any error, and the units of the columns (SI)."""
+        from .units import Units
+
+        return Summary(self._native.summary | self._units_keys(Units.of(self.model, self._columns, display=False), "si"))
+
+    def _units_keys(self, units: Units, system: str) -> dict[str, Any]:
+        """``summary.json``'s ``unit_system`` and ``units`` for the columns written in ``units``."""
+        return {"unit_system": system, "units": units.column_units(self)}
 
     @property
     def ok(self) -> bool:
@@ -302,7 +308,7 @@ class Results:
         # The engine's summary.json, with the units of the table beside it.
         written = out / "summary.json"
         summary = json.loads(written.read_text(encoding="utf-8"))
-        summary |= {"unit_system": units, "units": table_units.column_units(self)}
+        summary |= self._units_keys(table_units, units)
         # Its keys in alphabetical order, as the engine writes them; the units in column order.
         reports.write_text(written, json.dumps(dict(sorted(summary.items())), indent=2) + "\n")
         reports.write_text(out / "model.yaml", self.model.source)
