@@ -161,3 +161,131 @@ def test_a_display_section_with_a_wrong_unit_is_named() -> None:
     problems = dict(error.value.problems)
     assert problems["display.length"] == "'deg' is an angle, expected a length"
     assert problems["display.speed"].startswith("unknown quantity; expected one of length, angle")
+
+
+# --- files in display units (--units display) ------------------------------------------------
+
+# The model with a measure of a known quantity (a point's x, a length) and one of none (an
+# expression: written as computed, "SI").
+MEASURED = patch(TEXT, "analyses:\n", 'measures:\n  tip_x: {body: crank, point: A, component: x}\n  twice: "2 * slider.x"\nanalyses:\n')
+
+
+def _table(folder: Path) -> tuple[list[str], np.ndarray]:
+    rows = list(csv.reader((folder / "results.csv").read_text().splitlines()))
+    return rows[0], np.array(rows[1:], dtype=float)
+
+
+def _summary(folder: Path) -> dict[str, object]:
+    import json
+
+    summary: dict[str, object] = json.loads((folder / "summary.json").read_text())
+    return summary
+
+
+def test_display_files_are_the_si_files_divided_by_each_units_factor(tmp_path: Path) -> None:
+    results = linkwork.from_yaml(MEASURED).run("inverse")
+    results.write(tmp_path / "si", report=False)
+    results.write(tmp_path / "display", report=False, units="display")
+    header, si = _table(tmp_path / "si")
+    shown_header, shown = _table(tmp_path / "display")
+    assert shown_header == header == list(results)
+    si_summary, summary = _summary(tmp_path / "si"), _summary(tmp_path / "display")
+    assert si_summary["unit_system"] == "si" and summary["unit_system"] == "display"
+    si_units, units = si_summary["units"], summary["units"]
+    assert isinstance(si_units, dict) and isinstance(units, dict)
+    # Every column of the file, in its order, has its unit; chosen by the engine's quantity of
+    # the column and the model's display: {length: mm, angle: deg}, the rest SI.
+    assert list(units) == list(si_units) == header
+    expected = {"time": ("s", "s"), "slider.x": ("m", "mm"), "crank.phi": ("rad", "deg"),
+                "crank.omega": ("rad/s", "deg/s"), "slider.ax": ("m/s^2", "mm/s^2"),
+                "motor.effort": ("N m", "N m"), "B.fx": ("N", "N"), "tip_x": ("m", "mm"), "twice": ("SI", "SI")}
+    for column, (in_si, in_display) in expected.items():
+        assert (si_units[column], units[column]) == (in_si, in_display), column
+    # Each display column is the SI column divided by its unit's factor to SI, as the engine
+    # reads that unit: the division and the shortest round-trip text of each double are exact to
+    # half an ulp each, far inside 1e-12 relative (zeros stay zeros: no absolute slack).
+    for k, column in enumerate(header):
+        factor = 1.0 if units[column] == "SI" else linkwork._linkwork.unit(units[column])
+        assert np.allclose(shown[:, k] * factor, si[:, k], rtol=1e-12, atol=0), column
+    # Against the closed form: the crank turns once, 360 deg; the stroke is 2 r = 200 mm.
+    assert shown[-1, header.index("crank.phi")] == pytest.approx(360.0, rel=1e-9)
+    x = shown[:, header.index("slider.x")]
+    assert abs(x.max() - x.min() - 200.0) < 1e-6
+    # summary.json's own numbers stay SI whatever the table's units.
+    parameters = summary["parameters"]
+    assert parameters == si_summary["parameters"] and isinstance(parameters, dict) and parameters["r"] == 0.1
+
+
+def test_a_folder_written_in_display_units_reports_as_the_si_one(linkwork: RunLinkwork, tmp_path: Path) -> None:
+    model = tmp_path / "measured.yaml"
+    model.write_text(MEASURED)
+    for units in ("si", "display"):
+        out = linkwork("run", model, "-a", "inverse", "--out", units, "--units", units, "--no-report", "-q")
+        assert out.code == 0, out.stderr
+    assert "results.csv is in them too" in out.stdout
+    out = linkwork("report", "display")
+    assert out.code == 0, out.stderr
+    assert (tmp_path / "display" / "report.html").exists()
+    si, shown = report.from_folder(tmp_path / "si"), report.from_folder(tmp_path / "display")
+    # Read back to SI by the units summary.json records: each value divided, written, read and
+    # multiplied again, within a few ulps (1e-12 relative).
+    assert np.allclose(shown.time, si.time, rtol=1e-12, atol=0)
+    assert list(shown.columns) == list(si.columns)
+    for name, values in si.columns.items():
+        assert np.allclose(shown.columns[name], values, rtol=1e-12, atol=0), name
+    # The report of either folder shows the display units.
+    assert shown.units.column_unit("crank.phi") == "deg"
+
+
+def test_a_display_table_without_its_units_is_refused(tmp_path: Path) -> None:
+    import json
+
+    linkwork.from_yaml(TEXT).run("kinematics").write(tmp_path, report=False, units="display")
+    summary = _summary(tmp_path)
+    units = summary["units"]
+    assert isinstance(units, dict)
+    del units["slider.x"]
+    (tmp_path / "summary.json").write_text(json.dumps(summary))
+    with pytest.raises(linkwork.FileError, match=r"units: no unit for the column\(s\) slider.x of results.csv"):
+        report.from_folder(tmp_path)
+    units["slider.x"] = "furlong"
+    (tmp_path / "summary.json").write_text(json.dumps(summary))
+    with pytest.raises(linkwork.FileError, match=r"summary.json: units.slider.x: .*furlong"):
+        report.from_folder(tmp_path)
+
+
+def test_units_must_be_si_or_display(linkwork: RunLinkwork, tmp_path: Path) -> None:
+    out = linkwork("run", MODEL, "-a", "kinematics", "--units", "mm", "--no-report", "-q")
+    assert out.code == 2 and "--units: invalid choice: 'mm'" in out.stderr and "display" in out.stderr
+    out = linkwork("run", MODEL, "-a", "kinematics", "--units", "display", "--stream", "--no-report", "-q")
+    assert out.code == 2 and "--units: display cannot be used with --stream" in out.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_python_takes_units_si_or_display(tmp_path: Path) -> None:
+    results = linkwork.from_yaml(TEXT).run("kinematics")
+    with pytest.raises(ValueError, match="units: expected 'si' or 'display', got 'SI'"):
+        results.write(tmp_path / "a", units="SI")
+    streamed = linkwork.from_yaml(TEXT).run("kinematics", stream=tmp_path / "rows.csv")
+    with pytest.raises(ValueError, match="cannot be written for a streamed run"):
+        streamed.write(tmp_path / "b", units="display")
+    pytest.importorskip("pandas")
+    with pytest.raises(ValueError, match="units: expected 'si' or 'display', got 'deg'"):
+        linkwork.sweep(MODEL, "kinematics", {"r": [0.1]}, dict([OUTPUT.split("=", 1)]), units="deg")
+
+
+def test_a_sweep_in_display_units(linkwork: RunLinkwork, tmp_path: Path) -> None:
+    pd = pytest.importorskip("pandas")
+    pytest.importorskip("pyarrow")
+    for units in ("si", "display"):
+        out = linkwork("sweep", MODEL, "--grid", "r=80 mm:120 mm:3", "--output", OUTPUT, "--out", units, "--units", units, "-q")
+        assert out.code == 0, out.stderr
+    si, shown = (pd.read_parquet(tmp_path / units / "sweep.parquet") for units in ("si", "display"))
+    # The table says its units, in the Parquet file's metadata: the parameter in the display
+    # section's mm, the output as computed (SI, the stroke in m).
+    assert shown.attrs["units"] == {"r": "mm", "stroke": "SI"} and shown.attrs["unit_system"] == "display"
+    assert si.attrs["units"] == {"r": "m", "stroke": "SI"} and si.attrs["unit_system"] == "si"
+    # 80, 100, 120 mm: each SI value divided by 1e-3 (exact to an ulp or two, 1e-12 relative).
+    assert np.allclose(shown["r"], [80.0, 100.0, 120.0], rtol=1e-12, atol=0)
+    assert np.allclose(shown["r"] * 1e-3, si["r"], rtol=1e-12, atol=0)
+    assert shown["stroke"].astype(float).tolist() == si["stroke"].astype(float).tolist()

@@ -7,18 +7,21 @@
         [--integrator bdf|hht|abam] [--rtol R] [--atol A] [--t-end T] [--step H]
                                                        change the analysis for this run
         [--stream [csv|parquet]]                       write the rows as they are computed
+        [--units si|display]                           results.csv in SI (default) or the display units
     linkwork report DIR                                rebuild DIR/report.html from the files of a run
     linkwork sweep MODEL --output NAME=EXPR ...         an analysis over many parameter values, reduced to
         (--grid NAME=START:STOP:COUNT ... |             outputs: DIR/sweep.parquet, one row a variant
          --sample N --range NAME=LOW:HIGH ... [--seed S])
-        [--workers K | --dask ADDRESS] [--set NAME=VALUE]
+        [--workers K | --dask ADDRESS] [--set NAME=VALUE] [--units si|display]
     linkwork check MODEL [--json]                      degrees of freedom, redundant rows, assembly
     linkwork schema                                    the JSON Schema of model files
 
 A parameter's value from outside (--set, --grid, --range) is a number with a unit (``m="16 mm"``)
 or a bare number, which is SI whatever unit the file writes it in; a bare number more than 100
 times from the file's value is warned of (``--set m=16`` for ``m: 15 mm`` is 16 m). The output
-shows the units of the model's ``display:`` section; the files stay SI.
+shows the units of the model's ``display:`` section; the files stay SI unless ``--units display``
+is given (``summary.json`` gives the unit of every column of ``results.csv``, the Parquet file of
+a sweep of each of its columns).
 
 Exit status: 0 success; 2 an invalid model, a file that cannot be read or written, or a bad command
 line (every problem is printed as ``path: message``); 3 a solver failure (what failed, when, in
@@ -40,7 +43,7 @@ from . import _linkwork
 from .errors import AssemblyError, FileError, InternalError, LinkworkError, ModelError, SolverError, model_error
 from .model import Model
 from .results import Results, Summary, branch_lines
-from .units import Units
+from .units import SYSTEMS, Units
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
@@ -119,6 +122,7 @@ def _parser() -> argparse.ArgumentParser:
         help="write results.csv (or results.parquet) as the rows are computed, holding only a chunk of them "
         "in memory (for long runs of large models; the report reads the file back)",
     )
+    _add_units(run, "results.csv (not with --stream, whose rows are written SI as they are computed)")
     run.add_argument("--no-report", action="store_true", help="do not write report.html")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     run.set_defaults(command=_run)
@@ -137,7 +141,8 @@ def _parser() -> argparse.ArgumentParser:
         help="run an analysis over many parameter values and write sweep.parquet",
         description="Run an analysis of MODEL for every combination of the --grid values (or for --sample "
         "points of a Latin hypercube over the --range intervals), reduce each run to the --output expressions, "
-        "and write DIR/sweep.parquet: one row per variant with its parameters (SI), its status (ok, or the "
+        "and write DIR/sweep.parquet: one row per variant with its parameters (SI; --units display: in the display "
+        "units), its status (ok, or the "
         "error class and message) and its outputs. The variants run on this machine's cores, or on a Dask "
         "cluster (--dask). A bare number is SI; give a unit on both ends to sweep in it. Exit status 3 when "
         "every variant fails.",
@@ -182,6 +187,7 @@ def _parser() -> argparse.ArgumentParser:
         help="run on the Dask cluster whose scheduler is at ADDRESS (tcp://host:8786; pip install 'linkwork[dask]')",
     )
     _add_set(sweep)
+    _add_units(sweep, "the parameters' columns of sweep.parquet (its outputs stay SI)")
     sweep.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     sweep.set_defaults(command=_sweep)
 
@@ -213,6 +219,16 @@ def _add_set(command: argparse.ArgumentParser) -> None:
         metavar="NAME=VALUE",
         help="a parameter's value over the file's: a number with a unit (L='300 mm'), or a bare number, SI whatever "
         "unit the file uses (r=0.12), warned of when more than 100 times from the file's value; repeatable",
+    )
+
+
+def _add_units(command: argparse.ArgumentParser, what: str) -> None:
+    command.add_argument(
+        "--units",
+        choices=SYSTEMS,
+        default="si",
+        help=f"the units of {what}: si (default), or display, those of the model's display: section; "
+        "the units of every column are written beside it",
     )
 
 
@@ -255,6 +271,8 @@ def _run(args: argparse.Namespace) -> int:
             import pyarrow  # noqa: F401
         except ImportError:
             raise model_error("--stream", "parquet needs pyarrow: pip install 'linkwork[parquet]'") from None
+    if stream is not None and args.units != "si":
+        raise model_error("--units", "display cannot be used with --stream: the rows are written SI as they are computed")
     if stream is not None:
         try:
             out.mkdir(parents=True, exist_ok=True)
@@ -276,7 +294,7 @@ def _run(args: argparse.Namespace) -> int:
         partial = getattr(interrupt, "results", None)
         if not isinstance(partial, Results):
             raise
-        partial.write(out, report=not args.no_report)
+        partial.write(out, report=not args.no_report, units=args.units)
         _err(f"interrupted: partial results ({_span(partial)}) written to {_folder(out)} (status: interrupted)")
         return EXIT_INTERRUPTED
     except (SolverError, AssemblyError) as error:
@@ -284,14 +302,14 @@ def _run(args: argparse.Namespace) -> int:
         partial = error.results
         if isinstance(partial, Results):
             try:
-                partial.write(out, report=not args.no_report)
+                partial.write(out, report=not args.no_report, units=args.units)
             except FileError as write_error:
                 _err(f"error: the partial results could not be written: {write_error}")
                 return EXIT_SOLVER
             _err(f"partial results ({_span(partial)}) written to {_folder(out)} (status: failed)")
         return EXIT_SOLVER
-    results.write(out, report=not args.no_report)
-    _print_summary(results)
+    results.write(out, report=not args.no_report, units=args.units)
+    _print_summary(results, args.units)
     files = [stream.name if stream is not None else "results.csv", "summary.json", *(["modes.csv"] if results.modes else []), "model.yaml"]
     files += [] if args.no_report else ["report.html"]
     print(f"wrote {_folder(out)}{', '.join(files[:-1])} and {files[-1]}")
@@ -307,7 +325,7 @@ def _report(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _print_summary(results: Results) -> None:
+def _print_summary(results: Results, written: str) -> None:
     s = results.summary
     stats = s.statistics or {}
     units = Units.of(results.model, results.columns)
@@ -319,7 +337,8 @@ def _print_summary(results: Results) -> None:
     print(f"  {_span(results, units)}")
     if not units.is_si():
         shown = ", ".join(f"{q} {units.unit(q)}" for q in ("length", "angle", "time", "force", "torque"))
-        print(f"  shown in the model's display units ({shown}); the files are SI")
+        files = "results.csv is in them too" if written == "display" else "the files are SI"
+        print(f"  shown in the model's display units ({shown}); {files}")
     if stats and s.type == "dynamic":
         integrator = s.integrator or {}
         print(
@@ -488,6 +507,7 @@ def _sweep(args: argparse.Namespace) -> int:
                 model, analysis, dict(args.grid) if args.grid else None, dict(args.output),
                 sample=args.sample, ranges=dict(args.range) if args.range else None, seed=args.seed,
                 workers=args.workers, client=client, progress=sys.stderr.isatty() and not args.quiet,
+                units=args.units,
             )
         for warning in dict.fromkeys(str(w.message) for w in caught):
             _err(f"warning: {warning}")

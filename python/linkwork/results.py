@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import json
 import os
 import shutil
 from collections.abc import Iterator, Mapping, Sequence
@@ -19,6 +20,7 @@ if TYPE_CHECKING:
 
     from .model import Model
     from .report import Run
+    from .units import Units
 
 _T = TypeVar("_T")
 
@@ -116,6 +118,14 @@ class Summary(dict[str, Any]):
     summaries: _Key[dict[str, float] | None] = _Key()
     """The model's summaries (its ``summaries:``, whole-run quantities) by name: in a run that ended
     well and whose output spans time, when the model has any (see :attr:`Results.summaries`)."""
+    unit_system: _Key[str | None] = _Key()
+    """The units ``results.csv`` is written in: ``"si"``, or ``"display"`` (the model's
+    ``display:`` section, ``Results.write(units="display")``); ``"si"`` in
+    :attr:`Results.summary`, whose columns are SI (``None`` in a folder written before units were
+    recorded: SI)."""
+    units: _Key[dict[str, str] | None] = _Key()
+    """Each column of ``results.csv`` (``time`` first) with its unit as written there (``SI``: a
+    column whose quantity is not known, as computed)."""
     # Last: in the class body `type` is this attribute from here on.
     type: _Key[str | None] = _Key()
     """The analysis' type: ``kinematic``, ``inverse``, ``static``, ``modes`` or ``dynamic``."""
@@ -176,8 +186,14 @@ class Results:
     @property
     def summary(self) -> Summary:
         """What ``summary.json`` says, as a dict whose keys are also attributes (:class:`Summary`):
-        sizes, solver statistics, ``status`` and any error."""
-        return Summary(self._native.summary)
+        sizes, solver statistics, ``status`` and any error, and the units of the columns (SI)."""
+        from .units import Units
+
+        return Summary(self._native.summary | self._units_keys(Units.of(self.model, self._columns, display=False), "si"))
+
+    def _units_keys(self, units: Units, system: str) -> dict[str, Any]:
+        """``summary.json``'s ``unit_system`` and ``units`` for the columns written in ``units``."""
+        return {"unit_system": system, "units": units.column_units(self)}
 
     @property
     def ok(self) -> bool:
@@ -255,27 +271,58 @@ class Results:
         index = pd.Index(self._time.copy(), name="time")
         return pd.DataFrame(self._values.copy(), index=index, columns=list(self._columns))
 
-    def write(self, out_dir: str | os.PathLike[str], report: bool = True) -> None:
+    def write(self, out_dir: str | os.PathLike[str], report: bool = True, units: str = "si") -> None:
         """Write ``results.csv``, ``summary.json`` (and ``modes.csv`` for a modes analysis) and
         ``model.yaml`` (the model file as run) into ``out_dir`` (created if missing), in the
         engine's format, and ``report.html`` unless ``report`` is false: the same files as
         ``linkwork run``. The rows of a streamed run are its file, copied there as
         ``results.csv`` or ``results.parquet`` unless it is already that file; its report reads
-        them back."""
-        from . import report as reports
+        them back.
 
-        self._native.write(os.fspath(out_dir))
+        ``units="si"`` writes ``results.csv`` in SI; ``units="display"`` in the units of the
+        model's ``display:`` section (``linkwork run --units display``; not for a streamed run,
+        whose rows went to their file SI as they were computed: a ``ValueError``). Either way
+        ``summary.json`` says which (``unit_system``) and gives every column's unit as written
+        (``units``); its own numbers stay SI."""
+        from . import report as reports
+        from .units import Units, system
+
+        display = system(units)
+        if display and self.streamed_to is not None:
+            raise ValueError(
+                "units: 'display' cannot be written for a streamed run: its rows went to "
+                f"{self.streamed_to} in SI as they were computed; write it with units='si'"
+            )
+        out = Path(out_dir)
+        self._native.write(os.fspath(out))
+        table_units = Units.of(self.model, self._columns, display=display)
         if self.streamed_to is not None:
-            table = Path(out_dir) / f"results{self.streamed_to.suffix}"
+            table = out / f"results{self.streamed_to.suffix}"
             if not table.exists() or not table.samefile(self.streamed_to):
                 shutil.copyfile(self.streamed_to, table)
             if table.suffix != ".csv":
                 # A results.csv of an earlier run would be read in place of these rows.
-                (Path(out_dir) / "results.csv").unlink(missing_ok=True)
-        reports.write_text(Path(out_dir) / "model.yaml", self.model.source)
-        self._copy_tables(Path(out_dir))
+                (out / "results.csv").unlink(missing_ok=True)
+        elif display:
+            reports.write_text(out / "results.csv", self._csv(table_units))
+        # The engine's summary.json, with the units of the table beside it.
+        written = out / "summary.json"
+        summary = json.loads(written.read_text(encoding="utf-8"))
+        summary |= self._units_keys(table_units, units)
+        # Its keys in alphabetical order, as the engine writes them; the units in column order.
+        reports.write_text(written, json.dumps(dict(sorted(summary.items())), indent=2) + "\n")
+        reports.write_text(out / "model.yaml", self.model.source)
+        self._copy_tables(out)
         if report:
-            reports.write(Path(out_dir) / "report.html", self._run())
+            reports.write(out / "report.html", self._run())
+
+    def _csv(self, units: Units) -> str:
+        """The text of ``results.csv`` with every column in ``units``: the engine's layout, each
+        number in the shortest form that reads back to the same double, as the engine writes them."""
+        names = list(self)
+        shown = np.column_stack([units.shown(name, self[name]) for name in names]) if len(self) else np.empty((0, len(names)))
+        lines = [",".join(names), *(",".join(map(repr, row)) for row in shown.tolist())]
+        return "\n".join(lines) + "\n"
 
     def _copy_tables(self, out_dir: Path) -> None:
         """Copy each table's file that the model names by a path inside its folder to the same

@@ -22,6 +22,7 @@ from tqdm import tqdm
 
 from . import _linkwork
 from .model import Model, ProgressBar, _parameter_texts
+from .units import UNKNOWN, Units, system
 
 if TYPE_CHECKING:
     import pandas
@@ -52,6 +53,7 @@ def sweep(
     workers: int | None = None,
     client: Any = None,
     progress: bool | Callable[[int, int], object] = False,
+    units: str = "si",
 ) -> pandas.DataFrame:
     """Run ``analysis`` of ``model`` for many values of its parameters and reduce each run to
     ``outputs`` (a name to an expression).
@@ -67,9 +69,13 @@ def sweep(
     bar of the variants finished (tqdm, on stderr); a callable is called instead as
     ``progress(finished, total)``.
 
-    One row per variant: the parameters' values (SI), ``status``, and each output, missing
-    (``<NA>``) where the variant failed; ``attrs["units"]`` gives each column's unit (the
-    parameters' SI units; outputs ``SI``, as computed from SI columns). A failed variant is a row, not the end of the sweep.
+    One row per variant: the parameters' values, ``status``, and each output, missing
+    (``<NA>``) where the variant failed; ``attrs["units"]`` gives each column's unit and
+    ``attrs["unit_system"]`` the ``units`` asked for. With ``units="si"`` the parameters are SI;
+    with ``units="display"`` a parameter written with a unit of a result quantity (a length, an
+    angle ...) is in the unit the model's ``display:`` section shows that quantity in. Outputs
+    are ``SI`` either way, as computed from SI columns. Both attrs are kept in a Parquet file
+    (``to_parquet``). A failed variant is a row, not the end of the sweep.
     Ctrl-C stops the sweep (within 0.2 s on this machine) and raises ``KeyboardInterrupt`` with
     ``table``: every row, those not finished with a ``KeyboardInterrupt: ...`` status. An
     exception raised by ``progress`` stops it the same way and is raised with ``table``.
@@ -78,6 +84,7 @@ def sweep(
         import pandas as pd
     except ImportError as error:  # pragma: no cover - the test extra installs it
         raise ImportError("sweep() needs pandas: pip install 'linkwork[sweep]'") from error
+    display = system(units)
     if not isinstance(model, Model):
         model = Model.load(model)
     attrs: dict[str, object] = {}
@@ -112,16 +119,14 @@ def sweep(
         if first is not None:
             model.with_parameters(**{name: first})
     si = {(name, v): _si(model, name, v) for k, name in enumerate(names) for v in {c[k] for c in combinations}}
-    units = dict.fromkeys(names, "SI") | dict.fromkeys(dict(output_list), "SI")
-    for name, unit in model._native.parameter_units:
-        if name in names:
-            units[name] = _linkwork.si_unit(unit) or "SI"
-    attrs["units"] = units
+    shown = Units.of_parameters(model, names, display=display)
+    attrs["unit_system"] = units
+    attrs["units"] = shown.column_units(names) | dict.fromkeys(dict(output_list), UNKNOWN)
 
     def table(rows: list[Row]) -> pandas.DataFrame:
         data: dict[str, object] = {}
         for k, name in enumerate(names):
-            data[name] = [si[name, values[k]] for values in combinations]
+            data[name] = shown.shown(name, [si[name, values[k]] for values in combinations])
         data[STATUS] = [status for status, _ in rows]
         for j, (name, _) in enumerate(output_list):
             data[name] = pd.array([None if values is None else values[j] for _, values in rows], dtype="Float64")
