@@ -6,7 +6,8 @@
     ├── ModelError          problems: list of (path, message), e.g. ("joints.B.body_j", "unknown body 'rokcer' ...")
     ├── AssemblyError       joints, row, residual, iterations, hint, results
     ├── SolverError         time (s), joints, rows, results (the output computed before the failure);
-    │                       raised itself, with detail, when a joint's friction and its reactions do not converge
+    │                       raised itself, with detail, when a joint's friction and its reactions do not converge,
+    │                       or a dyad cannot keep its branch (a declared one, branch: strict, a sweep's variant)
     │   ├── SingularError       detail: a dead centre, lock-up or lost degree of freedom
     │   ├── ConvergenceError    row, residual, iterations, substep
     │   │   └── EquilibriumError    coordinates, index: no stable static equilibrium (stopped short: row,
