@@ -292,3 +292,15 @@ def test_a_failure_time_reads_the_same_in_every_line(linkwork: RunLinkwork, tmp_
     assert len(times) == 2 and times[0] == times[1], done.stderr
     assert 0 < float(times[0]) < 2e-9 and "e-" in times[0], done.stderr
 
+
+
+def test_check_states_every_dyads_branch_in_the_display_units(linkwork: RunLinkwork) -> None:
+    """examples/sixbar_leg.yaml: each dyad's side of its line, drawn and declared, and the change
+    from the guess in the model's display units (mm, deg)."""
+    done = linkwork("check", EXAMPLES / "sixbar_leg.yaml")
+    assert done.code == 0, done.output
+    assert re.search(r"branch F\s+right of C -> D \(drawn right, declared right; bodies linkf, foot\)", done.stdout)
+    assert re.search(r"branch B\s+left of A -> Q \(drawn left, declared left; bodies coupler, rocker\)", done.stdout)
+    assert re.search(r"x \(mm\)\s+y \(mm\)\s+phi \(deg\)", done.stdout), done.stdout
+    largest = re.search(r"change from guess\s+largest (\w+\.\w+) ([-+][\d.e+-]+) (\w+)", done.stdout)
+    assert largest and largest.group(3) == ("deg" if largest.group(1).endswith(".phi") else "mm"), done.stdout

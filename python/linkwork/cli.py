@@ -561,6 +561,7 @@ def _check(args: argparse.Namespace) -> int:
         print()
         return EXIT_OK
     bodies: list[str] = report["bodies"]
+    units = Units.of(model, report["coordinate_names"])
     print(report["model"] or Path(args.model).name)
     print(f"bodies: {', '.join(bodies)} ({len(bodies)} bodies, {report['coordinates']} coordinates)")
     if report["placed"]:
@@ -569,20 +570,20 @@ def _check(args: argparse.Namespace) -> int:
         for path, (x, y) in report["placed"].items():
             print(f"  {path:<32} [{x:.12g}, {y:.12g}]")
     print()
-    _print_system("mechanism (joints only; coordinates marked given held)", report["mechanism"], bodies)
+    _print_system("mechanism (joints only; coordinates marked given held)", report["mechanism"], bodies, units)
     for name, system in report["analyses"].items():
         print()
         if system["error"] is not None:
             print(f"analysis '{name}' ({system['kind']}): cannot be assembled: {system['error']}")
             continue
         drivers = ", ".join(system["drivers"]) or "no drivers"
-        _print_system(f"analysis '{name}' ({system['kind']}; joints and {drivers})", system, bodies)
+        _print_system(f"analysis '{name}' ({system['kind']}; joints and {drivers})", system, bodies, units)
         if system["warning"] is not None:
             print(f"  warning              {system['warning']}")
     return EXIT_OK
 
 
-def _print_system(title: str, system: dict[str, Any], bodies: list[str]) -> None:
+def _print_system(title: str, system: dict[str, Any], bodies: list[str], units: Units) -> None:
     n = 3 * len(bodies)
     print(f"{title}:")
     print(f"  equations            {system['equations']}")
@@ -612,12 +613,15 @@ def _print_system(title: str, system: dict[str, Any], bodies: list[str]) -> None
     change: list[float] = assembly["change"]
     names = [f"{b}.{c}" for b in bodies for c in COORDINATES]  # = report["coordinate_names"]
     if change:
+        # In the model's display units, as every number the command line shows.
+        shown = [float(units.shown(name, v)) for name, v in zip(names, change)]
         k = max(range(len(change)), key=lambda i: abs(change[i]))
-        print(f"  change from guess    largest {names[k]} {change[k]:+.6g}")
+        print(f"  change from guess    largest {names[k]} {shown[k]:+.6g} {units.column_unit(names[k])}")
         width = max(len(b) for b in bodies)
-        print(f"    {'':{width}}  {'x (m)':>11} {'y (m)':>11} {'phi (rad)':>11}")
+        length, angle = units.unit("length"), units.unit("angle")
+        print(f"    {'':{width}}  {f'x ({length})':>11} {f'y ({length})':>11} {f'phi ({angle})':>11}")
         for i, body in enumerate(bodies):
-            cells = " ".join(f"{v:+11.3e}" for v in change[3 * i : 3 * i + 3])
+            cells = " ".join(f"{v:+11.3e}" for v in shown[3 * i : 3 * i + 3])
             print(f"    {body:{width}}  {cells}")
 
 
