@@ -264,7 +264,11 @@ impl Results {
             if self.strict_branches {
                 return Err(change.error("branch: strict"));
             }
-            self.summary.warnings.push(change.message());
+            // One warning a dyad (a change point's mechanism passes it every turn); every change
+            // is in `branch_changes`.
+            if !self.summary.branch_changes.iter().any(|c| c.joint == change.joint) {
+                self.summary.warnings.push(change.message());
+            }
             self.summary.branch_changes.push(change);
         }
         if self.is_empty() {

@@ -64,9 +64,14 @@ pub fn sweep(
     let t_start = model.analysis(analysis)?.t_start;
     // The file's text parsed once; each variant reads its parameters from the document.
     let document = model.document()?;
-    // Every variant is assembled on the nominal model's branches and keeps them through its run,
-    // so that a table never mixes assembly modes unseen (docs/model-format.md, "Branches").
+    // Every variant is assembled on the nominal model's branches and changes branch where the
+    // nominal run does (a change point's mechanism passes its flat position every turn) and
+    // nowhere else, so that a table never mixes assembly modes unseen (docs/model-format.md,
+    // "Branches"). A nominal model that cannot be assembled leaves each variant its own
+    // `branches:`; one that fails its run, its changes unchecked.
     let nominal = crate::analysis::assembled_branches(model, analysis);
+    let nominal_changes: Option<Vec<String>> =
+        model.run(analysis).ok().map(|r| r.summary.branch_changes.iter().map(|c| c.joint.clone()).collect());
     let one = |values: &Vec<(String, String)>| -> Row {
         let run = || -> Row {
             // Stopped before this variant began: not compiled, not run.
@@ -74,13 +79,31 @@ pub fn sweep(
                 return Err(Error::Interrupted { time: t_start });
             }
             let mut variant = model.with_parameters_in(&document, values)?;
-            variant.branches = nominal
-                .iter()
-                .filter_map(|&(joints, side)| Some((Dyad::new(&variant.joints, &variant.bodies, joints).ok()?, side)))
-                .collect();
+            if !nominal.is_empty() {
+                variant.branches = nominal
+                    .iter()
+                    .filter_map(|&(joints, side)| {
+                        Some((Dyad::new(&variant.joints, &variant.bodies, joints).ok()?, side))
+                    })
+                    .collect();
+            }
             let results = variant.run_watched(analysis, &Overrides::default(), &watch.part()).map_err(|f| f.error)?;
-            if let Some(change) = results.summary.branch_changes.first() {
-                return Err(change.error("a sweep keeps the nominal model's branches"));
+            if let Some(expected) = &nominal_changes {
+                let changes = &results.summary.branch_changes;
+                let same = |k: usize| changes.get(k).map(|c| &c.joint) == expected.get(k);
+                if let Some(k) = (0..changes.len().max(expected.len())).find(|&k| !same(k)) {
+                    return Err(match changes.get(k) {
+                        Some(change) => change.error("a sweep keeps the nominal model's branches"),
+                        None => Error::Branch {
+                            time: t_start,
+                            joint: expected[k].clone(),
+                            detail: format!(
+                                "the nominal run's dyad of joint {} changes branch, and this variant's does not",
+                                expected[k]
+                            ),
+                        },
+                    });
+                }
             }
             outputs
                 .iter()

@@ -337,3 +337,31 @@ fn a_change_of_branch_between_two_outputs_is_found_with_its_time() {
         change.message()
     );
 }
+
+#[test]
+fn a_parallelogram_passing_its_change_points_warns_once_and_sweeps_ok() {
+    // At its flat positions the parallelogram's coupler and rocker pass through a line of pins
+    // and carry on as a parallelogram: each pass is in `branch_changes`, one warning a dyad, and
+    // a sweep's variants that pass where the nominal run passes are ok.
+    let model = Model::from_yaml(&example_text("parallelogram.yaml")).unwrap();
+    let name = model.analyses.keys().next().unwrap().clone();
+    let results = model.run(&name).unwrap();
+    let changes = &results.summary.branch_changes;
+    assert!(changes.len() >= 2, "{changes:?}");
+    let warned = results.summary.warnings.iter().filter(|w| w.contains("changed branch")).count();
+    let mut joints: Vec<&str> = changes.iter().map(|c| c.joint.as_str()).collect();
+    joints.sort_unstable();
+    joints.dedup();
+    assert_eq!(warned, joints.len(), "{:?}", results.summary.warnings);
+    let outputs = [linkwork::sweep::Output::parse("end", "final(time)").unwrap()];
+    let rows = linkwork::sweep::sweep(
+        &model,
+        &name,
+        &[vec![], vec![]],
+        &outputs,
+        Some(1),
+        &linkwork::progress::Progress::new(),
+    )
+    .unwrap();
+    assert!(rows.iter().all(|r| r.is_ok()), "{rows:?}");
+}

@@ -11,7 +11,7 @@
 //! group whose block has the smallest ratio of singular values is the one that locks.
 
 use super::assembly::assemble_or_best;
-use super::{assemble, Assembly};
+use super::{assemble, Assembly, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Result, RowName};
 use crate::linalg::dense::smallest_singular;
@@ -202,7 +202,8 @@ pub fn blame(
             worst = Some((g, local.into_iter().map(|i| sys.row_name(rows[i])).collect::<Vec<_>>()));
         }
     }
-    let (group, rows) = worst?;
+    // Only a block singular as the whole is: otherwise the structure does not explain it.
+    let (group, rows) = worst.filter(|_| worst_ratio < SINGULAR_RATIO_KINEMATIC)?;
     let bodies: Vec<&str> = group.bodies.iter().map(|&b| model.bodies[b].name.as_str()).collect();
     let words = match &group.dyad {
         Some(dyad) => {

@@ -19,10 +19,11 @@ use super::spec::Side;
 use super::{Body, Element, Model};
 use crate::constraints::{BodyIx, Frame, Shape};
 
-/// Bodies above which the decomposition is not attempted: it searches connected sets of up to
-/// [`MAX_GROUP`] bodies at each of up to `bodies` stages; a chain of 400 bodies takes about a
-/// millisecond, and no designer reads the groups of a larger one.
-pub const MAX_BODIES: usize = 400;
+/// Bodies above which the decomposition is not attempted: it searches the connected sets of up
+/// to `MAX_GROUP` bodies next to the bodies placed, at each of up to `bodies` stages, each set
+/// against every element; a free chain of 200 bodies takes about 10 ms (a run computes the
+/// groups three times), and no designer reads the groups of a larger mechanism.
+pub const MAX_BODIES: usize = 200;
 
 /// Bodies of the largest group searched for: four covers the dyads (2), and the triads of the
 /// Stephenson six-bars and the double-butterfly linkages (4 with their ternary link).
@@ -222,7 +223,6 @@ pub fn groups(model: &Model, drivers: &[usize]) -> Vec<Group> {
         .iter()
         .map(|(_, e)| {
             let mut b: Vec<usize> = e.constraint.columns().iter().map(|c| c / 3).collect();
-            b.dedup();
             b.sort_unstable();
             b.dedup();
             b
@@ -256,14 +256,22 @@ pub fn groups(model: &Model, drivers: &[usize]) -> Vec<Group> {
     };
     while placed.iter().any(|p| !p) {
         let mut found = None;
+        // A group is reached from the bodies already placed: its seeds are the bodies with an
+        // element whose other bodies are all placed (ground included). Sets grow one
+        // neighbour at a time, each set once (sorted), smallest first.
+        let mut level: Vec<Vec<usize>> = (0..bodies)
+            .filter(|&b| !placed[b] && touched.iter().any(|t| t.contains(&b) && t.iter().all(|&o| o == b || placed[o])))
+            .map(|b| vec![b])
+            .collect();
         'sizes: for size in 1..=MAX_GROUP {
-            for set in connected_sets(&neighbours, &placed, size) {
-                let (rows, taken) = take(&set, &placed, &used);
+            for set in &level {
+                let (rows, taken) = take(set, &placed, &used);
                 if rows >= 3 * size {
-                    found = Some((set, taken, 0));
+                    found = Some((set.clone(), taken, 0));
                     break 'sizes;
                 }
             }
+            level = grown(&neighbours, &placed, &level);
         }
         // No group is placed by its rows: the freedom the drivers leave. The body the rows to
         // placed bodies hold best is an input link (a crank pinned to ground).
@@ -310,32 +318,22 @@ fn dyad_of(model: &Model, bodies: &[usize], elements: &[usize]) -> Option<Dyad> 
     Dyad::new(&model.joints, &model.bodies, [e.min(d), middle, e.max(d)]).ok()
 }
 
-/// Every connected set of `size` bodies not yet `placed`, each once, in a fixed order.
-fn connected_sets(neighbours: &[Vec<usize>], placed: &[bool], size: usize) -> Vec<Vec<usize>> {
-    let mut out: Vec<Vec<usize>> = Vec::new();
-    let mut seen = std::collections::HashSet::new();
-    let mut stack: Vec<Vec<usize>> = (0..placed.len()).filter(|&b| !placed[b]).map(|b| vec![b]).collect();
-    while let Some(set) = stack.pop() {
-        if set.len() == size {
-            let mut key = set.clone();
-            key.sort_unstable();
-            if seen.insert(key.clone()) {
-                out.push(key);
-            }
-            continue;
-        }
-        for &a in &set {
+/// Each set of `sets` with one more neighbour not yet `placed`: every such set once, sorted.
+fn grown(neighbours: &[Vec<usize>], placed: &[bool], sets: &[Vec<usize>]) -> Vec<Vec<usize>> {
+    let mut out = std::collections::BTreeSet::new();
+    for set in sets {
+        for &a in set {
             for &b in &neighbours[a] {
                 if !placed[b] && !set.contains(&b) {
-                    let mut grown = set.clone();
-                    grown.push(b);
-                    stack.push(grown);
+                    let mut bigger = set.clone();
+                    bigger.push(b);
+                    bigger.sort_unstable();
+                    out.insert(bigger);
                 }
             }
         }
     }
-    out.sort();
-    out
+    out.into_iter().collect()
 }
 
 /// The dyads whose branch a run keeps and reports: each declared one (`branches:`), then every
@@ -458,7 +456,11 @@ impl BranchWatch {
         let mut change = None;
         for ((dyad, last_t, last), [e, f, d]) in self.dyads.iter_mut().zip(&self.names) {
             let sine = dyad.sine(q);
-            if change.is_none() && *last != 0.0 && sine != 0.0 && (sine > 0.0) != (*last > 0.0) {
+            // Exactly on the line has no side: the last side is kept, to compare with the next.
+            if sine == 0.0 {
+                continue;
+            }
+            if change.is_none() && *last != 0.0 && (sine > 0.0) != (*last > 0.0) {
                 let time = *last_t + (t - *last_t) * *last / (*last - sine);
                 let (from, to) = (side_of(*last), side_of(sine));
                 change = Some(BranchChange { joint: f.clone(), line: [e.clone(), d.clone()], time, from, to });
