@@ -215,7 +215,8 @@ fn a_leg_that_locks_names_its_foot_dyad_at_the_exact_time() {
     assert!(!joints.iter().any(|n| n == "A" || n == "O"), "the crank's loop is not to blame: {joints:?}");
     assert!(
         detail.starts_with(
-            "in the dyad C-F-D (bodies linkf, foot): links linkf and foot are collinear at joint F (stretched)"
+            // In the model's display units (mm): at the lock-up |CD| = cf + fd = 77 mm.
+            "in the dyad C-F-D (bodies linkf, foot): links linkf and foot are collinear at joint F (stretched): |CD| = 77.0000 mm against |CF| + |FD| = 40.0000 mm + 37.0000 mm = 77.0000 mm"
         ),
         "{detail}"
     );
@@ -270,7 +271,7 @@ fn a_dyad_too_short_to_close_is_named_by_assembly() {
     let model = Model::from_yaml(&text).unwrap();
     match model.run("kinematics").map_err(|f| f.error) {
         Err(Error::Assembly { hint, .. }) => assert!(
-            hint.starts_with("cannot close: the dyad C-F-D (links linkf and foot) is too short, |CD| = 0.07"),
+            hint.starts_with("cannot close: the dyad C-F-D (links linkf and foot) is too short, |CD| = 75.6655 mm > |CF| + |FD| = 20.0000 mm + 37.0000 mm = 57.0000 mm"),
             "{hint}"
         ),
         other => panic!("expected an assembly error, found {other:?}"),

@@ -133,10 +133,21 @@ fn cannot_close(model: &Model, drivers: &[usize], q: &[f64]) -> Option<String> {
         let [b1, b2] = dyad.bodies.map(|b| model.bodies[b].name.as_str());
         let [l1, l2, ed] = dyad.lengths(q);
         let (sum, diff) = (l1 + l2, (l1 - l2).abs());
+        let show = |x: f64| model.display.show("length", x);
         if ed > sum * (1.0 + REACH_MARGIN) {
-            Some(format!("cannot close: the dyad {e}-{f}-{d} (links {b1} and {b2}) is too short, |{e}{d}| = {ed:.6} m > |{e}{f}| + |{f}{d}| = {l1:.6} + {l2:.6} = {sum:.6} m"))
+            Some(format!(
+                "cannot close: the dyad {e}-{f}-{d} (links {b1} and {b2}) is too short, |{e}{d}| = {} > |{e}{f}| + |{f}{d}| = {} + {} = {}",
+                show(ed),
+                show(l1),
+                show(l2),
+                show(sum)
+            ))
         } else if ed < diff * (1.0 - REACH_MARGIN) {
-            Some(format!("cannot close: the dyad {e}-{f}-{d} (links {b1} and {b2}) cannot fold so far, |{e}{d}| = {ed:.6} m < ||{e}{f}| - |{f}{d}|| = {diff:.6} m"))
+            Some(format!(
+                "cannot close: the dyad {e}-{f}-{d} (links {b1} and {b2}) cannot fold so far, |{e}{d}| = {} < ||{e}{f}| - |{f}{d}|| = {}",
+                show(ed),
+                show(diff)
+            ))
         } else {
             None
         }

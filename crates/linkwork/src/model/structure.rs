@@ -193,14 +193,18 @@ impl Dyad {
         let [b1, b2] = self.bodies.map(|b| model.bodies[b].name.as_str());
         let [l1, l2, ed] = self.lengths(q);
         let (sum, diff) = (l1 + l2, (l1 - l2).abs());
-        let (how, bound, words) = if (ed - sum).abs() <= (ed - diff).abs() {
-            ("stretched", sum, format!("|{e}{f}| + |{f}{d}|"))
+        let (how, bound, words, op) = if (ed - sum).abs() <= (ed - diff).abs() {
+            ("stretched", sum, format!("|{e}{f}| + |{f}{d}|"), "+")
         } else {
-            ("folded", diff, format!("||{e}{f}| - |{f}{d}||"))
+            ("folded", diff, format!("||{e}{f}| - |{f}{d}||"), "-")
         };
+        let show = |x: f64| model.display.show("length", x);
         format!(
-            "links {b1} and {b2} are collinear at joint {f} ({how}): |{e}{d}| = {ed:.6} m against {words} = {l1:.6} {} {l2:.6} = {bound:.6} m",
-            if how == "stretched" { "+" } else { "-" }
+            "links {b1} and {b2} are collinear at joint {f} ({how}): |{e}{d}| = {} against {words} = {} {op} {} = {}",
+            show(ed),
+            show(l1),
+            show(l2),
+            show(bound)
         )
     }
 }

@@ -213,6 +213,17 @@ impl Display {
         self.units.iter().find(|(q, _, _)| *q == quantity).map_or("", |(_, u, _)| u.as_str())
     }
 
+    /// `si` (a value of `quantity`, SI) as the display shows it, with its unit and six
+    /// significant digits: `75.7105 mm`.
+    pub fn show(&self, quantity: &str, si: f64) -> String {
+        let (unit, factor) =
+            self.units.iter().find(|(q, _, _)| *q == quantity).map_or(("", 1.0), |(_, u, f)| (u.as_str(), *f));
+        let value = si / factor;
+        let magnitude = if value == 0.0 || !value.is_finite() { 0 } else { value.abs().log10().floor() as i32 };
+        let decimals = (5 - magnitude).clamp(0, 12) as usize;
+        format!("{value:.decimals$} {unit}")
+    }
+
     fn set(&mut self, quantity: &str, text: &str, factor: f64) {
         if let Some(entry) = self.units.iter_mut().find(|(q, _, _)| *q == quantity) {
             entry.1 = text.to_string();
