@@ -136,14 +136,14 @@ fn a_leg_drawn_on_the_wrong_side_is_stated_and_a_declared_branch_wins() {
     assert_eq!((f.side, f.drawn, f.declared), (Some(Side::Right), Some(Side::Left), Some(Side::Right)));
     let error = foot_error(&model);
     assert!(error < 1e-11, "foot point {error:e} m from the closed form");
-    // Strict: the disagreement is an assembly error naming the dyad's joint.
+    // Strict: the disagreement is a branch error naming the dyad's joint, the sides and the mode.
     let strict = Model::from_yaml(&format!("{}\nbranch: strict\n", drawn_wrong(&text))).unwrap();
     match strict.run("kinematics").map_err(|f| f.error) {
-        Err(Error::Assembly { row, hint, .. }) => {
-            assert_eq!(row.element, "F");
-            assert!(hint.contains("branch: strict"), "{hint}");
+        Err(Error::Branch { joint, detail, time }) => {
+            assert_eq!((joint.as_str(), time), ("F", 0.0));
+            assert!(detail.contains("left of the line C -> D") && detail.contains("branch: strict"), "{detail}");
         }
-        other => panic!("expected an assembly error, found {other:?}"),
+        other => panic!("expected a branch error, found {other:?}"),
     }
 }
 

@@ -25,7 +25,7 @@ use faer::Mat;
 /// Assemble as [`assemble`] does, then keep every dyad of the `drivers`' groups on its target
 /// side. Returns the assembly, each dyad's [`Branch`], and the warnings: a declared side the
 /// drawing disagrees with, a dyad left on the other side of its drawing. With `branch: strict`
-/// each of these is an [`Error::Assembly`] instead.
+/// each of these is an [`Error::Branch`] instead.
 #[allow(clippy::too_many_arguments)]
 pub fn assemble_on_branches(
     model: &Model,
@@ -39,16 +39,6 @@ pub fn assemble_on_branches(
 ) -> Result<(Assembly, Vec<Branch>, Vec<String>)> {
     let dyads = structure::dyads(model, drivers);
     let strict = model.branch_mode == BranchMode::Strict;
-    let refuse = |dyad: &Dyad, hint: String| {
-        let [_, f, _] = dyad.names(model);
-        Error::Assembly {
-            time: t,
-            iterations: 0,
-            residual: dyad.sine(q0).abs(),
-            row: RowName { element: f.to_string(), equation: "branch".into() },
-            hint,
-        }
-    };
     let mut warnings = Vec::new();
     for (dyad, declared) in &dyads {
         let (Some(want), Some(drawn)) = (declared, dyad.drawn_side(q0)) else { continue };
@@ -60,7 +50,11 @@ pub fn assemble_on_branches(
                 want.name()
             );
             if strict {
-                return Err(refuse(dyad, format!("{what} (branch: strict)")));
+                return Err(Error::Branch {
+                    time: t,
+                    joint: f.to_string(),
+                    detail: format!("{what} (branch: strict)"),
+                });
             }
             warnings.push(format!("{what}: assembled on the declared side"));
         }
