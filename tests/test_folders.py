@@ -283,5 +283,5 @@ def test_without_a_swap_of_two_folders_the_old_one_is_renamed_aside(tmp_path: Pa
     assert not staged(out)
     out.rename(tmp_path / ".out.linkwork-1.old")  # what a kill between the renames leaves
     (tmp_path / ".out.linkwork-1").mkdir()
-    folder.claim(out, stage=False).release()
+    folder.claim(out).release()
     assert files(out) == before and not staged(out)

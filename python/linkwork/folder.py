@@ -114,12 +114,14 @@ def claimed(path: str | os.PathLike[str]) -> Folder | None:
 
 def claim(path: str | os.PathLike[str], files: Iterable[str] = RUN_FILES, stage: bool = True) -> Folder:
     """Claim the output folder at ``path`` (its parents created): lock it, and with ``stage``
-    create its staging folder. A :class:`FileError` with one line when it cannot be written,
+    create its staging folder (without, the folder must exist: a report is rebuilt in it). A :class:`FileError` with one line when it cannot be written,
     when another run holds it (named by its process id and command), or when it holds entries
     that are none of ``files`` (names at its top, or paths of tables inside it)."""
     target = absolute(path)
     if target.parent == target:
         raise FileError(f"{target}: cannot be an output folder (a run replaces its output folder whole)")
+    if not stage and not target.is_dir():
+        raise FileError(f"{target}: no such folder")
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as error:
