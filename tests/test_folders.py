@@ -86,11 +86,14 @@ def test_a_run_replaces_the_folder_whole(linkwork: RunLinkwork, tmp_path: Path) 
 
 
 def test_results_write_replaces_the_folder_whole(tmp_path: Path) -> None:
+    """The files of the run before go, and the folder's permissions stay."""
     out = tmp_path / "out"
     linkwork.load(QUICK_RETURN).run("kinematics").write(out)
+    out.chmod(0o2775)
     linkwork.load(MODES).run("vibration").write(out, report=False)
     assert sorted(files(out)) == ["model.yaml", "modes.csv", "results.csv", "summary.json"]
     assert json.loads((out / "summary.json").read_text())["type"] == "modes"
+    assert out.stat().st_mode & 0o7777 == 0o2775
 
 
 def test_a_folder_holding_other_files_is_refused_not_replaced(linkwork: RunLinkwork, tmp_path: Path) -> None:

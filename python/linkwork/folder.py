@@ -23,6 +23,7 @@ import ctypes
 import errno
 import os
 import shutil
+import stat
 import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -141,6 +142,9 @@ def claim(path: str | os.PathLike[str], files: Iterable[str] = RUN_FILES, stage:
             shutil.rmtree(staging, ignore_errors=True)
             staging.mkdir()
             folder.staging = staging
+            if target.exists():
+                # The folder that takes its place keeps its permissions (a folder shared by a group).
+                staging.chmod(stat.S_IMODE(target.stat().st_mode))
     except OSError as error:
         folder.release()
         if isinstance(error, FileError):
