@@ -26,20 +26,27 @@ a sweep of each of its columns).
 Exit status: 0 success; 2 an invalid model, a file that cannot be read or written, or a bad command
 line (every problem is printed as ``path: message``); 3 a solver failure (what failed, when, in
 which joints; the results computed until then are still written); 130 interrupted by Ctrl-C (the
-results until then are written, ``"status": "interrupted"``); 1 an internal error (a bug).
+results until then are written, ``"status": "interrupted"``), 143 by SIGTERM and 129 by SIGHUP
+(the same way); 1 an internal error (a bug).
+
+An output folder is written whole (:mod:`linkwork.folder`): claimed before the run (a folder that
+cannot be written, or that another run is writing, fails at once), written in a staging folder
+beside it, then swapped into place in one step.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
+import threading
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from . import _linkwork
+from . import _linkwork, folder
 from .errors import AssemblyError, FileError, InternalError, LinkworkError, ModelError, SolverError, model_error
 from .model import Model
 from .results import Results, Summary, branch_lines
@@ -51,6 +58,10 @@ EXIT_MODEL = 2
 EXIT_SOLVER = 3
 # 128 + SIGINT, as a shell reports a process that Ctrl-C ended.
 EXIT_INTERRUPTED = 130
+
+# Signals that stop a command as Ctrl-C does: a service manager's or `kill`'s request to end
+# (SIGTERM), and a closed terminal (SIGHUP).
+STOP_SIGNALS = ("SIGTERM", "SIGHUP")
 
 # Seconds to wait for a Dask scheduler to answer: a scheduler on a network answers in
 # milliseconds; a wrong address should fail while the user is still looking.
@@ -67,6 +78,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exit_:  # --help, --version, or a usage error (status 2)
         return exit_.code if isinstance(exit_.code, int) else EXIT_MODEL
+    handled = _handle_signals()
     try:
         status: int = args.command(args)
         return status
@@ -85,9 +97,53 @@ def main(argv: Sequence[str] | None = None) -> int:
     except LinkworkError as error:  # a kind this command line does not know yet
         _err(f"error: {error}")
         return EXIT_INTERNAL
-    except KeyboardInterrupt:
-        _err("interrupted")
-        return EXIT_INTERRUPTED
+    except OSError as error:  # a file the command reads or writes, named by the system's message
+        _err(f"error: {error}")
+        return EXIT_MODEL
+    except KeyboardInterrupt as interrupt:
+        _err(_what(interrupt))
+        return _interrupted(interrupt)
+    finally:
+        for signum, handler in handled.items():
+            signal.signal(signum, handler)
+
+
+class Stopped(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, raised where Ctrl-C raises ``KeyboardInterrupt`` so that a run stops
+    the same way (its results until then written, ``"status": "interrupted"``)."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+def _stop(signum: int, _frame: object) -> None:
+    raise Stopped(signum)
+
+
+def _handle_signals() -> dict[int, Any]:
+    """Handle SIGTERM and SIGHUP (where the system has them) as Ctrl-C for the length of a
+    command; the handlers before, to put back. Only the main thread may set handlers: called
+    from another (an embedding program's), nothing changes."""
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    before = {}
+    for name in STOP_SIGNALS:
+        signum = getattr(signal, name, None)
+        if signum is not None:
+            before[signum] = signal.signal(signum, _stop)
+    return before
+
+
+def _what(interrupt: KeyboardInterrupt) -> str:
+    """``interrupted``, and by which signal when it was not Ctrl-C."""
+    return f"interrupted by {interrupt}" if isinstance(interrupt, Stopped) else "interrupted"
+
+
+def _interrupted(interrupt: KeyboardInterrupt) -> int:
+    """The exit status of a command stopped by ``interrupt``: 130 for Ctrl-C, 128 + the
+    signal's number for SIGTERM (143) and SIGHUP (129), as a shell reports a process they end."""
+    return 128 + interrupt.signum if isinstance(interrupt, Stopped) else EXIT_INTERRUPTED
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -265,19 +321,25 @@ def _load(path: str, given: list[tuple[str, str]]) -> Model:
 def _run(args: argparse.Namespace) -> int:
     model = _load(args.model, args.set)
     out: Path = args.out if args.out is not None else Path("out") / Path(args.model).stem
-    stream = out / f"results.{args.stream}" if args.stream else None
     if args.stream == "parquet":
         try:
             import pyarrow  # noqa: F401
         except ImportError:
             raise model_error("--stream", "parquet needs pyarrow: pip install 'linkwork[parquet]'") from None
-    if stream is not None and args.units != "si":
+    if args.stream and args.units != "si":
         raise model_error("--units", "display cannot be used with --stream: the rows are written SI as they are computed")
-    if stream is not None:
-        try:
-            out.mkdir(parents=True, exist_ok=True)
-        except OSError as error:
-            raise FileError(f"{out}: cannot create the output folder: {error}") from error
+    # Before the run: a folder that cannot be written, or that another run is writing, fails now.
+    claimed = folder.claim(out, folder.run_files(model._native.table_files))
+    try:
+        return _run_into(args, model, out, claimed.staging)
+    finally:
+        claimed.release()
+
+
+def _run_into(args: argparse.Namespace, model: Model, out: Path, staging: Path | None) -> int:
+    """Run and write into ``out``, claimed with its ``staging`` folder: a stream goes there, and
+    the results (whole, partial, or none) replace the folder at the end."""
+    stream = staging / f"results.{args.stream}" if args.stream and staging is not None else None
     try:
         results = model.run(
             args.analysis,
@@ -295,8 +357,8 @@ def _run(args: argparse.Namespace) -> int:
         if not isinstance(partial, Results):
             raise
         partial.write(out, report=not args.no_report, units=args.units)
-        _err(f"interrupted: partial results ({_span(partial)}) written to {_folder(out)} (status: interrupted)")
-        return EXIT_INTERRUPTED
+        _err(f"{_what(interrupt)}: partial results ({_span(partial)}) written to {_folder(out)} (status: interrupted)")
+        return _interrupted(interrupt)
     except (SolverError, AssemblyError) as error:
         _print_failure(error)
         partial = error.results
@@ -319,9 +381,19 @@ def _run(args: argparse.Namespace) -> int:
 def _report(args: argparse.Namespace) -> int:
     from . import report
 
-    folder: Path = args.folder
-    report.write(folder / "report.html", report.from_folder(folder))
-    print(f"wrote {folder / 'report.html'}")
+    path: Path = args.folder
+    # Held while the report is built: a run replacing the folder meanwhile would get a report of
+    # the files before it.
+    claimed = folder.claim(path, stage=False)
+    try:
+        report.write(path / "report.html", report.from_folder(path))
+    except OSError as error:
+        if isinstance(error, FileError):
+            raise
+        raise FileError(f"{path / 'report.html'}: cannot be written: {error.strerror or error}") from error
+    finally:
+        claimed.release()
+    print(f"wrote {path / 'report.html'}")
     return EXIT_OK
 
 
@@ -488,8 +560,6 @@ def _output(text: str) -> tuple[str, str]:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from .sweep import STATUS, sweep
-
     if bool(args.grid) == (args.sample is not None or bool(args.range)):
         _err("error: give --grid, or --sample with --range, not both")
         return EXIT_MODEL
@@ -499,6 +569,18 @@ def _sweep(args: argparse.Namespace) -> int:
     model = _load(args.model, args.set)
     analysis = args.analysis if args.analysis is not None else model.analyses[0]
     out: Path = args.out if args.out is not None else Path("out") / (Path(args.model).stem + "_sweep")
+    # Before the sweep: a folder that cannot be written, or that another run is writing, fails now.
+    claimed = folder.claim(out, folder.SWEEP_FILES)
+    try:
+        return _sweep_into(args, model, analysis, out)
+    finally:
+        claimed.release()
+
+
+def _sweep_into(args: argparse.Namespace, model: Model, analysis: str, out: Path) -> int:
+    """Run the sweep and write ``out``'s sweep.parquet (the table until then when interrupted)."""
+    from .sweep import STATUS, sweep
+
     client = _dask_client(args.dask) if args.dask is not None else None
     try:
         with warnings.catch_warnings(record=True) as caught:
@@ -515,16 +597,16 @@ def _sweep(args: argparse.Namespace) -> int:
         partial = getattr(interrupt, "table", None)
         if partial is None:
             raise
-        out.mkdir(parents=True, exist_ok=True)
-        partial.to_parquet(out / "sweep.parquet", index=False)
+        with folder.writing(out, folder.SWEEP_FILES) as staging:
+            partial.to_parquet(staging / "sweep.parquet", index=False)
         done = int((~partial[STATUS].str.startswith("KeyboardInterrupt")).sum())
-        _err(f"interrupted: {done} of {len(partial)} variants finished, written to {out / 'sweep.parquet'}")
-        return EXIT_INTERRUPTED
+        _err(f"{_what(interrupt)}: {done} of {len(partial)} variants finished, written to {out / 'sweep.parquet'}")
+        return _interrupted(interrupt)
     finally:
         if client is not None:
             client.close()
-    out.mkdir(parents=True, exist_ok=True)
-    table.to_parquet(out / "sweep.parquet", index=False)
+    with folder.writing(out, folder.SWEEP_FILES) as staging:
+        table.to_parquet(staging / "sweep.parquet", index=False)
     failed = table[STATUS] != "ok"
     print(f"{model.name}: analysis '{analysis}', {len(table)} variants, {len(table) - int(failed.sum())} ok, {int(failed.sum())} failed")
     if "seed" in table.attrs:

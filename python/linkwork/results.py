@@ -279,11 +279,19 @@ class Results:
         ``results.csv`` or ``results.parquet`` unless it is already that file; its report reads
         them back.
 
+        The folder is written whole (:mod:`linkwork.folder`): the files go into a staging
+        folder beside ``out_dir``, which then replaces ``out_dir`` in one step, so that
+        ``out_dir`` holds these files or the previous ones, never a mix (a report of another
+        run, or none left from one). A folder another run is writing, one that cannot be
+        written, or one holding files no run writes (which replacing it would delete) is a
+        :class:`FileError`, as is any error writing the files (the previous folder stays).
+
         ``units="si"`` writes ``results.csv`` in SI; ``units="display"`` in the units of the
         model's ``display:`` section (``linkwork run --units display``; not for a streamed run,
         whose rows went to their file SI as they were computed: a ``ValueError``). Either way
         ``summary.json`` says which (``unit_system``) and gives every column's unit as written
         (``units``); its own numbers stay SI."""
+        from . import folder
         from . import report as reports
         from .units import Units, system
 
@@ -293,28 +301,26 @@ class Results:
                 "units: 'display' cannot be written for a streamed run: its rows went to "
                 f"{self.streamed_to} in SI as they were computed; write it with units='si'"
             )
-        out = Path(out_dir)
-        self._native.write(os.fspath(out))
-        table_units = Units.of(self.model, self._columns, display=display)
-        if self.streamed_to is not None:
-            table = out / f"results{self.streamed_to.suffix}"
-            if not table.exists() or not table.samefile(self.streamed_to):
-                shutil.copyfile(self.streamed_to, table)
-            if table.suffix != ".csv":
-                # A results.csv of an earlier run would be read in place of these rows.
-                (out / "results.csv").unlink(missing_ok=True)
-        elif display:
-            reports.write_text(out / "results.csv", self._csv(table_units))
-        # The engine's summary.json, with the units of the table beside it.
-        written = out / "summary.json"
-        summary = json.loads(written.read_text(encoding="utf-8"))
-        summary |= self._units_keys(table_units, units)
-        # Its keys in alphabetical order, as the engine writes them; the units in column order.
-        reports.write_text(written, json.dumps(dict(sorted(summary.items())), indent=2) + "\n")
-        reports.write_text(out / "model.yaml", self.model.source)
-        self._copy_tables(out)
-        if report:
-            reports.write(out / "report.html", self._run())
+        with folder.writing(out_dir, folder.run_files(self.model._native.table_files)) as out:
+            self._native.write(os.fspath(out))
+            table_units = Units.of(self.model, self._columns, display=display)
+            if self.streamed_to is not None:
+                table = out / f"results{self.streamed_to.suffix}"
+                if not table.exists() or not table.samefile(self.streamed_to):
+                    shutil.copyfile(self.streamed_to, table)
+            elif display:
+                reports.write_text(out / "results.csv", self._csv(table_units))
+            # The engine's summary.json, with the units of the table beside it.
+            written = out / "summary.json"
+            summary = json.loads(written.read_text(encoding="utf-8"))
+            summary |= self._units_keys(table_units, units)
+            # Its keys in alphabetical order, as the engine writes them; the units in column order.
+            reports.write_text(written, json.dumps(dict(sorted(summary.items())), indent=2) + "\n")
+            reports.write_text(out / "model.yaml", self.model.source)
+            self._copy_tables(out)
+            # Last: a report only beside the files it shows.
+            if report:
+                reports.write(out / "report.html", self._run())
 
     def _csv(self, units: Units) -> str:
         """The text of ``results.csv`` with every column in ``units``: the engine's layout, each
@@ -330,14 +336,13 @@ class Results:
         from it). A table named by an absolute path is read where it is; one outside the model's
         folder (``../data.csv``) is not copied, and the folder's ``model.yaml`` finds it only
         where it was found."""
+        from .folder import inside
+
         folder = Path(self.model._native.folder)
         for name in self.model._native.table_files:
-            written = Path(name)
-            if written.is_absolute() or ".." in written.parts:
+            if not inside(name):
                 continue
-            source, copy = folder / written, out_dir / written
-            if copy.exists() and copy.samefile(source):
-                continue
+            source, copy = folder / name, out_dir / name
             copy.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(source, copy)
 

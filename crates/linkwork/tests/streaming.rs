@@ -147,3 +147,24 @@ fn a_sink_that_cannot_be_written_fails_the_run_naming_it() {
         failure.error
     );
 }
+
+/// A CSV stream makes its file anew when it writes the header (under a temporary name, then
+/// renamed over the old one): the previous file at its path is never truncated in place (it was,
+/// on the first chunk), so a reader holding it, here a second name of it, still reads it whole.
+#[test]
+fn a_csv_stream_replaces_its_file_and_never_truncates_it() {
+    let path = temp("replaced.csv");
+    let old = temp("replaced-old.csv");
+    std::fs::write(&path, "time,a.x\n0.0,1.0\n").unwrap();
+    let _ = std::fs::remove_file(&old);
+    std::fs::hard_link(&path, &old).unwrap();
+    let mut sink = CsvSink::at(&path);
+    sink.begin(&["b.y".to_string()]).unwrap();
+    assert_eq!(std::fs::read_to_string(&old).unwrap(), "time,a.x\n0.0,1.0\n");
+    sink.write(&[0.0, 0.5], &[vec![2.0, 3.0]]).unwrap();
+    sink.finish().unwrap();
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), "time,b.y\n0.0,2.0\n0.5,3.0\n");
+    assert_eq!(std::fs::read_to_string(&old).unwrap(), "time,a.x\n0.0,1.0\n");
+    std::fs::remove_file(&path).unwrap();
+    std::fs::remove_file(&old).unwrap();
+}

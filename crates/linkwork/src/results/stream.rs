@@ -14,7 +14,7 @@
 use crate::error::Error;
 use std::cell::RefCell;
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Bytes of output values held before a chunk goes to the sink: 16 MiB. Large enough that a
@@ -41,11 +41,14 @@ pub trait RowSink: Send + Sync {
 }
 
 /// `results.csv` written as the rows come: a header, then one line per output time, numbers in
-/// the shortest form that reads back to the same double. The file is created (or truncated)
-/// when the run begins to write it, not before.
+/// the shortest form that reads back to the same double. The file is made when the run begins
+/// to write it, not before: its header is written under a temporary name beside it, which then
+/// replaces any file at `path` (never truncated in place). Each chunk of rows is then one write,
+/// flushed: a process killed between chunks leaves whole lines, and one killed during a write
+/// leaves at most one line cut short, without its line end (`linkwork.stream.read` drops it).
 pub struct CsvSink {
     path: PathBuf,
-    out: Option<BufWriter<File>>,
+    out: Option<File>,
 }
 
 impl CsvSink {
@@ -54,11 +57,12 @@ impl CsvSink {
         CsvSink { path: path.to_path_buf(), out: None }
     }
 
-    fn out(&mut self) -> std::io::Result<&mut BufWriter<File>> {
-        if self.out.is_none() {
-            self.out = Some(BufWriter::new(File::create(&self.path)?));
+    /// Write `lines` (whole lines) at the end of the file in one call.
+    fn append(&mut self, lines: &[u8]) -> std::io::Result<()> {
+        match &mut self.out {
+            Some(out) => out.write_all(lines),
+            None => Err(std::io::Error::other("the header was not written")),
         }
-        Ok(self.out.as_mut().expect("opened above"))
     }
 }
 
@@ -85,17 +89,32 @@ pub(crate) fn write_rows(w: &mut impl Write, time: &[f64], columns: &[Vec<f64>])
 
 impl RowSink for CsvSink {
     fn begin(&mut self, names: &[String]) -> std::io::Result<()> {
-        write_header(self.out()?, names)
+        let name = self.path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+        let temp = self.path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+        let mut header = Vec::new();
+        write_header(&mut header, names)?;
+        let made = File::create(&temp)
+            .and_then(|mut f| f.write_all(&header))
+            .and_then(|()| std::fs::rename(&temp, &self.path));
+        if made.is_err() {
+            let _ = std::fs::remove_file(&temp);
+        }
+        made?;
+        self.out = Some(std::fs::OpenOptions::new().append(true).open(&self.path)?);
+        Ok(())
     }
 
     fn write(&mut self, time: &[f64], columns: &[Vec<f64>]) -> std::io::Result<()> {
-        write_rows(self.out()?, time, columns)
+        let mut lines = Vec::new();
+        write_rows(&mut lines, time, columns)?;
+        self.append(&lines)
     }
 
     fn finish(&mut self) -> std::io::Result<()> {
-        let out = self.out()?;
-        out.flush()?;
-        out.get_ref().sync_all()
+        match &self.out {
+            Some(out) => out.sync_all(),
+            None => Ok(()),
+        }
     }
 
     fn path(&self) -> String {
