@@ -14,7 +14,7 @@ use super::assembly::assemble_or_best;
 use super::{assemble, Assembly, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Result, RowName};
-use crate::linalg::dense::smallest_singular;
+use crate::linalg::dense::{equilibrated, smallest_singular};
 use crate::model::spec::{BranchMode, Side};
 use crate::model::structure::{self, side_name, Branch, Dyad};
 use crate::model::Model;
@@ -207,6 +207,8 @@ pub fn blame(
         let rows: Vec<usize> = g.elements.iter().flat_map(|&e| rows_of(e)).collect();
         let cols: Vec<usize> = g.bodies.iter().flat_map(|&b| 3 * b..3 * b + 3).collect();
         let block = Mat::from_fn(rows.len(), cols.len(), |i, j| jac[(rows[i], cols[j])]);
+        // Scaled as the whole's ratio is (`super::scaled_row_space`), so that the two compare.
+        let block = equilibrated(block.as_ref(), &super::column_scales(sys, cols.iter().copied()));
         let (ratio, local) = smallest_singular(block.as_ref());
         if ratio < worst_ratio {
             worst_ratio = ratio;

@@ -85,7 +85,7 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
     let (assembly, branches, warnings) =
         assemble_on_branches(model, drivers, &mut sys, &model.q0(), &model.qdot0(), &given, t, tolerance)?;
     let jac = sys.jacobian(&ConfigBuf::new(&assembly.q).view(), t);
-    let mut rows = super::row_space(&jac, t)?;
+    let mut rows = super::scaled_row_space(&sys, &jac, 0..n, t)?;
     let (keep, drop) = rows.independent_rows();
     Ok(SystemCheck {
         drivers: drivers.iter().map(|&d| model.drivers[d].name.clone()).collect(),

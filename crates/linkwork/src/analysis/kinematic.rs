@@ -13,9 +13,10 @@
 //! loop except the growth of the output columns, reserved up front.
 
 use super::setup::{fail, held, output_times, unmet_freedom};
-use super::{assemble_into, residual_floor, Assembly, SINGULAR_RATIO_KINEMATIC};
+use super::{assemble_into, scaled_residual, scaled_residual_floor, Assembly, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::{Config, ConfigBuf};
 use crate::error::{Error, Problem, RowName};
+use crate::linalg::rows::row_scales;
 use crate::linalg::{ColMatrix, FactorError, SparseLu};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, KinematicStats, Results, Statistics};
@@ -64,6 +65,10 @@ struct Solver<'m> {
     /// (bodies) `(cos phi, sin phi)` of `q` and of `trial`, computed once per position.
     rot_q: Vec<[f64; 2]>,
     rot_trial: Vec<[f64; 2]>,
+    /// (n) scales of the coordinates and of the independent rows of the last factorization
+    /// (`super::Scaled`): the residual and the condition free of units.
+    col_scale: Vec<f64>,
+    row_scale: Vec<f64>,
     t: f64,
     tolerance: f64,
     max_iterations: usize,
@@ -90,6 +95,7 @@ impl Solver<'_> {
         let q = if q_is_trial { Config::new(&self.trial, &self.rot_trial) } else { Config::new(&self.q, &self.rot_q) };
         let (pattern, values) = self.lu.pattern_and_values();
         self.sys.fill_jacobian(pattern, &q, t, values);
+        row_scales(&pattern.col_ptr, &pattern.row_idx, values, &self.col_scale, &mut self.row_scale);
         self.stats.factorizations += 1;
         self.lu.factor().map_err(|e| self.factor_error(e))
     }
@@ -118,14 +124,15 @@ impl Solver<'_> {
             Config::rotations(&self.trial, &mut self.rot_trial);
             self.sys.phi(&Config::new(&self.trial, &self.rot_trial), t, &mut self.full);
             gather(&self.full, &self.rows, &mut self.rhs);
-            let (row, r) = worst(&self.rhs);
-            let tolerance = self.tolerance.max(residual_floor(&self.trial));
+            let (row, r) = scaled_residual(&self.rhs, &self.row_scale, self.sys.length);
+            let tolerance = self.tolerance.max(scaled_residual_floor(&self.trial, self.sys.length));
             if r <= tolerance {
-                self.stats.max_residual = self.stats.max_residual.max(r);
+                self.stats.max_residual = self.stats.max_residual.max(worst(&self.rhs).1);
                 return Ok(Attempt::Converged);
             }
             if it == self.max_iterations || !r.is_finite() || r > 1e3 * previous.min(1e300) {
-                return Ok(Attempt::Failed(NewtonFailure { residual: r, row: self.rows[row], iterations: it }));
+                let residual = self.rhs[row].abs();
+                return Ok(Attempt::Failed(NewtonFailure { residual, row: self.rows[row], iterations: it }));
             }
             let rho = r / previous;
             if r * rho * rho * rho > tolerance {
@@ -147,7 +154,10 @@ impl Solver<'_> {
         let pattern = self.sys.pattern(&self.rows);
         let mut values = vec![0.0; pattern.row_idx.len()];
         self.sys.fill_jacobian(&pattern, &Config::new(&self.q, &self.rot_q), self.t, &mut values);
-        let Ok(mut space) = super::row_space(&ColMatrix::new(&pattern, values), self.t) else { return (0.0, vec![]) };
+        let jac = ColMatrix::new(&pattern, values);
+        let Ok(mut space) = super::scaled_row_space(&self.sys, &jac, 0..jac.ncols(), self.t) else {
+            return (0.0, vec![]);
+        };
         let (ratio, rows) = space.smallest_singular();
         (ratio, rows.into_iter().map(|i| self.sys.row_name(self.rows[i])).collect())
     }
@@ -205,7 +215,7 @@ pub(crate) fn run_driven(
             Err(e) => return Err(fail(results, e)),
         };
     let jac = sys.jacobian(&ConfigBuf::new(&assembly.q).view(), t0);
-    let (rows, redundant) = match super::row_space(&jac, t0) {
+    let (rows, redundant) = match super::scaled_row_space(&sys, &jac, 0..n, t0) {
         Ok(space) => space.independent_rows(),
         Err(e) => return Err(fail(results, e)),
     };
@@ -223,6 +233,7 @@ pub(crate) fn run_driven(
         }
     };
     let m = sys.m;
+    let col_scale = super::column_scales(&sys, 0..n);
     let mut s = Solver {
         sys,
         rows,
@@ -239,6 +250,8 @@ pub(crate) fn run_driven(
             rot
         },
         rot_trial: vec![[1.0, 0.0]; n / 3],
+        col_scale,
+        row_scale: vec![1.0; n],
         t: t0,
         tolerance: settings.tolerance,
         max_iterations: settings.max_iterations,
@@ -347,7 +360,7 @@ fn insert_summary(results: &mut Results, stats: &KinematicStats, assembly: &Asse
 }
 
 fn check_condition(s: &mut Solver<'_>, model: &Model, drivers: &[usize], limit: f64) -> Result<(), Error> {
-    let cond = s.lu.condition_estimate();
+    let cond = s.lu.scaled_condition_estimate(Some((&s.row_scale, &s.col_scale)));
     s.stats.max_condition = s.stats.max_condition.max(cond);
     if cond > limit {
         let (ratio, rows) = s.diagnose();

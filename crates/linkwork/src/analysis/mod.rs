@@ -27,7 +27,7 @@ pub(crate) use setup::measure_reactions;
 pub use statics::run_static;
 
 use crate::linalg::dense::null_space;
-use crate::linalg::rows::RowSpace;
+use crate::linalg::rows::{RowSpace, Scaled};
 use crate::linalg::ColMatrix;
 use faer::Mat;
 
@@ -42,6 +42,32 @@ pub const RESIDUAL_ROUNDOFF_UNITS: f64 = 64.0;
 /// `max(tolerance, residual_floor(q))`, so no tolerance asks for the impossible.
 pub fn residual_floor(q: &[f64]) -> f64 {
     RESIDUAL_ROUNDOFF_UNITS * f64::EPSILON * q.iter().fold(1.0f64, |a, x| a.max(x.abs()))
+}
+
+/// The residual of `Phi` free of units, and its row: `max_i |Phi_i| R_i / L`, `R` the row scales
+/// of `Phi_q` ([`crate::linalg::rows::row_scales`] with [`column_scales`]) and `L` the length
+/// scale. A row of lengths, whose scaled row has a norm of order 1, gives its residual over `L`;
+/// a row of angles, whose scaled row has a norm of order `1 / L`, its residual in radians: both
+/// relative, so that the position solvers stop at the same point of their iterations whatever
+/// the unit of length, and `solver.tolerance` means as much on a 10 um mechanism as on a 4 km
+/// one.
+pub(crate) fn scaled_residual(phi: &[f64], row_scales: &[f64], length: f64) -> (usize, f64) {
+    phi.iter().zip(row_scales).map(|(p, r)| (p * r / length).abs()).enumerate().fold((0, 0.0f64), |(bk, bx), (k, x)| {
+        if x > bx || x.is_nan() {
+            (k, x)
+        } else {
+            (bk, bx)
+        }
+    })
+}
+
+/// The smallest [`scaled_residual`] round-off lets Newton reach at `q`:
+/// `RESIDUAL_ROUNDOFF_UNITS eps max(1, max |x, y| / L, max |phi|)`, [`residual_floor`] in the
+/// scaled coordinates (lengths over `L`, angles in radians).
+pub(crate) fn scaled_residual_floor(q: &[f64], length: f64) -> f64 {
+    let size =
+        q.iter().enumerate().fold(1.0f64, |a, (k, x)| a.max(if k % 3 == 2 { x.abs() } else { x.abs() / length }));
+    RESIDUAL_ROUNDOFF_UNITS * f64::EPSILON * size
 }
 
 /// The tightest relative tolerance of an integrator: 100 units of round-off, as DASSL. Below it
@@ -195,5 +221,38 @@ pub(crate) fn massless_motion(model: &crate::model::Model, jac: &ColMatrix) -> O
 /// Gram factorization for a large one).
 pub(crate) fn row_space(jac: &ColMatrix, t: f64) -> crate::error::Result<RowSpace> {
     RowSpace::new(jac.as_ref())
+        .map_err(|_| crate::Error::OutOfMemory { time: t, what: "in the rank of the constraint Jacobian".into() })
+}
+
+/// The model's length scale `L`, m: the largest distance of a named point from its body's
+/// centre of mass (the lever arms that make the angle columns of `Phi_q`), else, for a model
+/// without points, the largest distance of a body's guessed position from the origin, else 1.
+/// It scales with the model: every length multiplied by `s` multiplies it by `s`.
+pub fn length_scale(model: &crate::model::Model) -> f64 {
+    let largest = |v: &mut dyn Iterator<Item = [f64; 2]>| v.map(|p| p[0].hypot(p[1])).fold(0.0f64, f64::max);
+    let arms = largest(&mut model.bodies.iter().flat_map(|b| b.points.values().copied()));
+    let positions = largest(&mut model.bodies.iter().map(|b| [b.q0[0], b.q0[1]]));
+    [arms, positions].into_iter().find(|&l| l > 0.0 && l.is_finite()).unwrap_or(1.0)
+}
+
+/// The scale of each coordinate of `columns` (indices into `q`) for [`Scaled`]: 1 for `x` and
+/// `y`, `1 / L` for an angle (`L` = `sys.length`, [`length_scale`]), so that a column of `Phi_q`
+/// holds the change of a row per metre of the coordinate or of the arc `L phi`: a point at the
+/// lever arm `L` moves as far when its body turns by `d(L phi)` as when it slides by `dx`.
+pub(crate) fn column_scales(sys: &crate::system::System<'_>, columns: impl Iterator<Item = usize>) -> Vec<f64> {
+    columns.map(|c| if c % 3 == 2 { 1.0 / sys.length } else { 1.0 }).collect()
+}
+
+/// The row space of `Phi_q` (`jac`, whose columns are the coordinates `columns`) scaled to be
+/// free of units ([`Scaled`], [`column_scales`]): for the rank (degrees of freedom, redundant
+/// rows) and the singular ratios, and for assembly's least change, the same whatever the model's
+/// unit of length.
+pub(crate) fn scaled_row_space(
+    sys: &crate::system::System<'_>,
+    jac: &ColMatrix,
+    columns: impl Iterator<Item = usize>,
+    t: f64,
+) -> crate::error::Result<Scaled> {
+    Scaled::new(jac, &column_scales(sys, columns))
         .map_err(|_| crate::Error::OutOfMemory { time: t, what: "in the rank of the constraint Jacobian".into() })
 }
