@@ -64,10 +64,11 @@ pub fn assemble(
     t: f64,
     tolerance: f64,
 ) -> Result<Assembly> {
-    assemble_or_best(sys, q0, qdot0, given, t, tolerance).map_err(|(e, _)| e)
+    assemble_or_best(sys, q0, qdot0, given, t, tolerance).map_err(|(e, _, _)| e)
 }
 
-/// [`assemble`], with the positions Newton reached (its best) beside the error when it fails.
+/// [`assemble`], with the positions Newton reached (its best) beside the error when it fails, and
+/// whether they hold (the positions assembled, the velocities did not).
 pub(crate) fn assemble_or_best(
     sys: &mut System<'_>,
     q0: &[f64],
@@ -75,12 +76,15 @@ pub(crate) fn assemble_or_best(
     given: &[bool],
     t: f64,
     tolerance: f64,
-) -> std::result::Result<Assembly, (Error, Vec<f64>)> {
+) -> std::result::Result<Assembly, (Error, Vec<f64>, bool)> {
     let mut best = q0.to_vec();
-    assemble_tracking(sys, q0, qdot0, given, t, tolerance, &mut best).map_err(|e| (e, best))
+    let mut assembled = false;
+    assemble_tracking(sys, q0, qdot0, given, t, tolerance, &mut best, &mut assembled).map_err(|e| (e, best, assembled))
 }
 
-/// [`assemble`], keeping in `best` the last positions Newton accepted.
+/// [`assemble`], keeping in `best` the last positions Newton accepted, and `assembled` true once
+/// they hold.
+#[allow(clippy::too_many_arguments)]
 fn assemble_tracking(
     sys: &mut System<'_>,
     q0: &[f64],
@@ -89,6 +93,7 @@ fn assemble_tracking(
     t: f64,
     tolerance: f64,
     best: &mut Vec<f64>,
+    assembled: &mut bool,
 ) -> Result<Assembly> {
     let (n, m) = (sys.n, sys.m);
     let free: Vec<usize> = (0..n).filter(|&k| !given[k]).collect();
@@ -147,6 +152,8 @@ fn assemble_tracking(
         best.clone_from(&q);
     }
     let residual = maxabs(&phi);
+    best.clone_from(&q);
+    *assembled = true;
     // Velocities: least change from the guess, given ones held.
     let config = ConfigBuf::new(&q);
     let jac = sys.jacobian(&config.view(), t);

@@ -68,14 +68,19 @@ pub fn assemble_on_branches(
     let target: Vec<Option<Side>> = dyads.iter().map(|(d, declared)| declared.or_else(|| d.drawn_side(q0))).collect();
     let mut assembly = match assemble_or_best(sys, q0, qdot0, given, t, tolerance) {
         Ok(a) => a,
-        Err((Error::Assembly { time, iterations, residual, row, hint }, best)) => {
+        Err((Error::Assembly { time, iterations, residual, row, hint }, best, assembled)) => {
+            // Positions that hold at a singular position whose velocities cannot: a start at a
+            // dead centre, not drivers that conflict.
+            if let Some(e) = assembled.then(|| singular_start(model, drivers, sys, &best, t)).flatten() {
+                return Err(e);
+            }
             let hint = match cannot_close(model, drivers, &best) {
                 Some(why) => format!("{why}; {hint}"),
                 None => hint,
             };
             return Err(Error::Assembly { time, iterations, residual, row, hint });
         }
-        Err((e, _)) => return Err(e),
+        Err((e, _, _)) => return Err(e),
     };
     // Each round reflects every dyad off its side; a reflection can only disturb the dyads placed
     // after it, so one round per dyad is enough.
@@ -234,4 +239,28 @@ pub fn blame(
         }
     };
     Some((rows, words))
+}
+
+/// A fully driven start (as many equations as coordinates, or more) at a singular position of
+/// the group that [`blame`] names: an [`Error::Singular`] at `t` saying so, where the rank alone
+/// would say a driver is missing or two drivers conflict. `None` when no group is singular.
+pub(crate) fn singular_start(
+    model: &Model,
+    drivers: &[usize],
+    sys: &mut System<'_>,
+    q: &[f64],
+    t: f64,
+) -> Option<Error> {
+    if sys.m < sys.n {
+        return None;
+    }
+    let (rows, words) = blame(model, drivers, sys, q, t)?;
+    Some(Error::Singular {
+        time: t,
+        rows,
+        detail: format!(
+            "the start is a dead centre or lock-up {words}: the driven Jacobian loses rank there, so the drivers \
+             cannot move the mechanism from it; start the drivers from another position"
+        ),
+    })
 }

@@ -125,6 +125,13 @@ pub fn check(model: &Model) -> Result<CheckReport> {
                 Ok(system) => {
                     let warning = match a.kind {
                         AnalysisKind::Dynamic => massless(model, &a.drivers, &system.assembly.q, a.t_start),
+                        // A rank short at a dead centre is the position's fault, not the drivers'.
+                        _ if system.dof > 0 => {
+                            let mut sys = System::new(model, &a.drivers);
+                            super::singular_start(model, &a.drivers, &mut sys, &system.assembly.q, a.t_start)
+                                .map(|e| e.to_string())
+                                .or_else(|| unmet_freedom(model, a, system.equations, system.rank))
+                        }
                         _ => unmet_freedom(model, a, system.equations, system.rank),
                     };
                     AnalysisCheck {
