@@ -42,6 +42,22 @@ fn scaled(text: &str, s: f64) -> String {
     serde_yaml_ng::to_string(&doc).unwrap()
 }
 
+/// `text` with its crank turning at 1 rev/s, a flywheel on an axle at the origin (free to turn:
+/// only its inertia resists), and a dynamic analysis of the free mechanism (`free`, 0.05 s).
+fn with_dynamics(text: &str) -> String {
+    let mut doc: Value = serde_yaml_ng::from_str(text).unwrap();
+    doc["bodies"]["crank"]["omega"] = Value::from(std::f64::consts::TAU);
+    let wheel: Value = serde_yaml_ng::from_str("{mass: 1.0, inertia: 0.001, position: [0, 0], angle: 0}").unwrap();
+    doc["bodies"].as_mapping_mut().unwrap().insert(Value::from("flywheel"), wheel);
+    let axle: Value =
+        serde_yaml_ng::from_str("{type: revolute, body_i: flywheel, point_i: [0, 0], body_j: ground, point_j: [0, 0]}")
+            .unwrap();
+    doc["joints"].as_mapping_mut().unwrap().insert(Value::from("axle"), axle);
+    let free: Value = serde_yaml_ng::from_str("{type: dynamic, drivers: [], t_end: 0.05, step: 0.01}").unwrap();
+    doc["analyses"].as_mapping_mut().unwrap().insert(Value::from("free"), free);
+    serde_yaml_ng::to_string(&doc).unwrap()
+}
+
 /// The slider-crank example scaled by 1e-6, 1e-3, 1e3 and 1e6 (and 1e-4, 1e4, the 10 um and
 /// 4 km of the fault probe) against itself: one degree of freedom alone and none with its motor,
 /// its kinematics runs to the end, and every output position equals the unscaled one times `s`
@@ -73,6 +89,12 @@ fn the_slider_crank_scaled_from_1e_6_to_1e6_has_the_same_freedom_and_positions()
         assert!(report.mechanism.redundant.is_empty() && driven.redundant.is_empty(), "scale {s:e}");
         let run = model.run("kinematics").unwrap_or_else(|f| panic!("scale {s:e}: {}", f.error));
         assert_eq!(run.time, reference.time, "scale {s:e}");
+        // Its dynamics runs too, with a flywheel: the massless-motion check compared inertias
+        // (kg m^2) with masses (kg), so at 1e-6 the flywheel's inertia (1e-15 kg m^2) counted as
+        // none and its free turning was refused as a motion no mass resists.
+        let free = Model::from_yaml(&scaled(&with_dynamics(&text), s)).unwrap();
+        let dynamics = free.run("free").unwrap_or_else(|f| panic!("scale {s:e}: {}", f.error));
+        assert_eq!(dynamics.summary.dof, Some(2), "scale {s:e}");
         for name in &reference.names {
             let Some(quantity) = [".x", ".y", ".phi"].into_iter().find(|q| name.ends_with(q)) else { continue };
             let (factor, size) = if quantity == ".phi" { (1.0, angle) } else { (s, length) };

@@ -54,8 +54,8 @@ impl Assembly {
 }
 
 /// Assemble `sys` at time `t` from `q0`, `qdot0`. `given: (2n)` marks the positions (first `n`)
-/// and velocities (last `n`) to hold. `tolerance` is the residual of `Phi` to reach, relative
-/// ([`super::scaled_residual`]).
+/// and velocities (last `n`) to hold. `tolerance` bounds the residual of `Phi` relative to the
+/// model's size ([`super::scaled_residual`]).
 pub fn assemble(
     sys: &mut System<'_>,
     q0: &[f64],
@@ -64,7 +64,7 @@ pub fn assemble(
     t: f64,
     tolerance: f64,
 ) -> Result<Assembly> {
-    assemble_or_best(sys, q0, qdot0, given, t, tolerance).map_err(|(e, _, _)| e)
+    assemble_or_best(sys, q0, qdot0, given, t, tolerance).map_err(|stopped| stopped.0)
 }
 
 /// [`assemble`], with the positions Newton reached (its best) beside the error when it fails, and
@@ -76,10 +76,11 @@ pub(crate) fn assemble_or_best(
     given: &[bool],
     t: f64,
     tolerance: f64,
-) -> std::result::Result<Assembly, (Error, Vec<f64>, bool)> {
+) -> std::result::Result<Assembly, Box<(Error, Vec<f64>, bool)>> {
     let mut best = q0.to_vec();
     let mut assembled = false;
-    assemble_tracking(sys, q0, qdot0, given, t, tolerance, &mut best, &mut assembled).map_err(|e| (e, best, assembled))
+    assemble_tracking(sys, q0, qdot0, given, t, tolerance, &mut best, &mut assembled)
+        .map_err(|e| Box::new((e, best, assembled)))
 }
 
 /// [`assemble`], keeping in `best` the last positions Newton accepted, and `assembled` true once

@@ -66,7 +66,7 @@ pub fn assemble_on_branches(
         }
     }
     let target: Vec<Option<Side>> = dyads.iter().map(|(d, declared)| declared.or_else(|| d.drawn_side(q0))).collect();
-    let mut assembly = match assemble_or_best(sys, q0, qdot0, given, t, tolerance) {
+    let mut assembly = match assemble_or_best(sys, q0, qdot0, given, t, tolerance).map_err(|stopped| *stopped) {
         Ok(a) => a,
         Err((Error::Assembly { time, iterations, residual, row, hint }, best, assembled)) => {
             // Positions that hold at a singular position whose velocities cannot: a start at a

@@ -48,9 +48,8 @@ pub fn residual_floor(q: &[f64]) -> f64 {
 /// of `Phi_q` ([`crate::linalg::rows::row_scales`] with [`column_scales`]) and `L` the length
 /// scale. A row of lengths, whose scaled row has a norm of order 1, gives its residual over `L`;
 /// a row of angles, whose scaled row has a norm of order `1 / L`, its residual in radians: both
-/// relative, so that the position solvers stop at the same point of their iterations whatever
-/// the unit of length, and `solver.tolerance` means as much on a 10 um mechanism as on a 4 km
-/// one.
+/// relative, so that the position solvers, which stop when it is below `solver.tolerance`, stop
+/// at the same point of their iterations whatever the unit of length.
 pub(crate) fn scaled_residual(phi: &[f64], row_scales: &[f64], length: f64) -> (usize, f64) {
     phi.iter().zip(row_scales).map(|(p, r)| (p * r / length).abs()).enumerate().fold((0, 0.0f64), |(bk, bx), (k, x)| {
         if x > bx || x.is_nan() {
@@ -59,6 +58,24 @@ pub(crate) fn scaled_residual(phi: &[f64], row_scales: &[f64], length: f64) -> (
             (bk, bx)
         }
     })
+}
+
+/// Each row's weight `R_i / L` in [`scaled_residual`] for `model` with the active `drivers` at
+/// `(q, t)`: the residual assembly and the kinematics bound by `solver.tolerance` is
+/// `max_i |Phi_i| w_i`, and the length scale `L` ([`length_scale`]) is returned beside them.
+pub fn residual_weights(model: &crate::model::Model, drivers: &[usize], q: &[f64], t: f64) -> (Vec<f64>, f64) {
+    let mut sys = crate::system::System::new(model, drivers);
+    let jac = sys.jacobian(&crate::constraints::ConfigBuf::new(q).view(), t);
+    let mut weights = vec![0.0; sys.m];
+    crate::linalg::rows::row_scales(
+        &jac.col_ptr,
+        &jac.row_idx,
+        &jac.values,
+        &column_scales(&sys, 0..sys.n),
+        &mut weights,
+    );
+    weights.iter_mut().for_each(|w| *w /= sys.length);
+    (weights, sys.length)
 }
 
 /// The smallest [`scaled_residual`] round-off lets Newton reach at `q`:
@@ -163,8 +180,10 @@ pub(crate) fn element_names(sys: &crate::system::System<'_>, rows: &[usize]) -> 
     names
 }
 
-/// A coordinate whose mass (or inertia) is below this fraction of the largest counts as having
-/// none: `1e-12`, far below the mass ratios within one mechanism and far above rounding.
+/// A coordinate whose mass (or inertia) is below this fraction of the largest mass (or inertia)
+/// counts as having none: `1e-12`, far below the mass ratios within one mechanism and far above
+/// rounding. Masses are compared with masses and inertias with inertias: an inertia in kg m^2
+/// against a mass in kg would depend on the unit of length (a 10 um body's `1e-15` against `1`).
 const MASSLESS: f64 = 1e-12;
 
 /// A motion the joints allow at `q` (`jac`, `Phi_q` there) that no mass or inertia resists: the
@@ -180,8 +199,11 @@ const MASSLESS: f64 = 1e-12;
 /// whatever the size of the mechanism.
 pub(crate) fn massless_motion(model: &crate::model::Model, jac: &ColMatrix) -> Option<crate::Problem> {
     let mass: Vec<f64> = model.bodies.iter().flat_map(|b| [b.mass, b.mass, b.inertia]).collect();
-    let largest = mass.iter().fold(0.0f64, |a, &m| a.max(m));
-    let light: Vec<usize> = (0..mass.len()).filter(|&k| mass[k] <= MASSLESS * largest).collect();
+    let largest = |kind: usize| mass.iter().skip(kind).step_by(3).fold(0.0f64, |a, &m| a.max(m));
+    let (largest_mass, largest_inertia) = (largest(0), largest(2));
+    let light: Vec<usize> = (0..mass.len())
+        .filter(|&k| mass[k] <= MASSLESS * if k % 3 == 2 { largest_inertia } else { largest_mass })
+        .collect();
     if light.is_empty() {
         return None;
     }
