@@ -13,7 +13,7 @@
     │   │   └── EquilibriumError    coordinates, index: no stable static equilibrium (stopped short: row,
     │   │                           residual, iterations, load_fraction; none stable or none at all: cause)
     │   ├── IntegrationError    step, cause: a dynamic integrator could not continue
-    │   ├── NonFiniteError      element, expression, value: an element gave NaN or infinity, or a driver ran away
+    │   ├── NonFiniteError      element, expression, value: an element gave NaN or infinity, or a driver ran away or jumped
     │   └── OutOfMemoryError    memory ran out in a factorization; also a MemoryError
     ├── FileError           path; also an OSError
     └── InternalError       the engine panicked: a bug, reported instead of crashing

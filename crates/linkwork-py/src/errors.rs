@@ -10,7 +10,8 @@
 //! │   ├── ConvergenceError    row, residual, iterations, substep
 //! │   │   └── EquilibriumError    coordinates, index; row, residual, iterations, load_fraction or cause
 //! │   ├── IntegrationError    step, cause
-//! │   ├── NonFiniteError      element, expression, value (NaN, infinity, or without bound)
+//! │   ├── NonFiniteError      element, expression, value (NaN, infinity, without bound, or a
+//! │   │                       driver's jump)
 //! │   └── OutOfMemoryError    (also a MemoryError) memory ran out in a factorization
 //! ├── FileError           path (also an OSError)
 //! └── InternalError       a panic inside the engine: a bug, reported instead of crashing
@@ -240,9 +241,10 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
         Error::Integration { time, step, cause, rows } => {
             (IntegrationError::new_err(message), failure(*time, names(rows))?.with("step", step)?.with("cause", cause)?)
         }
-        // A driver without bound gives its rate as the value.
+        // A driver without bound gives its rate as the value, one that jumps its jump.
         Error::NonFinite { time, element, expression, value }
-        | Error::Unbounded { time, element, expression, rate: value, .. } => (
+        | Error::Unbounded { time, element, expression, rate: value, .. }
+        | Error::Jump { time, element, expression, jump: value, .. } => (
             NonFiniteError::new_err(message),
             failure(*time, vec![])?.with("element", element)?.with("expression", expression)?.with("value", value)?,
         ),

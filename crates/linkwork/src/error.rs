@@ -208,6 +208,23 @@ pub enum Error {
         /// The limit the sub-steps reached.
         limit: String,
     },
+    /// A driver's prescribed position jumps: it changes within the smallest sub-step by far more
+    /// than its rate explains, and no position of the mechanism can follow it.
+    #[error(
+        "{element} jumps by {jump:.3e} at t = {when} s ({expression}): its position changes within {step:.3e} s by far more than its rate explains, and no motion of the mechanism can follow; make it continuous (a ramp or a motion law instead of a step)", when = seconds(.time)
+    )]
+    Jump {
+        /// Time after the jump, s.
+        time: f64,
+        /// The driver, as its path in the model file (`drivers.motor`).
+        element: String,
+        /// Its function of time.
+        expression: String,
+        /// Its change over the step (rad or m).
+        jump: f64,
+        /// The step, s.
+        step: f64,
+    },
     /// Memory ran out in a sparse factorization: the model is too large for this machine.
     #[error("out of memory {what} at t = {when} s", when = seconds(.time))]
     OutOfMemory {

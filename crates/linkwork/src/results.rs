@@ -571,6 +571,7 @@ impl Results {
                 | Error::Integration { time, .. }
                 | Error::NonFinite { time, .. }
                 | Error::Unbounded { time, .. }
+                | Error::Jump { time, .. }
                 | Error::OutOfMemory { time, .. }
                 | Error::Interrupted { time },
             ) => Some(*time),

@@ -157,24 +157,40 @@ fn condition_limit_stops_the_analysis() {
 }
 
 /// A slider-crank driven by its slider's x from the dead centre (crank and rod in line): as many
-/// equations as coordinates, but the rank drops at the start. The refusal says both possible
-/// causes; a model short of equations is told only to add drivers.
+/// equations as coordinates, but the rank drops at the start. It was refused as a model short of
+/// a driver ("add 1 driver(s), unless ..."), or, when the slider starts moving (`0.4 - 0.1*t`
+/// asks for a velocity the dead centre cannot give), as drivers asking for velocities that
+/// cannot hold ("two drivers of one motion"), depending on where the rank test fell. Both are a
+/// singular position at t = 0 naming the dyad whose links are collinear, in the run and in the
+/// check.
 #[test]
-fn a_start_at_a_dead_centre_is_named_as_a_possible_cause() {
-    let text = patched_example(
-        "slider_crank.yaml",
-        &[
-            (
-                "motor: {type: angle, body: crank, function: \"2*pi*t\"}",
-                "push: {type: x, body: slider, function: \"0.4 - 0.1*t\"}",
-            ),
-            ("drivers: [motor]", "drivers: [push]"),
-        ],
-    );
-    let model = Model::from_yaml(&text).unwrap();
-    let failure = model.run("kinematics").expect_err("singular start");
-    let message = failure.error.to_string();
-    assert!(message.contains("add 1 driver(s), unless the start position is a singular one"), "{message}");
+fn a_start_at_a_dead_centre_is_a_singular_position_naming_its_dyad() {
+    for function in ["0.4 - 0.1*t", "0.4 - 0.1*t^2"] {
+        let text = patched_example(
+            "slider_crank.yaml",
+            &[
+                (
+                    "motor: {type: angle, body: crank, function: \"2*pi*t\"}",
+                    &format!("push: {{type: x, body: slider, function: \"{function}\"}}"),
+                ),
+                ("drivers: [motor]", "drivers: [push]"),
+            ],
+        );
+        let model = Model::from_yaml(&text).unwrap();
+        let failure = model.run("kinematics").expect_err("singular start");
+        let message = failure.error.to_string();
+        assert!(matches!(failure.error, Error::Singular { time: 0.0, .. }), "{function}: {message}");
+        assert!(
+            message.starts_with("singular position at t = 0 s: the start is a dead centre"),
+            "{function}: {message}"
+        );
+        assert!(message.contains("links crank and rod are collinear at joint A (stretched)"), "{function}: {message}");
+        assert!(!message.contains("add 1 driver") && !message.contains("cannot all hold"), "{function}: {message}");
+        let report = check(&model).unwrap();
+        let entry = &report.analyses["kinematics"];
+        let said = entry.warning.clone().or(entry.error.clone()).unwrap_or_default();
+        assert!(said.contains("the start is a dead centre") && said.contains("joint A"), "{function}: {said}");
+    }
 }
 
 /// A crank driven by `function` over `t_end`, kinematics with output step 0.01 s.
@@ -357,4 +373,52 @@ analyses:
     assert_eq!(check(&model).unwrap().analyses["dyn"].warning, None);
     let r = model.run("dyn").unwrap_or_else(|f| panic!("{}", f.error));
     assert!(r.column("crank.phi").unwrap().iter().all(|x| x.is_finite()));
+}
+
+/// A driver whose position jumps (`2*pi*t + 0.5*(t > 0.5)`: half a radian at 0.5 s) cannot be
+/// followed: Newton lands on the new position, farther than half the predicted motion, at every
+/// sub-step down to the smallest. It was reported as "position solution did not converge ...:
+/// residual 0.000e0"; now the driver is named with its jump (0.5 rad) and the time.
+#[test]
+fn a_driver_that_jumps_is_named_with_its_jump_and_time() {
+    let model = crank_driven_by("2*pi*t + 0.5*(t > 0.5)", 1.0);
+    let failure = model.run("kinematics").expect_err("the jump cannot be followed");
+    let message = failure.error.to_string();
+    match &failure.error {
+        Error::Jump { time, element, expression, jump, .. } => {
+            assert_eq!((element.as_str(), expression.as_str()), ("drivers.motor", "2*pi*t + 0.5*(t > 0.5)"));
+            // The jump and its time, to the smallest sub-step (1e-10 s) and the ramp over it.
+            assert!((time - 0.5).abs() < 1e-9 && (jump - 0.5).abs() < 1e-8, "{message}");
+        }
+        other => panic!("expected the driver's jump, got {other}"),
+    }
+    assert!(message.contains("drivers.motor jumps by 5.000e-1 at t = 0.5 s"), "{message}");
+    let last = *failure.results.time.last().unwrap();
+    assert!((0.49..=0.5).contains(&last), "outputs up to the jump kept: the last at {last}");
+}
+
+/// The slider-crank example's crank turning at 1 rev/s over `t_end: 1e15` with outputs every `1e8` s (10 million points,
+/// the most allowed) was stopped as "drivers.motor grows without bound": its rate never grows,
+/// the output step asks for 6.3e8 rad between two outputs. Now the step is named. The same crank
+/// started at `t_start: 1e15`, where double precision spaces times 0.125 s apart and the
+/// sub-steps of 0.35 rad are 0.056 s, cannot advance the time: its round-off is named.
+#[test]
+fn a_huge_time_span_names_the_step_or_the_time_round_off() {
+    let crank = |times: &str| {
+        Model::from_yaml(&patch(&example_text("slider_crank.yaml"), "t_end: 2.0, step: 0.01", times)).unwrap()
+    };
+    let error = crank("t_end: 1e15, step: 1e8").run("kinematics").expect_err("too long a step").error;
+    let message = error.to_string();
+    assert!(
+        message.contains("analyses.kinematics.step: the output step 1e8 s is too long for the motion"),
+        "{message}"
+    );
+    assert!(message.contains("drivers.motor (2*pi*t) moves 6.283e0 per second"), "{message}");
+    assert!(!message.contains("without bound"), "{message}");
+
+    let late = crank("t_start: 1e15, t_end: 1000000000000010, step: 0.01");
+    let error = late.run("kinematics").expect_err("time round-off").error;
+    let message = error.to_string();
+    assert!(message.contains("analyses.kinematics.t_start: time round-off at t = 1e+15 s"), "{message}");
+    assert!(!message.contains("without bound"), "{message}");
 }

@@ -601,9 +601,11 @@ fn property(name: &str, check: impl Fn(&Recipe, &Tally) -> Result<(), TestCaseEr
 }
 
 /// Property 2 (and 1): driven kinematics. The bound: the position solver stops when the
-/// max-norm of `Phi` is at most `max(tolerance, 64 eps max(1, |q|))` (`residual_floor`); the
-/// residual recomputed here rounds differently, by as many units again, so `tolerance + 128 eps
-/// max(1, |q|)`. Velocities and accelerations are not checked here: they are linear solves of
+/// residual relative to the mechanism's size, `max_i |Phi_i| w_i` (`analysis::residual_weights`:
+/// a row of lengths over the length scale `L`, one of angles in rad; docs/kinematics.md,
+/// "Scale"), is at most `max(tolerance, 64 eps max(1, |x, y| / L, |phi|))`; the residual
+/// recomputed here by the test's own formulas rounds differently, by as many units again, so
+/// `tolerance + 128 eps max(1, |x, y| / L, |phi|)`. Velocities and accelerations are not checked here: they are linear solves of
 /// the same Jacobian (property 4 checks the accelerations through the balance).
 #[test]
 fn driven_kinematics_keeps_the_constraints() {
@@ -614,13 +616,21 @@ fn driven_kinematics_keeps_the_constraints() {
         // A dead centre, a lock-up or an assembly that the drivers make impossible is a typed
         // error, and the rows before it must hold.
         let r = tallied(&outcome, tally);
+        let model = Model::from_yaml(&text).expect("the generated model loads");
+        let drivers = model.analysis("run").expect("its analysis").drivers.clone();
         let mut phi = Vec::new();
         for row in 0..r.len() {
             let q = positions(&m, r, row);
-            let size = q.iter().flatten().fold(1.0f64, |a, x| a.max(x.abs()));
+            let flat: Vec<f64> = q.iter().flatten().copied().collect();
+            let (weights, length) = linkwork::analysis::residual_weights(&model, &drivers, &flat, r.time[row]);
+            let size = flat
+                .iter()
+                .enumerate()
+                .fold(1.0f64, |a, (k, x)| a.max(x.abs() / if k % 3 == 2 { 1.0 } else { length }));
             let bound = tolerance + 128.0 * f64::EPSILON * size;
             m.residuals(&q, r.time[row], true, &mut phi);
-            let worst = phi.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            assert_eq!(phi.len(), weights.len(), "one weight a row");
+            let worst = phi.iter().zip(&weights).fold(0.0f64, |a, (x, w)| a.max((x * w).abs()));
             prop_assert!(
                 worst <= bound,
                 "row {row} (t = {}): |Phi| = {worst:e} > {bound:e}: {phi:?}\n{text}",

@@ -9,9 +9,10 @@
 //! [`crate::linalg::rows`]); a backtracking line search on `|Phi|_2` keeps a rough guess from
 //! diverging.
 
-use super::{residual_floor, row_space};
+use super::{column_scales, scaled_residual, scaled_residual_floor, scaled_row_space};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Result};
+use crate::linalg::rows::row_scales;
 use crate::results::AssemblyReport;
 use crate::system::System;
 
@@ -53,7 +54,8 @@ impl Assembly {
 }
 
 /// Assemble `sys` at time `t` from `q0`, `qdot0`. `given: (2n)` marks the positions (first `n`)
-/// and velocities (last `n`) to hold. `tolerance` is the max-norm of `Phi` to reach.
+/// and velocities (last `n`) to hold. `tolerance` bounds the residual of `Phi` relative to the
+/// model's size ([`super::scaled_residual`]).
 pub fn assemble(
     sys: &mut System<'_>,
     q0: &[f64],
@@ -62,10 +64,11 @@ pub fn assemble(
     t: f64,
     tolerance: f64,
 ) -> Result<Assembly> {
-    assemble_or_best(sys, q0, qdot0, given, t, tolerance).map_err(|(e, _)| e)
+    assemble_or_best(sys, q0, qdot0, given, t, tolerance).map_err(|stopped| stopped.0)
 }
 
-/// [`assemble`], with the positions Newton reached (its best) beside the error when it fails.
+/// [`assemble`], with the positions Newton reached (its best) beside the error when it fails, and
+/// whether they hold (the positions assembled, the velocities did not).
 pub(crate) fn assemble_or_best(
     sys: &mut System<'_>,
     q0: &[f64],
@@ -73,12 +76,16 @@ pub(crate) fn assemble_or_best(
     given: &[bool],
     t: f64,
     tolerance: f64,
-) -> std::result::Result<Assembly, (Error, Vec<f64>)> {
+) -> std::result::Result<Assembly, Box<(Error, Vec<f64>, bool)>> {
     let mut best = q0.to_vec();
-    assemble_tracking(sys, q0, qdot0, given, t, tolerance, &mut best).map_err(|e| (e, best))
+    let mut assembled = false;
+    assemble_tracking(sys, q0, qdot0, given, t, tolerance, &mut best, &mut assembled)
+        .map_err(|e| Box::new((e, best, assembled)))
 }
 
-/// [`assemble`], keeping in `best` the last positions Newton accepted.
+/// [`assemble`], keeping in `best` the last positions Newton accepted, and `assembled` true once
+/// they hold.
+#[allow(clippy::too_many_arguments)]
 fn assemble_tracking(
     sys: &mut System<'_>,
     q0: &[f64],
@@ -87,6 +94,7 @@ fn assemble_tracking(
     t: f64,
     tolerance: f64,
     best: &mut Vec<f64>,
+    assembled: &mut bool,
 ) -> Result<Assembly> {
     let (n, m) = (sys.n, sys.m);
     let free: Vec<usize> = (0..n).filter(|&k| !given[k]).collect();
@@ -105,14 +113,23 @@ fn assemble_tracking(
         let (row, residual) = sys.worst_row(phi);
         Error::Assembly { time: t, iterations, residual, row, hint: hint.to_string() }
     };
-    while maxabs(&phi) > tolerance.max(residual_floor(&q)) {
+    let scales = column_scales(sys, 0..n);
+    let mut weights = vec![0.0; m];
+    loop {
+        // The residual free of units (`super::scaled_residual`): `tolerance` relative to the
+        // model's length scale on rows of lengths, in radians on rows of angles.
+        let jac = sys.jacobian(&ConfigBuf::new(&q).view(), t);
+        row_scales(&jac.col_ptr, &jac.row_idx, &jac.values, &scales, &mut weights);
+        if scaled_residual(&phi, &weights, sys.length).1 <= tolerance.max(scaled_residual_floor(&q, sys.length)) {
+            break;
+        }
         if iterations == MAX_ITERATIONS || !phi.iter().all(|x| x.is_finite()) {
             return Err(fail(sys, &phi, iterations, "the initial guess may be too far from an assembled configuration, or the joints, drivers and given coordinates cannot all hold at once (check lengths, points and given values)"));
         }
         iterations += 1;
-        let jf = sys.jacobian(&ConfigBuf::new(&q).view(), t).columns(&free);
+        let jf = jac.columns(&free);
         let rhs: Vec<f64> = phi.iter().map(|x| -x).collect();
-        let Some(dq) = row_space(&jf, t)?.min_norm_solve(&rhs) else {
+        let Some(dq) = scaled_row_space(sys, &jf, free.iter().copied(), t)?.min_norm_solve(&rhs) else {
             return Err(fail(sys, &phi, iterations, "the Jacobian is not finite at the guess"));
         };
         let before = norm2(&phi);
@@ -136,6 +153,8 @@ fn assemble_tracking(
         best.clone_from(&q);
     }
     let residual = maxabs(&phi);
+    best.clone_from(&q);
+    *assembled = true;
     // Velocities: least change from the guess, given ones held.
     let config = ConfigBuf::new(&q);
     let jac = sys.jacobian(&config.view(), t);
@@ -147,7 +166,7 @@ fn assemble_tracking(
     let mut qdot = qdot0.to_vec();
     let free_v: Vec<usize> = (0..n).filter(|&k| !given[n + k]).collect();
     let r: Vec<f64> = jac.times(&qdot).iter().zip(&nu).map(|(jv, nu)| nu - jv).collect();
-    let dv = row_space(&jac.columns(&free_v), t)?
+    let dv = scaled_row_space(sys, &jac.columns(&free_v), free_v.iter().copied(), t)?
         .min_norm_solve(&r)
         .ok_or_else(|| fail(sys, &phi, iterations, "the Jacobian is not finite"))?;
     for (k, &c) in free_v.iter().enumerate() {

@@ -14,7 +14,7 @@ use super::assembly::assemble_or_best;
 use super::{assemble, Assembly, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Result, RowName};
-use crate::linalg::dense::smallest_singular;
+use crate::linalg::dense::{equilibrated, smallest_singular};
 use crate::model::spec::{BranchMode, Side};
 use crate::model::structure::{self, side_name, Branch, Dyad};
 use crate::model::Model;
@@ -60,16 +60,21 @@ pub fn assemble_on_branches(
         }
     }
     let target: Vec<Option<Side>> = dyads.iter().map(|(d, declared)| declared.or_else(|| d.drawn_side(q0))).collect();
-    let mut assembly = match assemble_or_best(sys, q0, qdot0, given, t, tolerance) {
+    let mut assembly = match assemble_or_best(sys, q0, qdot0, given, t, tolerance).map_err(|stopped| *stopped) {
         Ok(a) => a,
-        Err((Error::Assembly { time, iterations, residual, row, hint }, best)) => {
+        Err((Error::Assembly { time, iterations, residual, row, hint }, best, assembled)) => {
+            // Positions that hold at a singular position whose velocities cannot: a start at a
+            // dead centre, not drivers that conflict.
+            if let Some(e) = assembled.then(|| singular_start(model, drivers, sys, &best, t)).flatten() {
+                return Err(e);
+            }
             let hint = match cannot_close(model, drivers, &best) {
                 Some(why) => format!("{why}; {hint}"),
                 None => hint,
             };
             return Err(Error::Assembly { time, iterations, residual, row, hint });
         }
-        Err((e, _)) => return Err(e),
+        Err((e, _, _)) => return Err(e),
     };
     // Each round reflects every dyad off its side; a reflection can only disturb the dyads placed
     // after it, so one round per dyad is enough.
@@ -201,6 +206,8 @@ pub fn blame(
         let rows: Vec<usize> = g.elements.iter().flat_map(|&e| rows_of(e)).collect();
         let cols: Vec<usize> = g.bodies.iter().flat_map(|&b| 3 * b..3 * b + 3).collect();
         let block = Mat::from_fn(rows.len(), cols.len(), |i, j| jac[(rows[i], cols[j])]);
+        // Scaled as the whole's ratio is (`super::scaled_row_space`), so that the two compare.
+        let block = equilibrated(block.as_ref(), &super::column_scales(sys, cols.iter().copied()));
         let (ratio, local) = smallest_singular(block.as_ref());
         if ratio < worst_ratio {
             worst_ratio = ratio;
@@ -226,4 +233,28 @@ pub fn blame(
         }
     };
     Some((rows, words))
+}
+
+/// A fully driven start (as many equations as coordinates, or more) at a singular position of
+/// the group that [`blame`] names: an [`Error::Singular`] at `t` saying so, where the rank alone
+/// would say a driver is missing or two drivers conflict. `None` when no group is singular.
+pub(crate) fn singular_start(
+    model: &Model,
+    drivers: &[usize],
+    sys: &mut System<'_>,
+    q: &[f64],
+    t: f64,
+) -> Option<Error> {
+    if sys.m < sys.n {
+        return None;
+    }
+    let (rows, words) = blame(model, drivers, sys, q, t)?;
+    Some(Error::Singular {
+        time: t,
+        rows,
+        detail: format!(
+            "the start is a dead centre or lock-up {words}: the driven Jacobian loses rank there, so the drivers \
+             cannot move the mechanism from it; start the drivers from another position"
+        ),
+    })
 }

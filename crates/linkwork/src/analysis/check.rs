@@ -85,7 +85,7 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
     let (assembly, branches, warnings) =
         assemble_on_branches(model, drivers, &mut sys, &model.q0(), &model.qdot0(), &given, t, tolerance)?;
     let jac = sys.jacobian(&ConfigBuf::new(&assembly.q).view(), t);
-    let mut rows = super::row_space(&jac, t)?;
+    let mut rows = super::scaled_row_space(&sys, &jac, 0..n, t)?;
     let (keep, drop) = rows.independent_rows();
     Ok(SystemCheck {
         drivers: drivers.iter().map(|&d| model.drivers[d].name.clone()).collect(),
@@ -125,6 +125,13 @@ pub fn check(model: &Model) -> Result<CheckReport> {
                 Ok(system) => {
                     let warning = match a.kind {
                         AnalysisKind::Dynamic => massless(model, &a.drivers, &system.assembly.q, a.t_start),
+                        // A rank short at a dead centre is the position's fault, not the drivers'.
+                        _ if system.dof > 0 => {
+                            let mut sys = System::new(model, &a.drivers);
+                            super::singular_start(model, &a.drivers, &mut sys, &system.assembly.q, a.t_start)
+                                .map(|e| e.to_string())
+                                .or_else(|| unmet_freedom(model, a, system.equations, system.rank))
+                        }
                         _ => unmet_freedom(model, a, system.equations, system.rank),
                     };
                     AnalysisCheck {

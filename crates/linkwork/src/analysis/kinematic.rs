@@ -13,9 +13,10 @@
 //! loop except the growth of the output columns, reserved up front.
 
 use super::setup::{fail, held, output_times, unmet_freedom};
-use super::{assemble_into, residual_floor, Assembly, SINGULAR_RATIO_KINEMATIC};
+use super::{assemble_into, scaled_residual, scaled_residual_floor, Assembly, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::{Config, ConfigBuf};
 use crate::error::{Error, Problem, RowName};
+use crate::linalg::rows::row_scales;
 use crate::linalg::{ColMatrix, FactorError, SparseLu};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, KinematicStats, Results, Statistics};
@@ -64,6 +65,10 @@ struct Solver<'m> {
     /// (bodies) `(cos phi, sin phi)` of `q` and of `trial`, computed once per position.
     rot_q: Vec<[f64; 2]>,
     rot_trial: Vec<[f64; 2]>,
+    /// (n) scales of the coordinates and of the independent rows of the last factorization
+    /// (`super::Scaled`): the residual and the condition free of units.
+    col_scale: Vec<f64>,
+    row_scale: Vec<f64>,
     t: f64,
     tolerance: f64,
     max_iterations: usize,
@@ -90,6 +95,7 @@ impl Solver<'_> {
         let q = if q_is_trial { Config::new(&self.trial, &self.rot_trial) } else { Config::new(&self.q, &self.rot_q) };
         let (pattern, values) = self.lu.pattern_and_values();
         self.sys.fill_jacobian(pattern, &q, t, values);
+        row_scales(&pattern.col_ptr, &pattern.row_idx, values, &self.col_scale, &mut self.row_scale);
         self.stats.factorizations += 1;
         self.lu.factor().map_err(|e| self.factor_error(e))
     }
@@ -118,14 +124,15 @@ impl Solver<'_> {
             Config::rotations(&self.trial, &mut self.rot_trial);
             self.sys.phi(&Config::new(&self.trial, &self.rot_trial), t, &mut self.full);
             gather(&self.full, &self.rows, &mut self.rhs);
-            let (row, r) = worst(&self.rhs);
-            let tolerance = self.tolerance.max(residual_floor(&self.trial));
+            let (row, r) = scaled_residual(&self.rhs, &self.row_scale, self.sys.length);
+            let tolerance = self.tolerance.max(scaled_residual_floor(&self.trial, self.sys.length));
             if r <= tolerance {
-                self.stats.max_residual = self.stats.max_residual.max(r);
+                self.stats.max_residual = self.stats.max_residual.max(worst(&self.rhs).1);
                 return Ok(Attempt::Converged);
             }
             if it == self.max_iterations || !r.is_finite() || r > 1e3 * previous.min(1e300) {
-                return Ok(Attempt::Failed(NewtonFailure { residual: r, row: self.rows[row], iterations: it }));
+                let residual = self.rhs[row].abs();
+                return Ok(Attempt::Failed(NewtonFailure { residual, row: self.rows[row], iterations: it }));
             }
             let rho = r / previous;
             if r * rho * rho * rho > tolerance {
@@ -147,7 +154,10 @@ impl Solver<'_> {
         let pattern = self.sys.pattern(&self.rows);
         let mut values = vec![0.0; pattern.row_idx.len()];
         self.sys.fill_jacobian(&pattern, &Config::new(&self.q, &self.rot_q), self.t, &mut values);
-        let Ok(mut space) = super::row_space(&ColMatrix::new(&pattern, values), self.t) else { return (0.0, vec![]) };
+        let jac = ColMatrix::new(&pattern, values);
+        let Ok(mut space) = super::scaled_row_space(&self.sys, &jac, 0..jac.ncols(), self.t) else {
+            return (0.0, vec![]);
+        };
         let (ratio, rows) = space.smallest_singular();
         (ratio, rows.into_iter().map(|i| self.sys.row_name(self.rows[i])).collect())
     }
@@ -205,10 +215,15 @@ pub(crate) fn run_driven(
             Err(e) => return Err(fail(results, e)),
         };
     let jac = sys.jacobian(&ConfigBuf::new(&assembly.q).view(), t0);
-    let (rows, redundant) = match super::row_space(&jac, t0) {
+    let (rows, redundant) = match super::scaled_row_space(&sys, &jac, 0..n, t0) {
         Ok(space) => space.independent_rows(),
         Err(e) => return Err(fail(results, e)),
     };
+    if rows.len() < n {
+        if let Some(e) = super::singular_start(model, &analysis.drivers, &mut sys, &assembly.q, t0) {
+            return Err(fail(results, e));
+        }
+    }
     if let Some(message) = unmet_freedom(model, analysis, sys.m, rows.len()) {
         let problem = Problem::new(format!("analyses.{}.drivers", analysis.name), message);
         return Err(fail(results, Error::Model(vec![problem])));
@@ -223,6 +238,7 @@ pub(crate) fn run_driven(
         }
     };
     let m = sys.m;
+    let col_scale = super::column_scales(&sys, 0..n);
     let mut s = Solver {
         sys,
         rows,
@@ -239,6 +255,8 @@ pub(crate) fn run_driven(
             rot
         },
         rot_trial: vec![[1.0, 0.0]; n / 3],
+        col_scale,
+        row_scale: vec![1.0; n],
         t: t0,
         tolerance: settings.tolerance,
         max_iterations: settings.max_iterations,
@@ -279,13 +297,13 @@ pub(crate) fn run_driven(
                     // (An infinite rate gives a zero step.)
                     if step < settings.min_substep * h {
                         let limit = "the sub-steps that keep each body's turn under solver.max_rotation fell below solver.min_substep";
-                        return Err(too_fast(&mut s, model, &analysis.drivers, target, step, limit));
+                        return Err(too_fast(&mut s, model, analysis, target, step, limit));
                     }
                 }
                 substeps += 1;
                 if substeps > MAX_SUBSTEPS_PER_OUTPUT {
                     let limit = format!("more than {MAX_SUBSTEPS_PER_OUTPUT} sub-steps, each turning a body by at most solver.max_rotation, between two output times");
-                    return Err(too_fast(&mut s, model, &analysis.drivers, target, step, &limit));
+                    return Err(too_fast(&mut s, model, analysis, target, step, &limit));
                 }
                 let t_new = if step == target - s.t { target } else { s.t + step };
                 for (k, p) in q_pred.iter_mut().enumerate() {
@@ -347,7 +365,7 @@ fn insert_summary(results: &mut Results, stats: &KinematicStats, assembly: &Asse
 }
 
 fn check_condition(s: &mut Solver<'_>, model: &Model, drivers: &[usize], limit: f64) -> Result<(), Error> {
-    let cond = s.lu.condition_estimate();
+    let cond = s.lu.scaled_condition_estimate(Some((&s.row_scale, &s.col_scale)));
     s.stats.max_condition = s.stats.max_condition.max(cond);
     if cond > limit {
         let (ratio, rows) = s.diagnose();
@@ -367,15 +385,58 @@ fn singular(s: &mut Solver<'_>, model: &Model, drivers: &[usize], rows: Vec<RowN
     }
 }
 
+/// Rate of the fastest driver, to its rate at the start, up to which its motion counts as
+/// bounded: 10. A driver that grows without bound (`exp(40*t)`, `tan(pi*t)`) reaches the limits
+/// of the sub-steps at rates thousands of times those of its start; one that keeps its rate
+/// (`2*pi*t`) reaches them only when the output step or the time's round-off asks too much.
+const BOUNDED_RATE_GROWTH: f64 = 10.0;
+
 /// Why the bodies turn too fast for a sub-step above the floor: a driver not finite now or at
-/// the next output time `target`; else a singular position (the driven Jacobian nearly loses
-/// rank, so the velocities it gives grow); else the fastest driver, whose motion grows without
-/// bound.
-fn too_fast(s: &mut Solver<'_>, model: &Model, drivers: &[usize], target: f64, step: f64, limit: &str) -> Error {
+/// the next output time `target`; else the time's round-off (at a time so large that double
+/// precision cannot take the sub-step or the output step); else a singular
+/// position (the driven Jacobian nearly loses rank, so the velocities it gives grow); else an
+/// output step too long for a motion whose rate stays bounded; else the fastest driver, whose
+/// motion grows without bound.
+fn too_fast(s: &mut Solver<'_>, model: &Model, analysis: &Analysis, target: f64, step: f64, limit: &str) -> Error {
+    let drivers = &analysis.drivers;
     if let Some(e) = model.non_finite_driver(drivers, &[s.t, target]) {
         return e;
     }
+    let problem = |field: &str, message: String| {
+        Error::Model(vec![Problem::new(format!("analyses.{}.{field}", analysis.name), message)])
+    };
+    // Doubles at `s.t` lie farther apart than half the sub-step or half the output step: the
+    // time cannot take the step asked (output times `t_start + k step` that round to one value
+    // leave a sub-step of zero).
+    let spacing = f64::from_bits(s.t.abs().to_bits() + 1) - s.t.abs();
+    if spacing > 0.5 * step.min(analysis.step) {
+        let field = if s.t.abs() <= 2.0 * analysis.t_start.abs() { "t_start" } else { "t_end" };
+        return problem(
+            field,
+            format!(
+                "time round-off at t = {} s: double precision spaces times there {spacing:.3e} s apart, too coarse for the output step {:e} s and its sub-steps; keep the analysis's times nearer 0 (shift the drivers' time origin)",
+                crate::error::seconds(&s.t),
+                analysis.step
+            ),
+        );
+    }
     let (ratio, rows) = s.diagnose();
+    if ratio >= SINGULAR_RATIO_KINEMATIC {
+        let rate = |k: usize, t: f64| model.drivers[k].constraint.time_function().map_or(0.0, |f| f.eval(t).1.abs());
+        let fastest = drivers.iter().copied().max_by(|&a, &b| rate(a, s.t).total_cmp(&rate(b, s.t)));
+        if let Some(k) = fastest.filter(|&k| rate(k, s.t) <= BOUNDED_RATE_GROWTH * rate(k, analysis.t_start)) {
+            let (d, r, h) = (&model.drivers[k], rate(k, s.t), analysis.step);
+            let expression = d.constraint.time_function().map_or("", |f| f.source());
+            return problem(
+                "step",
+                format!(
+                    "the output step {h:e} s is too long for the motion: drivers.{} ({expression}) moves {r:.3e} per second, {:.3e} between two outputs, and {limit}; shorten the step",
+                    d.name,
+                    r * h
+                ),
+            );
+        }
+    }
     let fastest = if ratio < SINGULAR_RATIO_KINEMATIC { None } else { model.fastest_driver(drivers, s.t, limit) };
     fastest.unwrap_or_else(|| Error::Singular {
         time: s.t,
@@ -386,10 +447,33 @@ fn too_fast(s: &mut Solver<'_>, model: &Model, drivers: &[usize], target: f64, s
     })
 }
 
+/// An active driver whose position jumps between `t0` and `t1` (the smallest sub-step): one that
+/// changes by more than ten times what the larger of its rates at the two ends explains over the
+/// step, plus a thousand units of round-off of its values. A continuous function changes by at
+/// most its largest rate inside the step times the step, and its rates at the ends differ from
+/// that by its curvature times the step, nothing over a sub-step of `min_substep` of the output
+/// step; a step function changes by its jump however short the step.
+fn jumping_driver(model: &Model, drivers: &[usize], t0: f64, t1: f64) -> Option<Error> {
+    drivers.iter().find_map(|&k| {
+        let d = &model.drivers[k];
+        let f = d.constraint.time_function()?;
+        let ((before, rate0, _), (after, rate1, _)) = (f.eval(t0), f.eval(t1));
+        let explained =
+            10.0 * rate0.abs().max(rate1.abs()) * (t1 - t0) + 1e3 * f64::EPSILON * before.abs().max(after.abs());
+        ((after - before).abs() > explained).then(|| Error::Jump {
+            time: t1,
+            element: format!("drivers.{}", d.name),
+            expression: f.source().to_string(),
+            jump: after - before,
+            step: t1 - t0,
+        })
+    })
+}
+
 /// The smallest sub-step failed (`rejected`, how): a driver not finite at the time sought; else a
 /// singular position (no assembled position beyond `s.t`); else a plain convergence failure.
 fn give_up(s: &mut Solver<'_>, model: &Model, drivers: &[usize], t_new: f64, step: f64, rejected: Attempt) -> Error {
-    if let Some(e) = model.non_finite_driver(drivers, &[t_new]) {
+    if let Some(e) = model.non_finite_driver(drivers, &[t_new]).or_else(|| jumping_driver(model, drivers, s.t, t_new)) {
         return e;
     }
     let (ratio, rows) = s.diagnose();

@@ -15,7 +15,7 @@ mod setup;
 mod statics;
 
 pub use assembly::{assemble, Assembly};
-pub(crate) use branches::assemble_into;
+pub(crate) use branches::{assemble_into, singular_start};
 pub use branches::{assemble_on_branches, blame};
 pub use check::{assembled_branches, check, AnalysisCheck, CheckReport, SystemCheck};
 pub(crate) use inverse::reaction_columns;
@@ -27,7 +27,7 @@ pub(crate) use setup::measure_reactions;
 pub use statics::run_static;
 
 use crate::linalg::dense::null_space;
-use crate::linalg::rows::RowSpace;
+use crate::linalg::rows::{RowSpace, Scaled};
 use crate::linalg::ColMatrix;
 use faer::Mat;
 
@@ -42,6 +42,49 @@ pub const RESIDUAL_ROUNDOFF_UNITS: f64 = 64.0;
 /// `max(tolerance, residual_floor(q))`, so no tolerance asks for the impossible.
 pub fn residual_floor(q: &[f64]) -> f64 {
     RESIDUAL_ROUNDOFF_UNITS * f64::EPSILON * q.iter().fold(1.0f64, |a, x| a.max(x.abs()))
+}
+
+/// The residual of `Phi` free of units, and its row: `max_i |Phi_i| R_i / L`, `R` the row scales
+/// of `Phi_q` ([`crate::linalg::rows::row_scales`] with [`column_scales`]) and `L` the length
+/// scale. A row of lengths, whose scaled row has a norm of order 1, gives its residual over `L`;
+/// a row of angles, whose scaled row has a norm of order `1 / L`, its residual in radians: both
+/// relative, so that the position solvers, which stop when it is below `solver.tolerance`, stop
+/// at the same point of their iterations whatever the unit of length.
+pub(crate) fn scaled_residual(phi: &[f64], row_scales: &[f64], length: f64) -> (usize, f64) {
+    phi.iter().zip(row_scales).map(|(p, r)| (p * r / length).abs()).enumerate().fold((0, 0.0f64), |(bk, bx), (k, x)| {
+        if x > bx || x.is_nan() {
+            (k, x)
+        } else {
+            (bk, bx)
+        }
+    })
+}
+
+/// Each row's weight `R_i / L` in [`scaled_residual`] for `model` with the active `drivers` at
+/// `(q, t)`: the residual assembly and the kinematics bound by `solver.tolerance` is
+/// `max_i |Phi_i| w_i`, and the length scale `L` ([`length_scale`]) is returned beside them.
+pub fn residual_weights(model: &crate::model::Model, drivers: &[usize], q: &[f64], t: f64) -> (Vec<f64>, f64) {
+    let mut sys = crate::system::System::new(model, drivers);
+    let jac = sys.jacobian(&crate::constraints::ConfigBuf::new(q).view(), t);
+    let mut weights = vec![0.0; sys.m];
+    crate::linalg::rows::row_scales(
+        &jac.col_ptr,
+        &jac.row_idx,
+        &jac.values,
+        &column_scales(&sys, 0..sys.n),
+        &mut weights,
+    );
+    weights.iter_mut().for_each(|w| *w /= sys.length);
+    (weights, sys.length)
+}
+
+/// The smallest [`scaled_residual`] round-off lets Newton reach at `q`:
+/// `RESIDUAL_ROUNDOFF_UNITS eps max(1, max |x, y| / L, max |phi|)`, [`residual_floor`] in the
+/// scaled coordinates (lengths over `L`, angles in radians).
+pub(crate) fn scaled_residual_floor(q: &[f64], length: f64) -> f64 {
+    let size =
+        q.iter().enumerate().fold(1.0f64, |a, (k, x)| a.max(if k % 3 == 2 { x.abs() } else { x.abs() / length }));
+    RESIDUAL_ROUNDOFF_UNITS * f64::EPSILON * size
 }
 
 /// The tightest relative tolerance of an integrator: 100 units of round-off, as DASSL. Below it
@@ -137,8 +180,10 @@ pub(crate) fn element_names(sys: &crate::system::System<'_>, rows: &[usize]) -> 
     names
 }
 
-/// A coordinate whose mass (or inertia) is below this fraction of the largest counts as having
-/// none: `1e-12`, far below the mass ratios within one mechanism and far above rounding.
+/// A coordinate whose mass (or inertia) is below this fraction of the largest mass (or inertia)
+/// counts as having none: `1e-12`, far below the mass ratios within one mechanism and far above
+/// rounding. Masses are compared with masses and inertias with inertias: an inertia in kg m^2
+/// against a mass in kg would depend on the unit of length (a 10 um body's `1e-15` against `1`).
 const MASSLESS: f64 = 1e-12;
 
 /// A motion the joints allow at `q` (`jac`, `Phi_q` there) that no mass or inertia resists: the
@@ -154,8 +199,11 @@ const MASSLESS: f64 = 1e-12;
 /// whatever the size of the mechanism.
 pub(crate) fn massless_motion(model: &crate::model::Model, jac: &ColMatrix) -> Option<crate::Problem> {
     let mass: Vec<f64> = model.bodies.iter().flat_map(|b| [b.mass, b.mass, b.inertia]).collect();
-    let largest = mass.iter().fold(0.0f64, |a, &m| a.max(m));
-    let light: Vec<usize> = (0..mass.len()).filter(|&k| mass[k] <= MASSLESS * largest).collect();
+    let largest = |kind: usize| mass.iter().skip(kind).step_by(3).fold(0.0f64, |a, &m| a.max(m));
+    let (largest_mass, largest_inertia) = (largest(0), largest(2));
+    let light: Vec<usize> = (0..mass.len())
+        .filter(|&k| mass[k] <= MASSLESS * if k % 3 == 2 { largest_inertia } else { largest_mass })
+        .collect();
     if light.is_empty() {
         return None;
     }
@@ -195,5 +243,38 @@ pub(crate) fn massless_motion(model: &crate::model::Model, jac: &ColMatrix) -> O
 /// Gram factorization for a large one).
 pub(crate) fn row_space(jac: &ColMatrix, t: f64) -> crate::error::Result<RowSpace> {
     RowSpace::new(jac.as_ref())
+        .map_err(|_| crate::Error::OutOfMemory { time: t, what: "in the rank of the constraint Jacobian".into() })
+}
+
+/// The model's length scale `L`, m: the largest distance of a named point from its body's
+/// centre of mass (the lever arms that make the angle columns of `Phi_q`), else, for a model
+/// without points, the largest distance of a body's guessed position from the origin, else 1.
+/// It scales with the model: every length multiplied by `s` multiplies it by `s`.
+pub fn length_scale(model: &crate::model::Model) -> f64 {
+    let largest = |v: &mut dyn Iterator<Item = [f64; 2]>| v.map(|p| p[0].hypot(p[1])).fold(0.0f64, f64::max);
+    let arms = largest(&mut model.bodies.iter().flat_map(|b| b.points.values().copied()));
+    let positions = largest(&mut model.bodies.iter().map(|b| [b.q0[0], b.q0[1]]));
+    [arms, positions].into_iter().find(|&l| l > 0.0 && l.is_finite()).unwrap_or(1.0)
+}
+
+/// The scale of each coordinate of `columns` (indices into `q`) for [`Scaled`]: 1 for `x` and
+/// `y`, `1 / L` for an angle (`L` = `sys.length`, [`length_scale`]), so that a column of `Phi_q`
+/// holds the change of a row per metre of the coordinate or of the arc `L phi`: a point at the
+/// lever arm `L` moves as far when its body turns by `d(L phi)` as when it slides by `dx`.
+pub(crate) fn column_scales(sys: &crate::system::System<'_>, columns: impl Iterator<Item = usize>) -> Vec<f64> {
+    columns.map(|c| if c % 3 == 2 { 1.0 / sys.length } else { 1.0 }).collect()
+}
+
+/// The row space of `Phi_q` (`jac`, whose columns are the coordinates `columns`) scaled to be
+/// free of units ([`Scaled`], [`column_scales`]): for the rank (degrees of freedom, redundant
+/// rows) and the singular ratios, and for assembly's least change, the same whatever the model's
+/// unit of length.
+pub(crate) fn scaled_row_space(
+    sys: &crate::system::System<'_>,
+    jac: &ColMatrix,
+    columns: impl Iterator<Item = usize>,
+    t: f64,
+) -> crate::error::Result<Scaled> {
+    Scaled::new(jac, &column_scales(sys, columns))
         .map_err(|_| crate::Error::OutOfMemory { time: t, what: "in the rank of the constraint Jacobian".into() })
 }

@@ -28,6 +28,7 @@ use super::setup::{coordinate_names, fail, held, unmet_freedom};
 use super::statics::{solve, Statics, ZERO_STIFFNESS};
 use super::{assemble_into, element_names, independent_rows, indeterminate_rows};
 use crate::error::Error;
+use crate::linalg::dense::equilibrated;
 use crate::model::spec::LinearisePoint;
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, Mode, ModeKind, Results};
@@ -120,6 +121,8 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
     st.dae.positions(&q, t);
     let mut jac = Mat::<f64>::zeros(st.dae.m, n);
     st.dae.jacobian_dense(jac.as_mut());
+    // Scaled to be free of units, as every rank test (`super::scaled_row_space`).
+    let jac = equilibrated(jac.as_ref(), &super::column_scales(&st.dae.sys, 0..n));
     let s = &mut results.summary;
     s.dof = Some(f);
     s.redundant_rows = Some(independent_rows(jac.as_ref()).1.iter().map(|&r| st.dae.sys.row_name(r)).collect());

@@ -49,7 +49,7 @@ use super::setup::{coordinate_name, fail, held, output_times};
 use super::{assemble, assemble_into, element_names, independent_rows, indeterminate_rows, residual_floor};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Unbalanced};
-use crate::linalg::dense::{min_norm_solve, null_space};
+use crate::linalg::dense::{equilibrated, min_norm_solve, null_space};
 use crate::model::{Analysis, Model};
 use crate::results::{EquilibriumReport, Failure, Results, StaticStats, Statistics};
 use faer::{Mat, MatMut, MatRef};
@@ -642,7 +642,9 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
     // The degrees of freedom and the redundant rows at the assembled start, as dynamics finds them.
     let mut jac = Mat::<f64>::zeros(dae.m, n);
     dae.sys.jacobian_dense(&ConfigBuf::new(&assembly.q).view(), t0, jac.as_mut());
-    let (independent, redundant) = independent_rows(jac.as_ref());
+    // Scaled to be free of units, as every rank test (`super::scaled_row_space`).
+    let scales = super::column_scales(&dae.sys, 0..n);
+    let (independent, redundant) = independent_rows(equilibrated(jac.as_ref(), &scales).as_ref());
     results.summary.dof = Some(n - independent.len());
     results.summary.redundant_rows = Some(redundant.iter().map(|&r| dae.sys.row_name(r)).collect());
     let mut st = Statics::new(&mut dae, analysis.settings.tolerance, &assembly.q, t0);
@@ -666,7 +668,8 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
                 }
                 if indeterminate.is_none() {
                     st.dae.jacobian_dense(st.jac.as_mut());
-                    indeterminate = Some(element_names(&st.dae.sys, &indeterminate_rows(st.jac.as_ref())));
+                    let scaled = equilibrated(st.jac.as_ref(), &scales);
+                    indeterminate = Some(element_names(&st.dae.sys, &indeterminate_rows(scaled.as_ref())));
                 }
                 st.dae.reactions(&eq.q, &zero, &eq.lambda, &mut react);
                 super::measure_reactions(model, &analysis.drivers, &react, &mut reactions);

@@ -156,6 +156,21 @@ pub fn independent_rows(jac: MatRef<'_, f64>) -> (Vec<usize>, Vec<usize>) {
     (keep, drop)
 }
 
+/// `R a C`: the columns of `a (m x n)` multiplied by `cols (n)`, then each row divided by its
+/// 2-norm (a zero row stays zero). Rank and singular values of the result do not depend on the
+/// units of the rows, nor, when `cols` holds the coordinates' scales, on those of the columns:
+/// see [`crate::linalg::rows::Scaled`].
+pub fn equilibrated(a: MatRef<'_, f64>, cols: &[f64]) -> Mat<f64> {
+    let mut out = Mat::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)] * cols[j]);
+    for i in 0..out.nrows() {
+        let norm = (0..out.ncols()).map(|j| out[(i, j)].powi(2)).sum::<f64>().sqrt();
+        if norm > 0.0 {
+            (0..out.ncols()).for_each(|j| out[(i, j)] /= norm);
+        }
+    }
+    out
+}
+
 /// Solve `a x = b` in place for a small symmetric positive definite `a` (order `n`, row-major,
 /// its lower triangle overwritten by the Cholesky factor `L`, `b` by `x`). False, with `a` and
 /// `b` partly overwritten, when a pivot is not positive (the matrix is not positive definite to

@@ -305,22 +305,39 @@ impl SparseLu {
     /// method as refined by Higham (at most 5 pairs of solves; a lower bound, usually within a
     /// factor 3 of the true value). Infinite when a solve overflows.
     pub fn condition_estimate(&mut self) -> f64 {
+        self.scaled_condition_estimate(None)
+    }
+
+    /// [`SparseLu::condition_estimate`] of `R A C`, `scales = (R, C)` the diagonals of the row and
+    /// column scalings (`(n)` each): `||R A C||_1 ||C^-1 A^-1 R^-1||_1`, from the same factors.
+    /// The condition of a matrix depends on the units of its rows and columns; scaled to be free
+    /// of them ([`rows::Scaled`]), it is the mechanism's own.
+    pub fn scaled_condition_estimate(&mut self, scales: Option<(&[f64], &[f64])>) -> f64 {
         let n = self.pattern.nrows;
         if n == 0 {
             return 1.0;
         }
+        let row = |i: usize| scales.map_or(1.0, |(r, _)| r[i]);
+        let col = |j: usize| scales.map_or(1.0, |(_, c)| c[j]);
         let mut norm_a = 0.0f64;
         for c in 0..n {
-            let s: f64 =
-                self.values[self.pattern.col_ptr[c]..self.pattern.col_ptr[c + 1]].iter().map(|v| v.abs()).sum();
-            norm_a = norm_a.max(s);
+            let range = self.pattern.col_ptr[c]..self.pattern.col_ptr[c + 1];
+            let s: f64 = self.pattern.row_idx[range.clone()]
+                .iter()
+                .zip(&self.values[range])
+                .map(|(&i, v)| (row(i) * v).abs())
+                .sum();
+            norm_a = norm_a.max(col(c) * s);
         }
         let [mut x, mut z] = std::mem::take(&mut self.work);
         x.fill(1.0 / n as f64);
         let mut est = 0.0f64;
         let mut last = usize::MAX;
         for _ in 0..5 {
+            // x <- C^-1 A^-1 R^-1 x.
+            x.iter_mut().enumerate().for_each(|(i, v)| *v /= row(i));
             self.solve_with(&mut x, false);
+            x.iter_mut().enumerate().for_each(|(j, v)| *v /= col(j));
             let y_norm: f64 = x.iter().map(|v| v.abs()).sum();
             if !y_norm.is_finite() {
                 est = f64::INFINITY;
@@ -333,7 +350,10 @@ impl SparseLu {
             for (zi, yi) in z.iter_mut().zip(&x) {
                 *zi = if *yi >= 0.0 { 1.0 } else { -1.0 };
             }
+            // z <- R^-1 A^-T C^-1 z.
+            z.iter_mut().enumerate().for_each(|(j, v)| *v /= col(j));
             self.solve_with(&mut z, true);
+            z.iter_mut().enumerate().for_each(|(i, v)| *v /= row(i));
             let (j, zmax) = z
                 .iter()
                 .enumerate()

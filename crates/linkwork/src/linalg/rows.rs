@@ -177,6 +177,75 @@ impl RowSpace {
     }
 }
 
+/// The row space of `A (m x n)` scaled on both sides, `R A C`, for the questions whose answer
+/// must not depend on units: `C` multiplies each column by the scale given for its coordinate
+/// (so that columns of lengths and of angles compare), then `R` divides each row by its 2-norm
+/// (so that rows of lengths and of angles compare). Every relative threshold of [`RowSpace`]
+/// ([`dense::RANK_TOLERANCE`], [`INDEPENDENCE_TOLERANCE`], the singular ratios of the
+/// analyses) then reads the same matrix whatever the unit of length: a mechanism scaled by `s`
+/// has `A` scaled on the left and right by diagonal matrices, which `R` and `C` undo when the
+/// column scales scale with it. Rows and their order are `A`'s, so the rows named are `A`'s.
+#[derive(Debug)]
+pub struct Scaled {
+    space: RowSpace,
+    /// (m) `R`'s diagonal.
+    rows: Vec<f64>,
+    /// (n) `C`'s diagonal.
+    cols: Vec<f64>,
+}
+
+impl Scaled {
+    /// The row space of `R a C`, `cols (n)` the diagonal of `C` ([`dense::equilibrated`] for
+    /// a sparse matrix).
+    pub fn new(a: &ColMatrix, cols: &[f64]) -> Result<Scaled, FactorError> {
+        let mut rows = vec![0.0; a.nrows];
+        row_scales(&a.col_ptr, &a.row_idx, &a.values, cols, &mut rows);
+        let mut scaled = a.clone();
+        for (c, w) in a.col_ptr.windows(2).enumerate() {
+            for k in w[0]..w[1] {
+                scaled.values[k] *= rows[a.row_idx[k]] * cols[c];
+            }
+        }
+        Ok(Scaled { space: RowSpace::new(scaled.as_ref())?, rows, cols: cols.to_vec() })
+    }
+
+    /// [`RowSpace::independent_rows`] of `R A C`.
+    pub fn independent_rows(&self) -> (Vec<usize>, Vec<usize>) {
+        self.space.independent_rows()
+    }
+
+    /// [`RowSpace::dependent_rows`] of `R A C`.
+    pub fn dependent_rows(&mut self) -> Vec<usize> {
+        self.space.dependent_rows()
+    }
+
+    /// [`RowSpace::smallest_singular`] of `R A C`.
+    pub fn smallest_singular(&mut self) -> (f64, Vec<usize>) {
+        self.space.smallest_singular()
+    }
+
+    /// A solution `x (n)` of `A x = b`, of least norm in the scaled coordinates `C^-1 x`:
+    /// `x = C y` with `y` the minimum-norm solution of `R A C y = R b`
+    /// ([`RowSpace::min_norm_solve`]). `None` as there.
+    pub fn min_norm_solve(&mut self, b: &[f64]) -> Option<Vec<f64>> {
+        let rb: Vec<f64> = b.iter().zip(&self.rows).map(|(x, r)| x * r).collect();
+        let y = self.space.min_norm_solve(&rb)?;
+        Some(y.iter().zip(&self.cols).map(|(y, c)| y * c).collect())
+    }
+}
+
+/// `R`'s diagonal for the compressed-column matrix `(col_ptr, row_idx, values)` whose columns are
+/// multiplied by `cols`: one over the 2-norm of each scaled row, 1 for a zero row. `out: (rows)`.
+pub fn row_scales(col_ptr: &[usize], row_idx: &[usize], values: &[f64], cols: &[f64], out: &mut [f64]) {
+    out.fill(0.0);
+    for (c, w) in col_ptr.windows(2).enumerate() {
+        for k in w[0]..w[1] {
+            out[row_idx[k]] += (values[k] * cols[c]).powi(2);
+        }
+    }
+    out.iter_mut().for_each(|x| *x = if *x > 0.0 { 1.0 / x.sqrt() } else { 1.0 });
+}
+
 /// A large matrix `A` with the Cholesky factor of `A A^T` in row order, its dependent rows
 /// dropped.
 pub struct Gram {

@@ -20,6 +20,8 @@ pub struct System<'m> {
     pub n: usize,
     /// Number of equations.
     pub m: usize,
+    /// The model's length scale, m ([`crate::analysis::length_scale`]).
+    pub length: f64,
     /// (max rows x width) one element's Jacobian block.
     block: Vec<f64>,
 }
@@ -36,7 +38,15 @@ impl<'m> System<'m> {
             big = big.max(c.rows() * c.columns().len());
         }
         let m = offsets[elements.len()];
-        System { elements, joints: model.joints.len(), offsets, n: model.n(), m, block: vec![0.0; big] }
+        System {
+            elements,
+            joints: model.joints.len(),
+            offsets,
+            n: model.n(),
+            m,
+            length: crate::analysis::length_scale(model),
+            block: vec![0.0; big],
+        }
     }
 
     fn constraints(&self) -> impl Iterator<Item = (&dyn Constraint, std::ops::Range<usize>)> + '_ {

@@ -238,7 +238,9 @@ impl Span {
 /// the evidence of a singular position.
 pub fn singular_rows(dae: &mut Dae<'_>, q: &[f64], t: f64) -> (f64, Vec<RowName>) {
     let jac = dae.sys.jacobian(&ConfigBuf::new(q).view(), t);
-    let Ok(mut space) = crate::analysis::row_space(&jac, t) else { return (0.0, vec![]) };
+    let Ok(mut space) = crate::analysis::scaled_row_space(&dae.sys, &jac, 0..jac.ncols(), t) else {
+        return (0.0, vec![]);
+    };
     let (ratio, rows) = space.smallest_singular();
     (ratio, rows.into_iter().map(|i| dae.sys.row_name(i)).collect())
 }
@@ -372,7 +374,7 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         Err(e) => return Err(fail(out.results, e)),
     };
     let jac = dae.sys.jacobian(&ConfigBuf::new(&assembly.q).view(), t0);
-    let mut rows = match crate::analysis::row_space(&jac, t0) {
+    let mut rows = match crate::analysis::scaled_row_space(&dae.sys, &jac, 0..n, t0) {
         Ok(rows) => rows,
         Err(e) => return Err(fail(out.results, e)),
     };
