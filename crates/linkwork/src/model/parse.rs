@@ -106,27 +106,31 @@ pub(crate) fn parse_document(text: &str) -> Result<Value, Vec<Problem>> {
     })
 }
 
-/// The largest model file: 16 MiB. The largest realistic model is far smaller (a chain of
-/// 1,000 bodies with its joints is 0.2 MB, an inline table of 100,000 points 3 MB; larger
-/// tables go in CSV files, `tables:`), and 16 MiB parses in about a second (docs/model-format.md,
-/// "Limits"); a larger text (or a device such as `/dev/zero`) would take the memory rather than
-/// be a model.
-pub(crate) const MAX_MODEL_BYTES: u64 = 16 << 20;
+/// The largest model file: 4 MiB. The largest realistic model is far smaller (a chain of 1,000
+/// bodies with its joints is about 0.2 MB, an inline table of 100,000 points 2.4 MB; larger
+/// tables go in CSV files, `tables:` with `file:`). The bound keeps the parse short enough that
+/// Ctrl-C need not interrupt it: the worst text allowed (4 MiB of flow mappings nested 15
+/// deep) takes about a second, and 16 MiB of them nested 60 deep took 14 s
+/// (docs/model-format.md, "Limits"); a larger text, or a device such as `/dev/zero`, would take
+/// the memory rather than be a model.
+pub(crate) const MAX_MODEL_BYTES: u64 = 4 << 20;
 
 /// What a model file larger than [`MAX_MODEL_BYTES`] is told.
 pub(crate) const LIMIT: &str =
-    "a model file may be at most 16 MiB (put large tables in CSV files: `tables:` with `file:`)";
+    "a model file may be at most 4 MiB (put large tables in CSV files: `tables:` with `file:`)";
 
 /// `bytes` in MB, for the messages.
 pub(crate) fn size(bytes: u64) -> String {
     format!("{:.1} MB", bytes as f64 / 1e6)
 }
 
-/// The deepest nesting of collections a model file may have: a model nests five levels at most
-/// (`analyses: {dyn: {outputs: {columns: [...]}}}`, a table's `[[x, y], ...]`). serde_yaml_ng
-/// refuses more than 128, but only once libyaml has read the whole text, in time quadratic in
-/// the depth of flow collections: a 400 KB file of `{a: {a: ...` took 87 s.
-const MAX_DEPTH: usize = 64;
+/// The deepest nesting of collections a model file may have: a model nests six levels at most
+/// (the file's mapping, `analyses`, an analysis, `outputs`, `columns`, its list; a table's
+/// `[[x, y], ...]`). serde_yaml_ng refuses more than 128, but only once libyaml has read the
+/// whole text, in time quadratic in the depth of flow collections (a 400 KB file of
+/// `{a: {a: ...` took 87 s); the time to parse a text of the largest size allowed grows with the
+/// depth allowed ([`MAX_MODEL_BYTES`]).
+const MAX_DEPTH: usize = 16;
 
 /// The line and column (from 1) of the first collection of `text` nested deeper than
 /// [`MAX_DEPTH`], if there is one. libyaml's events are read one at a time and the reading stops
