@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import warnings
 from collections.abc import Sequence
@@ -88,6 +89,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         _err("interrupted")
         return EXIT_INTERRUPTED
+    except OptionError as error:
+        _err(f"error: {error}")
+        return EXIT_MODEL
+
+
+class OptionError(Exception):
+    """A command-line option that cannot be used, said in one line naming it (exit 2)."""
+
+    def __init__(self, option: str, message: str) -> None:
+        super().__init__(f"{option}: {message}")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -488,7 +499,7 @@ def _output(text: str) -> tuple[str, str]:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from .sweep import STATUS, sweep
+    from .sweep import STATUS, check_count, name_problem, sweep, workers_to_use
 
     if bool(args.grid) == (args.sample is not None or bool(args.range)):
         _err("error: give --grid, or --sample with --range, not both")
@@ -496,7 +507,30 @@ def _sweep(args: argparse.Namespace) -> int:
     if (args.sample is None) != (not args.range) or (args.seed is not None and args.sample is None):
         _err("error: --sample, --range and --seed go together (--seed is optional)")
         return EXIT_MODEL
+    # A name given twice would keep its last value (or column) without a word.
+    for option, given in (("--grid", args.grid), ("--range", args.range), ("--output", args.output)):
+        names = [name for name, _ in given]
+        twice = next((name for k, name in enumerate(names) if name in names[:k]), None)
+        if twice is not None:
+            raise OptionError(option, f"'{twice}' is given twice; give each name once")
+    try:
+        # The count of variants before any is made (a COUNT of 1000000000 filled the memory).
+        if args.grid:
+            check_count(math.prod(len(values) for _, values in args.grid), "--grid")
+        if args.sample is not None:
+            check_count(args.sample, "--sample")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            workers = workers_to_use(args.workers, "--workers")
+        for early in caught:
+            _err(f"warning: {early.message}")
+    except ValueError as error:
+        raise OptionError(*str(error).split(": ", 1)) from None
     model = _load(args.model, args.set)
+    for name, _ in args.output:
+        problem = name_problem(name, model.parameters)
+        if problem is not None:
+            raise OptionError("--output", f"{name}: {problem}")
     analysis = args.analysis if args.analysis is not None else model.analyses[0]
     out: Path = args.out if args.out is not None else Path("out") / (Path(args.model).stem + "_sweep")
     client = _dask_client(args.dask) if args.dask is not None else None
@@ -506,7 +540,7 @@ def _sweep(args: argparse.Namespace) -> int:
             table = sweep(
                 model, analysis, dict(args.grid) if args.grid else None, dict(args.output),
                 sample=args.sample, ranges=dict(args.range) if args.range else None, seed=args.seed,
-                workers=args.workers, client=client, progress=sys.stderr.isatty() and not args.quiet,
+                workers=workers, client=client, progress=sys.stderr.isatty() and not args.quiet,
                 units=args.units,
             )
         for warning in dict.fromkeys(str(w.message) for w in caught):
@@ -548,6 +582,8 @@ def _dask_client(address: str) -> Any:
         return Client(address, timeout=DASK_CONNECT_TIMEOUT)
     except OSError as error:
         raise model_error("--dask", f"no Dask scheduler answered at {address}: {error}") from None
+    except ValueError as error:  # not an address: "missing port number", "unknown address scheme"
+        raise OptionError("--dask", f"expected the scheduler's address, such as tcp://host:8786: {error}") from None
 
 
 # --- check ---------------------------------------------------------------------------------------
