@@ -27,7 +27,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 /// The name of the column that says how a run or a sweep's variant ended (summary.json's
-/// `status`, the sweep table's column): no measure or summary may take it.
+/// `status`, the sweep table's column): no measure may take it.
 const STATUS: &str = "status";
 
 /// The most output points one analysis may ask for; more would exhaust memory rather than finish.
@@ -106,7 +106,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
     let summaries = cx.entries("summaries", &spec.summaries, |cx, name, path, source| {
         Some((name.to_string(), cx.summary(path, source)?))
     });
-    cx.distinct_results();
+    cx.distinct_measures();
     let gravity = spec.gravity.and_then(|g| cx.vec2("gravity", g)).unwrap_or([0.0, 0.0]);
     // Each number is a double, but the weight is their product: past 1.8e308 it is infinite,
     // and every reaction and potential energy with it.
@@ -407,33 +407,27 @@ impl Cx<'_> {
         }
     }
 
-    /// Measures and summaries are read by name (a measure as its column of `results.csv`, by
-    /// summaries, sweep outputs and Python; a summary as its key), and expressions read the
-    /// parameters by name: each name must mean one thing. A measure or summary named as a
-    /// built-in column (`time`, `kinetic_energy` ...), as `status` (of a run and of a sweep's
-    /// variant), as a parameter, or a summary named as a measure, is a problem at it naming the
-    /// other (a measure `kinetic_energy` gave `results.csv` two columns of that name, and Python
-    /// and the summaries read different ones).
-    fn distinct_results(&mut self) {
+    /// A measure is read by name (its column of `results.csv`, by summaries, sweep outputs and
+    /// Python), and expressions read the parameters by name: a measure named as a built-in column
+    /// (`time`, `kinetic_energy` ...), as `status` (of a run and of a sweep's variant) or as a
+    /// parameter is a problem at it naming the other (a measure `kinetic_energy` gave
+    /// `results.csv` two columns of that name, and Python and the summaries read different ones).
+    /// Summaries have names of their own (keys of `summary.json`'s `summaries`, read by nothing
+    /// else), which collide with none of these.
+    fn distinct_measures(&mut self) {
         let spec = self.spec;
-        let broken_measures = self.broken.iter().filter_map(|b| b.strip_prefix("measures."));
-        let measures: Vec<&str> = spec.measures.keys().map(String::as_str).chain(broken_measures).collect();
         let built_in = std::iter::once(TIME).chain(ENERGY_COLUMNS).chain(INVERSE_COLUMNS);
-        let entries =
-            measures.iter().map(|&m| ("measures", m)).chain(spec.summaries.keys().map(|k| ("summaries", k.as_str())));
-        for (section, name) in entries {
+        for name in spec.measures.keys() {
             let other = if built_in.clone().any(|c| c == name) {
                 format!("the built-in column {name} of results.csv")
             } else if name == STATUS {
                 "the status of a run (summary.json) and of a sweep's variant (a column of its table)".to_string()
             } else if spec.parameters.contains_key(name) {
                 format!("the parameter parameters.{name}, which expressions read by that name")
-            } else if section == "summaries" && measures.contains(&name) {
-                format!("the measure measures.{name}")
             } else {
                 continue;
             };
-            self.problem(format!("{section}.{name}"), format!("'{name}' is already {other}; choose another name"));
+            self.problem(format!("measures.{name}"), format!("'{name}' is already {other}; choose another name"));
         }
     }
 
