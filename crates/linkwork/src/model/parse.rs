@@ -137,43 +137,44 @@ const MAX_DEPTH: usize = 16;
 /// there; its scanner looks at most 1024 characters ahead, so this takes time linear in the
 /// text. A syntax error stops it too: the parse that follows reports it.
 fn too_deep(text: &str) -> Option<(usize, usize)> {
-    use unsafe_libyaml as yaml;
-    let mut parser = Box::new(std::mem::MaybeUninit::<yaml::yaml_parser_t>::uninit());
+    let mut parser = Box::new(std::mem::MaybeUninit::<unsafe_libyaml::yaml_parser_t>::uninit());
     let parser = parser.as_mut_ptr();
     // SAFETY: as serde_yaml_ng drives the same parser (its libyaml::parser): the parser is
     // initialized before any other call and deleted once, stays in its box (libyaml keeps
     // pointers into it), and reads `text`, which outlives it; each event is deleted after it is
     // read, and only events the parser returned with success are read.
     unsafe {
-        if yaml::yaml_parser_initialize(parser).fail {
+        if unsafe_libyaml::yaml_parser_initialize(parser).fail {
             return None;
         }
-        yaml::yaml_parser_set_encoding(parser, yaml::YAML_UTF8_ENCODING);
-        yaml::yaml_parser_set_input_string(parser, text.as_ptr(), text.len() as u64);
+        unsafe_libyaml::yaml_parser_set_encoding(parser, unsafe_libyaml::YAML_UTF8_ENCODING);
+        unsafe_libyaml::yaml_parser_set_input_string(parser, text.as_ptr(), text.len() as u64);
         let mut depth = 0usize;
         let mut found = None;
         loop {
-            let mut event = std::mem::MaybeUninit::<yaml::yaml_event_t>::uninit();
-            if yaml::yaml_parser_parse(parser, event.as_mut_ptr()).fail {
+            let mut event = std::mem::MaybeUninit::<unsafe_libyaml::yaml_event_t>::uninit();
+            if unsafe_libyaml::yaml_parser_parse(parser, event.as_mut_ptr()).fail {
                 break;
             }
             let event = event.as_mut_ptr();
             let kind = (*event).type_;
             match kind {
-                yaml::YAML_SEQUENCE_START_EVENT | yaml::YAML_MAPPING_START_EVENT => depth += 1,
-                yaml::YAML_SEQUENCE_END_EVENT | yaml::YAML_MAPPING_END_EVENT => depth = depth.saturating_sub(1),
+                unsafe_libyaml::YAML_SEQUENCE_START_EVENT | unsafe_libyaml::YAML_MAPPING_START_EVENT => depth += 1,
+                unsafe_libyaml::YAML_SEQUENCE_END_EVENT | unsafe_libyaml::YAML_MAPPING_END_EVENT => {
+                    depth = depth.saturating_sub(1)
+                }
                 _ => {}
             }
             if depth > MAX_DEPTH {
                 let mark = (*event).start_mark;
                 found = Some((mark.line as usize + 1, mark.column as usize + 1));
             }
-            yaml::yaml_event_delete(event);
-            if found.is_some() || kind == yaml::YAML_STREAM_END_EVENT {
+            unsafe_libyaml::yaml_event_delete(event);
+            if found.is_some() || kind == unsafe_libyaml::YAML_STREAM_END_EVENT {
                 break;
             }
         }
-        yaml::yaml_parser_delete(parser);
+        unsafe_libyaml::yaml_parser_delete(parser);
         found
     }
 }
