@@ -109,8 +109,8 @@ pub(crate) fn parse_document(text: &str) -> Result<Value, Vec<Problem>> {
 /// The largest model file: 4 MiB. The largest realistic model is far smaller (a chain of 1,000
 /// bodies with its joints is about 0.2 MB, an inline table of 100,000 points 2.4 MB; larger
 /// tables go in CSV files, `tables:` with `file:`). The bound keeps the parse short enough that
-/// Ctrl-C need not interrupt it: the worst text allowed (4 MiB of flow mappings nested 15
-/// deep) takes about a second, and 16 MiB of them nested 60 deep took 14 s
+/// Ctrl-C need not interrupt it: the worst text allowed (4 MiB of flow mappings nested 16
+/// deep) takes about two seconds, and 16 MiB of them nested 60 deep took 14 s
 /// (docs/model-format.md, "Limits"); a larger text, or a device such as `/dev/zero`, would take
 /// the memory rather than be a model.
 pub(crate) const MAX_MODEL_BYTES: u64 = 4 << 20;
