@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import signal
 import sys
 import threading
@@ -100,6 +101,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except OSError as error:  # a file the command reads or writes, named by the system's message
         _err(f"error: {error}")
         return EXIT_MODEL
+    except OptionError as error:
+        _err(f"error: {error}")
+        return EXIT_MODEL
     except KeyboardInterrupt as interrupt:
         _err(_what(interrupt))
         return _interrupted(interrupt)
@@ -144,6 +148,13 @@ def _interrupted(interrupt: KeyboardInterrupt) -> int:
     """The exit status of a command stopped by ``interrupt``: 130 for Ctrl-C, 128 + the
     signal's number for SIGTERM (143) and SIGHUP (129), as a shell reports a process they end."""
     return 128 + interrupt.signum if isinstance(interrupt, Stopped) else EXIT_INTERRUPTED
+
+
+class OptionError(Exception):
+    """A command-line option that cannot be used, said in one line naming it (exit 2)."""
+
+    def __init__(self, option: str, message: str) -> None:
+        super().__init__(f"{option}: {message}")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -560,25 +571,51 @@ def _output(text: str) -> tuple[str, str]:
 
 
 def _sweep(args: argparse.Namespace) -> int:
+    from .sweep import check_count, name_problem, workers_to_use
+
     if bool(args.grid) == (args.sample is not None or bool(args.range)):
         _err("error: give --grid, or --sample with --range, not both")
         return EXIT_MODEL
     if (args.sample is None) != (not args.range) or (args.seed is not None and args.sample is None):
         _err("error: --sample, --range and --seed go together (--seed is optional)")
         return EXIT_MODEL
+    # A name given twice would keep its last value (or column) without a word.
+    for option, given in (("--grid", args.grid), ("--range", args.range), ("--output", args.output)):
+        names = [name for name, _ in given]
+        twice = next((name for k, name in enumerate(names) if name in names[:k]), None)
+        if twice is not None:
+            raise OptionError(option, f"'{twice}' is given twice; give each name once")
+    try:
+        # The count of variants before any is made (a COUNT of 1000000000 filled the memory).
+        if args.grid:
+            check_count(math.prod(len(values) for _, values in args.grid), "--grid")
+        if args.sample is not None:
+            check_count(args.sample, "--sample")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            workers = workers_to_use(args.workers, "--workers")
+        for early in caught:
+            _err(f"warning: {early.message}")
+    except ValueError as error:
+        raise OptionError(*str(error).split(": ", 1)) from None
     model = _load(args.model, args.set)
+    for name, _ in args.output:
+        problem = name_problem(name, model.parameters)
+        if problem is not None:
+            raise OptionError("--output", f"{name}: {problem}")
     analysis = args.analysis if args.analysis is not None else model.analyses[0]
     out: Path = args.out if args.out is not None else Path("out") / (Path(args.model).stem + "_sweep")
     # Before the sweep: a folder that cannot be written, or that another run is writing, fails now.
     claimed = folder.claim(out, folder.SWEEP_FILES)
     try:
-        return _sweep_into(args, model, analysis, out)
+        return _sweep_into(args, model, analysis, out, workers)
     finally:
         claimed.release()
 
 
-def _sweep_into(args: argparse.Namespace, model: Model, analysis: str, out: Path) -> int:
-    """Run the sweep and write ``out``'s sweep.parquet (the table until then when interrupted)."""
+def _sweep_into(args: argparse.Namespace, model: Model, analysis: str, out: Path, workers: int | None) -> int:
+    """Run the sweep on ``workers`` threads and write ``out``'s sweep.parquet (the table until
+    then when interrupted)."""
     from .sweep import STATUS, sweep
 
     client = _dask_client(args.dask) if args.dask is not None else None
@@ -588,7 +625,7 @@ def _sweep_into(args: argparse.Namespace, model: Model, analysis: str, out: Path
             table = sweep(
                 model, analysis, dict(args.grid) if args.grid else None, dict(args.output),
                 sample=args.sample, ranges=dict(args.range) if args.range else None, seed=args.seed,
-                workers=args.workers, client=client, progress=sys.stderr.isatty() and not args.quiet,
+                workers=workers, client=client, progress=sys.stderr.isatty() and not args.quiet,
                 units=args.units,
             )
         for warning in dict.fromkeys(str(w.message) for w in caught):
@@ -630,6 +667,8 @@ def _dask_client(address: str) -> Any:
         return Client(address, timeout=DASK_CONNECT_TIMEOUT)
     except OSError as error:
         raise model_error("--dask", f"no Dask scheduler answered at {address}: {error}") from None
+    except ValueError as error:  # not an address: "missing port number", "unknown address scheme"
+        raise OptionError("--dask", f"expected the scheduler's address, such as tcp://host:8786: {error}") from None
 
 
 # --- check ---------------------------------------------------------------------------------------

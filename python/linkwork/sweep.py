@@ -14,13 +14,15 @@ import math
 import os
 import secrets
 import sys
-from collections.abc import Callable, Mapping, Sequence
+import warnings
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from tqdm import tqdm
 
 from . import _linkwork
+from .errors import model_error
 from .model import Model, ProgressBar, _parameter_texts
 from .units import UNKNOWN, Units, system
 
@@ -38,7 +40,45 @@ CHUNKS_PER_THREAD = 4
 thread which drew cheap variants takes another chunk while the others finish, few enough that
 the scheduler's cost per task (about a millisecond) stays small beside a chunk's runs."""
 
+MAX_VARIANTS = 1_000_000
+"""The most variants a sweep may have (a grid's combinations, a sample's points). A variant
+compiles and runs the model, a millisecond at the very least, so a million is a quarter of an
+hour on the cores of a large machine and the table a few hundred MB: past it a typo (a COUNT of
+1000000000) would fill the memory with the variants' values before the first one ran."""
+
 Row = tuple[str, "list[float] | None"]
+
+
+def check_count(count: int, what: str) -> None:
+    """``ValueError`` naming ``what`` (``--grid``, ``sample``) when ``count`` variants are more
+    than :data:`MAX_VARIANTS`: checked before any is made."""
+    if count > MAX_VARIANTS:
+        raise ValueError(f"{what}: {count} variants; a sweep may have at most {MAX_VARIANTS:,} (run it in parts)")
+
+
+def name_problem(name: str, parameters: Iterable[str]) -> str | None:
+    """What is wrong with an output called ``name`` among a model's ``parameters``, if anything: a
+    sweep's table has a column of each parameter swept and ``status``, and an output's column
+    of the same name would overwrite it (the parameter column held the outputs)."""
+    if name == STATUS:
+        return f"'{name}' is already the column of each variant's status; choose another name"
+    if name in parameters:
+        return f"'{name}' is already the parameter parameters.{name} (a column of the table when swept); choose another name"
+    return None
+
+
+def workers_to_use(workers: int | None, what: str = "workers") -> int | None:
+    """``workers`` threads, at most this process's cores (with a warning above: more threads than
+    cores only contend, and 100,000 of them ran for minutes); ``ValueError`` below 1."""
+    if workers is None:
+        return None
+    if workers < 1:
+        raise ValueError(f"{what}: expected a count of threads of at least 1, got {workers}")
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    if workers > cores:
+        warnings.warn(f"{what}: {workers} threads asked for, this machine has {cores} cores; using {cores}", stacklevel=3)
+        return cores
+    return workers
 
 
 def sweep(
@@ -79,6 +119,11 @@ def sweep(
     Ctrl-C stops the sweep (within 0.2 s on this machine) and raises ``KeyboardInterrupt`` with
     ``table``: every row, those not finished with a ``KeyboardInterrupt: ...`` status. An
     exception raised by ``progress`` stops it the same way and is raised with ``table``.
+
+    Refused before any variant is made: more than :data:`MAX_VARIANTS` variants, or ``workers``
+    below 1 (``ValueError``); an output named ``status`` or as a parameter of the model
+    (``ModelError`` at ``outputs.<name>``). More ``workers`` than cores use the cores, with a
+    ``UserWarning``.
     """
     try:
         import pandas as pd
@@ -90,8 +135,15 @@ def sweep(
     attrs: dict[str, object] = {}
     if grid is not None and (sample is not None or ranges is not None):
         raise ValueError("give either grid, or sample with ranges, not both")
+    output_list = list((outputs or {}).items())
+    for name, _ in output_list:
+        problem = name_problem(name, model.parameters)
+        if problem is not None:
+            raise model_error(f"outputs.{name}", problem)
+    workers = workers_to_use(workers)
     if grid is not None:
         names = list(grid)
+        check_count(math.prod(len(grid[name]) for name in names), "grid")
         combinations: list[tuple[float | str, ...]] = list(itertools.product(*(grid[name] for name in names)))
     elif sample is not None and ranges is not None:
         attrs["seed"] = seed = secrets.randbits(63) if seed is None else seed
@@ -104,7 +156,6 @@ def sweep(
     else:
         raise ValueError("give grid (values of each parameter), or sample (a count) with ranges")
     variants = [_parameter_texts(dict(zip(names, values))) for values in combinations]
-    output_list = list((outputs or {}).items())
     # The analysis and the outputs checked here, before any variant runs (ModelError).
     model._native.sweep(analysis, [], output_list, 1)
 
@@ -247,6 +298,7 @@ def latin_hypercube(ranges: Mapping[str, tuple[float, float]], count: int, seed:
     seed gives the same points."""
     if count < 1:
         raise ValueError(f"sample: expected a count of at least 1, got {count}")
+    check_count(count, "sample")
     for name, (low, high) in ranges.items():
         _check_range(name, low, high)
     rng = np.random.default_rng(seed)
@@ -275,6 +327,7 @@ def grid_values(text: str) -> tuple[str, list[float | str]]:
         raise ValueError(
             f"expected NAME=START:STOP:COUNT (COUNT >= 1), such as r=0.05:0.15:5 or r=50 mm:150 mm:5, got '{text}'{why}"
         ) from None
+    check_count(count, f"{name.strip()}: COUNT")
     # START + k (STOP - START) / (COUNT - 1): the ends are exactly START and STOP.
     values = [start + k * (stop - start) / (count - 1) if 0 < k < count - 1 else (start, stop)[k > 0] for k in range(count)]
     return name.strip(), [v if unit is None else f"{v!r} {unit}" for v in values]

@@ -68,6 +68,48 @@ pub struct Results {
     branches: BranchWatch,
     /// Whether a change of branch fails the run (`branch: strict`).
     strict_branches: bool,
+    /// Why the rows do not fit in memory ([`Results::reserve`]): the first push fails with it.
+    refused: Option<String>,
+}
+
+/// What a run whose results do not fit in memory is told to do.
+const REMEDY: &str = "stream the rows to a file (linkwork run --stream, or stream= in Python) or keep fewer columns (the analysis's outputs:)";
+
+/// The memory this process may still take, bytes: the kernel's estimate of what can be allocated
+/// without swapping (`MemAvailable`), or less when the process's control group has a limit
+/// (`memory.max` less `memory.current`, cgroup v2). `None` where neither can be read (not
+/// Linux): then only a failed allocation stops the run ([`Results::push`]).
+fn available_memory() -> Option<u64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok().and_then(|text| {
+        let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+        let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+        kb.checked_mul(1024)
+    });
+    let number =
+        |file: &str| std::fs::read_to_string(format!("/sys/fs/cgroup/{file}")).ok()?.trim().parse::<u64>().ok();
+    // `memory.max` is "max" (no number) without a limit.
+    let cgroup = number("memory.max").map(|max| max.saturating_sub(number("memory.current").unwrap_or(0)));
+    match (meminfo, cgroup) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    }
+}
+
+/// Why `rows` of `columns` numbers, with `copies` columns of `all_rows` numbers (the summaries'
+/// copies), do not fit in `available` bytes, if they do not. The rows are held twice at the peak
+/// of a run from Python (the engine's columns and the numpy matrix made of them), so the bound is
+/// half of what is available.
+fn too_large(rows: usize, columns: usize, all_rows: usize, copies: usize, available: Option<u64>) -> Option<String> {
+    let bytes = 8.0 * (rows as f64 * columns as f64 + all_rows as f64 * copies as f64);
+    let available = available? as f64;
+    let gb = |b: f64| format!("{:.2} GB", b / 1e9);
+    (bytes > available / 2.0).then(|| {
+        format!(
+            "for the results: {rows} output points x {columns} columns x 8 bytes = {}, more than half the {} of memory available (Python copies them once); {REMEDY}",
+            gb(bytes),
+            gb(available)
+        )
+    })
 }
 
 /// The largest reaction of each joint and effort of each active driver, kept as rows are pushed
@@ -190,6 +232,7 @@ impl Results {
             started: false,
             branches: BranchWatch::default(),
             strict_branches: false,
+            refused: None,
         }
     }
 
@@ -223,12 +266,38 @@ impl Results {
         }
     }
 
-    /// Room for `rows` output points (a chunk's at most, when streamed).
+    /// Room for the run's `rows` output points (a chunk's at most, when streamed), estimated
+    /// first against the memory available ([`too_large`]): results that would not fit, or room
+    /// that cannot be had, are the [`Error::OutOfMemory`] the first push returns, before the run
+    /// has taken the memory (a 3-body model's 10 million points are 2.2 GB; one of 48 million
+    /// aborted the process).
     pub(crate) fn reserve(&mut self, rows: usize) {
         self.start();
-        let rows = self.stream.as_ref().map_or(rows, |s| rows.min(s.chunk));
-        self.time.reserve(rows);
-        self.columns.iter_mut().for_each(|c| c.reserve(rows));
+        let held = self.stream.as_ref().map_or(rows, |s| rows.min(s.chunk));
+        let copies = match &self.summaries {
+            Summaries::Reading { copies, .. } => copies.len(),
+            _ => 0,
+        };
+        self.refused = too_large(held, self.columns.len() + 1, rows, copies, available_memory()).or_else(|| {
+            let room = self
+                .time
+                .try_reserve(held)
+                .and_then(|()| self.columns.iter_mut().try_for_each(|c| c.try_reserve(held)));
+            room.err().map(|_| {
+                format!("reserving room for {held} output points of {} columns; {REMEDY}", self.columns.len() + 1)
+            })
+        });
+    }
+
+    /// Room for one more row in every column kept (and each summary's copy), grown as `push`
+    /// would but failing rather than aborting the process when the memory is gone.
+    fn room_for_a_row(&mut self) -> Result<(), std::collections::TryReserveError> {
+        self.time.try_reserve(1)?;
+        self.columns.iter_mut().try_for_each(|c| c.try_reserve(1))?;
+        if let Summaries::Reading { copies, .. } = &mut self.summaries {
+            copies.iter_mut().try_for_each(|(_, _, values)| values.try_reserve(1))?;
+        }
+        Ok(())
     }
 
     /// Append an output point from `q`, `qdot`, `qddot` (each `(n)`) and the values of the
@@ -249,6 +318,14 @@ impl Results {
         );
         if let Summaries::Failed(e) = &self.summaries {
             return Err(e.clone());
+        }
+        if let Some(what) = &self.refused {
+            return Err(Error::OutOfMemory { time: t, what: what.clone() });
+        }
+        if self.room_for_a_row().is_err() {
+            let what =
+                format!("storing output point {} of {} columns; {REMEDY}", self.len() + 1, self.columns.len() + 1);
+            return Err(Error::OutOfMemory { time: t, what });
         }
         let (names, keep) = match &self.selection {
             Selection::Failed(e) => return Err(e.clone()),
@@ -698,6 +775,36 @@ mod tests {
         r.time = vec![0.0, 1.0];
         r.columns = vec![vec![value, value]];
         r
+    }
+
+    /// The estimate is the rows' bytes against half the memory available: 10 million points of
+    /// 28 columns are 8 x 2.8e8 = 2.24 GB, refused with 4 GB available (2.24 > 2) and kept with
+    /// 5 GB (2.24 < 2.5); a summary's copy of a column counts every row, also when streamed.
+    #[test]
+    fn the_results_are_estimated_against_the_memory_available() {
+        let refused = too_large(10_000_000, 28, 10_000_000, 0, Some(4_000_000_000)).expect("refused");
+        assert!(
+            refused.contains("2.24 GB") && refused.contains("--stream") && refused.contains("outputs:"),
+            "{refused}"
+        );
+        assert_eq!(too_large(10_000_000, 28, 10_000_000, 0, Some(5_000_000_000)), None);
+        assert!(too_large(1_000, 28, 10_000_000, 32, Some(5_000_000_000)).is_some(), "32 copies of 1e7 rows: 2.56 GB");
+        assert_eq!(too_large(10_000_000, 28, 10_000_000, 0, None), None, "unknown: left to the allocations");
+    }
+
+    /// Results that cannot fit are refused before the run takes the memory: the first push
+    /// returns `OutOfMemory` naming the remedies (the reservation panicked, or aborted the
+    /// process: "memory allocation of 384000128 bytes failed").
+    #[test]
+    fn results_too_large_for_memory_fail_the_first_push() {
+        let names = BODY_QUANTITIES.iter().map(|q| format!("a.{q}")).collect();
+        let mut r = Results::with_columns(names, Summary::default());
+        r.reserve(usize::MAX / 64);
+        let pushed = r.push(0.5, &[0.0; 3], &[0.0; 3], &[0.0; 3], &[]);
+        let Err(Error::OutOfMemory { time, what }) = pushed else { panic!("expected OutOfMemory, got {pushed:?}") };
+        assert_eq!(time, 0.5);
+        assert!(what.contains("--stream") && what.contains("outputs:"), "{what}");
+        assert!(r.is_empty());
     }
 
     /// A write that fails part-way (here: `summary.json`'s temporary name is taken by a

@@ -410,3 +410,30 @@ fn the_paths_default_to_the_point_measures_points() {
         [("crank.A", "crank", [1.0, 0.0]), ("crank [0.5, 0.25]", "crank", [0.5, 0.25]), ("crank", "crank", [0.0, 0.0])];
     assert_eq!(drawn, expected);
 }
+
+/// A measure named as a built-in column, as `status` or as a parameter is refused at it naming
+/// the other: each name reads one thing (a measure `kinetic_energy` gave `results.csv` two
+/// columns of that name, read differently by Python and by the summaries). One problem each; a
+/// name of its own compiles, and a summary, whose names are its own, may take any of them.
+#[test]
+fn measure_names_cannot_collide() {
+    let base = "parameters: {r: 2}\nbodies:\n  a: {mass: 1, inertia: 1, position: [0, 0], angle: 0}\n";
+    let cases = [
+        (
+            "measures:\n  kinetic_energy: a.x\n",
+            "measures.kinetic_energy",
+            "is already the built-in column kinetic_energy",
+        ),
+        ("measures:\n  time: a.x\n", "measures.time", "is already the built-in column time"),
+        ("measures:\n  driver_power: a.x\n", "measures.driver_power", "is already the built-in column driver_power"),
+        ("measures:\n  status: a.x\n", "measures.status", "is already the status of a run"),
+        ("measures:\n  r: a.x\n", "measures.r", "is already the parameter parameters.r"),
+    ];
+    for (entry, path, words) in cases {
+        let p = problems(&(base.to_string() + entry));
+        has(&p, path, words);
+        assert_eq!(p.len(), 1, "{p:#?}");
+    }
+    let own = "measures:\n  reach: a.x\nsummaries:\n  reach: max(reach)\n  time: max(time)\n  r: max(a.x)\n";
+    Model::from_yaml(&(base.to_string() + own)).expect("names of their own compile");
+}

@@ -8,13 +8,15 @@ use super::{
     Analysis, Body, Effort, Element, ForceElement, IntegratorSettings, Measure, MeasureKind, Model, PathPoint,
     SolverSettings, REACTION_QUANTITIES,
 };
+use crate::analysis::dynamic::ENERGY_COLUMNS;
+use crate::analysis::INVERSE_COLUMNS;
 use crate::constraints::{
     Absolute, AbsoluteKind, BodyIx, Cam, CamProfile, CamRow, Constraint, Curve, Distance, Driver, DriverKind, Frame,
     Friction, FrictionLaw, GearKind, GearPair, GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc,
     Shape, Sketch, Translational, Var, DEFAULT_TRANSITION_VELOCITY,
 };
 use crate::error::Problem;
-use crate::expr::functional::Functional;
+use crate::expr::functional::{Functional, TIME};
 use crate::expr::{Expr, Names, Spline, TimeFunction};
 use crate::forces::{
     Contact, Force, Load, PointLoad, RotationalSpringDamper, Shape as ContactShape, SpringDamper, StateExpr, StateVar,
@@ -23,6 +25,10 @@ use crate::forces::{
 use indexmap::IndexMap;
 use std::path::Path;
 use std::sync::Arc;
+
+/// The name of the column that says how a run or a sweep's variant ended (summary.json's
+/// `status`, the sweep table's column): no measure may take it.
+const STATUS: &str = "status";
 
 /// The most output points one analysis may ask for; more would exhaust memory rather than finish.
 const MAX_OUTPUT_POINTS: f64 = 1e7;
@@ -100,6 +106,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
     let summaries = cx.entries("summaries", &spec.summaries, |cx, name, path, source| {
         Some((name.to_string(), cx.summary(path, source)?))
     });
+    cx.distinct_measures();
     let gravity = spec.gravity.and_then(|g| cx.vec2("gravity", g)).unwrap_or([0.0, 0.0]);
     // Each number is a double, but the weight is their product: past 1.8e308 it is infinite,
     // and every reaction and potential energy with it.
@@ -397,6 +404,30 @@ impl Cx<'_> {
             } else {
                 seen.insert(name, section);
             }
+        }
+    }
+
+    /// A measure is read by name (its column of `results.csv`, by summaries, sweep outputs and
+    /// Python), and expressions read the parameters by name: a measure named as a built-in column
+    /// (`time`, `kinetic_energy` ...), as `status` (of a run and of a sweep's variant) or as a
+    /// parameter is a problem at it naming the other (a measure `kinetic_energy` gave
+    /// `results.csv` two columns of that name, and Python and the summaries read different ones).
+    /// Summaries have names of their own (keys of `summary.json`'s `summaries`, read by nothing
+    /// else), which collide with none of these.
+    fn distinct_measures(&mut self) {
+        let spec = self.spec;
+        let built_in = std::iter::once(TIME).chain(ENERGY_COLUMNS).chain(INVERSE_COLUMNS);
+        for name in spec.measures.keys() {
+            let other = if built_in.clone().any(|c| c == name) {
+                format!("the built-in column {name} of results.csv")
+            } else if name == STATUS {
+                "the status of a run (summary.json) and of a sweep's variant (a column of its table)".to_string()
+            } else if spec.parameters.contains_key(name) {
+                format!("the parameter parameters.{name}, which expressions read by that name")
+            } else {
+                continue;
+            };
+            self.problem(format!("measures.{name}"), format!("'{name}' is already {other}; choose another name"));
         }
     }
 

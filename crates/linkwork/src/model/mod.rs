@@ -467,6 +467,32 @@ pub struct Model {
     pub branch_mode: spec::BranchMode,
 }
 
+/// The text of the model file at `path`: a regular file (a device such as `/dev/zero`, or a
+/// FIFO, which would be read without end or wait for a writer, is refused before it is opened) of
+/// at most [`parse::MAX_MODEL_BYTES`], read no further than that (a file that grows while it is
+/// read included).
+fn read_model_file(path: &Path) -> Result<String> {
+    use std::io::Read;
+    let fail = |message: String| Error::Io { path: path.display().to_string(), message };
+    let meta = std::fs::metadata(path).map_err(|e| fail(e.to_string()))?;
+    if !meta.is_file() {
+        let what = if meta.is_dir() { "a folder" } else { "not a regular file (a device, a FIFO or a socket)" };
+        return Err(fail(format!("{what}; expected a model file (YAML)")));
+    }
+    let too_large = |size: String| fail(format!("{size}; {}", parse::LIMIT));
+    if meta.len() > parse::MAX_MODEL_BYTES {
+        return Err(too_large(parse::size(meta.len())));
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(parse::MAX_MODEL_BYTES + 1).read_to_end(&mut bytes))
+        .map_err(|e| fail(e.to_string()))?;
+    if bytes.len() as u64 > parse::MAX_MODEL_BYTES {
+        return Err(too_large(format!("more than {} (it grew while read)", parse::size(parse::MAX_MODEL_BYTES))));
+    }
+    String::from_utf8(bytes).map_err(|_| fail("stream did not contain valid UTF-8".into()))
+}
+
 impl Model {
     /// Read and compile a model file.
     pub fn load(path: impl AsRef<Path>) -> Result<Model> {
@@ -477,8 +503,7 @@ impl Model {
     /// [`Model::from_yaml_with`].
     pub fn load_with(path: impl AsRef<Path>, set: &[(String, String)]) -> Result<Model> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| Error::Io { path: path.display().to_string(), message: e.to_string() })?;
+        let text = read_model_file(path)?;
         // The folder made absolute, so that a model sent to another process (a Dask worker, in
         // another working folder) still finds its tables' files.
         let folder = path.parent().unwrap_or(Path::new(""));

@@ -84,6 +84,16 @@ pub fn parse_partial_with(text: &str, set: &[(String, String)]) -> Result<Parsed
 /// The YAML document of a model file's text, before any of it is read as a model: what
 /// [`parse_document_with`] reads, so that a text compiled many times (a sweep) is parsed once.
 pub(crate) fn parse_document(text: &str) -> Result<Value, Vec<Problem>> {
+    if text.len() as u64 > MAX_MODEL_BYTES {
+        let message = format!("the model is {}; {}", size(text.len() as u64), LIMIT);
+        return Err(vec![Problem::new("", message)]);
+    }
+    if let Some((line, column)) = too_deep(text) {
+        let message = format!(
+            "YAML syntax error at line {line}, column {column}: collections nested more than {MAX_DEPTH} deep; a model nests a few levels"
+        );
+        return Err(vec![Problem::new("", message)]);
+    }
     serde_yaml_ng::from_str(text).map_err(|e| {
         let msg = match (e.location(), duplicate(text, &e.to_string())) {
             (_, Some((line, column, message))) => {
@@ -94,6 +104,79 @@ pub(crate) fn parse_document(text: &str) -> Result<Value, Vec<Problem>> {
         };
         vec![Problem::new("", msg)]
     })
+}
+
+/// The largest model file: 4 MiB. The largest realistic model is far smaller (a chain of 1,000
+/// bodies with its joints is about 0.2 MB, an inline table of 100,000 points 2.4 MB; larger
+/// tables go in CSV files, `tables:` with `file:`). The bound keeps the parse short enough that
+/// Ctrl-C need not interrupt it: the worst text allowed (4 MiB of flow mappings nested 16
+/// deep) takes about two seconds, and 16 MiB of them nested 60 deep took 14 s
+/// (docs/model-format.md, "Limits"); a larger text, or a device such as `/dev/zero`, would take
+/// the memory rather than be a model.
+pub(crate) const MAX_MODEL_BYTES: u64 = 4 << 20;
+
+/// What a model file larger than [`MAX_MODEL_BYTES`] is told.
+pub(crate) const LIMIT: &str =
+    "a model file may be at most 4 MiB (put large tables in CSV files: `tables:` with `file:`)";
+
+/// `bytes` in MB, for the messages.
+pub(crate) fn size(bytes: u64) -> String {
+    format!("{:.1} MB", bytes as f64 / 1e6)
+}
+
+/// The deepest nesting of collections a model file may have: a model nests six levels at most
+/// (the file's mapping, `analyses`, an analysis, `outputs`, `columns`, its list; a table's
+/// `[[x, y], ...]`). serde_yaml_ng refuses more than 128, but only once libyaml has read the
+/// whole text, in time quadratic in the depth of flow collections (a 400 KB file of
+/// `{a: {a: ...` took 87 s); the time to parse a text of the largest size allowed grows with the
+/// depth allowed ([`MAX_MODEL_BYTES`]).
+const MAX_DEPTH: usize = 16;
+
+/// The line and column (from 1) of the first collection of `text` nested deeper than
+/// [`MAX_DEPTH`], if there is one. libyaml's events are read one at a time and the reading stops
+/// there; its scanner looks at most 1024 characters ahead, so this takes time linear in the
+/// text. A syntax error stops it too: the parse that follows reports it.
+fn too_deep(text: &str) -> Option<(usize, usize)> {
+    let mut parser = Box::new(std::mem::MaybeUninit::<unsafe_libyaml::yaml_parser_t>::uninit());
+    let parser = parser.as_mut_ptr();
+    // SAFETY: as serde_yaml_ng drives the same parser (its libyaml::parser): the parser is
+    // initialized before any other call and deleted once, stays in its box (libyaml keeps
+    // pointers into it), and reads `text`, which outlives it; each event is deleted after it is
+    // read, and only events the parser returned with success are read.
+    unsafe {
+        if unsafe_libyaml::yaml_parser_initialize(parser).fail {
+            return None;
+        }
+        unsafe_libyaml::yaml_parser_set_encoding(parser, unsafe_libyaml::YAML_UTF8_ENCODING);
+        unsafe_libyaml::yaml_parser_set_input_string(parser, text.as_ptr(), text.len() as u64);
+        let mut depth = 0usize;
+        let mut found = None;
+        loop {
+            let mut event = std::mem::MaybeUninit::<unsafe_libyaml::yaml_event_t>::uninit();
+            if unsafe_libyaml::yaml_parser_parse(parser, event.as_mut_ptr()).fail {
+                break;
+            }
+            let event = event.as_mut_ptr();
+            let kind = (*event).type_;
+            match kind {
+                unsafe_libyaml::YAML_SEQUENCE_START_EVENT | unsafe_libyaml::YAML_MAPPING_START_EVENT => depth += 1,
+                unsafe_libyaml::YAML_SEQUENCE_END_EVENT | unsafe_libyaml::YAML_MAPPING_END_EVENT => {
+                    depth = depth.saturating_sub(1)
+                }
+                _ => {}
+            }
+            if depth > MAX_DEPTH {
+                let mark = (*event).start_mark;
+                found = Some((mark.line as usize + 1, mark.column as usize + 1));
+            }
+            unsafe_libyaml::yaml_event_delete(event);
+            if found.is_some() || kind == unsafe_libyaml::YAML_STREAM_END_EVENT {
+                break;
+            }
+        }
+        unsafe_libyaml::yaml_parser_delete(parser);
+        found
+    }
 }
 
 /// As [`parse_partial_with`], from the file's YAML document ([`parse_document`]).
