@@ -572,6 +572,7 @@ impl Results {
                 | Error::NonFinite { time, .. }
                 | Error::Unbounded { time, .. }
                 | Error::OutOfMemory { time, .. }
+                | Error::Accuracy { time, .. }
                 | Error::Interrupted { time },
             ) => Some(*time),
             _ => None,
