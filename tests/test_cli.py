@@ -294,6 +294,32 @@ def test_a_failure_time_reads_the_same_in_every_line(linkwork: RunLinkwork, tmp_
 
 
 
+def test_meaningless_tolerances_are_refused_at_the_option(linkwork: RunLinkwork, tmp_path: Path) -> None:
+    """`--rtol 1e300` ran the double pendulum to a pin 1,168 m off its anchor with exit 0 and
+    status ok; a tolerance above 1e-2 is now a model error at the option, and nothing runs."""
+    for option in ("--rtol", "--atol"):
+        done = linkwork("run", EXAMPLES / "double_pendulum.yaml", option, "1e300", "-o", tmp_path / option)
+        assert done.code == 2, done.output
+        assert f"{option}: expected at most 1e-2, found 1e300" in done.stderr
+        assert not (tmp_path / option / "results.csv").exists()
+
+
+def test_kinematics_at_a_huge_time_exits_3_saying_why(linkwork: RunLinkwork, tmp_path: Path) -> None:
+    """The slider-crank started at t = 1e12 s ended ok with a joint open by centimetres; it now
+    fails at its first output naming the row, the time and the round-off that caused it."""
+    model = tmp_path / "late.yaml"
+    text = (EXAMPLES / "slider_crank.yaml").read_text()
+    model.write_text(patch(text, "t_end: 2.0,", "t_start: 1.0e12, t_end: 1000000000000.5,"))
+    out = tmp_path / "out"
+    done = linkwork("run", model, "-o", out)
+    assert done.code == 3, done.output
+    assert "position residual" in done.stderr and "at t = 1e+12 s in A.x" in done.stderr, done.stderr
+    assert "start the analysis near t = 0" in done.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed" and summary["error_time"] == 1e12
+    assert summary["error_elements"] == ["A"]
+
+
 def test_check_states_every_dyads_branch_in_the_display_units(linkwork: RunLinkwork) -> None:
     """examples/sixbar_leg.yaml: each dyad's side of its line, drawn and declared, and the change
     from the guess in the model's display units (mm, deg)."""

@@ -23,6 +23,7 @@ from typing import Any
 
 from . import _linkwork
 from .errors import (
+    AccuracyError,
     AssemblyError,
     ConvergenceError,
     EquilibriumError,
@@ -44,6 +45,7 @@ from .sweep import sweep
 __version__: str = _linkwork.__version__
 
 __all__ = [
+    "AccuracyError",
     "AssemblyError",
     "Body",
     "ByLengths",

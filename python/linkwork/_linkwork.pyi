@@ -14,6 +14,7 @@ import numpy.typing as npt
 
 __all__ = [
     "AGGREGATIONS",
+    "AccuracyError",
     "AssemblyError",
     "ConvergenceError",
     "EquilibriumError",
@@ -174,6 +175,12 @@ class NonFiniteError(SolverError):
     element: str
     expression: str
     value: float
+
+class AccuracyError(SolverError):
+    quantity: str
+    value: float
+    bound: float
+    detail: str
 
 class OutOfMemoryError(SolverError, MemoryError): ...
 

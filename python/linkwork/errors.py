@@ -14,6 +14,8 @@
     │   │                           residual, iterations, load_fraction; none stable or none at all: cause)
     │   ├── IntegrationError    step, cause: a dynamic integrator could not continue
     │   ├── NonFiniteError      element, expression, value: an element gave NaN or infinity, or a driver ran away or jumped
+    │   ├── AccuracyError       quantity, value, bound, detail: a run broke what it promised (a constraint
+    │   │                       residual at an output, a conservative system's energy)
     │   └── OutOfMemoryError    memory ran out in a factorization; also a MemoryError
     ├── FileError           path; also an OSError
     └── InternalError       the engine panicked: a bug, reported instead of crashing
@@ -25,6 +27,7 @@ message of each is the engine's own.
 from __future__ import annotations
 
 from ._linkwork import (
+    AccuracyError,
     AssemblyError,
     ConvergenceError,
     EquilibriumError,
@@ -40,6 +43,7 @@ from ._linkwork import (
 )
 
 __all__ = [
+    "AccuracyError",
     "AssemblyError",
     "ConvergenceError",
     "EquilibriumError",

@@ -12,6 +12,7 @@
 //! │   ├── IntegrationError    step, cause
 //! │   ├── NonFiniteError      element, expression, value (NaN, infinity, without bound, or a
 //! │   │                       driver's jump)
+//! │   ├── AccuracyError       quantity, value, bound, detail (a run that broke what it promised)
 //! │   └── OutOfMemoryError    (also a MemoryError) memory ran out in a factorization
 //! ├── FileError           path (also an OSError)
 //! └── InternalError       a panic inside the engine: a bug, reported instead of crashing
@@ -73,6 +74,12 @@ pyo3::create_exception!(
 );
 pyo3::create_exception!(
     linkwork,
+    AccuracyError,
+    SolverError,
+    "A run that ended broke what it promised: a constraint residual at an output beyond what its tolerances allow (`rows` the row, `time` the output), or a conservative system's energy drifting by more than half of the energy of its motion. `quantity` names what was checked, `value` its value, `bound` the largest allowed, `detail` why and what to do; `results` holds every row computed."
+);
+pyo3::create_exception!(
+    linkwork,
     NonFiniteError,
     SolverError,
     "An element evaluated to NaN or infinity at time `time`, or a driver's motion grew without bound near it: `element` is its path in the model file (`forces.drag`, `drivers.motor`), `expression` its expressions, `value` what it gave (for a driver without bound, its rate). No such number is written as a result."
@@ -102,6 +109,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("EquilibriumError", py.get_type::<EquilibriumError>())?;
     m.add("IntegrationError", py.get_type::<IntegrationError>())?;
     m.add("NonFiniteError", py.get_type::<NonFiniteError>())?;
+    m.add("AccuracyError", py.get_type::<AccuracyError>())?;
     m.add("InternalError", py.get_type::<InternalError>())?;
     // Two bases, so that `except OSError` catches a missing model file as well, and `except
     // MemoryError` memory running out in an analysis: built with `type(name, bases, namespace)`,
@@ -247,6 +255,14 @@ fn build(py: Python<'_>, error: &Error, partial: Option<PyResults>) -> PyResult<
         | Error::Jump { time, element, expression, jump: value, .. } => (
             NonFiniteError::new_err(message),
             failure(*time, vec![])?.with("element", element)?.with("expression", expression)?.with("value", value)?,
+        ),
+        Error::Accuracy { time, quantity, rows, value, bound, detail } => (
+            AccuracyError::new_err(message),
+            failure(*time, names(rows))?
+                .with("quantity", quantity)?
+                .with("value", value)?
+                .with("bound", bound)?
+                .with("detail", detail)?,
         ),
         Error::OutOfMemory { time, .. } => {
             let class = py.import("linkwork._linkwork")?.getattr(OUT_OF_MEMORY_ERROR)?;

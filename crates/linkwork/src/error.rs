@@ -225,6 +225,25 @@ pub enum Error {
         /// The step, s.
         step: f64,
     },
+    /// A run that ended, checked against what it promised (docs/integrators.md, "What a run
+    /// promises"; docs/kinematics.md, "The residual at every output"): a constraint residual
+    /// at an output beyond what the tolerances allow, or a conservative system's energy drifting
+    /// by more than half of the energy of its motion. The results computed are kept.
+    #[error("{quantity} {value:.3e} at t = {when} s{}, above {bound:.3e}: {detail}", in_rows(.rows), when = seconds(.time))]
+    Accuracy {
+        /// The output time where the quantity was largest, s.
+        time: f64,
+        /// What was checked: `position residual`, `velocity residual`, `energy drift`.
+        quantity: &'static str,
+        /// The constraint row with the largest residual (empty for the energy).
+        rows: Vec<RowName>,
+        /// Its value.
+        value: f64,
+        /// The largest value the check allows.
+        bound: f64,
+        /// Why the bound is what it is, what it means, and what to do.
+        detail: String,
+    },
     /// Memory ran out in a sparse factorization: the model is too large for this machine.
     #[error("out of memory {what} at t = {when} s", when = seconds(.time))]
     OutOfMemory {
@@ -290,7 +309,9 @@ impl Error {
     /// The joints (and drivers) named by a solver error, in order and without repeats.
     pub fn elements(&self) -> Vec<String> {
         let rows: Vec<&RowName> = match self {
-            Error::Singular { rows, .. } | Error::Integration { rows, .. } => rows.iter().collect(),
+            Error::Singular { rows, .. } | Error::Integration { rows, .. } | Error::Accuracy { rows, .. } => {
+                rows.iter().collect()
+            }
             Error::Convergence { row, .. } | Error::Assembly { row, .. } | Error::Friction { row, .. } => vec![row],
             Error::Equilibrium { equation: Unbalanced::Row(row), .. } => vec![row],
             Error::Branch { joint, .. } => return vec![joint.clone()],
@@ -311,6 +332,15 @@ fn rows_suffix(rows: &[RowName]) -> String {
         String::new()
     } else {
         format!("; rows involved: {}", join(rows))
+    }
+}
+
+/// ` in <row>` after a quantity checked in constraint rows, or nothing.
+fn in_rows(rows: &[RowName]) -> String {
+    if rows.is_empty() {
+        String::new()
+    } else {
+        format!(" in {}", join(rows))
     }
 }
 

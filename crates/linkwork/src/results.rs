@@ -650,6 +650,7 @@ impl Results {
                 | Error::Unbounded { time, .. }
                 | Error::Jump { time, .. }
                 | Error::OutOfMemory { time, .. }
+                | Error::Accuracy { time, .. }
                 | Error::Interrupted { time },
             ) => Some(*time),
             _ => None,

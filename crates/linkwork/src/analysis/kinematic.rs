@@ -148,6 +148,15 @@ impl Solver<'_> {
         unreachable!("the loop returns at it == max_iterations")
     }
 
+    /// The residual of every row (the redundant ones too) at the solver's position, checked
+    /// against what an output promises ([`super::promise::check_kinematic`]).
+    fn check_output(&mut self) -> Result<(), Error> {
+        self.sys.phi(&Config::new(&self.q, &self.rot_q), self.t, &mut self.full);
+        let (row, residual) = worst(&self.full);
+        let sys = &self.sys;
+        super::promise::check_kinematic(self.t, &self.q, &self.qdot, residual, || sys.row_name(row), self.tolerance)
+    }
+
     /// The ratio of the smallest to the largest singular value of the driven Jacobian at `q`,
     /// and the rows of the smallest ([`RowSpace::smallest_singular`](crate::linalg::rows::RowSpace::smallest_singular)).
     fn diagnose(&mut self) -> (f64, Vec<RowName>) {
@@ -275,6 +284,7 @@ pub(crate) fn run_driven(
         s.factor_at(false, t0)?;
         s.velocities();
         check_condition(&mut s, model, &analysis.drivers, settings.singular_condition)?;
+        s.check_output()?;
         extra_values(t0, &s.q, &s.qdot, &s.qddot, &mut extra)?;
         results.push(t0, &s.q, &s.qdot, &s.qddot, &extra)?;
         let mut dt = h;
@@ -341,6 +351,7 @@ pub(crate) fn run_driven(
                 }
             }
             check_condition(&mut s, model, &analysis.drivers, settings.singular_condition)?;
+            s.check_output()?;
             extra_values(target, &s.q, &s.qdot, &s.qddot, &mut extra)?;
             results.push(target, &s.q, &s.qdot, &s.qddot, &extra)?;
         }

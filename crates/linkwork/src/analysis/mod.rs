@@ -10,6 +10,7 @@ pub mod dynamic;
 mod inverse;
 mod kinematic;
 mod modes;
+pub mod promise;
 mod run;
 mod setup;
 mod statics;

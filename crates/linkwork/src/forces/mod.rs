@@ -36,6 +36,11 @@ pub trait ForceLaw: Debug + Send + Sync {
     fn expressions(&self) -> Vec<(&'static str, &str)> {
         Vec::new()
     }
+    /// Whether the force is conservative: all its work is the change of [`ForceLaw::potential`]
+    /// (an undamped spring without actuator). No by default.
+    fn conservative(&self) -> bool {
+        false
+    }
     /// The contact this force is, if it is one (for its events and output columns).
     fn contact(&self) -> Option<&Contact> {
         None
@@ -58,6 +63,8 @@ pub trait Force: Debug + Send + Sync {
     fn expressions(&self) -> Vec<(&'static str, &str)>;
     /// The contact this force is, if it is one.
     fn contact(&self) -> Option<&Contact>;
+    /// Whether all its work is the change of its potential.
+    fn conservative(&self) -> bool;
 }
 
 impl<T: ForceLaw> Force for T {
@@ -81,6 +88,9 @@ impl<T: ForceLaw> Force for T {
     }
     fn contact(&self) -> Option<&Contact> {
         ForceLaw::contact(self)
+    }
+    fn conservative(&self) -> bool {
+        ForceLaw::conservative(self)
     }
 }
 

@@ -75,6 +75,9 @@ impl ForceLaw for SpringDamper {
         let neg = [-fu[0], -fu[1]];
         self.i.add(out, [neg[0], neg[1], cross(ap, neg)]);
     }
+    fn conservative(&self) -> bool {
+        self.damping == 0.0 && self.actuator.is_zero()
+    }
     fn potential<S: Scalar>(&self, x: &[S]) -> S {
         let (_, l, _, _) = self.geometry(x);
         let e = l - S::constant(self.free_length);
@@ -124,6 +127,9 @@ impl ForceLaw for RotationalSpringDamper {
         let zero = S::constant(0.0);
         self.i.add(out, [zero, zero, torque]);
         self.j.add(out, [zero, zero, -torque]);
+    }
+    fn conservative(&self) -> bool {
+        self.damping == 0.0 && self.actuator.is_zero()
     }
     fn potential<S: Scalar>(&self, x: &[S]) -> S {
         let e = self.i.pose(x)[2] - self.j.pose(x)[2] - S::constant(self.free_angle);

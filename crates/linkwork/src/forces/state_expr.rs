@@ -84,6 +84,11 @@ pub enum Load {
 }
 
 impl Load {
+    /// Whether the load is the constant zero (no actuator).
+    pub(crate) fn is_zero(&self) -> bool {
+        matches!(self, Load::Constant(v) if *v == 0.0)
+    }
+
     /// Map the expression's coordinates onto local columns, appending those not yet in
     /// `columns`.
     pub(crate) fn localize(&mut self, columns: &mut Vec<usize>) {

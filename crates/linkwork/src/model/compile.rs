@@ -1718,8 +1718,16 @@ fn span(
 }
 
 /// The integrator of the analysis `name` at `path` and its settings, each left out taken from
+/// The loosest `rtol` and `atol` a dynamic analysis accepts: `1e-2`. The error test lets each
+/// step err by about the tolerance, relative to the state (`rtol`) or in its units (`atol`: m,
+/// rad, m/s); above a percent the steps' errors are as large as the motion over a few dozen
+/// steps (the double pendulum at `0.1` ends with a pin 4 cm off its anchor, at `1e300` 1,168 m
+/// off, and both passed), and no check after the run could tell such results from an answer.
+pub const MAX_INTEGRATOR_TOLERANCE: f64 = 1e-2;
+
 /// `base`: only a dynamic analysis names one or gives its settings, each given tolerance and
-/// step must be positive, and each setting must belong to the integrator.
+/// step must be positive (a tolerance at most [`MAX_INTEGRATOR_TOLERANCE`]), and each setting
+/// must belong to the integrator.
 fn integrator(
     problems: &mut Vec<Problem>,
     path: &str,
@@ -1751,7 +1759,9 @@ fn integrator(
     let kind = a.integrator.unwrap_or(base.kind);
     let mut ok = true;
     let mut pos = |problems: &mut Vec<Problem>, field: &str, v: Option<f64>| -> Option<f64> {
-        let r = positive(problems, &format!("{spath}.{field}"), v?);
+        let path = format!("{spath}.{field}");
+        let r = positive(problems, &path, v?);
+        let r = if matches!(field, "rtol" | "atol") { r.and_then(|v| tolerance_bound(problems, &path, v)) } else { r };
         ok &= r.is_some();
         r
     };
@@ -1862,6 +1872,21 @@ pub const DEFAULT_CONTACT_EXPONENT: f64 = 1.5;
 pub const DEFAULT_PENETRATION_FRACTION: f64 = 1e-3;
 
 /// `v`, or a problem at `path` when it is not a finite number above zero.
+/// `v`, an integrator's tolerance at `path`, if at most [`MAX_INTEGRATOR_TOLERANCE`].
+fn tolerance_bound(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f64> {
+    if v <= MAX_INTEGRATOR_TOLERANCE {
+        return Some(v);
+    }
+    problems.push(Problem::new(
+        path,
+        format!(
+            "expected at most {MAX_INTEGRATOR_TOLERANCE:e}, found {v:e}: a looser tolerance lets each step err by more \
+             than a percent of the motion, and the results mean nothing"
+        ),
+    ));
+    None
+}
+
 fn positive(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f64> {
     let v = finite(problems, path, v)?;
     if v > 0.0 {

@@ -36,6 +36,7 @@ pub(crate) use dae::{FRICTION_RTOL, NEWTON_FRICTION_ITERATIONS};
 pub use output::{factor_error, Output, CONTACT_QUANTITIES, ENERGY_COLUMNS};
 
 use super::assemble_into;
+use super::promise;
 use super::setup::{fail, held};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, RowName};
@@ -414,7 +415,8 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     s.redundant_rows = Some(redundant_rows);
     s.indeterminate_joints = Some(indeterminate);
     s.assembly = Some(assembly.report());
-    s.residuals = Some(Residuals { max_position: out.max_position_residual, max_velocity: out.max_velocity_residual });
+    let audit = &out.audit;
+    s.residuals = Some(Residuals { max_position: audit.position.value, max_velocity: audit.velocity.value });
     if let Some(t) = stats.first_crossing {
         s.warnings.push(format!(
             "abam: near singular positions (Phi_q losing rank; the first at t = {t:.6} s) the error estimate at rtol {:e} was the round-off noise of the accelerations; bdf took the state across, in {} stretches",
@@ -423,6 +425,18 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     }
     s.statistics = Some(Statistics::Dynamic(stats));
     results.insert_reaction_summary(model);
+    // A run that ended is checked against what it promised: the system conserves energy when
+    // nothing but gravity and undamped springs does work on it. A fixed step (the order tests')
+    // promises nothing: no error test chose it.
+    let error = error.or_else(|| {
+        if settings.fixed_step.is_some() {
+            return None;
+        }
+        let conservative =
+            analysis.drivers.is_empty() && !dae.has_friction() && dae.forces.iter().all(|f| f.force.conservative());
+        let warnings = &mut results.summary.warnings;
+        promise::check_dynamic(audit, &settings, conservative, |r| dae.sys.row_name(r), warnings).err()
+    });
     match error {
         None => Ok(results),
         Some(e) => Err(fail(results, e)),

@@ -9,6 +9,7 @@
 //! ([`Output::advance_work`]) and interpolated linearly to the output times.
 
 use super::dae::Dae;
+use crate::analysis::promise::Audit;
 use crate::error::Error;
 use crate::linalg::FactorError;
 use crate::model::{Analysis, Model};
@@ -48,10 +49,8 @@ pub struct Output {
     react: Vec<f64>,
     reactions: Vec<f64>,
     row: Vec<f64>,
-    /// Largest residuals at output times.
-    pub max_position_residual: f64,
-    /// Largest velocity-constraint residual at output times.
-    pub max_velocity_residual: f64,
+    /// What the outputs showed: residuals, sizes, energy ([`crate::analysis::promise`]).
+    pub audit: Audit,
 }
 
 impl Output {
@@ -86,8 +85,7 @@ impl Output {
             react: Vec::new(),
             reactions: Vec::new(),
             row: Vec::new(),
-            max_position_residual: 0.0,
-            max_velocity_residual: 0.0,
+            audit: Audit::default(),
         }
     }
 
@@ -157,14 +155,18 @@ impl Output {
         let (qddot, lambda) = sol.split_at(n);
         dae.reactions(q, qdot, lambda, &mut self.react);
         crate::analysis::measure_reactions(dae.model, &self.drivers, &self.react, &mut self.reactions);
-        let position_residual = dae.phi.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let (mut position_residual, mut velocity_residual) = (0.0f64, 0.0f64);
         dae.jv(qdot, &mut self.rows);
         dae.nu(q, t, &mut self.rows2);
-        let velocity_residual = self.rows.iter().zip(&self.rows2).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
-        self.max_position_residual = self.max_position_residual.max(position_residual);
-        self.max_velocity_residual = self.max_velocity_residual.max(velocity_residual);
+        for (r, ((p, v), nu)) in dae.phi.iter().zip(&self.rows).zip(&self.rows2).enumerate() {
+            self.audit.position.see(p.abs(), t, r);
+            self.audit.velocity.see((v - nu).abs(), t, r);
+            position_residual = position_residual.max(p.abs());
+            velocity_residual = velocity_residual.max((v - nu).abs());
+        }
         let kinetic = dae.kinetic_energy(qdot);
         let potential = dae.potential_energy(q);
+        self.audit.see(t, q, qdot, kinetic, potential);
         self.row.clear();
         self.row.extend_from_slice(&self.react);
         self.row.extend([kinetic, potential, self.work_at(t), position_residual, velocity_residual]);
