@@ -416,20 +416,11 @@ fn too_fast(s: &mut Solver<'_>, model: &Model, analysis: &Analysis, target: f64,
     let problem = |field: &str, message: String| {
         Error::Model(vec![Problem::new(format!("analyses.{}.{field}", analysis.name), message)])
     };
-    // Doubles at `s.t` lie farther apart than half the sub-step or half the output step: the
-    // time cannot take the step asked (output times `t_start + k step` that round to one value
-    // leave a sub-step of zero).
-    let spacing = f64::from_bits(s.t.abs().to_bits() + 1) - s.t.abs();
-    if spacing > 0.5 * step.min(analysis.step) {
+    // Doubles at `s.t` lie too far apart for the sub-step (the output step is checked when the
+    // model is compiled).
+    if let Some(message) = crate::model::time_round_off(s.t, step) {
         let field = if s.t.abs() <= 2.0 * analysis.t_start.abs() { "t_start" } else { "t_end" };
-        return problem(
-            field,
-            format!(
-                "time round-off at t = {} s: double precision spaces times there {spacing:.3e} s apart, too coarse for the output step {:e} s and its sub-steps; keep the analysis's times nearer 0 (shift the drivers' time origin)",
-                crate::error::seconds(&s.t),
-                analysis.step
-            ),
-        );
+        return problem(field, message);
     }
     let (ratio, rows) = s.diagnose();
     if ratio >= SINGULAR_RATIO_KINEMATIC {

@@ -50,6 +50,21 @@ fn output_step_problem(t0: f64, t1: f64, h: f64) -> Option<String> {
     }
 }
 
+/// What is wrong with stepping by `step` s at the time `t`, if anything: doubles there lie
+/// farther apart than half the step, so output times `t_start + k step` (or sub-steps) round to
+/// one another and a step can come out as zero. Half: a step must change `t` by at least two
+/// units of its spacing for the rounded steps to stay within a factor of two of the one asked.
+pub(crate) fn time_round_off(t: f64, step: f64) -> Option<String> {
+    let spacing = f64::from_bits(t.abs().to_bits() + 1) - t.abs();
+    (spacing > 0.5 * step).then(|| {
+        format!(
+            "time round-off at t = {} s: double precision spaces times there {spacing:.3e} s apart, too coarse for \
+             steps of {step:e} s; keep the analysis's times nearer 0 (shift the drivers' time origin)",
+            crate::error::seconds(&t)
+        )
+    })
+}
+
 /// Build the model, or list every problem found.
 /// (a table's `file:` relative to the working folder).
 pub fn compile(spec: &ModelSpec) -> Result<Model, Vec<Problem>> {
@@ -1667,6 +1682,12 @@ fn timing(problems: &mut Vec<Problem>, name: &str, a: &AnalysisSpec, base: &Fall
     }
     if let Some(message) = output_step_problem(t0, t1, h) {
         problems.push(Problem::new(format!("{path}.step"), message));
+        return None;
+    }
+    let far = if t0.abs() >= t1.abs() { t0 } else { t1 };
+    if let Some(message) = time_round_off(far, h).filter(|_| t1 > t0) {
+        let field = if 2.0 * t0.abs() >= t1.abs() { "t_start" } else { "t_end" };
+        problems.push(Problem::new(format!("{path}.{field}"), message));
         return None;
     }
     Some(Timing { t_start: t0, t_end: t1, step: h, settings: settings?, integrator: integrator? })

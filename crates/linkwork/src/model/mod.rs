@@ -13,8 +13,8 @@ pub mod structure;
 mod tables;
 pub mod units;
 
-pub(crate) use compile::revise;
 pub use compile::{compile, compile_partial};
+pub(crate) use compile::{revise, time_round_off};
 pub use drawing::{BodyDrawing, Drawing, DriverDrawing, JointDrawing, PathPoint};
 pub use parse::{parse_partial, parse_partial_with, parse_spec, Parsed};
 pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
