@@ -313,11 +313,13 @@ def test_kinematics_at_a_huge_time_exits_3_saying_why(linkwork: RunLinkwork, tmp
     out = tmp_path / "out"
     done = linkwork("run", model, "-o", out)
     assert done.code == 3, done.output
-    assert "position residual" in done.stderr and "at t = 1e+12 s in A.x" in done.stderr, done.stderr
+    # The row with the largest residual: a joint of the crank's loop (A or B, as round-off falls).
+    named = re.search(r"position residual \S+ at t = 1e\+12 s in (\w+)\.[xy]", done.stderr)
+    assert named is not None and named[1] in ("A", "B"), done.stderr
     assert "start the analysis near t = 0" in done.stderr
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed" and summary["error_time"] == 1e12
-    assert summary["error_elements"] == ["A"]
+    assert summary["error_elements"] == [named[1]]
 
 
 def test_check_states_every_dyads_branch_in_the_display_units(linkwork: RunLinkwork) -> None:
