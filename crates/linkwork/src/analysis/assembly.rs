@@ -55,7 +55,7 @@ impl Assembly {
 
 /// Assemble `sys` at time `t` from `q0`, `qdot0`. `given: (2n)` marks the positions (first `n`)
 /// and velocities (last `n`) to hold. `tolerance` bounds the residual of `Phi` relative to the
-/// model's size ([`super::scaled_residual`]).
+/// model's size (`scaled_residual`).
 pub fn assemble(
     sys: &mut System<'_>,
     q0: &[f64],

@@ -61,7 +61,7 @@ pub(crate) fn scaled_residual(phi: &[f64], row_scales: &[f64], length: f64) -> (
     })
 }
 
-/// Each row's weight `R_i / L` in [`scaled_residual`] for `model` with the active `drivers` at
+/// Each row's weight `R_i / L` in `scaled_residual` for `model` with the active `drivers` at
 /// `(q, t)`: the residual assembly and the kinematics bound by `solver.tolerance` is
 /// `max_i |Phi_i| w_i`, and the length scale `L` ([`length_scale`]) is returned beside them.
 pub fn residual_weights(model: &crate::model::Model, drivers: &[usize], q: &[f64], t: f64) -> (Vec<f64>, f64) {
