@@ -141,39 +141,35 @@ pub fn check_dynamic(
     let relative = rtol.max(TOLERANCE_FLOOR);
     let asked = atol + relative * audit.length;
     let bound = (POSITION_FACTOR * asked).max(audit.floor);
-    let p = audit.position;
-    if p.value > bound {
-        return Err(Error::Accuracy {
-            time: p.time,
-            quantity: "position residual",
-            rows: vec![row_name(p.row)],
-            value: p.value,
-            bound,
-            detail: format!(
-                "the joints are open by more than {POSITION_FACTOR} times what rtol {rtol:e} and atol {atol:e} ask at \
-                 this mechanism's size ({:.3e} m): the integrator's steps do not hold its constraints; tighten \
-                 rtol/atol",
-                audit.length
-            ),
-        });
-    }
+    let residual = |quantity: &'static str, worst: Worst, bound: f64, detail: String| {
+        if worst.value > bound {
+            let rows = vec![row_name(worst.row)];
+            return Err(Error::Accuracy { time: worst.time, quantity, rows, value: worst.value, bound, detail });
+        }
+        Ok(())
+    };
+    residual(
+        "position residual",
+        audit.position,
+        bound,
+        format!(
+            "the joints are open by more than {POSITION_FACTOR} times what rtol {rtol:e} and atol {atol:e} ask at this \
+             mechanism's size ({:.3e} m): the integrator's steps do not hold its constraints; tighten rtol/atol",
+            audit.length
+        ),
+    )?;
     let asked = atol + relative * audit.speed;
     let bound = (VELOCITY_FACTOR * asked).min((VELOCITY_SPEED_FRACTION * audit.speed).max(POSITION_FACTOR * asked));
-    let v = audit.velocity;
-    if v.value > bound {
-        return Err(Error::Accuracy {
-            time: v.time,
-            quantity: "velocity residual",
-            rows: vec![row_name(v.row)],
-            value: v.value,
-            bound,
-            detail: format!(
-                "the velocities break the joints by more than rtol {rtol:e} and atol {atol:e} allow at the largest \
-                 speed ({:.3e} m/s), or by half of it: tighten rtol/atol",
-                audit.speed
-            ),
-        });
-    }
+    residual(
+        "velocity residual",
+        audit.velocity,
+        bound,
+        format!(
+            "the velocities break the joints by more than rtol {rtol:e} and atol {atol:e} allow at the largest speed \
+             ({:.3e} m/s), or by half of it: tighten rtol/atol",
+            audit.speed
+        ),
+    )?;
     if conservative {
         check_energy(audit, settings, warnings)?;
     }
