@@ -215,9 +215,9 @@ def test_dir_shows_only_the_public_api() -> None:
     assert not {"json", "os", "annotations", "report", "results", "_linkwork"} & set(dir(linkwork))
     # Each name it shows is there, and the submodules stay importable.
     assert all(hasattr(linkwork, name) for name in dir(linkwork))
-    from linkwork import report
+    from linkwork import page
 
-    assert callable(report.page)
+    assert callable(page.page)
 
 
 # --- exceptions ----------------------------------------------------------------------------------

@@ -231,7 +231,7 @@ def test_an_error_writing_the_files_exits_2_and_keeps_the_previous_folder(
     def full(path: object, run: object) -> None:
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
 
-    monkeypatch.setattr(linkwork.report, "write", full)
+    monkeypatch.setattr(linkwork.page, "write", full)
     capsys.readouterr()
     assert linkwork.cli.main(["run", str(QUICK_RETURN), "-a", "dynamics", "-o", "out"]) == 2
     assert "No space left on device" in one_line(capsys.readouterr().err)

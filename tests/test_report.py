@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import linkwork
-from linkwork import report
+from linkwork import figures
 
 from conftest import EXAMPLES, RunLinkwork
 
@@ -190,10 +190,10 @@ def test_the_report_decimates_what_it_draws_but_keeps_every_peak() -> None:
     y = np.sin(7 * t)
     y[12_345] = 5.0
     y[67_891] = -4.0
-    rows = report._plot_rows(y)
-    assert len(rows) <= report.MAX_PLOT_POINTS + 2
+    rows = figures._plot_rows(y)
+    assert len(rows) <= figures.MAX_PLOT_POINTS + 2
     assert {12_345, 67_891, 0, n - 1} <= set(rows.tolist())
-    assert len(report._frame_rows(n)) == report.MAX_FRAMES
+    assert len(figures._frame_rows(n)) == figures.MAX_FRAMES
 
 
 def test_results_plot_and_animate_give_figures() -> None:
@@ -241,7 +241,7 @@ def test_results_path_is_the_coupler_curve_and_plot_draws_any_column_against_ano
     fig = results.plot(x="coupler.P.x", y="coupler.P.y")
     assert isinstance(fig, go.Figure)
     assert fig.layout.yaxis.scaleanchor == "x", "a path is drawn on equal axes"
-    # The figure's numbers are rounded to report.DIGITS = 6 significant digits.
+    # The figure's numbers are rounded to figures.DIGITS = 6 significant digits.
     assert list(fig.data[0].x) == pytest.approx(x.tolist(), rel=1e-5)
     assert list(fig.data[0].y) == pytest.approx(y.tolist(), rel=1e-5)
     body = results.plot(x="coupler.x", y="coupler.y")
@@ -289,7 +289,7 @@ def test_the_report_draws_the_named_paths_and_plots_against_the_crank_angle(tmp_
                 return Plotly.animate(d, step.args[0], step.args[1]).then(() => Number(step.args[0][0])); }"""
         )
         page.wait_for_timeout(200)
-        row = int(report._frame_rows(len(results))[frame])
+        row = int(figures._frame_rows(len(results))[frame])
         moved = page.evaluate("() => { const t = document.getElementById('paths').data[1]; return [t.x[0], t.y[0]]; }")
         assert moved == pytest.approx([x[row], y[row]], rel=1e-5)
         # Against the crank's angle: the x of every curve is crank.phi at its rows, and the time
@@ -351,7 +351,7 @@ def test_drawing_places_every_joint_on_its_bodies() -> None:
     model = linkwork.load(EXAMPLES / "quick_return_a.yaml")
     results = model.run()
     run = results._run()
-    poses = report._Poses(run, np.arange(len(results)))
+    poses = figures._Poses(run, np.arange(len(results)))
     for joint in model.drawing()["joints"]:
         px, py = poses.point(joint["body_i"], joint["p"])
         qx, qy = poses.point(joint["body_j"], joint["q"])

@@ -11,7 +11,7 @@ import pytest
 
 import linkwork
 from conftest import EXAMPLES, RunLinkwork, WriteModel, patch
-from linkwork import report
+from linkwork import page, report
 
 WHEEL = """
 parameters: {w: 3}
@@ -96,10 +96,10 @@ def test_run_prints_and_writes_the_summaries_and_the_report_shows_them(linkwork:
     summary = json.loads((out / "summary.json").read_text())
     efficiency = summary["summaries"]["efficiency"]
     assert f"summary {'efficiency':<21} {efficiency:.6g}" in done.stdout
-    page = (out / "report.html").read_text()
-    assert "<h3>Summaries</h3>" in page and f"<td>{efficiency:.6g}</td>" in page
+    written = (out / "report.html").read_text()
+    assert "<h3>Summaries</h3>" in written and f"<td>{efficiency:.6g}</td>" in written
     # The rebuilt report reads them from summary.json.
-    assert "<h3>Summaries</h3>" in report.page(report.from_folder(out), "")
+    assert "<h3>Summaries</h3>" in page.page(report.from_folder(out), "")
 
 
 def test_a_summary_that_is_not_finite_exits_3_and_keeps_the_rows(

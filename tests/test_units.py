@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import linkwork
-from linkwork import report
+from linkwork import figures, page, report
 from conftest import EXAMPLES, RunLinkwork, patch
 from linkwork.sweep import grid_values, range_values
 
@@ -123,15 +123,15 @@ def test_a_display_model_prints_and_plots_in_its_units_while_the_files_stay_si(
 
 def test_a_display_model_plots_in_its_units() -> None:
     run = linkwork.load(MODEL).run("inverse")._run()
-    fig = report.line_figure(run, ["crank.phi"])
+    fig = figures.line_figure(run, ["crank.phi"])
     assert fig["layout"]["yaxis"]["title"]["text"] == "deg"
     # The plotted angle is the SI column in degrees (to the 6 digits the report draws).
     plotted = np.array(fig["data"][0]["y"], dtype=float)
     assert plotted[-1] == pytest.approx(360.0, rel=1e-6)
-    fig = report.line_figure(run, ["slider.x"])
+    fig = figures.line_figure(run, ["slider.x"])
     assert fig["layout"]["yaxis"]["title"]["text"] == "mm"
     assert max(fig["data"][0]["y"]) == pytest.approx(400.0, rel=1e-6)
-    mechanism = report.mechanism_figure(run)
+    mechanism = figures.mechanism_figure(run)
     assert mechanism["layout"]["xaxis"]["title"]["text"] == "x (mm)"
     # The slider's block is drawn about its x: in mm, some point of the picture is near 400.
     xs = [x for trace in mechanism["data"] for x in trace.get("x", []) if x is not None]
@@ -140,7 +140,7 @@ def test_a_display_model_plots_in_its_units() -> None:
 
 def test_the_report_tables_say_their_units() -> None:
     run = linkwork.load(MODEL).run("inverse")._run()
-    html = report.summary_html(run.summary, run.units)
+    html = page.summary_html(run.summary, run.units)
     assert " N m at t = " in html and " N at t = " in html
 
 

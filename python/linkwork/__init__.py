@@ -39,7 +39,8 @@ from .errors import (
 )
 from .builder import Body, ByLengths, CamProfile, Mechanism, PinFriction, SlideFriction
 from .model import Model
-from .results import Results, Summary
+from .results import Results
+from .summary import Summary
 from .sweep import sweep
 
 __version__: str = _linkwork.__version__

@@ -47,10 +47,13 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from . import _linkwork, folder
+from . import _linkwork, folder, page
 from .errors import AssemblyError, FileError, InternalError, LinkworkError, ModelError, SolverError, model_error
 from .model import Model
-from .results import Results, Summary, branch_lines
+from .report import from_folder
+from .results import Results
+from .summary import Summary, branch_lines
+from .sweep import STATUS, check_count, grid_values, name_problem, range_values, sweep, workers_to_use
 from .units import SYSTEMS, Units
 
 EXIT_OK = 0
@@ -390,14 +393,12 @@ def _run_into(args: argparse.Namespace, model: Model, out: Path, staging: Path |
 
 
 def _report(args: argparse.Namespace) -> int:
-    from . import report
-
     path: Path = args.folder
     # Held while the report is built: a run replacing the folder meanwhile would get a report of
     # the files before it.
     claimed = folder.claim(path, stage=False)
     try:
-        report.write(path / "report.html", report.from_folder(path))
+        page.write(path / "report.html", from_folder(path))
     except OSError as error:
         if isinstance(error, FileError):
             raise
@@ -546,8 +547,6 @@ def _folder(path: Path) -> str:
 
 
 def _grid(text: str) -> tuple[str, list[float | str]]:
-    from .sweep import grid_values
-
     try:
         return grid_values(text)
     except ValueError as error:
@@ -555,8 +554,6 @@ def _grid(text: str) -> tuple[str, list[float | str]]:
 
 
 def _range(text: str) -> tuple[str, tuple[float | str, float | str]]:
-    from .sweep import range_values
-
     try:
         return range_values(text)
     except ValueError as error:
@@ -571,8 +568,6 @@ def _output(text: str) -> tuple[str, str]:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from .sweep import check_count, name_problem, workers_to_use
-
     if bool(args.grid) == (args.sample is not None or bool(args.range)):
         _err("error: give --grid, or --sample with --range, not both")
         return EXIT_MODEL
@@ -616,8 +611,6 @@ def _sweep(args: argparse.Namespace) -> int:
 def _sweep_into(args: argparse.Namespace, model: Model, analysis: str, out: Path, workers: int | None) -> int:
     """Run the sweep on ``workers`` threads and write ``out``'s sweep.parquet (the table until
     then when interrupted)."""
-    from .sweep import STATUS, sweep
-
     client = _dask_client(args.dask) if args.dask is not None else None
     try:
         with warnings.catch_warnings(record=True) as caught:

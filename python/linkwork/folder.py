@@ -14,6 +14,8 @@ run left beside the folder (its staging folder, with the rows it had streamed).
 
 A folder that holds files no run writes is refused rather than replaced: replacing it would
 delete them.
+
+A single file is written whole as well (:func:`write_text`): to a temporary name, then renamed.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ import stat
 import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
+from typing import Any
 
 from .errors import FileError
 
@@ -309,3 +312,14 @@ def _swap(staging: Path, target: Path) -> None:
     os.rename(target, aside)
     os.rename(staging, target)
     shutil.rmtree(aside, ignore_errors=True)
+
+
+def write_text(path: Any, text: str) -> None:
+    """Write ``text`` to ``path`` whole, then rename it into place, as the engine writes its files."""
+    path = Path(path)
+    temp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        temp.write_text(text, encoding="utf-8")
+        os.replace(temp, path)
+    finally:
+        temp.unlink(missing_ok=True)

@@ -13,7 +13,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from . import _linkwork
+from . import _linkwork, figures
 from . import stream as stream_
 from .errors import AssemblyError, SolverError, model_error
 from .results import Results
@@ -177,13 +177,11 @@ class Model:
     def draw(self) -> Any:
         """The assembled pose of the mechanism alone (its joints, no drivers), with the initial
         guess of the file faded beside it, as a ``plotly`` figure (shown by a notebook)."""
-        from . import report
-
         assembly = self.check()["mechanism"]["assembly"]
         names = assembly_coordinates(self.bodies)
         assembled = dict(zip(names, assembly["q"], strict=True))
         guess = {n: q - dq for (n, q), dq in zip(assembled.items(), assembly["change"], strict=True)}
-        return report.figure(report.pose_figure(self.drawing(), [("initial guess", guess, 0.3), ("assembled", assembled, 1.0)]))
+        return figures.figure(figures.pose_figure(self.drawing(), [("initial guess", guess, 0.3), ("assembled", assembled, 1.0)]))
 
     def run(
         self,

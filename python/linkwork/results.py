@@ -7,128 +7,22 @@ import difflib
 import json
 import os
 import shutil
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast, overload
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import _linkwork
+from . import _linkwork, figures, folder, page, stream
+from .figures import Run, _Poses
+from .summary import Summary
+from .units import Units, system
 
 if TYPE_CHECKING:
     import pandas
 
+    # Only named in annotations: a model makes its results, not the other way round.
     from .model import Model
-    from .report import Run
-    from .units import Units
-
-_T = TypeVar("_T")
-
-
-class _Key(Generic[_T]):
-    """A read-only attribute of :class:`Summary`: its key of the same name, ``None`` when absent."""
-
-    def __set_name__(self, owner: type, name: str) -> None:
-        self._name = name
-
-    @overload
-    def __get__(self, summary: None, owner: type) -> _Key[_T]: ...
-    @overload
-    def __get__(self, summary: Summary, owner: type) -> _T: ...
-    def __get__(self, summary: Summary | None, owner: type) -> _Key[_T] | _T:
-        if summary is None:
-            return self
-        # Declared per key: optional where a summary may lack the key, so that absent is None.
-        return cast(_T, summary.get(self._name))
-
-
-class Summary(dict[str, Any]):
-    """What ``summary.json`` says: a dict, as read from the file, whose keys are also attributes.
-
-    ``summary["dof"]`` and ``summary.dof`` are the same value; an attribute whose key this summary
-    does not have (``modes`` of a kinematic analysis, ``dof`` of a run that failed before it was
-    known) is ``None``. Every summary has the model's ``model``, ``bodies``, ``coordinates``,
-    ``joints``, and ``output_points``, ``warnings`` and ``status``; every analysis adds
-    ``analysis``, ``type``, ``active_drivers``, ``settings``, and once it has the rank of the
-    constraint Jacobian ``dof`` and ``redundant_rows``. ``docs/model-format.md`` lists the rest.
-    """
-
-    __slots__ = ()
-
-    model: _Key[str] = _Key()
-    """Name of the model."""
-    bodies: _Key[int] = _Key()
-    """Number of moving bodies."""
-    coordinates: _Key[int] = _Key()
-    """Number of coordinates, three per body."""
-    joints: _Key[list[str]] = _Key()
-    """The joints, in file order."""
-    parameters: _Key[dict[str, float]] = _Key()
-    """The parameters' values used, SI, by name (empty when the file has none)."""
-    output_points: _Key[int] = _Key()
-    """Number of output points written."""
-    warnings: _Key[list[str]] = _Key()
-    """Messages about the run; empty when there is nothing to say."""
-    status: _Key[str] = _Key()
-    """``"ok"``; ``"failed"`` when the run stopped at an error; ``"interrupted"`` when Ctrl-C stopped it."""
-    error: _Key[str | None] = _Key()
-    """The error's message, when the run failed."""
-    error_elements: _Key[list[str] | None] = _Key()
-    """The joints and drivers the error names, when the run failed."""
-    error_time: _Key[float | None] = _Key()
-    """When the error happened, s, when it happened at a time."""
-    analysis: _Key[str | None] = _Key()
-    """Name of the analysis run (``None`` when the run named none of the model's)."""
-    active_drivers: _Key[list[str] | None] = _Key()
-    """The drivers the analysis holds."""
-    settings: _Key[dict[str, Any] | None] = _Key()
-    """The position solver's settings."""
-    dof: _Key[int | None] = _Key()
-    """Degrees of freedom the joints and active drivers leave."""
-    redundant_rows: _Key[list[dict[str, str]] | None] = _Key()
-    """Rows that repeat earlier ones (they hold implicitly), each ``{"element": ..., "equation": ...}``."""
-    branches: _Key[list[dict[str, Any]] | None] = _Key()
-    """Each dyad's assembly mode: ``joint``, ``line``, ``bodies``, ``side``, ``drawn``, ``declared``."""
-    branch_changes: _Key[list[dict[str, Any]] | None] = _Key()
-    """Each change of a dyad's branch during the run: ``joint``, ``line``, ``time``, ``from``, ``to``."""
-    indeterminate_joints: _Key[list[str] | None] = _Key()
-    """Joints whose share of the reactions the equations leave open (minimum-norm reactions)."""
-    assembly: _Key[dict[str, Any] | None] = _Key()
-    """The assembly at the start: ``iterations``, ``residual``, ``velocity_residual``."""
-    statistics: _Key[dict[str, Any] | None] = _Key()
-    """What the solver did (its keys depend on the analysis' type)."""
-    integrator: _Key[dict[str, Any] | None] = _Key()
-    """The integrator's settings (dynamic)."""
-    residuals: _Key[dict[str, float] | None] = _Key()
-    """The largest constraint residuals at output, ``max_position`` and ``max_velocity`` (dynamic)."""
-    stable: _Key[bool | None] = _Key()
-    """Whether the state is a stable equilibrium (static, modes)."""
-    index: _Key[int | None] = _Key()
-    """Unstable directions of the equilibrium reached (static; ``None`` also when there was none)."""
-    min_reduced_stiffness: _Key[float | None] = _Key()
-    """Smallest eigenvalue of the reduced tangent stiffness over the equilibria written (static)."""
-    about: _Key[str | None] = _Key()
-    """The state a modes analysis linearised about."""
-    modes: _Key[list[dict[str, Any]] | None] = _Key()
-    """The modes of a modes analysis (see :attr:`Results.modes`)."""
-    reaction_bodies: _Key[dict[str, str] | None] = _Key()
-    """The body each joint's reaction acts on (inverse, static, dynamic)."""
-    peaks: _Key[dict[str, dict[str, Any]] | None] = _Key()
-    """Per joint and active driver the largest reaction or effort ``max_abs`` and its ``time``."""
-    summaries: _Key[dict[str, float] | None] = _Key()
-    """The model's summaries (its ``summaries:``, whole-run quantities) by name: in a run that ended
-    well and whose output spans time, when the model has any (see :attr:`Results.summaries`)."""
-    unit_system: _Key[str | None] = _Key()
-    """The units ``results.csv`` is written in: ``"si"``, or ``"display"`` (the model's
-    ``display:`` section, ``Results.write(units="display")``); ``"si"`` in
-    :attr:`Results.summary`, whose columns are SI (``None`` in a folder written before units were
-    recorded: SI)."""
-    units: _Key[dict[str, str] | None] = _Key()
-    """Each column of ``results.csv`` (``time`` first) with its unit as written there (``SI``: a
-    column whose quantity is not known, as computed)."""
-    # Last: in the class body `type` is this attribute from here on.
-    type: _Key[str | None] = _Key()
-    """The analysis' type: ``kinematic``, ``inverse``, ``static``, ``modes`` or ``dynamic``."""
 
 
 class Results:
@@ -187,8 +81,6 @@ class Results:
     def summary(self) -> Summary:
         """What ``summary.json`` says, as a dict whose keys are also attributes (:class:`Summary`):
         sizes, solver statistics, ``status`` and any error, and the units of the columns (SI)."""
-        from .units import Units
-
         return Summary(self._native.summary | self._units_keys(Units.of(self.model, self._columns, display=False), "si"))
 
     def _units_keys(self, units: Units, system: str) -> dict[str, Any]:
@@ -291,10 +183,6 @@ class Results:
         whose rows went to their file SI as they were computed: a ``ValueError``). Either way
         ``summary.json`` says which (``unit_system``) and gives every column's unit as written
         (``units``); its own numbers stay SI."""
-        from . import folder
-        from . import report as reports
-        from .units import Units, system
-
         display = system(units)
         if display and self.streamed_to is not None:
             raise ValueError(
@@ -309,18 +197,18 @@ class Results:
                 if not table.exists() or not table.samefile(self.streamed_to):
                     shutil.copyfile(self.streamed_to, table)
             elif display:
-                reports.write_text(out / "results.csv", self._csv(table_units))
+                folder.write_text(out / "results.csv", self._csv(table_units))
             # The engine's summary.json, with the units of the table beside it.
             written = out / "summary.json"
             summary = json.loads(written.read_text(encoding="utf-8"))
             summary |= self._units_keys(table_units, units)
             # Its keys in alphabetical order, as the engine writes them; the units in column order.
-            reports.write_text(written, json.dumps(dict(sorted(summary.items())), indent=2) + "\n")
-            reports.write_text(out / "model.yaml", self.model.source)
+            folder.write_text(written, json.dumps(dict(sorted(summary.items())), indent=2) + "\n")
+            folder.write_text(out / "model.yaml", self.model.source)
             self._copy_tables(out)
             # Last: a report only beside the files it shows.
             if report:
-                reports.write(out / "report.html", self._run())
+                page.write(out / "report.html", self._run())
 
     def _csv(self, units: Units) -> str:
         """The text of ``results.csv`` with every column in ``units``: the engine's layout, each
@@ -336,21 +224,15 @@ class Results:
         from it). A table named by an absolute path is read where it is; one outside the model's
         folder (``../data.csv``) is not copied, and the folder's ``model.yaml`` finds it only
         where it was found."""
-        from .folder import inside
-
-        folder = Path(self.model._native.folder)
+        model_folder = Path(self.model._native.folder)
         for name in self.model._native.table_files:
-            if not inside(name):
+            if not folder.inside(name):
                 continue
-            source, copy = folder / name, out_dir / name
+            source, copy = model_folder / name, out_dir / name
             copy.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(source, copy)
 
     def _run(self) -> Run:
-        from . import stream
-        from .report import Run
-        from .units import Units
-
         units = Units.of(self.model, self._columns)
         if self.streamed_to is not None:
             time, columns = stream.read(self.streamed_to)
@@ -364,8 +246,6 @@ class Results:
         ``foot``; ``path("foot")`` for its centre of mass (the columns ``foot.x``, ``foot.y``).
         Computed from the body's columns ``x``, ``y``, ``phi``, as the report draws it. An
         unknown body or point raises a :class:`KeyError` naming the closest ones."""
-        from .report import _Poses
-
         if point is None and "." in body:
             body, point = body.split(".", 1)
         drawn = {b["name"]: b for b in self.model.drawing()["bodies"]}
@@ -398,8 +278,6 @@ class Results:
         (``x="foot.x", y="foot.y"``, ``x="foot.G.x", y="foot.G.y"``) plot its path, with equal
         scales on both axes. Values are in the units of the model's ``display:`` section (SI
         without one); the axes and the legend say which."""
-        from . import report
-
         if columns and y is not None:
             raise TypeError("plot() takes the curves either as positional names or as y=, not both")
         names = [y] if isinstance(y, str) else list(y if y is not None else columns)
@@ -407,24 +285,20 @@ class Results:
         series = {name: self._series(name) for name in [x, *names] if name != "time"}
         run = self._run()
         run = dataclasses.replace(run, columns={**run.columns, **series})
-        fig = report.line_figure(run, names, x=x)
+        fig = figures.line_figure(run, names, x=x)
         if len(names) == 1 and x.endswith(".x") and names[0] == x[:-2] + ".y":
             fig["layout"]["yaxis"].update(scaleanchor="x", scaleratio=1)
-        return report.figure(fig)
+        return figures.figure(fig)
 
     def animate(self) -> Any:
         """The mechanism moving through the results, with play, pause and a time slider, as a
         ``plotly`` figure (shown by a notebook)."""
-        from . import report
-
         if not len(self):
             raise ValueError("no output point was computed: there is no pose to draw")
-        return report.figure(report.mechanism_figure(self._run()))
+        return figures.figure(figures.mechanism_figure(self._run()))
 
     def _repr_html_(self) -> str:
-        from . import report
-
-        return report.compact_html(self.summary, len(self), self._time)
+        return page.compact_html(self.summary, len(self), self._time)
 
     def __repr__(self) -> str:
         summary = self.summary
@@ -449,19 +323,3 @@ def _unknown(what: str, name: str, known: Sequence[str], where: str = "") -> str
     if close:
         return f"no {what} {name!r}{where}; did you mean {' or '.join(repr(c) for c in close)}?"
     return f"no {what} {name!r}{where}; there are {', '.join(known) or 'none'}"
-
-
-def branch_words(branch: Mapping[str, Any]) -> str:
-    """A dyad's assembly mode in words, from an entry of a summary's or a check's ``branches``:
-    ``right of C -> D (drawn right, declared right; bodies linkf, foot)``."""
-    e, d = branch["line"]
-    side = f"{branch['side']} of" if branch["side"] else "on"
-    notes = [f"drawn {branch['drawn']}" if branch["drawn"] else "drawn on the line"]
-    if branch["declared"]:
-        notes.append(f"declared {branch['declared']}")
-    return f"{side} {e} -> {d} ({', '.join(notes)}; bodies {', '.join(branch['bodies'])})"
-
-
-def branch_lines(branches: Sequence[Mapping[str, Any]]) -> list[str]:
-    """Each dyad's assembly mode, a line each: ``branch F  right of C -> D (...)``."""
-    return [f"branch {b['joint']:<11} {branch_words(b)}" for b in branches]
