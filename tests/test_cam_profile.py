@@ -98,7 +98,7 @@ def test_bad_profiles_are_refused_at_their_fields() -> None:
         m = linkwork.Mechanism()
         cam = m.body("cam", mass=1, inertia=0.01, position=(0, 0))
         follower = m.body("follower", mass=0.1, inertia=0.001, position=(0, 0.06))
-        m.cam("contact", cam, follower, (0, 0), radius, surface_radius=surface_radius, profile=profile,
+        m.cam("contact", cam, follower, (0, 0), radius=radius, surface_radius=surface_radius, profile=profile,
               roller_radius=roller_radius)
         with pytest.raises(linkwork.ModelError) as error:
             m.build()

@@ -21,23 +21,10 @@ import os
 from collections.abc import Mapping
 from typing import Any
 
-from . import _linkwork
-from .errors import (
-    AccuracyError,
-    AssemblyError,
-    ConvergenceError,
-    EquilibriumError,
-    FileError,
-    IntegrationError,
-    InternalError,
-    LinkworkError,
-    ModelError,
-    NonFiniteError,
-    OutOfMemoryError,
-    SingularError,
-    SolverError,
-)
-from .builder import Body, ByLengths, CamProfile, Mechanism, PinFriction, SlideFriction
+from . import _linkwork, errors
+from .errors import *  # noqa: F403 (the exception classes: errors.__all__)
+from ._entries import ByLengths, CamProfile, ContactFriction, PinFriction, Shape, SlideFriction
+from .builder import Body, Mechanism
 from .model import Model
 from .results import Results
 from .summary import Summary
@@ -46,27 +33,16 @@ from .sweep import sweep
 __version__: str = _linkwork.__version__
 
 __all__ = [
-    "AccuracyError",
-    "AssemblyError",
     "Body",
     "ByLengths",
     "CamProfile",
-    "ConvergenceError",
-    "EquilibriumError",
-    "FileError",
-    "IntegrationError",
-    "InternalError",
-    "LinkworkError",
+    "ContactFriction",
     "Mechanism",
     "Model",
-    "ModelError",
-    "NonFiniteError",
-    "OutOfMemoryError",
     "PinFriction",
     "Results",
-    "SingularError",
+    "Shape",
     "SlideFriction",
-    "SolverError",
     "Summary",
     "__version__",
     "from_yaml",
@@ -74,6 +50,7 @@ __all__ = [
     "schema",
     "sweep",
 ]
+__all__ += errors.__all__
 
 
 def __dir__() -> list[str]:

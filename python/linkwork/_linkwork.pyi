@@ -12,31 +12,15 @@ from typing import Any, Protocol, final
 import numpy as np
 import numpy.typing as npt
 
+# generated: names
 __all__ = [
-    "AGGREGATIONS",
-    "AccuracyError",
-    "AssemblyError",
-    "ConvergenceError",
-    "EquilibriumError",
-    "FileError",
-    "IntegrationError",
-    "InternalError",
-    "LinkworkError",
-    "ModelError",
-    "NonFiniteError",
-    "OutOfMemoryError",
-    "PyModel",
-    "PyResults",
-    "SingularError",
-    "SolverError",
-    "__version__",
-    "_panic_for_tests",
-    "quantity",
-    "schema",
-    "si_unit",
-    "si_units",
-    "unit",
+    'AGGREGATIONS', 'AccuracyError', 'AssemblyError', 'BODY_QUANTITIES', 'ConvergenceError',
+    'ENGINE_COLUMNS', 'ERROR_ATTRIBUTES', 'EquilibriumError', 'FileError', 'IntegrationError',
+    'InternalError', 'LinkworkError', 'ModelError', 'NonFiniteError', 'OutOfMemoryError', 'PyModel',
+    'PyResults', 'SingularError', 'SolverError', '__version__', '_panic_for_tests', 'quantity',
+    'schema', 'si_unit', 'si_units', 'unit',
 ]
+# end generated: names
 
 __version__: str
 
@@ -124,14 +108,19 @@ def schema() -> str: ...
 def quantity(text: str) -> tuple[float, str] | None: ...
 def unit(text: str) -> float: ...
 AGGREGATIONS: list[str]
+BODY_QUANTITIES: list[str]
+ENGINE_COLUMNS: list[str]
+ERROR_ATTRIBUTES: list[tuple[str, list[tuple[str, str]]]]
 
 def si_unit(text: str) -> str | None: ...
 def si_units() -> list[tuple[str, str]]: ...
 def _panic_for_tests() -> None: ...
 
-# The exceptions. Their attributes are set on each instance when the engine raises it; `results`
-# is a `PyResults` there, which `linkwork.Model.run` replaces with a `linkwork.Results`.
+# The exceptions (generated from ERROR_ATTRIBUTES and the classes: `python -m linkwork._generate`).
+# Their attributes are set on each instance when the engine raises it; `results` is a `PyResults`
+# there, which `linkwork.Model.run` replaces with a `linkwork.Results`.
 
+# generated: exceptions
 class LinkworkError(Exception): ...
 
 class ModelError(LinkworkError):
@@ -188,3 +177,4 @@ class FileError(LinkworkError, OSError):
     path: str
 
 class InternalError(LinkworkError): ...
+# end generated: exceptions

@@ -15,8 +15,9 @@
 Every entry is what the model file holds (docs/model-format.md): a number is SI, or text with a
 unit (``"40 mm"``) or an expression of the parameters (``"r/2"``); a point is ``(x, y)`` (a named
 point may be placed from others instead: ``"body.B"``, or :class:`ByLengths`); a body is
-its name or the :class:`Body` that :meth:`Mechanism.body` returns. The typed methods cover the
-common joints and the standard measures (and :meth:`Mechanism.summary` a whole-run quantity);
+its name or the :class:`Body` that :meth:`Mechanism.body` returns. The typed methods cover every
+joint, driver and force type (generated from the schema of model files: ``_entries.py``) and the
+standard measures (and :meth:`Mechanism.summary` a whole-run quantity);
 :meth:`Mechanism.joint`, :meth:`driver`, :meth:`force`, :meth:`measure` and :meth:`analysis` take
 any type with its fields as keywords, so the builder
 expresses whatever the file format does.
@@ -24,102 +25,31 @@ The engine checks the model when it is built (:meth:`Mechanism.build`), each pro
 in the file (``joints.A.body_j: unknown body 'coupler'``); the builder itself refuses only what
 a file could not hold: a name used twice, a number that is not finite, a value of no YAML kind.
 
-:meth:`Mechanism.to_yaml` writes the model file: ``linkwork.from_yaml(m.to_yaml())`` is the model
-:meth:`Mechanism.build` gives (every number written in the shortest form that reads back to the
-same double).
+:meth:`Mechanism.to_yaml` writes the model file (with ruamel.yaml): ``linkwork.from_yaml(m.to_yaml())``
+is the model :meth:`Mechanism.build` gives (every number written in the shortest form that reads
+back to the same double).
 """
 
 from __future__ import annotations
 
-import json
+import io
 import math
 import numbers
-import re
+import sys
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any, Required, TypedDict, Union
+from typing import Any, Union
 
-import numpy as np
+from ruamel.yaml import YAML
+from ruamel.yaml.comments import CommentedMap, CommentedSeq
+from ruamel.yaml.nodes import ScalarNode
+from ruamel.yaml.representer import BaseRepresenter
 
+from ._entries import ByLengths, Entries, Number, Point
 from .model import Model
-
-Number = Union[float, str]
-"""A number in SI units, or text: a number with a unit (``"40 mm"``) or an expression of the
-parameters (``"r/2"``)."""
-
-Point = Union[tuple[Number, Number], Sequence[Number], "np.ndarray[Any, Any]"]
-"""``(x, y)``, m (or text with a unit); a numpy array of two numbers too."""
-
-# Written with the functional syntax: ``from`` is a keyword of Python's.
-ByLengths = TypedDict(
-    "ByLengths",
-    {"from": tuple[str, str] | Sequence[str], "distances": tuple[Number, Number] | Sequence[Number], "side": str},
-)
-ByLengths.__doc__ = """A named point placed by its distances to two other points (docs/model-format.md,
-"Points placed by lengths"): ``{"from": ("B", "C"), "distances": (d, e), "side": "left"}``, the
-point at ``d`` m from ``B`` and ``e`` m from ``C`` on the ``"left"`` or ``"right"`` of the directed
-line from ``B`` to ``C``; ``B`` a point of the same body (of ground, for a ground point),
-``"body.B"`` another body's or ground's."""
 
 NamedPoint = Union[Point, str, ByLengths]
 """A named point of a body or of ground: ``(x, y)``; ``"body.B"``, where that point of another body
 (or of ground) is; or :class:`ByLengths`."""
-
-class PinFriction(TypedDict, total=False):
-    """Coulomb friction in a revolute joint (docs/model-format.md, "Joint friction"): the torque
-    ``mu * tanh(r * omega / transition_velocity) * r * |F|`` opposes the relative rotation, ``|F|``
-    the magnitude of the joint's reaction force.
-
-    ``mu``: coefficient of friction (>= 0). ``radius``: the pin's radius ``r``, m (or a number with a
-    unit, ``"10 mm"``). ``transition_velocity``: the sliding speed on the pin's surface, m/s, at which
-    the coefficient reaches 76% of ``mu`` (default 0.001).
-    """
-
-    mu: Required[Number]
-    radius: Required[Number]
-    transition_velocity: Number
-
-
-class SlideFriction(TypedDict, total=False):
-    """Coulomb friction in a translational joint (docs/model-format.md, "Joint friction"): the
-    force ``mu * tanh(v / transition_velocity) * (|F| + |M| / length)`` opposes the sliding velocity
-    ``v``, ``|F|`` the magnitude of the joint's reaction force and ``M`` its moment about ``point_j``.
-
-    ``mu``: coefficient of friction (>= 0). ``length``: the length of the sliding block, centred at
-    ``point_j``, m. ``transition_velocity``: m/s, at which the coefficient reaches 76% of ``mu``
-    (default 0.001).
-    """
-
-    mu: Required[Number]
-    length: Required[Number]
-    transition_velocity: Number
-
-
-class ContactFriction(TypedDict, total=False):
-    """Coulomb friction at a contact (docs/model-format.md, "Contact"): ``mu *
-    tanh(v_t / transition_velocity)`` times the normal force opposes the slip velocity ``v_t``.
-
-    ``mu``: coefficient of friction (>= 0). ``transition_velocity``: m/s, at which the coefficient
-    reaches 76% of ``mu`` (default 0.001).
-    """
-
-    mu: Required[Number]
-    transition_velocity: Number
-
-
-class CamProfile(TypedDict, total=False):
-    """A cam's working surface as a closed curve about the cam's centre in its frame, m
-    (docs/model-format.md, "Cams"): ``x`` and ``y`` expressions of ``u`` (``"e + Rc*cos(u)"``; parameters,
-    tables and motion laws too) over ``period`` (default ``2*pi``); or the points' coordinates in
-    order round the curve (lists of numbers, or text with units); or, with ``file`` (a CSV file whose
-    first row names its columns, relative to the model file's folder, or to the working folder for
-    :meth:`Mechanism.build`), the names of two of its columns. Points are joined by periodic cubic
-    splines over their chord length.
-    """
-
-    x: Required[str | Sequence[Number]]
-    y: Required[str | Sequence[Number]]
-    period: Number
-    file: str
 
 
 _SECTIONS = (
@@ -132,14 +62,13 @@ _NAMED = (
 # Bodies, joints, drivers, forces and measures share one space of names (they label the results'
 # columns); parameters, summaries and analyses have their own.
 _SHARED = ("bodies", "joints", "drivers", "forces", "measures")
-_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
 
 class Body(str):
     """A body's name, as :meth:`Mechanism.body` returns it: pass it wherever a body is named."""
 
 
-class Mechanism:
+class Mechanism(Entries):
     """A model under construction: bodies, joints, drivers, forces, measures, summaries and
     analyses, by name, in the order they are added (the order of the file, and of the results' columns)."""
 
@@ -204,101 +133,6 @@ class Mechanism:
         self._add("joints", name, _entry(f"joints.{name}", {"type": type, **fields}))
         return name
 
-    def revolute(
-        self,
-        name: str,
-        body_i: str,
-        body_j: str,
-        *,
-        at: Point | None = None,
-        point_i: Point | str | None = None,
-        point_j: Point | str | None = None,
-        friction: PinFriction | None = None,
-    ) -> str:
-        """A pin: ``point_i`` of ``body_i`` on ``point_j`` of ``body_j`` (body frames, m, or point
-        names), or both at the global point ``at`` of the initial position; ``friction``: Coulomb
-        friction in the pin (:class:`PinFriction`: ``mu``, ``radius`` in m, ``transition_velocity`` in
-        m/s), reported as the column ``<name>.friction`` (N m, on ``body_i``)."""
-        fields = {"at": at, "point_i": point_i, "point_j": point_j, "friction": friction}
-        return self.joint(name, "revolute", body_i=body_i, body_j=body_j, **fields)
-
-    def translational(
-        self,
-        name: str,
-        body_i: str,
-        body_j: str,
-        *,
-        at: Point | None = None,
-        axis: Point | None = None,
-        point_i: Point | str | None = None,
-        axis_i: Point | None = None,
-        point_j: Point | str | None = None,
-        axis_j: Point | None = None,
-        friction: SlideFriction | None = None,
-    ) -> str:
-        """A slider: ``body_j`` slides without turning along the line of ``body_i``, given in body
-        frames (``point_i``, ``axis_i``, ``point_j``, ``axis_j``) or by a global point of the line
-        ``at`` and its global direction ``axis`` at the initial position; ``friction``: Coulomb
-        friction in the slider (:class:`SlideFriction`: ``mu``, ``length`` of the block in m,
-        ``transition_velocity`` in m/s), reported as the column ``<name>.friction`` (N along the
-        axis, on ``body_i``)."""
-        fields: dict[str, Any] = {"at": at, "axis": axis, "point_i": point_i, "axis_i": axis_i, "point_j": point_j}
-        fields.update(axis_j=axis_j, friction=friction)
-        return self.joint(name, "translational", body_i=body_i, body_j=body_j, **fields)
-
-    def point_on_line(
-        self,
-        name: str,
-        body_i: str,
-        body_j: str,
-        *,
-        at: Point | None = None,
-        axis: Point | None = None,
-        point_i: Point | str | None = None,
-        axis_i: Point | None = None,
-        point_j: Point | str | None = None,
-    ) -> str:
-        """A pin in a slot: ``point_j`` of ``body_j`` stays on the line of ``body_i``, given in body
-        frames or by ``at`` (the pin's global position) and ``axis`` (the slot's direction)."""
-        fields = {"at": at, "axis": axis, "point_i": point_i, "axis_i": axis_i, "point_j": point_j}
-        return self.joint(name, "point_on_line", body_i=body_i, body_j=body_j, **fields)
-
-    def distance(
-        self, name: str, body_i: str, point_i: Point | str, body_j: str, point_j: Point | str, length: Number | None = None
-    ) -> str:
-        """A link of ``length`` m between two body points (default: their initial distance)."""
-        fields = {"point_i": point_i, "point_j": point_j, "length": length}
-        return self.joint(name, "distance", body_i=body_i, body_j=body_j, **fields)
-
-    def cam(
-        self,
-        name: str,
-        body_i: str,
-        body_j: str,
-        point_j: Point | str,
-        radius: str | None = None,
-        *,
-        point_i: Point | str | None = None,
-        roller_radius: Number | None = None,
-        surface_radius: str | None = None,
-        profile: CamProfile | None = None,
-    ) -> str:
-        """A cam and roller (or knife-edge) follower, the cam ``body_i`` given by one of:
-
-        ``radius``: its pitch curve, the path of the roller's centre ``point_j`` of the follower
-        ``body_j`` (body frame, m, or a point name): the pitch radius (m) as an expression of
-        ``psi``, the polar angle (rad) of the follower's point about the cam's centre ``point_i``
-        (body frame, m; default its origin) in the cam's frame, of parameters and of tables;
-
-        ``surface_radius`` (an expression of ``psi`` likewise) or ``profile`` (a closed Cartesian
-        curve, :class:`CamProfile`): its working surface, the curve that is cut, which the roller
-        of ``roller_radius`` (m) touches from outside.
-
-        ``roller_radius`` defaults to 0: a knife edge (on a surface, a point on the curve)."""
-        fields: dict[str, Any] = {"point_i": point_i, "point_j": point_j, "radius": radius}
-        fields.update(surface_radius=surface_radius, profile=profile, roller_radius=roller_radius)
-        return self.joint(name, "cam", body_i=body_i, body_j=body_j, **fields)
-
     def driver(self, name: str, type: str, **fields: Any) -> str:
         """A driver (``"angle"``, ``"relative_angle"``, ``"distance"``, ``"x"``, ``"y"``) with its
         fields: ``m.driver("motor", "angle", body=crank, function="2*pi*t")``; ``function`` an
@@ -311,36 +145,6 @@ class Mechanism:
         ``"rotational_spring_damper"``, ``"contact"``) with its fields, N, N m, N/m, N s/m."""
         self._add("forces", name, _entry(f"forces.{name}", {"type": type, **fields}))
         return name
-
-    def contact(
-        self,
-        name: str,
-        body_i: str,
-        shape_i: Mapping[str, Any],
-        body_j: str,
-        shape_j: Mapping[str, Any],
-        *,
-        stiffness: Number,
-        exponent: Number | None = None,
-        damping: Number | None = None,
-        friction: ContactFriction | None = None,
-        max_penetration: Number | None = None,
-    ) -> str:
-        """A unilateral contact (docs/model-format.md, "Contact") between shapes fixed to two
-        bodies, in their frames: ``{"circle": {"centre": (x, y), "radius": r}}``,
-        ``{"segment": [(x, y), (x, y)]}`` or ``{"polyline": [(x, y), ...]}``, one a circle. Normal
-        force ``stiffness * delta**exponent * (1 + damping * ddelta/dt)`` (N/m^n, default exponent
-        1.5, damping s/m, default 0), Coulomb friction optional."""
-        fields = {
-            "shape_i": shape_i,
-            "shape_j": shape_j,
-            "stiffness": stiffness,
-            "exponent": exponent,
-            "damping": damping,
-            "friction": friction,
-            "max_penetration": max_penetration,
-        }
-        return self.force(name, "contact", body_i=body_i, body_j=body_j, **fields)
 
     def measure(self, name: str, expression: str | None = None, **fields: Any) -> str:
         """A named output: an expression (``"slider_d.x + 4"``; where the analysis has them it
@@ -446,15 +250,20 @@ class Mechanism:
         return {key: self._doc[key] for key in _SECTIONS if key in self._doc}
 
     def to_yaml(self) -> str:
-        """The model file: one line per entry, as the examples are written."""
-        lines = []
+        """The model file, written by ruamel.yaml: one line per entry, as the examples are written."""
+        document = CommentedMap()
         for key, value in self.to_dict().items():
             if key in _NAMED or key == "ground":
-                lines.append(f"{key}:")
-                lines.extend(f"  {_key(name)}: {_flow(entry)}" for name, entry in value.items())
+                document[key] = CommentedMap((name, _flow(entry)) for name, entry in value.items())
             else:
-                lines.append(f"{key}: {_flow(value)}")
-        return "\n".join(lines) + "\n"
+                document[key] = _flow(value)
+        writer = YAML()
+        # An entry on one line however long.
+        writer.width = sys.maxsize
+        writer.representer.add_representer(str, _text)
+        text = io.StringIO()
+        writer.dump(document, text)
+        return text.getvalue()
 
     def build(self, parameters: Mapping[str, float | str] | None = None) -> Model:
         """The compiled model (as ``linkwork.from_yaml(self.to_yaml(), parameters)``); a
@@ -479,8 +288,10 @@ def _entry(path: str, fields: Mapping[str, Any]) -> dict[str, Any]:
 def _value(path: str, value: Any) -> Any:
     """``value`` as the file holds it (tuples as lists, numpy numbers as Python ones), or a
     ``ValueError`` naming ``path`` for what no file could hold."""
-    if isinstance(value, bool) or value is None or isinstance(value, str):
+    if isinstance(value, bool) or value is None:
         return value
+    if isinstance(value, str):
+        return str(value)  # a Body as the text it is
     if isinstance(value, numbers.Integral):
         return int(value)
     if isinstance(value, numbers.Real):
@@ -496,30 +307,26 @@ def _value(path: str, value: Any) -> Any:
     raise ValueError(f"{path}: expected a number, text, a list or a mapping, found {type(value).__name__}")
 
 
-# Words YAML reads as something other than text, in any case (1.1's booleans too, which some
-# readers still apply): never written plain.
+# Words YAML 1.1 reads as booleans, in any case: text in YAML 1.2 (ruamel.yaml's and the engine's),
+# but some readers still apply 1.1, so they are written in quotes.
 _YAML_WORDS = {"true", "false", "null", "yes", "no", "on", "off", "y", "n"}
 
 
-def _key(name: str) -> str:
-    """A name or a word of text: plain when it is an identifier YAML reads as text, else in
-    double quotes (JSON's escapes are YAML's)."""
-    plain = _IDENTIFIER.match(name) and name.lower() not in _YAML_WORDS
-    # ASCII escapes (\uXXXX): YAML refuses some characters unescaped in quotes (DEL, C1 controls).
-    return name if plain else json.dumps(name)
+def _text(representer: BaseRepresenter, text: str) -> ScalarNode:
+    """Text as ruamel.yaml writes it, in double quotes where YAML 1.1 would read a boolean."""
+    style = '"' if text.lower() in _YAML_WORDS else None
+    return representer.represent_scalar("tag:yaml.org,2002:str", text, style=style)
 
 
-def _flow(value: Any) -> str:
-    """``value`` in YAML's flow style: numbers in their shortest exact form (``repr``), text as
-    :func:`_key` writes it, mappings ``{a: 1}``, lists ``[1, 2]``."""
-    if value is None:
-        return "null"
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (int, float)):
-        return repr(value)
-    if isinstance(value, str):
-        return _key(value)
+def _flow(value: Any) -> Any:
+    """``value`` (as :func:`_value` leaves it) with its mappings and lists in YAML's flow style:
+    ``{a: 1}``, ``[1, 2]``; numbers in their shortest exact form (``repr``)."""
     if isinstance(value, Mapping):
-        return "{" + ", ".join(f"{_key(k)}: {_flow(v)}" for k, v in value.items()) + "}"
-    return "[" + ", ".join(_flow(v) for v in value) + "]"
+        mapping = CommentedMap((k, _flow(v)) for k, v in value.items())
+        mapping.fa.set_flow_style()
+        return mapping
+    if isinstance(value, list):
+        sequence = CommentedSeq(_flow(v) for v in value)
+        sequence.fa.set_flow_style()
+        return sequence
+    return value

@@ -48,7 +48,7 @@ from pathlib import Path
 from typing import Any
 
 from . import _linkwork, folder, page
-from .errors import AssemblyError, FileError, InternalError, LinkworkError, ModelError, SolverError, model_error
+from .errors import AssemblyError, FileError, LinkworkError, ModelError, SolverError, model_error
 from .model import Model
 from .report import from_folder
 from .results import Results
@@ -88,31 +88,37 @@ def main(argv: Sequence[str] | None = None) -> int:
         return status
     except ModelError as error:
         _print_problems(error, getattr(args, "model", None))
-        return EXIT_MODEL
-    except FileError as error:
-        _err(f"error: {error}")
-        return EXIT_MODEL
-    except InternalError as error:
-        _err(f"error: {error}")
-        return EXIT_INTERNAL
+        return exit_status(error)
     except (SolverError, AssemblyError) as error:  # from `check`: `run` handles its own
         _print_failure(error)
-        return EXIT_SOLVER
-    except LinkworkError as error:  # a kind this command line does not know yet
+        return exit_status(error)
+    # A file the command reads or writes (named by the system's message), a bad option, a bug.
+    except (LinkworkError, OSError, OptionError) as error:
         _err(f"error: {error}")
-        return EXIT_INTERNAL
-    except OSError as error:  # a file the command reads or writes, named by the system's message
-        _err(f"error: {error}")
-        return EXIT_MODEL
-    except OptionError as error:
-        _err(f"error: {error}")
-        return EXIT_MODEL
+        return exit_status(error)
     except KeyboardInterrupt as interrupt:
         _err(_what(interrupt))
-        return _interrupted(interrupt)
+        return exit_status(interrupt)
     finally:
         for signum, handler in handled.items():
             signal.signal(signum, handler)
+
+
+def exit_status(error: BaseException) -> int:
+    """The exit status of a command that raised ``error``: 2 for an invalid model, a file that
+    cannot be read or written, or a bad option; 3 for a solver failure (an analysis's, or an
+    assembly's); 130 for Ctrl-C, 143 and 129 for SIGTERM and SIGHUP; 1 for an internal error,
+    and for a kind of :class:`LinkworkError` this command line does not know yet."""
+    if isinstance(error, KeyboardInterrupt):
+        return _interrupted(error)
+    if isinstance(error, (SolverError, AssemblyError)):
+        return EXIT_SOLVER
+    if isinstance(error, (ModelError, OptionError)):
+        return EXIT_MODEL
+    # FileError is an OSError; an internal error is none.
+    if isinstance(error, OSError):
+        return EXIT_MODEL
+    return EXIT_INTERNAL
 
 
 class Stopped(KeyboardInterrupt):

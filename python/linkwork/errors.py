@@ -1,63 +1,26 @@
-"""The exceptions Linkwork raises.
+"""The exceptions Linkwork raises: every one a :class:`LinkworkError`.
 
-::
-
-    LinkworkError
-    ├── ModelError          problems: list of (path, message), e.g. ("joints.B.body_j", "unknown body 'rokcer' ...")
-    ├── AssemblyError       joints, row, residual, iterations, hint, results
-    ├── SolverError         time (s), joints, rows, results (the output computed before the failure);
-    │                       raised itself, with detail, when a joint's friction and its reactions do not converge,
-    │                       or a dyad cannot keep its branch (a declared one, branch: strict, a sweep's variant)
-    │   ├── SingularError       detail: a dead centre, lock-up or lost degree of freedom
-    │   ├── ConvergenceError    row, residual, iterations, substep
-    │   │   └── EquilibriumError    coordinates, index: no stable static equilibrium (stopped short: row,
-    │   │                           residual, iterations, load_fraction; none stable or none at all: cause)
-    │   ├── IntegrationError    step, cause: a dynamic integrator could not continue
-    │   ├── NonFiniteError      element, expression, value: an element gave NaN or infinity, or a driver ran away or jumped
-    │   ├── AccuracyError       quantity, value, bound, detail: a run broke what it promised (a constraint
-    │   │                       residual at an output, a conservative system's energy)
-    │   └── OutOfMemoryError    memory ran out in a factorization; also a MemoryError
-    ├── FileError           path; also an OSError
-    └── InternalError       the engine panicked: a bug, reported instead of crashing
-
-The classes are defined by the native module, which maps each engine error to one of them; the
-message of each is the engine's own.
+The classes are defined by the native module (``crates/linkwork-py/src/errors.rs``), which maps
+each engine error to one of them; the message of each is the engine's own, its docstring says
+when it is raised, and the README's table ("Errors in Python") gives each with its base classes,
+its attributes and the exit status of the command line.
 """
 
 from __future__ import annotations
 
+# generated: exception names
 from ._linkwork import (
-    AccuracyError,
-    AssemblyError,
-    ConvergenceError,
-    EquilibriumError,
-    FileError,
-    IntegrationError,
-    InternalError,
-    LinkworkError,
-    ModelError,
-    NonFiniteError,
-    OutOfMemoryError,
-    SingularError,
+    AccuracyError, AssemblyError, ConvergenceError, EquilibriumError, FileError, IntegrationError,
+    InternalError, LinkworkError, ModelError, NonFiniteError, OutOfMemoryError, SingularError,
     SolverError,
 )
 
 __all__ = [
-    "AccuracyError",
-    "AssemblyError",
-    "ConvergenceError",
-    "EquilibriumError",
-    "FileError",
-    "IntegrationError",
-    "InternalError",
-    "LinkworkError",
-    "ModelError",
-    "NonFiniteError",
-    "OutOfMemoryError",
-    "SingularError",
-    "SolverError",
-    "model_error",
+    'AccuracyError', 'AssemblyError', 'ConvergenceError', 'EquilibriumError', 'FileError',
+    'IntegrationError', 'InternalError', 'LinkworkError', 'ModelError', 'NonFiniteError',
+    'OutOfMemoryError', 'SingularError', 'SolverError',
 ]
+# end generated: exception names
 
 
 def model_error(path: str, message: str) -> ModelError:

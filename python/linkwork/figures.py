@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from . import _linkwork
 from .summary import Summary
 from .units import UNKNOWN, Units
 
@@ -48,14 +49,11 @@ PALETTE = ("#636efa", "#ef553b", "#00cc96", "#ab63fa", "#ffa15a", "#19d3f3", "#f
 GROUND = "#555555"
 INK = "#222222"
 
-#: The columns of each body, in the order of ``results.csv``.
-BODY_QUANTITIES = ("x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha")
+#: The columns of each body, in the order of ``results.csv`` (the engine's).
+BODY_QUANTITIES = tuple(_linkwork.BODY_QUANTITIES)
 
-#: The columns an analysis adds that belong to no body, joint or driver.
-ENGINE_COLUMNS = (
-    "kinetic_energy", "potential_energy", "nonconservative_work", "position_residual", "velocity_residual",
-    "driver_power", "applied_power",
-)
+#: The columns an analysis adds that belong to no body, joint or driver (the engine's).
+ENGINE_COLUMNS = tuple(_linkwork.ENGINE_COLUMNS)
 
 
 @dataclass(frozen=True)

@@ -91,15 +91,51 @@ pyo3::create_exception!(
     "The engine panicked: a bug in Linkwork. Please report it with the model that caused it."
 );
 
+/// Every exception class, base classes before their subclasses, with the attributes it adds to
+/// those of its base and their Python types: what [`build`] sets on an instance. The native
+/// module exports it as `ERROR_ATTRIBUTES`; the exception lists of the Python package (the stub
+/// `_linkwork.pyi`, `errors.py`, the README's table) are generated from it and from the classes
+/// themselves (`python -m linkwork._generate`).
+const ATTRIBUTES: &[(&str, &[(&str, &str)])] = &[
+    ("LinkworkError", &[]),
+    ("ModelError", &[("problems", "list[tuple[str, str]]")]),
+    (
+        "AssemblyError",
+        &[
+            ("time", "float"),
+            ("joints", "list[str]"),
+            ("row", "str"),
+            ("residual", "float"),
+            ("iterations", "int"),
+            ("hint", "str"),
+            ("results", "Any"),
+        ],
+    ),
+    ("SolverError", &[("time", "float"), ("joints", "list[str]"), ("rows", "list[str]"), ("results", "Any")]),
+    ("SingularError", &[("detail", "str")]),
+    ("ConvergenceError", &[("row", "str"), ("residual", "float"), ("iterations", "int"), ("substep", "float")]),
+    (
+        "EquilibriumError",
+        &[("coordinates", "list[str]"), ("index", "int | None"), ("load_fraction", "float"), ("cause", "str")],
+    ),
+    ("IntegrationError", &[("step", "float"), ("cause", "str")]),
+    ("NonFiniteError", &[("element", "str"), ("expression", "str"), ("value", "float")]),
+    ("AccuracyError", &[("quantity", "str"), ("value", "float"), ("bound", "float"), ("detail", "str")]),
+    (OUT_OF_MEMORY_ERROR, &[]),
+    (FILE_ERROR, &[("path", "str")]),
+    ("InternalError", &[]),
+];
+
 /// Name of the exception that is both a `LinkworkError` and an `OSError`.
 const FILE_ERROR: &str = "FileError";
 
 /// Name of the exception that is both a `SolverError` and a `MemoryError`.
 const OUT_OF_MEMORY_ERROR: &str = "OutOfMemoryError";
 
-/// Add the exception classes to the module.
+/// Add the exception classes to the module, and their attributes as `ERROR_ATTRIBUTES`.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
+    m.add("ERROR_ATTRIBUTES", ATTRIBUTES.to_vec())?;
     m.add("LinkworkError", py.get_type::<LinkworkError>())?;
     m.add("ModelError", py.get_type::<ModelError>())?;
     m.add("AssemblyError", py.get_type::<AssemblyError>())?;

@@ -500,6 +500,16 @@ fn _linkwork(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(si_units, m)?)?;
     m.add_function(wrap_pyfunction!(si_unit, m)?)?;
     m.add("AGGREGATIONS", linkwork::expr::functional::AGGREGATIONS.to_vec())?;
+    m.add("BODY_QUANTITIES", linkwork::results::BODY_QUANTITIES.to_vec())?;
+    // The columns an analysis adds that belong to no body, joint or driver, each once: the
+    // dynamic analyses' energies and residuals, then the inverse analysis's powers.
+    let mut engine_columns = linkwork::analysis::dynamic::ENERGY_COLUMNS.to_vec();
+    for column in linkwork::analysis::INVERSE_COLUMNS {
+        if !engine_columns.contains(&column) {
+            engine_columns.push(column);
+        }
+    }
+    m.add("ENGINE_COLUMNS", engine_columns)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     errors::register(m)
 }
