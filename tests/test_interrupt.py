@@ -136,13 +136,20 @@ def interrupt_long_run(out: Path) -> tuple[int, bytes]:
     """Start the long run writing into `out`, send it Ctrl-C after 2 s; its exit status and
     stderr."""
     process = start_long_run(out, subprocess.PIPE)
+    stderr = ctrl_c(process)
+    return process.returncode, stderr
+
+
+def ctrl_c(process: subprocess.Popen[bytes]) -> bytes:
+    """Send `process` Ctrl-C once it has run 2 s; its stderr, once it has ended (killed if it
+    has not within 120 s)."""
     try:
         wait_for_rows(process, 2.0)
         process.send_signal(signal.SIGINT)
         _, stderr = process.communicate(timeout=120)
     finally:
         process.kill()
-    return process.returncode, stderr
+    return stderr
 
 
 def test_ctrl_c_on_the_command_line_writes_the_partial_results_and_exits_130(tmp_path: Path) -> None:
@@ -272,12 +279,7 @@ def test_ctrl_c_on_a_cli_sweep_writes_the_rows_and_exits_130(tmp_path: Path) -> 
     out = tmp_path / "out"
     args = ["sweep", str(SWEEP_MODEL), "-a", "kinematics", "--grid", SWEEP_GRID, "--output", SWEEP_OUTPUT, "-j", "1"]
     process = subprocess.Popen([*linkwork_command(), *args, "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    try:
-        wait_for_rows(process, 2.0)
-        process.send_signal(signal.SIGINT)
-        _, stderr = process.communicate(timeout=120)
-    finally:
-        process.kill()
+    stderr = ctrl_c(process)
     assert process.returncode == 130, stderr.decode()
     assert "interrupted:" in stderr.decode() and "variants finished" in stderr.decode()
     table = pd.read_parquet(out / "sweep.parquet")

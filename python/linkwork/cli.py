@@ -43,7 +43,7 @@ import signal
 import sys
 import threading
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -225,35 +225,23 @@ def _parser() -> argparse.ArgumentParser:
     )
     sweep.add_argument("model", metavar="MODEL", help="model file (YAML)")
     sweep.add_argument("--analysis", "-a", metavar="NAME", help="analysis to run (default: the first in the file)")
-    sweep.add_argument(
-        "--grid",
-        action="append",
-        default=[],
-        type=_grid,
-        metavar="NAME=START:STOP:COUNT",
-        help="COUNT evenly spaced values of the parameter NAME, ends included: numbers (SI) or both ends with a unit "
+    _repeatable(
+        sweep, "--grid", _grid, "NAME=START:STOP:COUNT",
+        "COUNT evenly spaced values of the parameter NAME, ends included: numbers (SI) or both ends with a unit "
         "(m='12 mm:18 mm:7'); repeatable (all combinations)",
     )
     sweep.add_argument("--sample", type=int, metavar="N", help="N points of a Latin hypercube over the --range intervals")
-    sweep.add_argument(
-        "--range",
-        action="append",
-        default=[],
-        type=_range,
-        metavar="NAME=LOW:HIGH",
-        help="the interval of the parameter NAME for --sample: numbers (SI) or both ends with a unit (m='12 mm:18 mm'); "
+    _repeatable(
+        sweep, "--range", _range, "NAME=LOW:HIGH",
+        "the interval of the parameter NAME for --sample: numbers (SI) or both ends with a unit (m='12 mm:18 mm'); "
         "repeatable",
     )
     sweep.add_argument("--seed", type=int, metavar="S", help="seed of the --sample (default: a fresh one, printed)")
-    sweep.add_argument(
-        "--output",
-        action="append",
-        default=[],
-        type=_output,
-        required=True,
-        metavar="NAME=EXPR",
-        help=f"an output: an expression of the aggregations {', '.join(_linkwork.AGGREGATIONS)} (at(time, ...)) "
+    _repeatable(
+        sweep, "--output", _output, "NAME=EXPR",
+        f"an output: an expression of the aggregations {', '.join(_linkwork.AGGREGATIONS)} (at(time, ...)) "
         "of result columns (SI), such as stroke='max(slider.x) - min(slider.x)'; repeatable",
+        required=True,
     )
     sweep.add_argument("--out", "-o", metavar="DIR", type=Path, help="output folder (default: out/<model file stem>_sweep/)")
     sweep.add_argument("--workers", "-j", type=int, metavar="K", help="threads (default: every core)")
@@ -286,14 +274,18 @@ def _parser() -> argparse.ArgumentParser:
 # --- run -----------------------------------------------------------------------------------------
 
 
+def _repeatable(
+    command: argparse.ArgumentParser, flag: str, kind: Callable[[str], Any], metavar: str, help: str, required: bool = False
+) -> None:
+    """The option ``flag`` of ``command``, given any number of times: the list of its values, each
+    read by ``kind``."""
+    command.add_argument(flag, action="append", default=[], type=kind, metavar=metavar, help=help, required=required)
+
+
 def _add_set(command: argparse.ArgumentParser) -> None:
-    command.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        type=_setting,
-        metavar="NAME=VALUE",
-        help="a parameter's value over the file's: a number with a unit (L='300 mm'), or a bare number, SI whatever "
+    _repeatable(
+        command, "--set", _setting, "NAME=VALUE",
+        "a parameter's value over the file's: a number with a unit (L='300 mm'), or a bare number, SI whatever "
         "unit the file uses (r=0.12), warned of when more than 100 times from the file's value; repeatable",
     )
 
