@@ -6,7 +6,7 @@ schema``): do not edit; change the engine's types and generate again.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import Any, Protocol, Required, TypedDict, Union
 
 import numpy as np

@@ -213,7 +213,8 @@ def builder_entries(schema: Mapping[str, Any]) -> str:
         "",
         "from __future__ import annotations",
         "",
-        "from collections.abc import Mapping, Sequence",
+        "from collections.abc import Mapping, Sequence" if any("Mapping[" in t for t in [*types, *methods])
+        else "from collections.abc import Sequence",
         "from typing import Any, Protocol, Required, TypedDict, Union",
         "",
         "import numpy as np",
