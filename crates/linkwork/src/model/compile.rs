@@ -11,9 +11,8 @@ use super::{
 use crate::analysis::dynamic::ENERGY_COLUMNS;
 use crate::analysis::INVERSE_COLUMNS;
 use crate::constraints::{
-    Absolute, AbsoluteKind, BodyIx, Cam, CamProfile, CamRow, Constraint, Curve, Distance, Driver, DriverKind, Frame,
-    Friction, FrictionLaw, GearKind, GearPair, GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc,
-    Shape, Sketch, Translational, Var, DEFAULT_TRANSITION_VELOCITY,
+    cam_row, finite, positive, BodyIx, Constraint, Context, Driver, DriverKind, Frame, GeneralConstraint, Shape,
+    Sketch, Var, DEFAULT_TRANSITION_VELOCITY,
 };
 use crate::error::Problem;
 use crate::expr::functional::{Functional, TIME};
@@ -104,7 +103,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
     cx.q0 = bodies.iter().flat_map(|b| b.q0).collect();
     cx.unique_names();
     let joints = cx.entries("joints", &spec.joints, |cx, name, path, j| {
-        let (constraint, friction) = cx.joint(path, j)?;
+        let (constraint, friction) = j.compile(cx, path)?;
         Some(Element { name: name.into(), kind: j.name(), constraint, friction })
     });
     let drivers = cx.entries("drivers", &spec.drivers, |cx, name, path, d| {
@@ -180,9 +179,6 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
 /// and their accelerations.
 const QUANTITIES: [&str; 9] = ["x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha"];
 
-/// A body and a point of it, body frame.
-type End = (BodyIx, [f64; 2]);
-
 struct Cx<'s> {
     spec: &'s ModelSpec,
     /// Each body's named points in its frame (`points`, and `points_global` and those placed by
@@ -249,10 +245,6 @@ impl Cx<'_> {
         self.broken.iter().any(|b| b.strip_prefix("bodies.") == Some(name))
     }
 
-    fn problem(&mut self, path: impl Into<String>, msg: impl Into<String>) {
-        self.problems.push(Problem::new(path, msg));
-    }
-
     /// Each entry of the model's `section` (`entries`) whose name is checked and which `build`
     /// builds from its name, path and spec, in file order.
     fn entries<S, T>(
@@ -277,29 +269,6 @@ impl Cx<'_> {
                 format!("'{name}' is not a valid name: use letters, digits and _, not starting with a digit"),
             );
         }
-    }
-
-    fn finite(&mut self, path: &str, v: f64) -> Option<f64> {
-        finite(&mut self.problems, path, v)
-    }
-
-    fn positive(&mut self, path: &str, v: f64) -> Option<f64> {
-        positive(&mut self.problems, path, v)
-    }
-
-    fn vec2(&mut self, path: &str, v: [f64; 2]) -> Option<[f64; 2]> {
-        let a = self.finite(&format!("{path}[0]"), v[0]);
-        let b = self.finite(&format!("{path}[1]"), v[1]);
-        Some([a?, b?])
-    }
-
-    fn axis(&mut self, path: &str, v: [f64; 2]) -> Option<[f64; 2]> {
-        let v = self.vec2(path, v)?;
-        if v[0].hypot(v[1]) < 1e-12 {
-            self.problem(path, "zero-length axis: expected a non-zero direction [x, y]");
-            return None;
-        }
-        Some(v)
     }
 
     fn bodies(&mut self) -> Vec<Body> {
@@ -446,43 +415,6 @@ impl Cx<'_> {
         }
     }
 
-    fn body(&mut self, path: &str, name: &str) -> Option<BodyIx> {
-        if name == "ground" {
-            return Some(BodyIx::GROUND);
-        }
-        match self.spec.bodies.get_index_of(name) {
-            Some(k) => Some(BodyIx(Some(3 * k))),
-            None if self.is_broken_body(name) => None,
-            None => {
-                let message = unknown_body(name, &self.body_names());
-                self.problem(path, message);
-                None
-            }
-        }
-    }
-
-    fn point(&mut self, path: &str, body: &str, p: &PointRef) -> Option<[f64; 2]> {
-        match p {
-            PointRef::Coords(v) => self.vec2(path, *v),
-            PointRef::Name(n) => {
-                match self.points.get(body).map(|ps| (ps.get(n), ps)) {
-                    Some((Some(v), _)) => Some(*v),
-                    Some((None, ps)) => {
-                        let known: Vec<&str> = ps.keys().map(String::as_str).collect();
-                        let list = it_has(&known, "no named points");
-                        self.problem(
-                            path,
-                            format!("unknown point '{n}' of body '{body}' ({list}); or give coordinates [x, y]"),
-                        );
-                        None
-                    }
-                    // The body itself is unknown: reported where the body is named.
-                    None => None,
-                }
-            }
-        }
-    }
-
     /// The points of `paths:` (each `<body>.<point>` or `<body>`), or when it names none the
     /// points of the point measures, each once (a measure's own problems are reported at it).
     fn paths(&mut self) -> Vec<PathPoint> {
@@ -541,461 +473,6 @@ impl Cx<'_> {
             out.push(PathPoint { name: entry.clone(), body: body.to_string(), point: s });
         }
         out
-    }
-
-    /// Body `name`'s frame at its initial position (ground's is the global one); `None` for a
-    /// body that is not known (reported where it is named).
-    fn initial_frame(&self, name: &str) -> Option<Frame> {
-        if name == "ground" {
-            return Some(Frame::of_slice(BodyIx::GROUND, &self.q0));
-        }
-        let k = self.spec.bodies.get_index_of(name)?;
-        (self.q0.len() >= 3 * k + 3).then(|| Frame::of_slice(BodyIx(Some(3 * k)), &self.q0))
-    }
-
-    /// The two points of a joint at `path` that coincide at the initial position: `point_i` and
-    /// `point_j` as given, or both from `at`, the global point, in each body's frame.
-    fn placed_points(
-        &mut self,
-        path: &str,
-        bodies: [&str; 2],
-        points: [&Option<PointRef>; 2],
-        at: &Option<[f64; 2]>,
-    ) -> Option<(PointRef, PointRef)> {
-        match (at, points) {
-            (Some(_), [Some(_), _] | [_, Some(_)]) => {
-                self.problem(format!("{path}.at"), "give at (global) or point_i and point_j (body frames), not both");
-                None
-            }
-            (Some(at), _) => {
-                let at = self.vec2(&format!("{path}.at"), *at)?;
-                // An unknown body is reported where the joint names it (`ends`).
-                let [pi, pj] = bodies.map(|b| self.initial_frame(b).map_or([0.0; 2], |f| f.local(at)));
-                self.placed.insert(format!("{path}.point_i"), pi);
-                self.placed.insert(format!("{path}.point_j"), pj);
-                Some((PointRef::Coords(pi), PointRef::Coords(pj)))
-            }
-            (None, [Some(pi), Some(pj)]) => Some((pi.clone(), pj.clone())),
-            (None, [pi, _]) => {
-                let field = if pi.is_none() { "point_i" } else { "point_j" };
-                self.problem(
-                    format!("{path}.{field}"),
-                    "missing: give point_i and point_j (body frames), or at: [x, y] (the global point)",
-                );
-                None
-            }
-        }
-    }
-
-    /// The directions of a joint at `path`, each `(field, body, value)`: as given, or all from
-    /// `axis`, the global direction at the initial position, in each body's frame.
-    fn placed_axes<const N: usize>(
-        &mut self,
-        path: &str,
-        fields: [(&str, &str, &Option<[f64; 2]>); N],
-        axis: &Option<[f64; 2]>,
-    ) -> Option<[[f64; 2]; N]> {
-        let names = fields.map(|(f, _, _)| f).join(" and ");
-        match axis {
-            Some(_) if fields.iter().any(|(_, _, v)| v.is_some()) => {
-                self.problem(format!("{path}.axis"), format!("give axis (global) or {names} (body frames), not both"));
-                None
-            }
-            Some(a) => {
-                let a = self.axis(&format!("{path}.axis"), *a)?;
-                // An unknown body is reported where the joint names it.
-                let local = fields.map(|(_, b, _)| self.initial_frame(b).map_or(a, |f| f.unrotate(a)));
-                for ((field, _, _), v) in fields.iter().zip(&local) {
-                    self.placed.insert(format!("{path}.{field}"), *v);
-                }
-                Some(local)
-            }
-            None => {
-                if let Some((field, _, _)) = fields.iter().find(|(_, _, v)| v.is_none()) {
-                    let message =
-                        format!("missing: give {names} (body frames), or axis: [x, y] (the global direction)");
-                    self.problem(format!("{path}.{field}"), message);
-                    return None;
-                }
-                Some(fields.map(|(_, _, v)| v.unwrap_or_default()))
-            }
-        }
-    }
-
-    /// A body and one of its points, both resolved.
-    fn body_point(&mut self, path: &str, bfield: &str, body: &str, pfield: &str, p: &PointRef) -> Option<End> {
-        let b = self.body(&format!("{path}.{bfield}"), body);
-        let s = self.point(&format!("{path}.{pfield}"), body, p);
-        Some((b?, s?))
-    }
-
-    /// The two ends of an element between two bodies (`body_i`, `point_i`, `body_j`, `point_j`
-    /// at `path`), resolved; a problem at `body_j` when both are the same body. An element between
-    /// the bodies themselves (a torque, a relative angle) takes their origins.
-    fn ends(
-        &mut self,
-        path: &str,
-        body_i: &str,
-        point_i: &PointRef,
-        body_j: &str,
-        point_j: &PointRef,
-    ) -> Option<[End; 2]> {
-        let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
-        let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
-        if body_i == body_j {
-            let message = format!("a joint needs two different bodies, found '{body_i}' twice");
-            self.problem(format!("{path}.body_j"), message);
-            return None;
-        }
-        Some([a?, b?])
-    }
-
-    /// A moving body and one of its points (`body`, `point` at `path`), resolved; ground is
-    /// refused, as what cannot be `verb` ("constrained", "driven").
-    fn moving_point(&mut self, path: &str, body: &str, point: &PointRef, verb: &str) -> Option<End> {
-        let (b, s) = self.body_point(path, "body", body, "point", point)?;
-        if b == BodyIx::GROUND {
-            self.problem(format!("{path}.body"), format!("ground cannot be {verb}; name a moving body"));
-            return None;
-        }
-        Some((b, s))
-    }
-
-    /// The distance between two body points in the initial guess, m.
-    fn initial_distance(&self, [(i, sp), (j, sq)]: [End; 2]) -> f64 {
-        let (p, r) = (Frame::of_slice(i, &self.q0).point(sp), Frame::of_slice(j, &self.q0).point(sq));
-        (r[0] - p[0]).hypot(r[1] - p[1])
-    }
-
-    /// The coefficient and transition velocity of the `friction:` mapping at `path`, checked.
-    fn friction_law(&mut self, path: &str, mu: f64, transition_velocity: Option<f64>) -> Option<FrictionLaw> {
-        let mu = self.finite(&format!("{path}.mu"), mu).and_then(|mu| {
-            if mu >= 0.0 {
-                Some(mu)
-            } else {
-                self.problem(format!("{path}.mu"), format!("expected a coefficient of friction >= 0, found {mu}"));
-                None
-            }
-        });
-        let v_s = match transition_velocity {
-            Some(v) => self.positive(&format!("{path}.transition_velocity"), v),
-            None => Some(DEFAULT_TRANSITION_VELOCITY),
-        };
-        Some(FrictionLaw { mu: mu?, transition_velocity: v_s? })
-    }
-
-    /// A joint's constraint, and its friction when it has a `friction:` mapping.
-    fn joint(&mut self, path: &str, j: &JointSpec) -> Option<(Box<dyn Constraint>, Option<Friction>)> {
-        use JointSpec as J;
-        let mut friction = None;
-        let c: Box<dyn Constraint> = match j {
-            J::Revolute(RevoluteJoint { body_i, point_i, body_j, point_j, at, friction: pin }) => {
-                let points = self.placed_points(path, [body_i, body_j], [point_i, point_j], at);
-                // The bodies are checked (`ends`) whether or not the points could be placed.
-                let (pi, pj) = points.clone().unwrap_or_default();
-                let ends = self.ends(path, body_i, &pi, body_j, &pj);
-                let law = pin.as_ref().map(|f| {
-                    let at = format!("{path}.friction");
-                    (
-                        self.friction_law(&at, f.mu, f.transition_velocity),
-                        self.positive(&format!("{at}.radius"), f.radius),
-                    )
-                });
-                let (_, [(i, sp), (j, sq)]) = (points?, ends?);
-                let joint = Revolute::new(i, sp, j, sq);
-                if let Some((law, radius)) = law {
-                    friction = Some(joint.friction(law?, radius?));
-                }
-                Box::new(joint)
-            }
-            J::Translational(TranslationalJoint {
-                body_i,
-                point_i,
-                axis_i,
-                body_j,
-                point_j,
-                axis_j,
-                at,
-                axis,
-                friction: slide,
-            }) => {
-                let points = self.placed_points(path, [body_i, body_j], [point_i, point_j], at);
-                let axes = self.placed_axes(path, [("axis_i", body_i, axis_i), ("axis_j", body_j, axis_j)], axis);
-                let (pi, pj) = points.clone().unwrap_or_default();
-                let ends = self.ends(path, body_i, &pi, body_j, &pj);
-                let vi = axes.and_then(|[ai, _]| self.axis(&format!("{path}.axis_i"), ai));
-                let vj = axes.and_then(|[_, aj]| self.axis(&format!("{path}.axis_j"), aj));
-                let law = slide.as_ref().map(|f| {
-                    let at = format!("{path}.friction");
-                    (
-                        self.friction_law(&at, f.mu, f.transition_velocity),
-                        self.positive(&format!("{at}.length"), f.length),
-                    )
-                });
-                let (_, [(i, sp), (j, sq)], vi, vj) = (points?, ends?, vi?, vj?);
-                let relative = i.coords(&self.q0)[2] - j.coords(&self.q0)[2];
-                let joint = Translational::new(i, sp, vi, j, sq, vj).near(relative);
-                if let Some((law, length)) = law {
-                    friction = Some(joint.friction(law?, length?));
-                }
-                Box::new(joint)
-            }
-            J::PointOnLine(PointOnLineJoint { body_i, point_i, axis_i, body_j, point_j, at, axis }) => {
-                let points = self.placed_points(path, [body_i, body_j], [point_i, point_j], at);
-                let axes = self.placed_axes(path, [("axis_i", body_i, axis_i)], axis);
-                let (pi, pj) = points.clone().unwrap_or_default();
-                let ends = self.ends(path, body_i, &pi, body_j, &pj);
-                let vi = axes.and_then(|[ai]| self.axis(&format!("{path}.axis_i"), ai));
-                let (_, [(i, sp), (j, sq)], vi) = (points?, ends?, vi?);
-                Box::new(PointOnLine::new(i, sp, vi, j, sq, 0.0))
-            }
-            J::RevoluteTranslational(RevoluteTranslationalJoint {
-                body_i,
-                point_i,
-                axis_i,
-                body_j,
-                point_j,
-                offset,
-            }) => {
-                let ([(i, sp), (j, sq)], vi) = self.line_and_point(path, body_i, point_i, axis_i, body_j, point_j)?;
-                let offset = match offset {
-                    Some(o) => self.finite(&format!("{path}.offset"), *o)?,
-                    None => {
-                        let (fi, fj) = (Frame::of_slice(i, &self.q0), Frame::of_slice(j, &self.q0));
-                        let (p, r, a) = (fi.point(sp), fj.point(sq), fi.rotate(vi));
-                        let n = [-a[1], a[0]];
-                        ((r[0] - p[0]) * n[0] + (r[1] - p[1]) * n[1]) / a[0].hypot(a[1])
-                    }
-                };
-                Box::new(PointOnLine::new(i, sp, vi, j, sq, offset))
-            }
-            J::Distance(DistanceJoint { body_i, point_i, body_j, point_j, length }) => {
-                let ends = self.ends(path, body_i, point_i, body_j, point_j)?;
-                let [(i, sp), (j, sq)] = ends;
-                let length = match length {
-                    Some(l) => self.positive(&format!("{path}.length"), *l)?,
-                    None => {
-                        let l = self.initial_distance(ends);
-                        if l < 1e-12 {
-                            self.problem(
-                                format!("{path}.length"),
-                                "the points coincide in the initial configuration: give a positive length",
-                            );
-                            return None;
-                        }
-                        l
-                    }
-                };
-                Box::new(Distance::new(i, sp, j, sq, length))
-            }
-            J::AbsoluteX(AbsolutePoint { body, point, value }) | J::AbsoluteY(AbsolutePoint { body, point, value }) => {
-                let (b, s) = self.moving_point(path, body, point, "constrained")?;
-                let x = matches!(j, J::AbsoluteX(..));
-                let value = match value {
-                    Some(v) => self.finite(&format!("{path}.value"), *v)?,
-                    None => Frame::of_slice(b, &self.q0).point(s)[if x { 0 } else { 1 }],
-                };
-                let kind = if x { AbsoluteKind::X } else { AbsoluteKind::Y };
-                Box::new(Absolute::new(kind, b, s, value))
-            }
-            J::AbsoluteAngle(AbsoluteAngleJoint { body, value }) => {
-                let (b, _) = self.moving_point(path, body, &PointRef::default(), "constrained")?;
-                let value = match value {
-                    Some(v) => self.finite(&format!("{path}.value"), *v)?,
-                    None => b.coords(&self.q0)[2],
-                };
-                Box::new(Absolute::new(AbsoluteKind::Angle, b, [0.0, 0.0], value))
-            }
-            J::Gear(GearJoint { body_i, point_i, radius_i, body_j, point_j, radius_j, internal }) => {
-                let ends = self.ends(path, body_i, point_i, body_j, point_j);
-                let ri = self.positive(&format!("{path}.radius_i"), *radius_i);
-                let rj = self.positive(&format!("{path}.radius_j"), *radius_j);
-                let (ends, ri, rj) = (ends?, ri?, rj?);
-                let [(i, si), (j, sj)] = ends;
-                if self.initial_distance(ends) < 1e-9 {
-                    self.problem(
-                        path,
-                        "the gear centres coincide in the initial configuration: the line of centres is undefined",
-                    );
-                    return None;
-                }
-                let kind = if *internal { GearKind::Internal } else { GearKind::External };
-                Box::new(GearPair::new(kind, i, si, ri, j, sj, rj, &self.q0))
-            }
-            J::RackPinion(RollingJoint { body_i, point_i, radius, body_j, point_j, axis_j })
-            | J::RollingDisc(RollingJoint { body_i, point_i, radius, body_j, point_j, axis_j }) => {
-                let rack = matches!(j, J::RackPinion(..));
-                let ends = self.ends(path, body_i, point_i, body_j, point_j);
-                let r = self.positive(&format!("{path}.radius"), *radius);
-                let v = self.axis(&format!("{path}.axis_j"), *axis_j);
-                let ([(i, sc), (j, sl)], r, v) = (ends?, r?, v?);
-                if rack {
-                    Box::new(RackPinion::new(i, sc, r, j, sl, v, &self.q0))
-                } else {
-                    Box::new(RollingDisc::new(i, sc, r, j, sl, v, &self.q0))
-                }
-            }
-            J::Expression(ExpressionJoint { expression }) => self.general(&format!("{path}.expression"), expression)?,
-            J::Cam(cam) => self.cam(path, cam)?.boxed(),
-        };
-        Some((c, friction))
-    }
-
-    /// The ends of a point-on-line joint and the line's axis `axis_i`, resolved.
-    fn line_and_point(
-        &mut self,
-        path: &str,
-        body_i: &str,
-        point_i: &PointRef,
-        axis_i: &[f64; 2],
-        body_j: &str,
-        point_j: &PointRef,
-    ) -> Option<([End; 2], [f64; 2])> {
-        let ends = self.ends(path, body_i, point_i, body_j, point_j);
-        let v = self.axis(&format!("{path}.axis_i"), *axis_i);
-        Some((ends?, v?))
-    }
-
-    /// A cam joint's row: its ends, and its pitch curve (`radius`) or its working surface
-    /// (`surface_radius`, `profile`) with the roller on it. Every field is read before any
-    /// problem returns, so that each is reported.
-    fn cam(&mut self, path: &str, cam: &CamJoint) -> Option<CamRow> {
-        let CamJoint { body_i, point_i, body_j, point_j, radius, surface_radius, profile, roller_radius } = cam;
-        let ends = self.ends(path, body_i, point_i, body_j, point_j);
-        let roller = self.non_negative(&format!("{path}.roller_radius"), *roller_radius);
-        // Either the pitch radius (`Ok`) or the surface (`Err`), each `None` when it has a problem.
-        let given = match (radius, surface_radius, profile) {
-            (Some(r), None, None) => {
-                Ok(self.curve_expr(&format!("{path}.radius"), r, "psi", "the polar angle of the follower's point"))
-            }
-            (None, Some(r), None) => {
-                let expr =
-                    self.curve_expr(&format!("{path}.surface_radius"), r, "psi", "the polar angle of the surface");
-                Err(expr.and_then(|e| self.curve_at(path, Curve::polar(e))))
-            }
-            (None, None, Some(p)) => Err(self.profile(&format!("{path}.profile"), p)),
-            _ => {
-                let message = "give one of radius (the pitch curve), surface_radius or profile (the working surface)";
-                self.problem(path, message);
-                return None;
-            }
-        };
-        let ([(i, si), (j, sj)], roller) = (ends?, roller?);
-        let expr = match given {
-            Ok(expr) => expr?,
-            Err(curve) => {
-                return match CamProfile::try_new(i, si, j, sj, curve?, roller) {
-                    Ok(c) => Some(CamRow::Surface(c)),
-                    Err(e) => {
-                        self.problem(format!("{path}.{}", e.field), e.message);
-                        None
-                    }
-                };
-            }
-        };
-        if self.initial_distance([(i, si), (j, sj)]) < 1e-12 {
-            let message = "the follower's point is at the cam's centre in the initial configuration: psi is undefined";
-            self.problem(path, message);
-            return None;
-        }
-        match Cam::try_new(i, si, j, sj, expr) {
-            Ok(c) => Some(CamRow::Pitch(c)),
-            Err(e) => {
-                self.problem(format!("{path}.radius"), e);
-                None
-            }
-        }
-    }
-
-    /// An expression at `path` of the curve parameter `var` (slot 0; `what` it is), parameters
-    /// and tables.
-    fn curve_expr(&mut self, path: &str, src: &str, var: &str, what: &str) -> Option<Expr> {
-        let names = ModelNames { parameters: &self.spec.parameters, tables: &self.tables };
-        let mut resolve = |name: &str| {
-            if name == var {
-                Ok(0)
-            } else {
-                Err(format!("expected {var} ({what}), a parameter or a table"))
-            }
-        };
-        match Expr::parse_with(src, &names, &mut resolve) {
-            Ok(e) => Some(e),
-            Err(e) => {
-                self.problem(path, format!("cannot read the expression '{src}': {e}"));
-                None
-            }
-        }
-    }
-
-    /// A curve, or its problem at its field of the joint at `path`.
-    fn curve_at(&mut self, path: &str, curve: Result<Curve, crate::constraints::CurveError>) -> Option<Curve> {
-        curve.map_err(|e| self.problem(format!("{path}.{}", e.field), e.message)).ok()
-    }
-
-    /// A cam's `profile` at `path`: expressions of `u`, or points inline or from a file.
-    fn profile(&mut self, path: &str, p: &CamProfileSpec) -> Option<Curve> {
-        use ProfileColumn::{Text, Values};
-        let joint = path.strip_suffix(".profile").unwrap_or(path).to_string();
-        let points = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(&a, &b)| [a, b]).collect::<Vec<[f64; 2]>>();
-        let no_period = |cx: &mut Self| {
-            if p.period.is_some() {
-                cx.problem(format!("{path}.period"), "points take no period (their parameter is the chord length)");
-                return false;
-            }
-            true
-        };
-        let curve = match (&p.file, &p.x, &p.y) {
-            (None, Text(x), Text(y)) => {
-                let period = match p.period {
-                    Some(v) => self.positive(&format!("{path}.period"), v),
-                    // A parameter u that is an angle round the cam: one turn.
-                    None => Some(2.0 * std::f64::consts::PI),
-                };
-                let x = self.curve_expr(&format!("{path}.x"), x, "u", "the profile's parameter");
-                let y = self.curve_expr(&format!("{path}.y"), y, "u", "the profile's parameter");
-                Curve::parametric(x?, y?, period?)
-            }
-            (None, Values(x), Values(y)) => {
-                if x.len() != y.len() {
-                    let message = format!("x has {} values and y {}; expected as many of each", x.len(), y.len());
-                    self.problem(path, message);
-                    return None;
-                }
-                if !no_period(self) {
-                    return None;
-                }
-                Curve::points(&points(x, y))
-            }
-            (Some(file), Text(x), Text(y)) => {
-                if !no_period(self) {
-                    return None;
-                }
-                let (x, y, _) = super::tables::columns(path, &self.folder.join(file), x, y)
-                    .map_err(|problems| self.problems.extend(problems))
-                    .ok()?;
-                Curve::points(&points(&x, &y))
-            }
-            (Some(_), x, y) => {
-                for (field, c) in [("x", x), ("y", y)] {
-                    if matches!(c, Values(_)) {
-                        self.problem(format!("{path}.{field}"), "expected the name of a column of the file");
-                    }
-                }
-                return None;
-            }
-            (None, _, _) => {
-                self.problem(path, "expected x and y both expressions of u (text) or both lists of numbers (points)");
-                return None;
-            }
-        };
-        self.curve_at(&joint, curve)
-    }
-
-    /// A general constraint: names are `<body>.x`, `<body>.y`, `<body>.phi` and `t`.
-    fn general(&mut self, path: &str, src: &str) -> Option<Box<dyn Constraint>> {
-        let var = |v: Option<(usize, usize)>| v.map_or(Var::Time, |(col, _)| Var::Coord(col));
-        let c = self.expression(path, src, 3, var, None, GeneralConstraint::try_new)?;
-        Some(Box::new(c))
     }
 
     /// An expression of time and state: `<body>.x, .y, .phi, .vx, .vy, .omega` and `t`; for a
@@ -1130,15 +607,6 @@ impl Cx<'_> {
             Quantity::Number(v) => self.finite(path, *v).map(Load::Constant),
             Quantity::Expression(src) => self.state_expr(path, src, false).map(Load::Expression),
         }
-    }
-
-    fn non_negative(&mut self, path: &str, v: f64) -> Option<f64> {
-        let v = self.finite(path, v)?;
-        if v < 0.0 {
-            self.problem(path, format!("expected a number >= 0, found {v}"));
-            return None;
-        }
-        Some(v)
     }
 
     fn moving(&mut self, path: &str, name: &str) -> Option<usize> {
@@ -1384,7 +852,7 @@ impl Cx<'_> {
                         return None;
                     }
                 };
-                self.cam(&format!("joints.{joint}"), cam).map(MeasureKind::PressureAngle)
+                cam_row(cam, self, &format!("joints.{joint}")).map(MeasureKind::PressureAngle)
             }
         }
     }
@@ -1603,6 +1071,100 @@ impl Cx<'_> {
                 }
             })
             .collect()
+    }
+}
+
+/// The joints' (and the other elements') [`Context`]: the model's bodies, points and names.
+impl Context for Cx<'_> {
+    fn problems(&mut self) -> &mut Vec<Problem> {
+        &mut self.problems
+    }
+
+    fn body(&mut self, path: &str, name: &str) -> Option<BodyIx> {
+        if name == "ground" {
+            return Some(BodyIx::GROUND);
+        }
+        match self.spec.bodies.get_index_of(name) {
+            Some(k) => Some(BodyIx(Some(3 * k))),
+            None if self.is_broken_body(name) => None,
+            None => {
+                let message = unknown_body(name, &self.body_names());
+                self.problem(path, message);
+                None
+            }
+        }
+    }
+
+    fn point(&mut self, path: &str, body: &str, p: &PointRef) -> Option<[f64; 2]> {
+        match p {
+            PointRef::Coords(v) => self.vec2(path, *v),
+            PointRef::Name(n) => {
+                match self.points.get(body).map(|ps| (ps.get(n), ps)) {
+                    Some((Some(v), _)) => Some(*v),
+                    Some((None, ps)) => {
+                        let known: Vec<&str> = ps.keys().map(String::as_str).collect();
+                        let list = it_has(&known, "no named points");
+                        self.problem(
+                            path,
+                            format!("unknown point '{n}' of body '{body}' ({list}); or give coordinates [x, y]"),
+                        );
+                        None
+                    }
+                    // The body itself is unknown: reported where the body is named.
+                    None => None,
+                }
+            }
+        }
+    }
+
+    fn q0(&self) -> &[f64] {
+        &self.q0
+    }
+
+    /// Body `name`'s frame at its initial position (ground's is the global one); `None` for a
+    /// body that is not known (reported where it is named).
+    fn initial_frame(&self, name: &str) -> Option<Frame> {
+        if name == "ground" {
+            return Some(Frame::of_slice(BodyIx::GROUND, &self.q0));
+        }
+        let k = self.spec.bodies.get_index_of(name)?;
+        (self.q0.len() >= 3 * k + 3).then(|| Frame::of_slice(BodyIx(Some(3 * k)), &self.q0))
+    }
+
+    fn place(&mut self, path: String, value: [f64; 2]) {
+        self.placed.insert(path, value);
+    }
+
+    /// An expression at `path` of the curve parameter `var` (slot 0; `what` it is), parameters
+    /// and tables.
+    fn curve_expr(&mut self, path: &str, src: &str, var: &str, what: &str) -> Option<Expr> {
+        let names = ModelNames { parameters: &self.spec.parameters, tables: &self.tables };
+        let mut resolve = |name: &str| {
+            if name == var {
+                Ok(0)
+            } else {
+                Err(format!("expected {var} ({what}), a parameter or a table"))
+            }
+        };
+        match Expr::parse_with(src, &names, &mut resolve) {
+            Ok(e) => Some(e),
+            Err(e) => {
+                self.problem(path, format!("cannot read the expression '{src}': {e}"));
+                None
+            }
+        }
+    }
+
+    fn csv_columns(&mut self, path: &str, file: &str, x: &str, y: &str) -> Option<(Vec<f64>, Vec<f64>)> {
+        let (x, y, _) = super::tables::columns(path, &self.folder.join(file), x, y)
+            .map_err(|problems| self.problems.extend(problems))
+            .ok()?;
+        Some((x, y))
+    }
+
+    fn coordinate_constraint(&mut self, path: &str, src: &str) -> Option<GeneralConstraint> {
+        let var = |v: Option<(usize, usize)>| v.map_or(Var::Time, |(col, _)| Var::Coord(col));
+        self.expression(path, src, 3, var, None, GeneralConstraint::try_new)
     }
 }
 
@@ -1873,16 +1435,6 @@ fn solver_settings(
     ok.then_some(SolverSettings { tolerance, max_iterations, max_rotation, min_substep, singular_condition })
 }
 
-/// `v`, or a problem at `path` when it is not finite.
-pub(super) fn finite(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f64> {
-    if v.is_finite() {
-        Some(v)
-    } else {
-        problems.push(Problem::new(path, format!("expected a finite number, found {v}")));
-        None
-    }
-}
-
 /// The exponent of a contact's penetration when none is given: 1.5, Hertz's for two cylinders'
 /// ends or spheres, the usual choice (Lankarani and Nikravesh 1990).
 pub const DEFAULT_CONTACT_EXPONENT: f64 = 1.5;
@@ -1892,7 +1444,6 @@ pub const DEFAULT_CONTACT_EXPONENT: f64 = 1.5;
 /// fraction of its peak in any impact that deforms the shapes less than their size.
 pub const DEFAULT_PENETRATION_FRACTION: f64 = 1e-3;
 
-/// `v`, or a problem at `path` when it is not a finite number above zero.
 /// `v`, an integrator's tolerance at `path`, if at most [`MAX_INTEGRATOR_TOLERANCE`].
 fn tolerance_bound(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f64> {
     if v <= MAX_INTEGRATOR_TOLERANCE {
@@ -1906,16 +1457,6 @@ fn tolerance_bound(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f6
         ),
     ));
     None
-}
-
-fn positive(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f64> {
-    let v = finite(problems, path, v)?;
-    if v > 0.0 {
-        Some(v)
-    } else {
-        problems.push(Problem::new(path, format!("expected a positive number, found {v}")));
-        None
-    }
 }
 
 #[cfg(test)]
