@@ -1,8 +1,8 @@
-//! The joint types, by the name model files call them in `type`: one line each, the only place
-//! besides a joint's own module that names it.
+//! The joint and driver types, by the name model files call them in `type`: one line each, the
+//! only place besides the type's own module that names it.
 
 use super::schema::registry;
-use super::{absolute, cam, distance, expression, gear, point_line, revolute, rolling, translational};
+use super::{absolute, cam, distance, driver, expression, gear, point_line, revolute, rolling, translational};
 use super::{Constraint, Friction};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -56,5 +56,24 @@ registry! {
         /// cam's working surface from outside, given by `surface_radius` (polar) or `profile` (a
         /// closed Cartesian curve). 1 equation.
         "cam" => Cam(cam::CamJoint, cam::compile),
+    }
+}
+
+registry! {
+    /// A prescribed motion: a coordinate of the mechanism equals `function` of time `t` (an
+    /// expression such as `"6.1506 + 2*pi*t"`; its derivatives are exact).
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(tag = "type")]
+    pub enum DriverSpec -> Box<dyn Constraint> {
+        /// Angle of `body`, rad.
+        "angle" => Angle(driver::AngleDriver, driver::compile_angle),
+        /// Angle of `body_i` minus angle of `body_j`, rad.
+        "relative_angle" => RelativeAngle(driver::RelativeAngleDriver, driver::compile_relative),
+        /// Distance between two points, m.
+        "distance" => Distance(driver::DistanceDriver, driver::compile_distance),
+        /// Global x of a body point, m.
+        "x" => X(driver::PointDriver, driver::compile_x),
+        /// Global y of a body point, m.
+        "y" => Y(driver::PointDriver, driver::compile_y),
     }
 }

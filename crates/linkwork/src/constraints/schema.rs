@@ -4,7 +4,7 @@
 
 use super::{BodyIx, Frame, FrictionLaw, GeneralConstraint, DEFAULT_TRANSITION_VELOCITY};
 use crate::error::Problem;
-use crate::expr::Expr;
+use crate::expr::{Expr, TimeFunction};
 use schemars::JsonSchema;
 use serde::{Deserialize, Deserializer, Serialize};
 
@@ -213,6 +213,8 @@ pub(crate) trait Context {
     fn csv_columns(&mut self, path: &str, file: &str, x: &str, y: &str) -> Option<(Vec<f64>, Vec<f64>)>;
     /// A general constraint `src = 0` at `path`: an expression of `<body>.x, .y, .phi` and `t`.
     fn coordinate_constraint(&mut self, path: &str, src: &str) -> Option<GeneralConstraint>;
+    /// A driver's function of time `t` at `path`, of parameters and tables.
+    fn time_function(&mut self, path: &str, src: &str) -> Option<TimeFunction>;
 
     /// Report `msg` at `path`.
     fn problem(&mut self, path: impl Into<String>, msg: impl Into<String>) {

@@ -11,8 +11,8 @@ use super::{
 use crate::analysis::dynamic::ENERGY_COLUMNS;
 use crate::analysis::INVERSE_COLUMNS;
 use crate::constraints::{
-    cam_row, finite, positive, BodyIx, Constraint, Context, Driver, DriverKind, Frame, GeneralConstraint, Shape,
-    Sketch, Var, DEFAULT_TRANSITION_VELOCITY,
+    cam_row, finite, positive, BodyIx, Context, Frame, GeneralConstraint, Shape, Sketch, Var,
+    DEFAULT_TRANSITION_VELOCITY,
 };
 use crate::error::Problem;
 use crate::expr::functional::{Functional, TIME};
@@ -107,7 +107,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
         Some(Element { name: name.into(), kind: j.name(), constraint, friction })
     });
     let drivers = cx.entries("drivers", &spec.drivers, |cx, name, path, d| {
-        Some(Element { name: name.into(), kind: d.name(), constraint: cx.driver(path, d)?, friction: None })
+        Some(Element { name: name.into(), kind: d.name(), constraint: d.compile(cx, path)?, friction: None })
     });
     let forces = cx.entries("forces", &spec.forces, |cx, name, path, f| {
         let applied = matches!(f, ForceSpec::Force(..) | ForceSpec::Torque(..));
@@ -953,54 +953,6 @@ impl Cx<'_> {
         }
     }
 
-    fn function(&mut self, path: &str, src: &str) -> Option<TimeFunction> {
-        let names = ModelNames { parameters: &self.spec.parameters, tables: &self.tables };
-        match TimeFunction::parse_with(src, &names) {
-            Ok(f) => Some(f),
-            Err(e) => {
-                self.problem(path, format!("cannot read the function '{src}': {e}"));
-                None
-            }
-        }
-    }
-
-    fn driver(&mut self, path: &str, d: &DriverSpec) -> Option<Box<dyn Constraint>> {
-        use DriverSpec as D;
-        let (kind, f) = match d {
-            D::Angle(AngleDriver { body, function }) => {
-                let b = self.moving_point(path, body, &PointRef::default(), "driven");
-                let f = self.function(&format!("{path}.function"), function);
-                let ((b, _), f) = (b?, f?);
-                (DriverKind::Angle { body: b }, f)
-            }
-            D::RelativeAngle(RelativeAngleDriver { body_i, body_j, function }) => {
-                let origin = PointRef::default();
-                let ends = self.ends(path, body_i, &origin, body_j, &origin);
-                let f = self.function(&format!("{path}.function"), function);
-                let [(i, _), (j, _)] = ends?;
-                (DriverKind::RelativeAngle { i, j }, f?)
-            }
-            D::Distance(DistanceDriver { body_i, point_i, body_j, point_j, function }) => {
-                let ends = self.ends(path, body_i, point_i, body_j, point_j);
-                let f = self.function(&format!("{path}.function"), function);
-                let [(i, s_p), (j, s_q)] = ends?;
-                (DriverKind::Distance { i, s_p, j, s_q }, f?)
-            }
-            D::X(PointDriver { body, point, function }) | D::Y(PointDriver { body, point, function }) => {
-                let bp = self.moving_point(path, body, point, "driven");
-                let f = self.function(&format!("{path}.function"), function);
-                let (b, p) = bp?;
-                let kind = if matches!(d, D::X(..)) {
-                    DriverKind::X { body: b, point: p }
-                } else {
-                    DriverKind::Y { body: b, point: p }
-                };
-                (kind, f?)
-            }
-        };
-        Some(Box::new(Driver::new(kind, f)))
-    }
-
     fn analyses(&mut self) -> IndexMap<String, Analysis> {
         let spec = self.spec;
         let mut out = IndexMap::new();
@@ -1160,6 +1112,17 @@ impl Context for Cx<'_> {
             .map_err(|problems| self.problems.extend(problems))
             .ok()?;
         Some((x, y))
+    }
+
+    fn time_function(&mut self, path: &str, src: &str) -> Option<TimeFunction> {
+        let names = ModelNames { parameters: &self.spec.parameters, tables: &self.tables };
+        match TimeFunction::parse_with(src, &names) {
+            Ok(f) => Some(f),
+            Err(e) => {
+                self.problem(path, format!("cannot read the function '{src}': {e}"));
+                None
+            }
+        }
     }
 
     fn coordinate_constraint(&mut self, path: &str, src: &str) -> Option<GeneralConstraint> {

@@ -5,9 +5,10 @@
 
 use crate::constraints::{named, pair};
 pub use crate::constraints::{
-    AbsoluteAngleJoint, AbsolutePoint, CamJoint, CamProfileSpec, DistanceJoint, ExpressionJoint, GearJoint, JointSpec,
-    PinFriction, PointOnLineJoint, PointRef, ProfileColumn, RevoluteJoint, RevoluteTranslationalJoint, RollingJoint,
-    SlideFriction, Tagged, TranslationalJoint,
+    AbsoluteAngleJoint, AbsolutePoint, AngleDriver, CamJoint, CamProfileSpec, DistanceDriver, DistanceJoint,
+    DriverSpec, ExpressionJoint, GearJoint, JointSpec, PinFriction, PointDriver, PointOnLineJoint, PointRef,
+    ProfileColumn, RelativeAngleDriver, RevoluteJoint, RevoluteTranslationalJoint, RollingJoint, SlideFriction, Tagged,
+    TranslationalJoint,
 };
 use indexmap::IndexMap;
 use schemars::JsonSchema;
@@ -631,77 +632,6 @@ pub struct ByLengths {
     pub distances: [f64; 2],
     /// The side of the directed line from B to C the point lies on, looking from B towards C.
     pub side: Side,
-}
-
-named! {
-    tagged
-    /// A prescribed motion: a coordinate of the mechanism equals `function` of time `t` (an
-    /// expression such as `"6.1506 + 2*pi*t"`; its derivatives are exact).
-    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-    #[serde(tag = "type")]
-    pub enum DriverSpec {
-        /// Angle of `body`, rad.
-        "angle" => Angle(AngleDriver),
-        /// Angle of `body_i` minus angle of `body_j`, rad.
-        "relative_angle" => RelativeAngle(RelativeAngleDriver),
-        /// Distance between two points, m.
-        "distance" => Distance(DistanceDriver),
-        /// Global x of a body point, m.
-        "x" => X(PointDriver),
-        /// Global y of a body point, m.
-        "y" => Y(PointDriver),
-    }
-}
-
-/// Angle of `body`, rad.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct AngleDriver {
-    /// The driven body.
-    pub body: String,
-    /// Angle as a function of `t`, rad.
-    pub function: String,
-}
-
-/// Angle of `body_i` minus angle of `body_j`, rad.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct RelativeAngleDriver {
-    /// First body.
-    pub body_i: String,
-    /// Second body.
-    pub body_j: String,
-    /// Relative angle as a function of `t`, rad.
-    pub function: String,
-}
-
-/// Distance between two points, m.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct DistanceDriver {
-    /// First body.
-    pub body_i: String,
-    /// Point on the first body.
-    pub point_i: PointRef,
-    /// Second body.
-    pub body_j: String,
-    /// Point on the second body.
-    pub point_j: PointRef,
-    /// Distance as a function of `t`, m (must stay positive).
-    pub function: String,
-}
-
-/// `x` / `y` drivers: a global coordinate of a body point.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct PointDriver {
-    /// The body.
-    pub body: String,
-    /// The point (default: the centre of mass).
-    #[serde(default)]
-    pub point: PointRef,
-    /// The x (or y) coordinate as a function of `t`, m.
-    pub function: String,
 }
 
 /// An analysis of the model.
