@@ -289,7 +289,7 @@ pub(crate) fn cam_row(cam: &CamJoint, cx: &mut impl Context, path: &str) -> Opti
     let expr = match given {
         Ok(expr) => expr?,
         Err(curve) => {
-            return match CamProfile::try_new(i, si, j, sj, curve?, roller) {
+            return match CamProfile::try_new([(i, si), (j, sj)], curve?, roller) {
                 Ok(c) => Some(CamRow::Surface(c)),
                 Err(e) => {
                     cx.problem(format!("{path}.{}", e.field), e.message);

@@ -84,7 +84,8 @@ macro_rules! registry {
         $crate::constraints::named! { tagged $(#[$attr])* pub enum $Enum { $( $(#[$vattr])* $name => $Variant($Inner), )* } }
 
         impl $Enum {
-            /// The entry compiled in `cx`, its problems reported there at `path` (`joints.<name>`).
+            /// The entry compiled in `cx`, its problems reported there at `path` (`joints.<name>`,
+            /// `drivers.<name>`).
             pub(crate) fn compile(&self, cx: &mut impl $crate::constraints::Context, path: &str) -> Option<$Out> {
                 match self {
                     $( $Enum::$Variant(fields) => $compile(fields, cx, path), )*
