@@ -11,6 +11,7 @@
 //! `r_P = r_i + A(phi_i) s'_P` with `A(phi) = [[cos, -sin], [sin, cos]]`.
 
 mod absolute;
+mod belt;
 mod cam;
 mod cam_profile;
 mod distance;

@@ -56,6 +56,7 @@ registry! {
         /// cam's working surface from outside, given by `surface_radius` (polar) or `profile` (a
         /// closed Cartesian curve). 1 equation.
         "cam" => Cam(cam::CamJoint, cam::compile),
+        "belt" => Belt(super::belt::BeltJoint, super::belt::compile),
     }
 }
 
