@@ -54,6 +54,7 @@ joints:
   rolling_disc: {type: rolling_disc, body_i: a, point_i: [0, 0], radius: 1, body_j: b, point_j: [0, 0], axis_j: [1, 0]}
   expression: {type: expression, expression: "a.x"}
   cam: {type: cam, body_i: a, body_j: b, point_j: [0, 0], radius: "1 + 0.1*cos(psi)"}
+  belt: {type: belt, body_i: a, radius_i: 1, body_j: b, radius_j: 2}
 drivers:
   angle: {type: angle, body: a, function: t}
   relative_angle: {type: relative_angle, body_i: a, body_j: b, function: t}

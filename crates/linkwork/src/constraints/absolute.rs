@@ -9,7 +9,12 @@
 //! ```
 //! Haug (1989) section 3.2; Nikravesh (2018) section 7.3.
 
+use super::schema::{Context, PointRef};
+use super::CompiledJoint;
+use super::Frame;
 use super::{Anchor, BodyIx, Config, Constraint, Pair, Separation, Shape, Sketch};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// Which coordinate an [`Absolute`] constraint holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -95,6 +100,64 @@ impl Constraint for Absolute {
             None => 0.0,
         };
     }
+}
+
+/// `absolute_x` / `absolute_y`: a global coordinate of a body point is constant.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AbsolutePoint {
+    /// The body.
+    pub body: String,
+    /// The point (default: the centre of mass).
+    #[serde(default)]
+    pub point: PointRef,
+    /// The value of the x (or y) coordinate, m. Default: its value in the initial configuration.
+    #[serde(default)]
+    pub value: Option<f64>,
+}
+
+/// Absolute angle of a body is constant. 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AbsoluteAngleJoint {
+    /// The body.
+    pub body: String,
+    /// The angle, rad. Default: its value in the initial configuration.
+    #[serde(default)]
+    pub value: Option<f64>,
+}
+
+/// An `absolute_x` joint at `path` compiled in `cx`.
+pub(crate) fn compile_x(spec: &AbsolutePoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+    held_point(AbsoluteKind::X, spec, cx, path)
+}
+
+/// An `absolute_y` joint at `path` compiled in `cx`.
+pub(crate) fn compile_y(spec: &AbsolutePoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+    held_point(AbsoluteKind::Y, spec, cx, path)
+}
+
+/// The joint holding coordinate `kind` (x or y) of a body point: its value as given, or as the
+/// initial configuration has it.
+fn held_point(kind: AbsoluteKind, spec: &AbsolutePoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+    let AbsolutePoint { body, point, value } = spec;
+    let (b, s) = cx.moving_point(path, body, point, "constrained")?;
+    let value = match value {
+        Some(v) => cx.finite(&format!("{path}.value"), *v)?,
+        None => Frame::of_slice(b, cx.q0()).point(s)[if kind == AbsoluteKind::X { 0 } else { 1 }],
+    };
+    Some((Box::new(Absolute::new(kind, b, s, value)), None))
+}
+
+/// An `absolute_angle` joint at `path` compiled in `cx`.
+pub(crate) fn compile_angle(spec: &AbsoluteAngleJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+    let AbsoluteAngleJoint { body, value } = spec;
+    let (b, _) = cx.moving_point(path, body, &PointRef::default(), "constrained")?;
+    let value = match value {
+        Some(v) => cx.finite(&format!("{path}.value"), *v)?,
+        None => b.coords(cx.q0())[2],
+    };
+    Some((Box::new(Absolute::new(AbsoluteKind::Angle, b, [0.0, 0.0], value)), None))
 }
 
 #[cfg(test)]

@@ -17,8 +17,13 @@
 //! need. The row is undefined where `P` is at the centre (`d = 0`). Norton, Design of Machinery,
 //! chapter 8; Haug (1989) section 3.5.
 
+use super::schema::{Context, PointRef};
+use super::CompiledJoint;
 use super::{Anchor, BodyIx, CamProfile, Config, Constraint};
+use super::{Curve, CurveError};
 use crate::expr::{Dual, Expr, HyperDual, Scalar};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// Where a cam joint measures from: the cam `i` with its centre `si`, the follower `j` with its
 /// point `sj` (the roller's centre), each in its body's frame. Shared by the pitch-curve cam and
@@ -177,6 +182,199 @@ impl Constraint for Cam {
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = -self.residual(q, &|c, v| HyperDual::seed(v, qdot[c], qdot[c])).e12;
     }
+}
+
+/// Cam and roller (or knife-edge) follower, the cam given by one of: its pitch curve `radius`
+/// (the path of the roller's centre, polar), or its working surface, `surface_radius` (polar) or
+/// `profile` (a closed Cartesian curve), which the roller of `roller_radius` touches from outside
+/// (docs/model-format.md, "Cams"). 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CamJoint {
+    /// The cam.
+    pub body_i: String,
+    /// The cam's centre, body i frame: the origin of `psi` and of the profile. Default: its
+    /// frame's origin.
+    #[serde(default)]
+    pub point_i: PointRef,
+    /// The follower.
+    pub body_j: String,
+    /// The roller's centre (the knife edge), body j frame.
+    pub point_j: PointRef,
+    /// The pitch radius, m: an expression of the polar angle `psi` (rad, cam frame, from the
+    /// cam's x axis), parameters and tables, e.g. `"0.05 + cycloidal(psi, 0, 0, 2*pi/3, 0.02)"`.
+    /// The pitch curve `|d| = radius(psi)` is the path of the roller's centre. Give one of
+    /// `radius`, `surface_radius` and `profile`.
+    #[serde(default)]
+    pub radius: Option<String>,
+    /// The working surface's radius, m: an expression of the polar angle `psi` (as `radius`), the
+    /// surface `radius(psi) (cos psi, sin psi)` about `point_i` in the cam's frame.
+    #[serde(default)]
+    pub surface_radius: Option<String>,
+    /// The working surface as a closed curve about `point_i` in the cam's frame.
+    #[serde(default)]
+    pub profile: Option<CamProfileSpec>,
+    /// The roller's radius, m: the pitch curve's offset to the surface. Default: 0, a knife edge
+    /// (on a profile or surface radius: a point on the curve).
+    #[serde(default)]
+    pub roller_radius: f64,
+}
+
+/// A cam's working surface as a closed curve `(x, y)` about the cam's centre in its frame, m:
+/// expressions `x(u)`, `y(u)` of a parameter `u` over one `period`; or points in order (the last
+/// joined to the first), inline or two columns of a CSV file, joined by periodic cubic splines
+/// over their chord length.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CamProfileSpec {
+    /// A CSV file whose first row names its columns, relative to the model file's folder (the
+    /// working folder for a model given as text). With it, `x` and `y` are column names.
+    #[serde(default)]
+    pub file: Option<String>,
+    /// An expression of `u`, parameters and tables; the points' x coordinates, m; or, with
+    /// `file`, the name of their column.
+    pub x: ProfileColumn,
+    /// As `x`, for y.
+    pub y: ProfileColumn,
+    /// The period of `u` for expressions (the curve closes: the same point and slope at `u = 0`
+    /// and `u = period`). Default: `2 pi`. Points take none (their parameter is the chord
+    /// length).
+    #[serde(default)]
+    pub period: Option<f64>,
+}
+
+/// A coordinate of a cam profile: the points' values, or text (an expression of `u`, or a column
+/// of the profile's file).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(
+    untagged,
+    expecting = "an expression of u (text), a list of numbers (the points' coordinates, m), or with `file:` the name of a column"
+)]
+pub enum ProfileColumn {
+    /// The points' coordinates.
+    Values(Vec<f64>),
+    /// An expression of `u`, or a column of the file.
+    Text(String),
+}
+
+/// A cam joint at `path` compiled in `cx`.
+pub(crate) fn compile(cam: &CamJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+    Some((cam_row(cam, cx, path)?.boxed(), None))
+}
+
+/// A cam joint's row at `path` compiled in `cx`: its ends, and its pitch curve (`radius`) or its
+/// working surface (`surface_radius`, `profile`) with the roller on it. Every field is read
+/// before any problem returns, so that each is reported.
+pub(crate) fn cam_row(cam: &CamJoint, cx: &mut impl Context, path: &str) -> Option<CamRow> {
+    let CamJoint { body_i, point_i, body_j, point_j, radius, surface_radius, profile, roller_radius } = cam;
+    let ends = cx.ends(path, body_i, point_i, body_j, point_j);
+    let roller = cx.non_negative(&format!("{path}.roller_radius"), *roller_radius);
+    // Either the pitch radius (`Ok`) or the surface (`Err`), each `None` when it has a problem.
+    let given = match (radius, surface_radius, profile) {
+        (Some(r), None, None) => {
+            Ok(cx.curve_expr(&format!("{path}.radius"), r, "psi", "the polar angle of the follower's point"))
+        }
+        (None, Some(r), None) => {
+            let expr = cx.curve_expr(&format!("{path}.surface_radius"), r, "psi", "the polar angle of the surface");
+            Err(expr.and_then(|e| curve_at(cx, path, Curve::polar(e))))
+        }
+        (None, None, Some(p)) => Err(profile_curve(cx, &format!("{path}.profile"), p)),
+        _ => {
+            let message = "give one of radius (the pitch curve), surface_radius or profile (the working surface)";
+            cx.problem(path, message);
+            return None;
+        }
+    };
+    let ([(i, si), (j, sj)], roller) = (ends?, roller?);
+    let expr = match given {
+        Ok(expr) => expr?,
+        Err(curve) => {
+            return match CamProfile::try_new([(i, si), (j, sj)], curve?, roller) {
+                Ok(c) => Some(CamRow::Surface(c)),
+                Err(e) => {
+                    cx.problem(format!("{path}.{}", e.field), e.message);
+                    None
+                }
+            };
+        }
+    };
+    // Closer than 1e-12 m the follower's polar angle about the centre is round-off.
+    if cx.initial_distance([(i, si), (j, sj)]) < 1e-12 {
+        let message = "the follower's point is at the cam's centre in the initial configuration: psi is undefined";
+        cx.problem(path, message);
+        return None;
+    }
+    match Cam::try_new(i, si, j, sj, expr) {
+        Ok(c) => Some(CamRow::Pitch(c)),
+        Err(e) => {
+            cx.problem(format!("{path}.radius"), e);
+            None
+        }
+    }
+}
+
+/// A curve, or its problem at its field of the joint at `path`.
+fn curve_at(cx: &mut impl Context, path: &str, curve: Result<Curve, CurveError>) -> Option<Curve> {
+    curve.map_err(|e| cx.problem(format!("{path}.{}", e.field), e.message)).ok()
+}
+
+/// Whether the points of a profile at `path` come without a `period`; a problem there when not.
+fn no_period(cx: &mut impl Context, path: &str, period: Option<f64>) -> bool {
+    if period.is_some() {
+        cx.problem(format!("{path}.period"), "points take no period (their parameter is the chord length)");
+        return false;
+    }
+    true
+}
+
+/// A cam's `profile` at `path`: expressions of `u`, or points inline or from a file.
+fn profile_curve(cx: &mut impl Context, path: &str, p: &CamProfileSpec) -> Option<Curve> {
+    use ProfileColumn::{Text, Values};
+    let joint = path.strip_suffix(".profile").unwrap_or(path).to_string();
+    let points = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(&a, &b)| [a, b]).collect::<Vec<[f64; 2]>>();
+    let curve = match (&p.file, &p.x, &p.y) {
+        (None, Text(x), Text(y)) => {
+            let period = match p.period {
+                Some(v) => cx.positive(&format!("{path}.period"), v),
+                // A parameter u that is an angle round the cam: one turn.
+                None => Some(2.0 * std::f64::consts::PI),
+            };
+            let x = cx.curve_expr(&format!("{path}.x"), x, "u", "the profile's parameter");
+            let y = cx.curve_expr(&format!("{path}.y"), y, "u", "the profile's parameter");
+            Curve::parametric(x?, y?, period?)
+        }
+        (None, Values(x), Values(y)) => {
+            if x.len() != y.len() {
+                let message = format!("x has {} values and y {}; expected as many of each", x.len(), y.len());
+                cx.problem(path, message);
+                return None;
+            }
+            if !no_period(cx, path, p.period) {
+                return None;
+            }
+            Curve::points(&points(x, y))
+        }
+        (Some(file), Text(x), Text(y)) => {
+            if !no_period(cx, path, p.period) {
+                return None;
+            }
+            let (x, y) = cx.csv_columns(path, file, x, y)?;
+            Curve::points(&points(&x, &y))
+        }
+        (Some(_), x, y) => {
+            for (field, c) in [("x", x), ("y", y)] {
+                if matches!(c, Values(_)) {
+                    cx.problem(format!("{path}.{field}"), "expected the name of a column of the file");
+                }
+            }
+            return None;
+        }
+        (None, _, _) => {
+            cx.problem(path, "expected x and y both expressions of u (text) or both lists of numbers (points)");
+            return None;
+        }
+    };
+    curve_at(cx, &joint, curve)
 }
 
 #[cfg(test)]

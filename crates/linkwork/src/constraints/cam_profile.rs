@@ -275,10 +275,7 @@ impl CamProfile {
     /// slope differs at the two ends of its period), it encloses no area, or the roller is larger
     /// than the radius of curvature of a concave part (an undercut), each with its field.
     pub fn try_new(
-        i: BodyIx,
-        si: [f64; 2],
-        j: BodyIx,
-        sj: [f64; 2],
+        [(i, si), (j, sj)]: [(BodyIx, [f64; 2]); 2],
         curve: Curve,
         roller: f64,
     ) -> Result<CamProfile, CurveError> {
@@ -620,8 +617,9 @@ mod tests {
     #[test]
     fn derivatives_match_finite_differences() {
         for (roller, seed) in [(0.3, 1), (0.0, 2)] {
-            let cam = CamProfile::try_new(BodyIx(Some(0)), [0.1, -0.2], BodyIx(Some(3)), [0.3, 0.1], convex(), roller)
-                .unwrap();
+            let cam =
+                CamProfile::try_new([(BodyIx(Some(0)), [0.1, -0.2]), (BodyIx(Some(3)), [0.3, 0.1])], convex(), roller)
+                    .unwrap();
             assert_eq!(cam.columns(), [0, 1, 2, 3, 4, 5]);
             for (q, qdot) in states(&cam, 0.2, seed, 20) {
                 check_fd(&cam, &q, &qdot, 0.0);
@@ -630,7 +628,7 @@ mod tests {
         // A knife edge on the curve, near the concave flank of the limacon: the signed distance is
         // smooth through zero, on either side.
         let knife =
-            CamProfile::try_new(BodyIx::GROUND, [0.0, 0.0], BodyIx(Some(0)), [0.0, 0.0], limacon(), 0.0).unwrap();
+            CamProfile::try_new([(BodyIx::GROUND, [0.0, 0.0]), (BodyIx(Some(0)), [0.0, 0.0])], limacon(), 0.0).unwrap();
         for (psi, off) in [(PI - 0.1, 0.05), (PI, -0.05), (2.5, 0.0), (0.3, 0.02)] {
             let r = 1.0 + 0.6 * f64::cos(psi) + off;
             check_fd(&knife, &[r * psi.cos(), r * psi.sin(), 0.4], &[0.7, -1.1, 2.0], 0.0);
@@ -671,8 +669,8 @@ mod tests {
     /// `eps |Phi_q qdot| / h ~ 1e-10`; to 1e-6. Measured: 1.5e-8 and 1.2e-9.
     #[test]
     fn gamma_and_the_contact_rate_match_differences_along_a_trajectory() {
-        let cam =
-            CamProfile::try_new(BodyIx(Some(0)), [0.1, -0.2], BodyIx(Some(3)), [0.3, 0.1], convex(), 0.3).unwrap();
+        let cam = CamProfile::try_new([(BodyIx(Some(0)), [0.1, -0.2]), (BodyIx(Some(3)), [0.3, 0.1])], convex(), 0.3)
+            .unwrap();
         let (gamma, rate) = trajectory_errors(&cam, &states(&cam, 0.2, 7, 30), 1e-5);
         eprintln!("expressions: gamma {gamma:.1e}, du*/dt {rate:.1e} off their differences");
         assert!(gamma < 1e-6, "gamma against differences of Phi_q qdot: {gamma:e}");
@@ -691,7 +689,8 @@ mod tests {
             .map(|u| [0.1 + 1.2 * u.cos() + 0.05 * (3.0 * u).cos(), -0.05 + 0.8 * u.sin()])
             .collect();
         let curve = Curve::points(&table).unwrap();
-        let cam = CamProfile::try_new(BodyIx(Some(0)), [0.1, -0.2], BodyIx(Some(3)), [0.3, 0.1], curve, 0.3).unwrap();
+        let cam =
+            CamProfile::try_new([(BodyIx(Some(0)), [0.1, -0.2]), (BodyIx(Some(3)), [0.3, 0.1])], curve, 0.3).unwrap();
         let states = states(&cam, 0.2, 3, 30);
         let h = 1e-5;
         for (q, _) in &states {
@@ -722,7 +721,8 @@ mod tests {
     fn hand_derived_circle_either_way_round() {
         for y in ["2*sin(u)", "-2*sin(u)"] {
             let circle = Curve::parametric(expr("2*cos(u)", "u"), expr(y, "u"), 2.0 * PI).unwrap();
-            let cam = CamProfile::try_new(BodyIx::GROUND, [0.0; 2], BodyIx(Some(0)), [0.0; 2], circle, 0.5).unwrap();
+            let cam =
+                CamProfile::try_new([(BodyIx::GROUND, [0.0; 2]), (BodyIx(Some(0)), [0.0; 2])], circle, 0.5).unwrap();
             let q = [3.0, 4.0, 0.7];
             let (mut phi, mut jac, mut g) = ([0.0], [0.0; 3], [0.0]);
             cam.phi_at(&q, 0.0, &mut phi);
@@ -740,9 +740,12 @@ mod tests {
     fn a_point_table_of_a_circle() {
         let pts: Vec<[f64; 2]> =
             (0..360).map(|k| (k as f64).to_radians()).map(|a| [2.0 * a.cos(), 2.0 * a.sin()]).collect();
-        let cam =
-            CamProfile::try_new(BodyIx::GROUND, [0.0; 2], BodyIx(Some(0)), [0.0; 2], Curve::points(&pts).unwrap(), 0.5)
-                .unwrap();
+        let cam = CamProfile::try_new(
+            [(BodyIx::GROUND, [0.0; 2]), (BodyIx(Some(0)), [0.0; 2])],
+            Curve::points(&pts).unwrap(),
+            0.5,
+        )
+        .unwrap();
         let mut worst = 0.0f64;
         for k in 0..1000 {
             let a = k as f64 * 0.00731;
@@ -759,7 +762,7 @@ mod tests {
     #[test]
     fn the_nearest_point_is_refused_where_it_is_not_unique() {
         let circle = Curve::parametric(expr("2*cos(u)", "u"), expr("2*sin(u)", "u"), 2.0 * PI).unwrap();
-        let cam = CamProfile::try_new(BodyIx::GROUND, [0.0; 2], BodyIx(Some(0)), [0.0; 2], circle, 0.5).unwrap();
+        let cam = CamProfile::try_new([(BodyIx::GROUND, [0.0; 2]), (BodyIx(Some(0)), [0.0; 2])], circle, 0.5).unwrap();
         let mut phi = [0.0];
         // At the circle's centre every point is nearest.
         cam.phi_at(&[0.0, 0.0, 0.0], 0.0, &mut phi);
@@ -767,7 +770,7 @@ mod tests {
         // Inside an ellipse on its minor axis, both ends of the major axis are... not: the two
         // nearest points of the minor axis' ends are equally near from the centre.
         let ellipse = Curve::parametric(expr("2*cos(u)", "u"), expr("sin(u)", "u"), 2.0 * PI).unwrap();
-        let cam = CamProfile::try_new(BodyIx::GROUND, [0.0; 2], BodyIx(Some(0)), [0.0; 2], ellipse, 0.0).unwrap();
+        let cam = CamProfile::try_new([(BodyIx::GROUND, [0.0; 2]), (BodyIx(Some(0)), [0.0; 2])], ellipse, 0.0).unwrap();
         cam.phi_at(&[0.0, 0.0, 0.0], 0.0, &mut phi);
         assert!(phi[0].is_nan(), "{phi:?}");
         cam.phi_at(&[0.0, 0.3, 0.0], 0.0, &mut phi);
@@ -777,7 +780,8 @@ mod tests {
     #[test]
     fn bad_curves_are_refused_at_their_fields() {
         let make = |curve: Result<Curve, CurveError>, roller: f64| {
-            curve.and_then(|c| CamProfile::try_new(BodyIx::GROUND, [0.0; 2], BodyIx(Some(0)), [0.0; 2], c, roller))
+            curve
+                .and_then(|c| CamProfile::try_new([(BodyIx::GROUND, [0.0; 2]), (BodyIx(Some(0)), [0.0; 2])], c, roller))
         };
         let cases: [(Result<Curve, CurveError>, f64, &str, &str); 7] = [
             (Ok(limacon()), 0.85, "roller_radius", "an undercut"),

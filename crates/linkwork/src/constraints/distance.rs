@@ -12,7 +12,11 @@
 //! price of a multiplier that is a force divided by `2 L`. Haug (1989) section 3.4.1; Nikravesh
 //! (2018) section 7.2.
 
+use super::schema::{Context, PointRef};
+use super::CompiledJoint;
 use super::{dot, Anchor, BodyIx, Config, Constraint, PointPair, Shape, Sketch};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// Two body points at a fixed distance.
 #[derive(Debug, Clone)]
@@ -58,6 +62,47 @@ impl Constraint for Distance {
         let free = sep.accel_free(qd_i[2], qd_j[2]);
         out[0] = -2.0 * (dot(rate, rate) + dot(sep.d, free));
     }
+}
+
+/// Distance (revolute-revolute link): the two points stay `length` apart. 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DistanceJoint {
+    /// First body.
+    pub body_i: String,
+    /// Point on the first body.
+    pub point_i: PointRef,
+    /// Second body.
+    pub body_j: String,
+    /// Point on the second body.
+    pub point_j: PointRef,
+    /// Distance, m. Default: its value in the initial configuration.
+    #[serde(default)]
+    pub length: Option<f64>,
+}
+
+/// A distance joint at `path` compiled in `cx`: its length as given, or as the initial
+/// configuration has it.
+pub(crate) fn compile(spec: &DistanceJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+    let DistanceJoint { body_i, point_i, body_j, point_j, length } = spec;
+    let ends = cx.ends(path, body_i, point_i, body_j, point_j)?;
+    let [(i, sp), (j, sq)] = ends;
+    let length = match length {
+        Some(l) => cx.positive(&format!("{path}.length"), *l)?,
+        None => {
+            let l = cx.initial_distance(ends);
+            // Below 1e-12 m the points coincide but for round-off: no length to keep.
+            if l < 1e-12 {
+                cx.problem(
+                    format!("{path}.length"),
+                    "the points coincide in the initial configuration: give a positive length",
+                );
+                return None;
+            }
+            l
+        }
+    };
+    Some((Box::new(Distance::new(i, sp, j, sq, length)), None))
 }
 
 #[cfg(test)]

@@ -18,8 +18,11 @@
 //! `P Q` (its effort); it is singular when `P` and `Q` coincide (`|d| = 0`, division by zero), which
 //! the prescribed `f(t)` must keep away from. Haug (1989) section 3.5; Nikravesh (2018) section 7.5.
 
+use super::schema::{Context, PointRef};
 use super::{dot, Absolute, AbsoluteKind, Anchor, BodyIx, Config, Constraint, Pair, PointPair};
 use crate::expr::TimeFunction;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// What a [`Driver`] prescribes.
 #[derive(Debug, Clone, PartialEq)]
@@ -161,6 +164,104 @@ impl Constraint for Length {
         let along = dot(sep.d, rate) / len;
         out[0] = -(dot(rate, rate) - along * along + dot(sep.d, free)) / len;
     }
+}
+
+/// Angle of `body`, rad.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AngleDriver {
+    /// The driven body.
+    pub body: String,
+    /// Angle as a function of `t`, rad.
+    pub function: String,
+}
+
+/// Angle of `body_i` minus angle of `body_j`, rad.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RelativeAngleDriver {
+    /// First body.
+    pub body_i: String,
+    /// Second body.
+    pub body_j: String,
+    /// Relative angle as a function of `t`, rad.
+    pub function: String,
+}
+
+/// Distance between two points, m.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DistanceDriver {
+    /// First body.
+    pub body_i: String,
+    /// Point on the first body.
+    pub point_i: PointRef,
+    /// Second body.
+    pub body_j: String,
+    /// Point on the second body.
+    pub point_j: PointRef,
+    /// Distance as a function of `t`, m (must stay positive).
+    pub function: String,
+}
+
+/// `x` / `y` drivers: a global coordinate of a body point.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PointDriver {
+    /// The body.
+    pub body: String,
+    /// The point (default: the centre of mass).
+    #[serde(default)]
+    pub point: PointRef,
+    /// The x (or y) coordinate as a function of `t`, m.
+    pub function: String,
+}
+
+/// The driver of `kind` prescribing `function` (the field at `path`), or `None` when either has
+/// a problem.
+fn driver(cx: &mut impl Context, path: &str, kind: Option<DriverKind>, function: &str) -> Option<Box<dyn Constraint>> {
+    let f = cx.time_function(&format!("{path}.function"), function);
+    Some(Box::new(Driver::new(kind?, f?)))
+}
+
+/// An `angle` driver at `path` compiled in `cx`.
+pub(crate) fn compile_angle(spec: &AngleDriver, cx: &mut impl Context, path: &str) -> Option<Box<dyn Constraint>> {
+    let b = cx.moving_point(path, &spec.body, &PointRef::default(), "driven");
+    driver(cx, path, b.map(|(body, _)| DriverKind::Angle { body }), &spec.function)
+}
+
+/// A `relative_angle` driver at `path` compiled in `cx`.
+pub(crate) fn compile_relative(
+    spec: &RelativeAngleDriver,
+    cx: &mut impl Context,
+    path: &str,
+) -> Option<Box<dyn Constraint>> {
+    let origin = PointRef::default();
+    let ends = cx.ends(path, &spec.body_i, &origin, &spec.body_j, &origin);
+    driver(cx, path, ends.map(|[(i, _), (j, _)]| DriverKind::RelativeAngle { i, j }), &spec.function)
+}
+
+/// A `distance` driver at `path` compiled in `cx`.
+pub(crate) fn compile_distance(
+    spec: &DistanceDriver,
+    cx: &mut impl Context,
+    path: &str,
+) -> Option<Box<dyn Constraint>> {
+    let ends = cx.ends(path, &spec.body_i, &spec.point_i, &spec.body_j, &spec.point_j);
+    let kind = ends.map(|[(i, s_p), (j, s_q)]| DriverKind::Distance { i, s_p, j, s_q });
+    driver(cx, path, kind, &spec.function)
+}
+
+/// An `x` driver at `path` compiled in `cx`.
+pub(crate) fn compile_x(spec: &PointDriver, cx: &mut impl Context, path: &str) -> Option<Box<dyn Constraint>> {
+    let bp = cx.moving_point(path, &spec.body, &spec.point, "driven");
+    driver(cx, path, bp.map(|(body, point)| DriverKind::X { body, point }), &spec.function)
+}
+
+/// A `y` driver at `path` compiled in `cx`.
+pub(crate) fn compile_y(spec: &PointDriver, cx: &mut impl Context, path: &str) -> Option<Box<dyn Constraint>> {
+    let bp = cx.moving_point(path, &spec.body, &spec.point, "driven");
+    driver(cx, path, bp.map(|(body, point)| DriverKind::Y { body, point }), &spec.function)
 }
 
 #[cfg(test)]

@@ -17,8 +17,12 @@
 //! [`MAX_SLOTS`] slots, so that the derivative passes run on stack arrays. Haug (1989) section
 //! 3.5 (general constraints and drivers); derivatives by hyper-dual numbers (Fike and Alonso, 2011).
 
+use super::schema::Context;
+use super::CompiledJoint;
 use super::{Anchor, BodyIx, Config, Constraint};
 use crate::expr::{Dual, Expr, HyperDual, Scalar};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// The most slots (distinct names) a general constraint may use.
 pub const MAX_SLOTS: usize = 64;
@@ -161,6 +165,21 @@ impl Constraint for GeneralConstraint {
         }
         out[0] = -self.expr.eval(&z[..n]).e12;
     }
+}
+
+/// A general constraint `expression = 0` in body coordinates (`crank.x`, `crank.y`,
+/// `crank.phi`) and time `t`, differentiated exactly. 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ExpressionJoint {
+    /// The left-hand side, e.g. `"crank.x^2 + crank.y^2 - 0.5625"`.
+    pub expression: String,
+}
+
+/// An expression joint at `path` compiled in `cx`.
+pub(crate) fn compile(spec: &ExpressionJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+    let c = cx.coordinate_constraint(&format!("{path}.expression"), &spec.expression)?;
+    Some((Box::new(c), None))
 }
 
 #[cfg(test)]

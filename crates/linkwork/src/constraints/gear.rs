@@ -31,7 +31,11 @@
 
 use std::f64::consts::TAU;
 
+use super::schema::{Context, PointRef};
+use super::CompiledJoint;
 use super::{dot, perp, Anchor, BodyIx, Config, ConfigBuf, Constraint, Pair, Separation, Shape, Sketch};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// External or internal meshing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -146,6 +150,45 @@ impl Constraint for GearPair {
         let theta_free = dot(n, free) / rho - 2.0 * dot(n, rate) * dot(sep.d, rate) / (rho * rho);
         out[0] = self.k * theta_free;
     }
+}
+
+/// Gear pair: pitch circles of radius `radius_i` and `radius_j` about `point_i` and `point_j`
+/// roll without slip. The centre distance must be kept by other joints. 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GearJoint {
+    /// First gear.
+    pub body_i: String,
+    /// Centre of the first gear, body i frame.
+    pub point_i: PointRef,
+    /// Pitch radius of the first gear, m.
+    pub radius_i: f64,
+    /// Second gear (the ring when `internal`).
+    pub body_j: String,
+    /// Centre of the second gear, body j frame.
+    pub point_j: PointRef,
+    /// Pitch radius of the second gear, m.
+    pub radius_j: f64,
+    /// True when gear j is an internal (ring) gear with gear i inside it. Default: false.
+    #[serde(default)]
+    pub internal: bool,
+}
+
+/// A gear joint at `path` compiled in `cx`.
+pub(crate) fn compile(spec: &GearJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+    let GearJoint { body_i, point_i, radius_i, body_j, point_j, radius_j, internal } = spec;
+    let ends = cx.ends(path, body_i, point_i, body_j, point_j);
+    let ri = cx.positive(&format!("{path}.radius_i"), *radius_i);
+    let rj = cx.positive(&format!("{path}.radius_j"), *radius_j);
+    let (ends, ri, rj) = (ends?, ri?, rj?);
+    let [(i, si), (j, sj)] = ends;
+    // Centres closer than 1e-9 m leave the line of centres to round-off.
+    if cx.initial_distance(ends) < 1e-9 {
+        cx.problem(path, "the gear centres coincide in the initial configuration: the line of centres is undefined");
+        return None;
+    }
+    let kind = if *internal { GearKind::Internal } else { GearKind::External };
+    Some((Box::new(GearPair::new(kind, i, si, ri, j, sj, rj, cx.q0())), None))
 }
 
 #[cfg(test)]

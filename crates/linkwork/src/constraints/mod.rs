@@ -11,6 +11,7 @@
 //! `r_P = r_i + A(phi_i) s'_P` with `A(phi) = [[cos, -sin], [sin, cos]]`.
 
 mod absolute;
+mod belt;
 mod cam;
 mod cam_profile;
 mod distance;
@@ -19,25 +20,32 @@ mod expression;
 mod friction;
 mod gear;
 mod point_line;
+mod registry;
 mod revolute;
 mod rolling;
+mod schema;
 mod translational;
 
 use crate::expr::Scalar;
-pub use absolute::{Absolute, AbsoluteKind};
-pub use cam::{Cam, CamFrame, CamRow, PitchPoint};
+pub use absolute::{Absolute, AbsoluteAngleJoint, AbsoluteKind, AbsolutePoint};
+pub(crate) use cam::cam_row;
+pub use cam::{Cam, CamFrame, CamJoint, CamProfileSpec, CamRow, PitchPoint, ProfileColumn};
 pub use cam_profile::{CamProfile, Curve, CurveError};
-pub use distance::Distance;
-pub use driver::{Driver, DriverKind};
+pub use distance::{Distance, DistanceJoint};
+pub use driver::{AngleDriver, DistanceDriver, Driver, DriverKind, PointDriver, RelativeAngleDriver};
+pub use expression::ExpressionJoint;
 pub use expression::{GeneralConstraint, Var, MAX_SLOTS};
 pub use friction::{Friction, FrictionLaw, DEFAULT_TRANSITION_VELOCITY};
-pub use gear::{GearKind, GearPair};
-pub use point_line::PointOnLine;
-pub use revolute::Revolute;
-pub use rolling::{RackPinion, Rolling, RollingDisc};
+pub use gear::{GearJoint, GearKind, GearPair};
+pub use point_line::{PointOnLine, PointOnLineJoint, RevoluteTranslationalJoint};
+pub use registry::{CompiledJoint, DriverSpec, JointSpec};
+pub use revolute::{PinFriction, Revolute, RevoluteJoint};
+pub use rolling::{RackPinion, Rolling, RollingDisc, RollingJoint};
+pub(crate) use schema::{finite, named, pair, positive, Context};
+pub use schema::{PointRef, Tagged};
 use std::fmt::Debug;
 use std::ops::Deref;
-pub use translational::Translational;
+pub use translational::{SlideFriction, Translational, TranslationalJoint};
 
 /// Positions `q (n)` together with each body's rotation `(cos phi, sin phi)`, computed once per
 /// evaluation of the whole system rather than once per joint (a fifth of the kinematic run's time

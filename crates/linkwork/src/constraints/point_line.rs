@@ -13,7 +13,12 @@
 //! `e > 0` puts `Q` on the left of the line (the side `R90 v'_i` points to). Haug (1989) sections
 //! 3.3.2 and 3.4.2; Nikravesh (2018) section 7.1.
 
+use super::schema::{Context, PointRef};
+use super::CompiledJoint;
+use super::Frame;
 use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Pair, Projection, Shape, Sketch};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// A point of body j on (or at a fixed offset from) a line of body i.
 #[derive(Debug, Clone)]
@@ -63,6 +68,90 @@ impl Constraint for PointOnLine {
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = self.line.gamma(q, qdot);
     }
+}
+
+/// Pin in slot: `point_j` of `body_j` stays on the line of `body_i` through `point_i` along
+/// `axis_i`; rotation stays free. 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PointOnLineJoint {
+    /// Body carrying the slot (line).
+    pub body_i: String,
+    /// A point of the line, body i frame (or `at`).
+    #[serde(default)]
+    pub point_i: Option<PointRef>,
+    /// Direction of the line, body i frame (or `axis`).
+    #[serde(default)]
+    pub axis_i: Option<[f64; 2]>,
+    /// Body carrying the pin.
+    pub body_j: String,
+    /// The pin, body j frame (or `at`).
+    #[serde(default)]
+    pub point_j: Option<PointRef>,
+    /// The pin's global position at the initial position, m (on the line), instead of `point_i`
+    /// and `point_j`.
+    #[serde(default)]
+    pub at: Option<[f64; 2]>,
+    /// The line's global direction at the initial position, instead of `axis_i`.
+    #[serde(default)]
+    pub axis: Option<[f64; 2]>,
+}
+
+/// Revolute-translational composite: `point_j` of `body_j` keeps a constant signed distance
+/// `offset` from the line of `body_i` (a link pinned at `point_j` and sliding, at right angles,
+/// on the line). 1 equation.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RevoluteTranslationalJoint {
+    /// Body carrying the line.
+    pub body_i: String,
+    /// A point of the line, body i frame.
+    pub point_i: PointRef,
+    /// Direction of the line, body i frame.
+    pub axis_i: [f64; 2],
+    /// Body carrying the pin.
+    pub body_j: String,
+    /// The pin, body j frame.
+    pub point_j: PointRef,
+    /// Signed distance from the line to the pin (positive to the left of `axis_i`), m.
+    /// Default: its value in the initial configuration.
+    #[serde(default)]
+    pub offset: Option<f64>,
+}
+
+/// A point-on-line joint at `path` compiled in `cx`.
+pub(crate) fn compile(spec: &PointOnLineJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+    let PointOnLineJoint { body_i, point_i, axis_i, body_j, point_j, at, axis } = spec;
+    let points = cx.placed_points(path, [body_i, body_j], [point_i, point_j], at);
+    let axes = cx.placed_axes(path, [("axis_i", body_i, axis_i)], axis);
+    let (pi, pj) = points.clone().unwrap_or_default();
+    let ends = cx.ends(path, body_i, &pi, body_j, &pj);
+    let vi = axes.and_then(|[ai]| cx.axis(&format!("{path}.axis_i"), ai));
+    let (_, [(i, sp), (j, sq)], vi) = (points?, ends?, vi?);
+    Some((Box::new(PointOnLine::new(i, sp, vi, j, sq, 0.0)), None))
+}
+
+/// A revolute-translational joint at `path` compiled in `cx`: its offset as given, or as the
+/// initial configuration has it.
+pub(crate) fn compile_offset(
+    spec: &RevoluteTranslationalJoint,
+    cx: &mut impl Context,
+    path: &str,
+) -> Option<CompiledJoint> {
+    let RevoluteTranslationalJoint { body_i, point_i, axis_i, body_j, point_j, offset } = spec;
+    let ends = cx.ends(path, body_i, point_i, body_j, point_j);
+    let v = cx.axis(&format!("{path}.axis_i"), *axis_i);
+    let ([(i, sp), (j, sq)], vi) = (ends?, v?);
+    let offset = match offset {
+        Some(o) => cx.finite(&format!("{path}.offset"), *o)?,
+        None => {
+            let (fi, fj) = (Frame::of_slice(i, cx.q0()), Frame::of_slice(j, cx.q0()));
+            let (p, r, a) = (fi.point(sp), fj.point(sq), fi.rotate(vi));
+            let n = [-a[1], a[0]];
+            ((r[0] - p[0]) * n[0] + (r[1] - p[1]) * n[1]) / a[0].hypot(a[1])
+        }
+    };
+    Some((Box::new(PointOnLine::new(i, sp, vi, j, sq, offset)), None))
 }
 
 #[cfg(test)]

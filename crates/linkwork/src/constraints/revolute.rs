@@ -8,7 +8,11 @@
 //! ```
 //! with `B = dA/dphi`. Haug (1989) section 3.3.1; Nikravesh (2018) section 7.1.
 
+use super::schema::{Context, PointRef};
+use super::CompiledJoint;
 use super::{Anchor, BodyIx, Config, Constraint, Frame, Friction, FrictionLaw, Pair, Separation, Shape, Sketch};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// A revolute joint between body i (point `P`) and body j (point `Q`).
 #[derive(Debug, Clone)]
@@ -64,6 +68,64 @@ impl Constraint for Revolute {
         out[0] = ai[0] * wi * wi - aj[0] * wj * wj;
         out[1] = ai[1] * wi * wi - aj[1] * wj * wj;
     }
+}
+
+/// Pin: `point_i` of `body_i` coincides with `point_j` of `body_j`. 2 equations.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RevoluteJoint {
+    /// First body.
+    pub body_i: String,
+    /// Pin location on the first body (or `at`).
+    #[serde(default)]
+    pub point_i: Option<PointRef>,
+    /// Second body.
+    pub body_j: String,
+    /// Pin location on the second body (or `at`).
+    #[serde(default)]
+    pub point_j: Option<PointRef>,
+    /// The pin's global position at the initial position, m, instead of `point_i` and `point_j`.
+    #[serde(default)]
+    pub at: Option<[f64; 2]>,
+    /// Coulomb friction in the pin.
+    #[serde(default)]
+    pub friction: Option<PinFriction>,
+}
+
+/// Coulomb friction in a revolute joint: a torque `mu tanh(r omega / v_s) r |F|` opposing the
+/// relative rotation `omega = omega_i - omega_j`, `|F|` the magnitude of the joint's reaction force
+/// (docs/model-format.md, "Joint friction").
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PinFriction {
+    /// Coefficient of friction, `>= 0`.
+    pub mu: f64,
+    /// Radius of the pin, m, `> 0`.
+    pub radius: f64,
+    /// Sliding speed on the pin's surface at which the coefficient reaches `tanh(1) = 76%` of
+    /// `mu`, m/s, `> 0`; default 0.001.
+    #[serde(default)]
+    pub transition_velocity: Option<f64>,
+}
+
+/// A revolute joint at `path` compiled in `cx`, with its friction.
+pub(crate) fn compile(spec: &RevoluteJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+    let RevoluteJoint { body_i, point_i, body_j, point_j, at, friction: pin } = spec;
+    let points = cx.placed_points(path, [body_i, body_j], [point_i, point_j], at);
+    // The bodies are checked (`ends`) whether or not the points could be placed.
+    let (pi, pj) = points.clone().unwrap_or_default();
+    let ends = cx.ends(path, body_i, &pi, body_j, &pj);
+    let law = pin.as_ref().map(|f| {
+        let at = format!("{path}.friction");
+        (cx.friction_law(&at, f.mu, f.transition_velocity), cx.positive(&format!("{at}.radius"), f.radius))
+    });
+    let (_, [(i, sp), (j, sq)]) = (points?, ends?);
+    let joint = Revolute::new(i, sp, j, sq);
+    let friction = match law {
+        Some((law, radius)) => Some(joint.friction(law?, radius?)),
+        None => None,
+    };
+    Some((Box::new(joint), friction))
 }
 
 #[cfg(test)]

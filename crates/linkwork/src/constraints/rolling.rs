@@ -32,7 +32,11 @@
 //! frame and the rack on a translational joint), so it has only the rolling row; a rolling disc
 //! adds the contact row. Haug (1989) section 3.4.5; Nikravesh (2018) section 7.4.
 
+use super::schema::{Context, End, PointRef};
+use super::CompiledJoint;
 use super::{perp, unit, Anchor, BodyIx, Config, ConfigBuf, Constraint, Pair, Projection, Shape, Sketch};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// The no-slip row shared by [`RackPinion`] and [`RollingDisc`].
 #[derive(Debug, Clone)]
@@ -154,6 +158,46 @@ impl<const CONTACT: bool> Constraint for Rolling<CONTACT> {
         }
         out[usize::from(CONTACT)] = self.rolling.along.gamma(q, qdot);
     }
+}
+
+/// `rack_pinion` / `rolling_disc`: a pitch circle rolling on a pitch line.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RollingJoint {
+    /// The pinion.
+    pub body_i: String,
+    /// Centre of the pinion, body i frame.
+    pub point_i: PointRef,
+    /// Pitch radius, m.
+    pub radius: f64,
+    /// The rack.
+    pub body_j: String,
+    /// A point of the pitch line, body j frame.
+    pub point_j: PointRef,
+    /// Direction of the pitch line, body j frame.
+    pub axis_j: [f64; 2],
+}
+
+/// The fields of a rolling joint at `path`, resolved: the circle's centre and radius, the line's
+/// point and direction.
+fn rolling_ends(spec: &RollingJoint, cx: &mut impl Context, path: &str) -> Option<([End; 2], f64, [f64; 2])> {
+    let RollingJoint { body_i, point_i, radius, body_j, point_j, axis_j } = spec;
+    let ends = cx.ends(path, body_i, point_i, body_j, point_j);
+    let r = cx.positive(&format!("{path}.radius"), *radius);
+    let v = cx.axis(&format!("{path}.axis_j"), *axis_j);
+    Some((ends?, r?, v?))
+}
+
+/// A `rack_pinion` joint at `path` compiled in `cx`.
+pub(crate) fn compile_rack(spec: &RollingJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+    let ([(i, sc), (j, sl)], r, v) = rolling_ends(spec, cx, path)?;
+    Some((Box::new(RackPinion::new(i, sc, r, j, sl, v, cx.q0())), None))
+}
+
+/// A `rolling_disc` joint at `path` compiled in `cx`.
+pub(crate) fn compile_disc(spec: &RollingJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+    let ([(i, sc), (j, sl)], r, v) = rolling_ends(spec, cx, path)?;
+    Some((Box::new(RollingDisc::new(i, sc, r, j, sl, v, cx.q0())), None))
 }
 
 #[cfg(test)]

@@ -11,8 +11,9 @@
 //! names, a point placed from others those points. Meeting again a point (or a pose) still being
 //! resolved is a cycle, reported once.
 
-use super::compile::{finite, it_has, unknown_body};
+use super::compile::{it_has, unknown_body};
 use super::spec::{ByLengths, ModelSpec, PointRef, PointSpec, Side};
+use crate::constraints::finite;
 use crate::constraints::Frame;
 use crate::error::Problem;
 use indexmap::IndexMap;
