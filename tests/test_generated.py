@@ -60,7 +60,7 @@ def test_a_generated_part_without_its_markers_is_refused(tmp_path: Path) -> None
         _generate.stale(root)
 
 
-def belt_schema() -> dict[str, Any]:
+def pulleys_schema() -> dict[str, Any]:
     """The engine's schema with a joint type added the way a flattened Rust struct writes it:
     `allOf` of a shared definition (by `$ref`) and the type's own fields, one of them a `$ref`
     with a description of its own, and a nullable number."""
@@ -75,15 +75,15 @@ def belt_schema() -> dict[str, Any]:
         "required": ["body_i", "body_j"],
     }
     schema["$defs"]["JointSpec"]["oneOf"].append({
-        "description": "A belt: the pulleys turn as their radii say.",
+        "description": "Pulleys: they turn as their radii say.",
         "allOf": [
             {"$ref": "#/$defs/TwoPulleys"},
             {
                 "type": "object",
                 "properties": {
-                    "type": {"enum": ["belt"]},
+                    "type": {"enum": ["pulleys"]},
                     "radius_i": {"type": ["number", "string"], "description": "Radius of the first pulley, m."},
-                    "crossed": {"type": ["boolean", "null"], "default": None, "description": "A crossed belt."},
+                    "crossed": {"type": ["boolean", "null"], "default": None, "description": "Crossed."},
                     "slip": {"type": ["number", "null", "string"], "default": None, "description": "Slip."},
                 },
                 "required": ["type", "radius_i"],
@@ -97,14 +97,14 @@ def test_a_new_joint_type_gets_its_builder_method_from_the_schema() -> None:
     """A joint type written with `allOf` and `$ref`: its method takes the required fields by
     position, in the schema's order, the others by keyword, typed from the schema, and adds the
     entry the file would hold."""
-    text = _generate.builder_entries(belt_schema())
+    text = _generate.builder_entries(pulleys_schema())
     assert (
-        "    def belt(self: _Adds, name: str, body_i: str, body_j: str, radius_i: Number, *, "
+        "    def pulleys(self: _Adds, name: str, body_i: str, body_j: str, radius_i: Number, *, "
         "point_i: Point | str | None = None, crossed: bool | None = None, slip: Number | None = None) -> str:\n"
     ) in text
     words = " ".join(text.split())
-    assert "A belt: the pulleys turn as their radii say." in words and "``point_i``: Centre of the first pulley." in words
-    namespace: dict[str, Any] = {"__name__": "belt_entries"}
+    assert "Pulleys: they turn as their radii say." in words and "``point_i``: Centre of the first pulley." in words
+    namespace: dict[str, Any] = {"__name__": "pulleys_entries"}
     exec(compile(text, "_entries.py", "exec"), namespace)
 
     entries: type = namespace["Entries"]
@@ -115,8 +115,8 @@ def test_a_new_joint_type_gets_its_builder_method_from_the_schema() -> None:
             return name
 
     built = Built()
-    assert built.belt("drive", "a", "b", 0.05, crossed=True) == "drive"
-    assert built.added == ("drive", "belt", {"body_i": "a", "body_j": "b", "radius_i": 0.05, "crossed": True})
+    assert built.pulleys("drive", "a", "b", 0.05, crossed=True) == "drive"
+    assert built.added == ("drive", "pulleys", {"body_i": "a", "body_j": "b", "radius_i": 0.05, "crossed": True})
 
 
 def test_the_typed_methods_cover_every_type_of_the_schema() -> None:

@@ -184,7 +184,8 @@ def _doc(text: str, indent: str, lead: str = "") -> list[str]:
 
 def _field_doc(fields: Mapping[str, Any]) -> str:
     """The fields' descriptions: ``name``: what it is."""
-    return " ".join(f"``{name}``: {field.get('description', '').strip()}" for name, field in fields.items())
+    # Each description on one line: a field's paragraphs would break the docstring's line.
+    return " ".join(f"``{name}``: {' '.join(field.get('description', '').split())}" for name, field in fields.items())
 
 
 def builder_entries(schema: Mapping[str, Any]) -> str:
