@@ -7,9 +7,10 @@
 
 pub mod references;
 
-use linkwork::analysis::dynamic::IntegratorKind;
+use linkwork::analysis::dynamic::{Formulation, IntegratorKind};
 use linkwork::expr::{HyperDual, Scalar};
 use linkwork::{Model, Overrides, Results};
+use std::time::Instant;
 
 /// Path of a file in the repository's `examples/` folder.
 pub fn example(name: &str) -> String {
@@ -61,6 +62,36 @@ pub fn run(name: &str, analysis: &str) -> (Model, Results) {
     let model = Model::load(example(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
     let results = model.run(analysis).unwrap_or_else(|f| panic!("{name}: {}", f.error));
     (model, results)
+}
+
+/// Run `analysis` of `model` with `bdf` in `formulation` at `rtol = atol = tol`, up to `t_end`
+/// (the analysis's own when `None`); returns the results (up to the failure, if one), the error
+/// message if any, and the CPU time, s.
+pub fn run_bdf(
+    model: &mut Model,
+    analysis: &str,
+    formulation: Formulation,
+    tol: f64,
+    t_end: Option<f64>,
+) -> (Results, Option<String>, f64) {
+    model.analyses[analysis].integrator.formulation = formulation;
+    let o = at_tolerance(IntegratorKind::Bdf, tol, t_end);
+    let start = Instant::now();
+    let r = model.run_with(analysis, &o);
+    let cpu = start.elapsed().as_secs_f64();
+    match r {
+        Ok(r) => (r, None, cpu),
+        Err(f) => (f.results, Some(f.error.to_string()), cpu),
+    }
+}
+
+/// Run `analysis` of `model` with the integrator `kind` at `rtol = atol = tol`, up to `t_end`;
+/// returns the results and the CPU time, s; panics with the engine's message on failure.
+pub fn run_tol(model: &Model, analysis: &str, kind: IntegratorKind, tol: f64, t_end: Option<f64>) -> (Results, f64) {
+    let o = at_tolerance(kind, tol, t_end);
+    let clock = Instant::now();
+    let r = model.run_with(analysis, &o).unwrap_or_else(|f| panic!("{} {analysis} {tol}: {}", model.name, f.error));
+    (r, clock.elapsed().as_secs_f64())
 }
 
 /// The problems loading `text` reports; panics when it loads or fails otherwise.
