@@ -21,19 +21,14 @@ EXAMPLES = ROOT / "examples"
 
 def pendulum_with_torque(torque: str, step: float, name: str = "kick") -> str:
     """A 1 m bar pinned at its end, under gravity and the torque `torque` (an expression of t),
-    run 1 s by `dynamics` with output step `step`: the model of the non-finite-value tests."""
-    return f"""
-name: pendulum with a torque
-gravity: [0, -9.81]
-bodies:
-  bar: {{mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {{O: [-0.5, 0]}}}}
-joints:
-  O: {{type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}}
-forces:
-  {name}: {{type: torque, body: bar, torque: "{torque}"}}
-analyses:
-  dynamics: {{type: dynamic, t_end: 1, step: {step}}}
-"""
+    run 1 s by `dynamics` with output step `step`: the model of the non-finite-value tests (the
+    file the Rust tests load too)."""
+    text = patch(
+        (ROOT / "crates" / "linkwork" / "tests" / "models" / "pendulum_torque.yaml").read_text(),
+        'kick: {type: torque, body: bar, torque: "0"}',
+        f'{name}: {{type: torque, body: bar, torque: "{torque}"}}',
+    )
+    return patch(text, "step: 0.01}", f"step: {step}}}")
 
 
 def patch(text: str, old: str, new: str) -> str:

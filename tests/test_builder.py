@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import linkwork
-from conftest import EXAMPLES
+from conftest import EXAMPLES, ROOT
 
 
 def placed_four_bar() -> linkwork.Mechanism:
@@ -242,41 +242,8 @@ def test_a_built_cam_runs_as_the_example() -> None:
     assert "expected psi" in problems["joints.contact.radius"]
 
 
-LEG = """
-parameters: {a: 38 mm, l: 7.8 mm, m: 15 mm, j: 50 mm, b: 41.5 mm, c: 39.3 mm, d: 40.1 mm, ee: 55.8 mm,
-  f: 39.4 mm, g: 36.7 mm, h: 65.7 mm, i: 49 mm, k: 61.9 mm}
-ground:
-  points: {O: [0, 0], D: [-a, -l]}
-bodies:
-  crank: {mass: 0.1, inertia: 1e-5, position: O, points_global: {O: ground.O, A: [m, 0]}}
-  upper:
-    mass: 0.2
-    inertia: 1e-4
-    position: D
-    points_global:
-      D: ground.D
-      E: {from: [D, crank.A], distances: [b, j], side: left}
-      F: {from: [D, E], distances: [d, ee], side: left}
-  leg:
-    mass: 0.3
-    inertia: 2e-4
-    position: H
-    points_global:
-      H: {from: [ground.D, crank.A], distances: [c, k], side: right}
-      G: {from: [H, upper.F], distances: [i, f], side: left}
-      P: {from: [H, G], distances: [h, g], side: left}
-joints:
-  O: {type: revolute, body_i: crank, point_i: O, body_j: ground, point_j: O}
-  D: {type: revolute, body_i: upper, point_i: D, body_j: ground, point_j: D}
-  link_j: {type: distance, body_i: crank, point_i: A, body_j: upper, point_j: E, length: j}
-  link_k: {type: distance, body_i: crank, point_i: A, body_j: leg, point_j: H, length: k}
-  link_c: {type: distance, body_i: ground, point_i: D, body_j: leg, point_j: H, length: c}
-  link_f: {type: distance, body_i: upper, point_i: F, body_j: leg, point_j: G, length: f}
-drivers:
-  motor: {type: angle, body: crank, function: 2*pi*t}
-analyses:
-  kinematics: {type: kinematic, drivers: [motor], t_end: 1, step: 0.01}
-"""
+# The leg of crates/linkwork/tests/placement.rs, which checks it against the law of cosines.
+LEG = (ROOT / "crates" / "linkwork" / "tests" / "models" / "jansen_leg.yaml").read_text()
 
 
 def test_a_leg_placed_by_lengths_builds_as_its_file() -> None:

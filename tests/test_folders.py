@@ -1,4 +1,4 @@
-"""Whole output folders (issue 32): a run's folder holds one run's files, the new run's or the
+"""Whole output folders: a run's folder holds one run's files, the new run's or the
 previous one's, whatever stops it; a stream never truncates the previous results and a killed one
 opens; a second run into a folder refuses; a folder that cannot be written fails before the run;
 SIGTERM and SIGHUP stop a run as Ctrl-C does; every file error exits 2 with one line."""

@@ -45,7 +45,7 @@ SWEEP_OUTPUT = "stroke=max(slider.x) - min(slider.x)"
 # handler (its children, started by exec, then get the default disposition and install theirs).
 signal.signal(signal.SIGINT, signal.default_int_handler)
 
-# The bar for Ctrl-C. The engine looks every 50 ms and stops at its next step (about a
+# How soon a run must stop after Ctrl-C, s. The engine looks every 50 ms and stops at its next step (about a
 # millisecond here), so this leaves three quarters of it to a loaded machine.
 STOP_WITHIN = 0.2
 

@@ -31,8 +31,8 @@ EXAMPLE_RUNS = [
     for name in linkwork.load(path).analyses
 ]
 
-# Plots with data per report, at least: the bar for the quick-return (positions,
-# velocities, accelerations and more), held for every analysis type.
+# Plots with data per report, at least: the quick-return's kinematics has four (positions,
+# velocities, accelerations and more), and every analysis type must show as many.
 MIN_PLOTS = 4
 
 

@@ -6,8 +6,9 @@
 
 mod common;
 
+use common::problems;
 use linkwork::expr::{HyperDual, Scalar};
-use linkwork::{Error, Model};
+use linkwork::Model;
 use std::f64::consts::PI;
 
 /// The example's lift in the cam angle `theta`: a cycloidal rise of 20 mm over 120 deg, a dwell
@@ -18,18 +19,12 @@ fn lift(theta: f64) -> (f64, f64, f64) {
 
 const BASE: f64 = 0.05;
 
-fn cam() -> Model {
-    Model::load(format!("{}/../../examples/cam_roller.yaml", env!("CARGO_MANIFEST_DIR"))).unwrap()
-}
-
 #[test]
 fn the_follower_moves_by_the_law_and_the_pressure_angle_is_its_closed_form() {
-    let r = cam().run("motion").unwrap_or_else(|f| panic!("{}", f.error));
-    // 1.5 s at a degree a step: the cam turns on past 360 deg, across the pitch curve's seam
-    // (psi = +-pi, at theta = 270 deg) twice.
-    assert_eq!(r.len(), 541);
-    let col = |n: &str| r.column(n).unwrap_or_else(|| panic!("no column {n}")).to_vec();
-    let (y, vy, ay, pressure) = (col("follower.y"), col("follower.vy"), col("follower.ay"), col("pressure_angle"));
+    // The cam turns on past 360 deg, across the pitch curve's seam (psi = +-pi, at theta =
+    // 270 deg) twice.
+    let (r, [y, vy, ay]) = common::cam_motion("cam_roller.yaml");
+    let pressure = common::col(&r, "pressure_angle");
     let omega = 2.0 * PI;
     let mut worst = [0.0f64; 4];
     let (mut low, mut high) = (0.0f64, 0.0f64);
@@ -59,9 +54,8 @@ fn the_follower_moves_by_the_law_and_the_pressure_angle_is_its_closed_form() {
 
 #[test]
 fn the_motor_torque_pays_the_followers_work() {
-    let r = cam().run("drive").unwrap_or_else(|f| panic!("{}", f.error));
-    let col = |n: &str| r.column(n).unwrap_or_else(|| panic!("no column {n}")).to_vec();
-    let (ay, torque) = (col("follower.ay"), col("motor.effort"));
+    let (_, r) = common::run("cam_roller.yaml", "drive");
+    let (ay, torque) = (common::col(&r, "follower.ay"), common::col(&r, "motor.effort"));
     // Virtual work: the cam turns steadily about its centre of mass and the guide is frictionless,
     // so T omega = F v_y with F = m (a_y + g) the force the follower needs and v_y = s' omega:
     // T = F ds/dtheta.
@@ -77,14 +71,6 @@ fn the_motor_torque_pays_the_followers_work() {
     // 0.08 N m is rounding with room (measured 7e-15 N m).
     assert!(worst < 1e-10, "torque error {worst:e}");
     assert!(peak > 0.01, "the follower's lift needs torque: peak {peak}");
-}
-
-fn problems(text: &str) -> Vec<String> {
-    match Model::from_yaml(text) {
-        Err(Error::Model(p)) => p.iter().map(|p| p.to_string()).collect(),
-        Err(e) => panic!("expected a model error, got {e}"),
-        Ok(_) => panic!("expected a model error, the model compiled"),
-    }
 }
 
 #[test]

@@ -232,9 +232,9 @@ fn stops(model: &linkwork::Model, why: &str) -> Vec<(IntegratorKind, linkwork::F
     integrators().map(stop).collect()
 }
 
-/// A torque that turns NaN between output times, `sqrt(0.503 - t)`, stopped every integrator at
-/// 0.503 s as a torque that "grows without bound" (its rate does, but its value goes to 0 and
-/// is NaN past 0.503 s). The run now says it is NaN there, naming it and its expression.
+/// A torque that turns NaN between output times, `sqrt(0.503 - t)`: its rate grows without
+/// bound, but its value goes to 0 and is NaN past 0.503 s, so every integrator stops there saying
+/// it is NaN, naming it and its expression (not a torque that grows without bound).
 #[test]
 fn a_torque_that_turns_nan_inside_a_step_is_named() {
     let model = pendulum_with_torque("kick", "sqrt(0.503-t)", 0.01);
@@ -249,10 +249,9 @@ fn a_torque_that_turns_nan_inside_a_step_is_named() {
 }
 
 /// A torque that is NaN at one instant, `(t - 0.5) / abs(t - 0.5)` (0/0 at t = 0.5 s, an output
-/// time), ran to the end with status ok and NaN in the accelerations and reactions there (the
-/// issue's case, at 0.3 s on its output grid). With every integrator the run now stops at 0.5 s
-/// with a `NonFinite` error naming the force and its expression; the results before it are
-/// kept and hold no NaN.
+/// time, so a run that steps over it would end ok with NaN in the accelerations and reactions
+/// there): with every integrator the run stops at 0.5 s with a `NonFinite` error naming the
+/// force and its expression; the results before it are kept and hold no NaN.
 #[test]
 fn a_nan_torque_stops_the_run_naming_it() {
     let model = pendulum_with_torque("flip", "(t-0.5)/abs(t-0.5)", 0.1);
@@ -276,10 +275,10 @@ fn a_nan_torque_stops_the_run_naming_it() {
 
 /// A torque with a pole between output times, `1/(t - 0.503)`, cannot be integrated through:
 /// the velocity grows like `ln|t - 0.503|` on both sides, so what follows the pole is not
-/// determined. `bdf` and `abam` stopped at 0.503 s blaming the joint ("rows involved: O.y");
-/// `hht` stepped over the pole (its error test measures positions, which a logarithmic velocity
-/// hardly moves: a step of `2.3e-7` s straddling the pole passed) and ended `ok`. All three now
-/// name the torque, its expression and its rate, with the outputs before it kept.
+/// determined. Every integrator stops there naming the torque, its expression and its rate
+/// (not the joint, "rows involved: O.y"), with the outputs before it kept; `hht` too, whose error
+/// test measures positions, which a logarithmic velocity hardly moves (a step of `2.3e-7` s
+/// straddling the pole would pass it).
 #[test]
 fn a_torque_with_a_pole_stops_the_run_naming_it() {
     let model = pendulum_with_torque("kick", "1/(t-0.503)", 0.01);

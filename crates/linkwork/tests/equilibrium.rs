@@ -345,7 +345,8 @@ analyses:
 
 /// An equilibrium left unbalanced in a body coordinate's force balance names that coordinate,
 /// and no joint: `elements()` (the Python `joints`, the command line's "in joint(s)") lists
-/// joints and drivers only. The issue's four-bar said "in joint(s) coupler".
+/// joints and drivers only: a four-bar's unbalanced `coupler.phi` is not reported "in joint(s)
+/// coupler".
 #[test]
 fn an_unbalanced_body_coordinate_is_not_a_joint() {
     let e = linkwork::Error::Equilibrium {
@@ -484,8 +485,9 @@ fn hanging_fourbar_at(theta: f64) -> String {
 /// solver's crank angle (modulo a turn) must match it to 1e-7 rad: the force balance converges to
 /// 1e-10 of the load, and with `V'' ~ 10^2 J/rad^2` against loads of `10^2 N` that places the angle to
 /// about 1e-10 rad; the golden section's own error is `sqrt(eps |V| / V'')`, about 1e-8 rad
-/// (measured difference: 2.3e-8 rad). Before the descents, starts from 40 to 160 degrees returned
-/// the maximum (1.550 rad) with `stable: false`, and those from 330 to 30 degrees failed.
+/// (measured difference: 2.3e-8 rad). Newton alone would return the maximum (1.550 rad) with
+/// `stable: false` from starts between 40 and 160 degrees and fail from 330 to 30 degrees: the
+/// descents take every start to the minimum.
 #[test]
 fn hanging_fourbar_rests_at_the_energy_minimum_from_every_start() {
     let tau = std::f64::consts::TAU;
@@ -591,8 +593,8 @@ fn inverted_pendulum_modes_are_a_divergence() {
 }
 
 /// No non-finite number leaves a static or modes analysis. A weight past a double's range
-/// (`1.9e307 kg` under `9.81 m/s^2`, found by `tests/test_properties.py`) wrote NaN reactions
-/// and potential energy with `status: ok`; it is now a model error at the mass. A measure that
+/// (`1.9e307 kg` under `9.81 m/s^2`, as `tests/test_properties.py` draws) would give NaN
+/// reactions and potential energy: it is a model error at the mass. A measure that
 /// is NaN at the equilibrium (`sqrt(-1 - bob.phi*bob.phi)`) stops the analysis naming its column,
 /// with no row written.
 #[test]
@@ -629,9 +631,9 @@ fn a_non_finite_equilibrium_is_not_written() {
 /// reactions are found (tests/properties.rs checks the balance on random mechanisms). At
 /// `d = 1e-9` and `2e-9` the condition is inside the kinematics' `singular_condition` (1e10),
 /// with room on both sides, while the least-squares solve drops the direction as rank-deficient
-/// (below 1e-9 of the largest): the reactions left more than half the loads unbalanced and the
-/// analysis ended ok. It is now a `Singular` error at 0.1 s naming the joints, with the t = 0
-/// row kept.
+/// (below 1e-9 of the largest), so that reactions from it would leave more than half the loads
+/// unbalanced: the analysis stops with a `Singular` error at 0.1 s naming the joints, with the
+/// t = 0 row kept.
 #[test]
 fn reactions_that_cannot_balance_the_loads_are_not_written() {
     let parallelogram = |d: &str| {

@@ -363,20 +363,18 @@ fn wedge_accelerations_are_the_closed_form() {
 /// `abam` on the N = 40 file over its 20 s, through six flat positions, against the
 /// one-degree-of-freedom reference, at `1e-11`, `1e-12` and `1e-13`.
 ///
-/// - At `1e-11` it stopped at 10.55 s ("the error test fails even with the smallest step"):
-///   Newton for the dependent coordinates stopped at 1000 units of round-off, which near a flat
-///   position left them `|B^-1|` times that off, and the error test measured that noise.
-/// - At `1e-12` and `1e-13` it crept at steps of `4e-11` s for hours: within about `1e-3` s of a
-///   flat position the accelerations are round-off noise whatever Newton does (the constraints
-///   fix the dependent positions only to `|B^-1|` times the round-off of `Phi`), which no step
-///   resolves. `bdf` now takes the state across and `abam` resumes, with a warning. The step
-///   budget of 50,000 (the runs take 1,616, 4,367 and 8,339 steps) makes a creep a failure here:
-///   without the crossing it stops at the budget at `t = 2.687 s` at `1e-12`.
+/// - At `1e-11` Newton for the dependent coordinates must stop below 1000 units of round-off:
+///   near a flat position that leaves them `|B^-1|` times off, and the error test would measure
+///   that noise and fail even with the smallest step.
+/// - At `1e-12` and `1e-13`, within about `1e-3` s of a flat position the accelerations are
+///   round-off noise whatever Newton does (the constraints fix the dependent positions only to
+///   `|B^-1|` times the round-off of `Phi`), which no step resolves: `bdf` takes the state
+///   across and `abam` resumes, with a warning. The step budget of 50,000 (the runs take 1,616,
+///   4,367 and 8,339 steps) makes a creep at tiny steps a failure here: without the crossing the
+///   run stops at the budget at `t = 2.687 s` at `1e-12`.
 ///
-/// Measured: B0 within `9.6e-8`, `2.3e-6` and `5.8e-7` m (2, 9 and 20 crossings; before the
-/// accelerations were solved in the independent coordinates, with the same error test to
-/// rounding, `9.3e-7`, `5.4e-7` and `1.8e-6`: which passage leaves which noise changes with
-/// the last bits of the error estimates). Bounds: `2e-6` m at `1e-11`, and `2e-5` at `1e-12` and
+/// Measured: B0 within `9.6e-8`, `2.3e-6` and `5.8e-7` m (2, 9 and 20 crossings; which passage
+/// leaves which noise changes with the last bits of the error estimates). Bounds: `2e-6` m at `1e-11`, and `2e-5` at `1e-12` and
 /// `1e-13` (`bdf`'s own bound on A02 at `1e-12`): the floor of a run through singular positions,
 /// where each passage fixes the positions only to the noise the near-singular Jacobian allows
 /// (docs/integrators.md, `abam`; `bdf` alone ends `5.5e-6` off at `1e-12`).

@@ -1,13 +1,6 @@
 //! `bdf` against independent references (`common/references.rs`, the Andrews test set): short
-//! regression tests of each cause found in docs/integrators.md (`bdf` section), and ignored
-//! measurements that print the long-run numbers quoted there:
-//!
-//! ```sh
-//! cargo test --release -p linkwork --test integrator_bdf -- --ignored --nocapture
-//! ```
-//!
-//! (environment: `TOLS=1e-8,1e-10` chooses the tolerances, `FORM=index3|si2` the formulation,
-//! `T_END` shortens A01/A02.)
+//! regression tests of each cause found in docs/integrators.md (`bdf` section). The long-run
+//! numbers quoted there come from `crates/linkwork/examples/bdf_measurements.rs`.
 
 // 6.283 rad/s is the file's given crank speed, not 2 pi.
 #![allow(clippy::approx_constant)]
@@ -15,36 +8,12 @@
 mod common;
 
 use common::references::{andrews_digits, nfourbar_error, pendulum_a01, QuickReturn, ANDREWS_END_CONVERGED, SAMPLES};
-use common::{at_tolerance, col};
+use common::{at_tolerance, col, run_bdf as run};
 use linkwork::analysis::dynamic::{Formulation, IntegratorKind};
 use linkwork::{Model, Results};
-use std::time::Instant;
 
 fn load(name: &str) -> Model {
     Model::load(common::example(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
-
-/// Run `analysis` with `bdf` in `formulation` at `rtol = atol = tol`, up to `t_end`; returns the
-/// results (up to the failure, if one), the error message if any, and the CPU time.
-fn run(
-    model: &mut Model,
-    analysis: &str,
-    formulation: Formulation,
-    tol: f64,
-    t_end: Option<f64>,
-) -> (Results, Option<String>, f64) {
-    model.analyses[analysis].integrator.formulation = formulation;
-    if let Some(k) = std::env::var("MAX_ORDER").ok().and_then(|s| s.parse().ok()) {
-        model.analyses[analysis].integrator.max_order = Some(k);
-    }
-    let o = at_tolerance(IntegratorKind::Bdf, tol, t_end);
-    let start = Instant::now();
-    let r = model.run_with(analysis, &o);
-    let cpu = start.elapsed().as_secs_f64();
-    match r {
-        Ok(r) => (r, None, cpu),
-        Err(f) => (f.results, Some(f.error.to_string()), cpu),
-    }
 }
 
 fn stat(r: &Results, name: &str) -> f64 {
@@ -233,126 +202,6 @@ fn tightest_tolerance_runs_the_loaded_quick_returns_and_andrews() {
         if file == "andrews.yaml" {
             let digits = andrews_digits(&r, &ANDREWS_END_CONVERGED);
             assert!(digits >= 9.0, "{digits}");
-        }
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// Measurements (ignored; the numbers of docs/integrators.md)
-
-fn tols(default: &[f64]) -> Vec<f64> {
-    std::env::var("TOLS")
-        .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
-        .unwrap_or_else(|_| default.to_vec())
-}
-
-fn forms() -> Vec<(&'static str, Formulation)> {
-    match std::env::var("FORM").as_deref() {
-        Ok("index3") => vec![("index3", Formulation::Index3)],
-        Ok("si2") => vec![("si2", Formulation::Si2)],
-        _ => vec![("si2", Formulation::Si2), ("index3", Formulation::Index3)],
-    }
-}
-
-fn t_end(default: Option<f64>) -> Option<f64> {
-    std::env::var("T_END").ok().and_then(|s| s.parse().ok()).or(default)
-}
-
-fn report(name: &str, fname: &str, tol: f64, what: &str, r: &Results, e: Option<String>, cpu: f64) {
-    println!(
-        "| {name} | {fname} | {tol:.0e} | {what} | {} | {} | {} | {cpu:.3} | {} {} |",
-        stat(r, "steps"),
-        stat(r, "rejected_steps"),
-        stat(r, "newton_failures"),
-        r.time[r.len() - 1],
-        e.map(|e| e.chars().take(120).collect::<String>()).unwrap_or_default()
-    );
-}
-
-#[test]
-#[ignore]
-fn measure_quick_return() {
-    let mut model = load("quick_return_a.yaml");
-    let reference = QuickReturn::new(&model, 6.283, SAMPLES);
-    for (fname, f) in forms() {
-        for tol in tols(&[1e-4, 1e-6, 1e-8, 1e-10, 1e-12, 1e-13]) {
-            let (r, e, cpu) = run(&mut model, "dynamics", f, tol, None);
-            let err = quick_return_error(&r, &reference);
-            report("quick_return_a", fname, tol, &format!("{err:.2e} ({:.0} x tol)", err / tol), &r, e, cpu);
-        }
-    }
-}
-
-#[test]
-#[ignore]
-fn measure_a01() {
-    let mut model = load("iftomm_a01_pendulum.yaml");
-    for (fname, f) in forms() {
-        for tol in tols(&[1e-8, 1e-10, 1e-12]) {
-            let (r, e, cpu) = run(&mut model, "dynamics", f, tol, t_end(None));
-            report("A01", fname, tol, &format!("{:.2e}", pendulum_error(&r)), &r, e, cpu);
-        }
-    }
-}
-
-#[test]
-#[ignore]
-fn measure_andrews() {
-    let mut model = load("andrews.yaml");
-    for (fname, f) in forms() {
-        for tol in tols(&[1e-6, 1e-8, 1e-10, 1e-12]) {
-            let (r, e, cpu) = run(&mut model, "dynamics", f, tol, None);
-            report(
-                "andrews",
-                fname,
-                tol,
-                &format!("{:.2} digits", andrews_digits(&r, &ANDREWS_END_CONVERGED)),
-                &r,
-                e,
-                cpu,
-            );
-        }
-    }
-}
-
-#[test]
-#[ignore]
-fn measure_a02() {
-    let mut model = load("iftomm_a02_nfourbar.yaml");
-    for (fname, f) in forms() {
-        for tol in tols(&[1e-8, 1e-10, 1e-12]) {
-            let (r, e, cpu) = run(&mut model, "dynamics", f, tol, t_end(None));
-            report("A02", fname, tol, &format!("{:.2e}", nfourbar_error(&r, 40)), &r, e, cpu);
-        }
-    }
-}
-
-/// Every example's dynamic analyses at tolerances `1e-4` to `1e-13` (A01 over 20 s): prints
-/// the failures.
-#[test]
-#[ignore]
-fn sweep_examples() {
-    let cases: &[(&str, &str, Option<f64>)] = &[
-        ("quick_return_a.yaml", "dynamics", None),
-        ("quick_return_a.yaml", "dynamics_loaded", None),
-        ("quick_return_b.yaml", "dynamics", None),
-        ("quick_return_b.yaml", "dynamics_loaded", None),
-        ("andrews.yaml", "dynamics", None),
-        ("iftomm_a01_pendulum.yaml", "dynamics", Some(20.0)),
-        ("iftomm_a02_nfourbar.yaml", "dynamics", t_end(None)),
-        ("double_pendulum.yaml", "dynamics", None),
-        ("wedge.yaml", "dynamics", None),
-    ];
-    for (fname, f) in forms() {
-        for &(file, analysis, t_end) in cases {
-            let mut model = load(file);
-            for k in 4..=13 {
-                let tol = 10f64.powi(-k);
-                let (r, e, cpu) = run(&mut model, analysis, f, tol, t_end);
-                if e.is_some() || std::env::var("ALL").is_ok() {
-                    report(&format!("{file} {analysis}"), fname, tol, "", &r, e, cpu);
-                }
-            }
         }
     }
 }

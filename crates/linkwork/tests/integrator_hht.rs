@@ -5,25 +5,16 @@
 
 mod common;
 
-use common::references::{nfourbar_error, pendulum_error as a01_error, QuickReturn, QUICK_RETURN_CRANK_SPEED, SAMPLES};
-use common::{at_tolerance, col, energy_drift};
+use common::references::{
+    a01_energy_loss_per_period, nfourbar_error, pendulum_error as a01_error, QuickReturn, QUICK_RETURN_CRANK_SPEED,
+    SAMPLES,
+};
+use common::run_tol;
 use linkwork::analysis::dynamic::IntegratorKind;
 use linkwork::{Model, Results};
 
-/// A bar pinned off its centre on a torsion spring: `phi = 0.5 cos 2t` exactly (as order_tests.rs).
-const BAR: &str = include_str!("models/pinned_bar.yaml");
-/// How long `diag` runs the bar without `TEND`, s: 20 periods.
-const BAR_END: f64 = 62.83185307179586;
-
 fn load(name: &str) -> Model {
     Model::load(common::example(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
-
-fn run_tol(model: &Model, analysis: &str, kind: IntegratorKind, tol: f64, t_end: Option<f64>) -> (Results, f64) {
-    let o = at_tolerance(kind, tol, t_end);
-    let clock = std::time::Instant::now();
-    let r = model.run_with(analysis, &o).unwrap_or_else(|f| panic!("{} {analysis} {tol}: {}", model.name, f.error));
-    (r, clock.elapsed().as_secs_f64())
 }
 
 fn steps(r: &Results) -> u64 {
@@ -52,21 +43,6 @@ fn quick_return_error_follows_the_tolerance() {
         .collect();
     assert!(e[1] < 1e-4, "{e:?}");
     assert!(e[0] > 10.0 * e[1] && e[1] > 10.0 * e[2], "{e:?}");
-}
-
-/// A01's period, s: `4 sqrt(L / g) K(sin 45 deg)`.
-const A01_PERIOD: f64 = 2.3678419;
-
-/// The secular energy change of A01 per period, relative to `m g L = 9.81 J` (positive: a loss):
-/// the mean energy over the first period minus that over the last, per period between them
-/// (the means remove the energy's oscillation within a swing, `1.6e-4` at 1e-8).
-fn a01_energy_loss_per_period(r: &Results) -> f64 {
-    let (ke, pe) = (col(r, "kinetic_energy"), col(r, "potential_energy"));
-    let e: Vec<f64> = (0..r.len()).map(|k| ke[k] + pe[k]).collect();
-    let per = ((A01_PERIOD / (r.time[1] - r.time[0])).round() as usize).clamp(1, r.len() / 2);
-    let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
-    let periods = (r.time[r.len() - 1] - A01_PERIOD) / A01_PERIOD;
-    (mean(&e[..per]) - mean(&e[e.len() - per..])) / 9.81 / periods
 }
 
 /// IFToMM A01 over the benchmark's 2000 s (845 swings) at 1e-8 against the exact solution.
@@ -117,83 +93,5 @@ fn a02_passes_the_flat_position_at_1e_12_and_1e_13() {
         let err = nfourbar_error(&r, 40);
         eprintln!("A02 to 1 s at {tol:e}: error {err:.2e}, {}", r.summary_json(None)["statistics"]);
         assert!(err < 1e-6, "{tol:e}: {err:.3e}");
-    }
-}
-
-/// The measurements of docs/integrators.md (`DIAG=a01,qr,andr,iftomm_a02 TOLS=1e-6,1e-8
-/// [TEND=..] cargo test --release --test integrator_hht -- --ignored --nocapture`).
-#[test]
-#[ignore]
-fn diag() {
-    let what = std::env::var("DIAG").unwrap_or_default();
-    let tols: Vec<f64> =
-        std::env::var("TOLS").unwrap_or("1e-6,1e-8".into()).split(',').map(|s| s.parse().unwrap()).collect();
-    let t_end: Option<f64> = std::env::var("TEND").ok().map(|s| s.parse().unwrap());
-    if what.contains("bar") {
-        let m = Model::from_yaml(BAR).unwrap();
-        for &tol in &tols {
-            let (r, cpu) = run_tol(&m, "dynamics", IntegratorKind::Hht, tol, t_end.or(Some(BAR_END)));
-            let (t, v) = (col(&r, "kinetic_energy"), col(&r, "potential_energy"));
-            let e: Vec<f64> = (0..r.len()).map(|k| t[k] + v[k]).collect();
-            let periods = r.time[r.len() - 1] / std::f64::consts::PI;
-            let phi = col(&r, "bar.phi");
-            let err = r.time.iter().zip(phi).map(|(t, p)| (p - 0.5 * (2.0 * t).cos()).abs()).fold(0.0, f64::max);
-            eprintln!("BAR tol {tol:e}: energy loss per period {:.4e} (E0 {:.4}, min {:.4e} max {:.4e}) phi error {err:.3e} steps {} cpu {cpu:.2} {}", (e[0] - e[e.len() - 1]) / e[0] / periods, e[0], e.iter().cloned().fold(f64::INFINITY, f64::min), e.iter().cloned().fold(0.0, f64::max), steps(&r), r.summary_json(None)["statistics"]);
-        }
-    }
-    if what.contains("a01") {
-        let m = load("iftomm_a01_pendulum.yaml");
-        for &tol in &tols {
-            let (r, cpu) = run_tol(&m, "dynamics", IntegratorKind::Hht, tol, t_end);
-            let (ke, pe) = (col(&r, "kinetic_energy"), col(&r, "potential_energy"));
-            let e: Vec<f64> = (0..r.len()).map(|k| ke[k] + pe[k]).collect();
-            let per = ((A01_PERIOD / (r.time[1] - r.time[0])).round() as usize).clamp(1, r.len() / 2);
-            eprintln!(
-                "A01 secular energy loss per period {:.3e} relative (of 9.81 J), oscillation {:.3e}",
-                a01_energy_loss_per_period(&r),
-                e[..per].iter().map(|x| (x - e[0]).abs()).fold(0.0, f64::max)
-            );
-            eprintln!("A01 residuals {}", r.summary_json(None)["residuals"]);
-            eprintln!(
-                "A01 hht tol {tol:e}: error {:.3e} drift {:.3e} steps {} cpu {cpu:.2} s stats {}",
-                a01_error(&r),
-                energy_drift(&r),
-                steps(&r),
-                r.summary_json(None)["statistics"]
-            );
-        }
-    }
-    for name in ["iftomm_a02_nfourbar.yaml", "andrews.yaml"] {
-        if !what.contains(&name[..4]) {
-            continue;
-        }
-        let m = load(name);
-        for &tol in &tols {
-            let o = at_tolerance(IntegratorKind::Hht, tol, t_end);
-            let clock = std::time::Instant::now();
-            match m.run_with("dynamics", &o) {
-                Ok(r) => eprintln!(
-                    "{name} hht {tol:e}: ok in {:.2} s, {}",
-                    clock.elapsed().as_secs_f64(),
-                    r.summary_json(None)["statistics"]
-                ),
-                Err(f) => {
-                    eprintln!("{name} hht {tol:e}: stopped in {:.2} s: {}", clock.elapsed().as_secs_f64(), f.error)
-                }
-            }
-        }
-    }
-    if what.contains("qr") {
-        let m = load("quick_return_a.yaml");
-        let qr = QuickReturn::new(&m, QUICK_RETURN_CRANK_SPEED, SAMPLES);
-        for &tol in &tols {
-            let (r, cpu) = run_tol(&m, "dynamics", IntegratorKind::Hht, tol, None);
-            eprintln!(
-                "QR hht tol {tol:e}: error {:.3e} steps {} cpu {cpu:.2} s stats {}",
-                qr.error(&r),
-                steps(&r),
-                r.summary_json(None)["statistics"]
-            );
-        }
     }
 }

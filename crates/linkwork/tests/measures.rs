@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{col, example_text, patch};
+use common::{col, example_text, patch, problems};
 use linkwork::{Error, Model, Results};
 use std::f64::consts::PI;
 
@@ -182,15 +182,6 @@ fn measures_read_the_reaction_and_effort_columns_of_every_analysis() {
             assert_eq!(power[k], effort[k] * omega2[k], "{analysis}: motor_power at row {k}");
             assert!(b_load[k] > 0.0, "{analysis}: the pin carries the load");
         }
-    }
-}
-
-/// The problems of `text` (a model error expected).
-fn problems(text: &str) -> Vec<String> {
-    match Model::from_yaml(text) {
-        Err(Error::Model(p)) => p.iter().map(|p| p.to_string()).collect(),
-        Err(e) => panic!("expected a model error, got {e}"),
-        Ok(_) => panic!("expected a model error, the model compiled"),
     }
 }
 

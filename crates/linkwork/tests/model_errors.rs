@@ -3,16 +3,8 @@
 
 mod common;
 
-use common::{example, example_text, patch};
+use common::{example, example_text, patch, problems};
 use linkwork::{Error, Model};
-
-fn problems(text: &str) -> Vec<String> {
-    match Model::from_yaml(text) {
-        Err(Error::Model(p)) => p.iter().map(|p| p.to_string()).collect(),
-        Err(e) => panic!("expected a model error, got {e}"),
-        Ok(_) => panic!("expected a model error, the model compiled"),
-    }
-}
 
 /// Whether `list` has a problem at `path` (none: at the top) whose message contains `words`.
 fn found(list: &[String], path: &str, words: &str) -> bool {
@@ -248,7 +240,7 @@ analyses:
   bdf7: {type: dynamic, t_end: 1, step: 0.1, solver: {max_order: 7}}
 "#;
 
-/// The bad inputs the dynamics issue names (an unknown state name in a force expression, a
+/// Bad inputs of a dynamic model (an unknown state name in a force expression, a
 /// negative mass or inertia, a tolerance of zero) and their neighbours, each with its path.
 #[test]
 fn dynamics_problems_are_listed_with_their_paths() {
@@ -324,9 +316,9 @@ fn overrides_are_checked() {
         "{}",
         e.error
     );
-    // A step longer than the run gave only its two ends, silently; now it is refused, in the
-    // file and as an override. The option blamed is the one given: the end time that the file's
-    // step no longer fits (it named `--step`, which the user had not passed).
+    // A step longer than the run (which would give only its two ends) is refused, in the file
+    // and as an override. The option blamed is the one given: the end time that the file's step
+    // no longer fits, not `--step`, which the user did not pass.
     let short = linkwork::Overrides { t_end: Some(0.005), ..Default::default() };
     let e = kin.run_with("kinematics", &short).unwrap_err().error;
     assert!(e.to_string().contains("--t-end: the output step (0.02 s) is longer than the analysis (0.005 s"), "{e}");

@@ -5,6 +5,7 @@
 //! allocates now and then while it waits, tests run side by side, and the engine runs on the
 //! calling thread.
 
+use linkwork::{Model, Overrides};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -48,19 +49,29 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
+/// The example `file`, loaded.
+fn example(file: &str) -> Model {
+    Model::load(format!("{}/../../examples/{file}", env!("CARGO_MANIFEST_DIR"))).unwrap()
+}
+
+/// Overrides that end the run at `t_end` and change nothing else.
+fn ending_at(t_end: f64) -> Overrides {
+    Overrides { t_end: Some(t_end), ..Default::default() }
+}
+
+/// The allocations of one run of `analysis` of `model` under `overrides`, and the rows it wrote.
+fn run_counted(model: &Model, analysis: &str, overrides: &Overrides) -> (usize, usize) {
+    let before = allocations();
+    let r = model.run_with(analysis, overrides).unwrap_or_else(|f| panic!("{analysis}: {}", f.error));
+    (allocations() - before, r.len())
+}
+
 #[test]
 fn time_loop_allocates_nothing() {
     allocations();
-    let path = format!("{}/../../examples/quick_return_a.yaml", env!("CARGO_MANIFEST_DIR"));
-    let mut model = linkwork::Model::load(path).unwrap();
-    let mut count = |t_end: f64| {
-        model.analyses[0].t_end = t_end;
-        let before = allocations();
-        let r = model.run("kinematics").unwrap();
-        (allocations() - before, r.len())
-    };
-    let (short, n_short) = count(2.0);
-    let (long, n_long) = count(100.0);
+    let model = example("quick_return_a.yaml");
+    let (short, n_short) = run_counted(&model, "kinematics", &ending_at(2.0));
+    let (long, n_long) = run_counted(&model, "kinematics", &ending_at(100.0));
     assert_eq!((n_short, n_long), (41, 2001));
     assert!(short > 0, "the counter sees the engine's setup allocations");
     assert_eq!(
@@ -77,16 +88,9 @@ fn time_loop_allocates_nothing() {
 #[test]
 fn a_cam_surface_allocates_nothing_in_the_time_loop() {
     allocations();
-    let path = format!("{}/../../examples/cam_profile.yaml", env!("CARGO_MANIFEST_DIR"));
-    let mut model = linkwork::Model::load(path).unwrap();
-    let mut count = |t_end: f64| {
-        model.analyses[0].t_end = t_end;
-        let before = allocations();
-        let r = model.run("motion").unwrap();
-        (allocations() - before, r.len())
-    };
-    let (short, n_short) = count(0.25);
-    let (long, n_long) = count(2.0);
+    let model = example("cam_profile.yaml");
+    let (short, n_short) = run_counted(&model, "motion", &ending_at(0.25));
+    let (long, n_long) = run_counted(&model, "motion", &ending_at(2.0));
     assert_eq!((n_short, n_long), (91, 721));
     assert_eq!(short, long, "the long run allocated {} more times than the short one", long as i64 - short as i64);
 }
@@ -106,15 +110,11 @@ fn dynamic_steps_allocate_nothing() {
     for (file, t_end, integrators) in
         [("double_pendulum.yaml", 1.0, IntegratorKind::NAMES), ("quick_return_a.yaml", 2.0, &["bdf", "hht"][..])]
     {
-        let path = format!("{}/../../examples/{file}", env!("CARGO_MANIFEST_DIR"));
-        let model = linkwork::Model::load(path).unwrap();
+        let model = example(file);
         for name in integrators {
             let count = |t_end: f64| {
-                let integrator = IntegratorKind::from_name(name);
-                let overrides = linkwork::Overrides { integrator, t_end: Some(t_end), ..Default::default() };
-                let before = allocations();
-                let r = model.run_with("dynamics", &overrides).unwrap();
-                (allocations() - before, r.len())
+                let overrides = Overrides { integrator: IntegratorKind::from_name(name), ..ending_at(t_end) };
+                run_counted(&model, "dynamics", &overrides)
             };
             let ((short, rows_short), (long, rows_long)) = (count(t_end), count(10.0 * t_end));
             assert!(rows_long > 9 * rows_short, "{file} {name}: {rows_short} and {rows_long} output rows");

@@ -4,7 +4,14 @@
 //! side}`). Checked against a second formulation of the same mechanism in body frames, against
 //! the rotation and the law of cosines written out, and for the problems of bad input.
 
-use linkwork::{Error, Model};
+mod common;
+
+use linkwork::Model;
+
+/// The problems loading `text` reports, each as `(path, message)`.
+fn problems(text: &str) -> Vec<(String, String)> {
+    common::model_problems(text).into_iter().map(|p| (p.path, p.message)).collect()
+}
 
 fn example(name: &str) -> Model {
     Model::load(format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap_or_else(|e| panic!("{e}"))
@@ -68,12 +75,6 @@ joints:
 /// Bad placements are problems at their paths, each saying what to write.
 #[test]
 fn bad_placements_name_the_field() {
-    let problems = |text: &str| -> Vec<(String, String)> {
-        match Model::from_yaml(text) {
-            Err(Error::Model(p)) => p.into_iter().map(|p| (p.path, p.message)).collect(),
-            other => panic!("expected problems, got {other:?}"),
-        }
-    };
     let base = "
 bodies:
   bar: {mass: 1, inertia: 0.1, position: POSITION, points: {A: [0.5, 0]}, points_global: GLOBAL}
@@ -126,45 +127,9 @@ joints:
     }
 }
 
-/// A six-bar leg of Jansen's kind, its two ternary links placed by their link lengths (the
-/// lengths in mm of Jansen's linkage; `ee` for his `e`, a constant's name): each point where the
-/// drawing puts it, from points of its own body, of other bodies and of ground, some of them
-/// placed by lengths themselves.
-const LEG: &str = "
-parameters: {a: 38 mm, l: 7.8 mm, m: 15 mm, j: 50 mm, b: 41.5 mm, c: 39.3 mm, d: 40.1 mm, ee: 55.8 mm,
-  f: 39.4 mm, g: 36.7 mm, h: 65.7 mm, i: 49 mm, k: 61.9 mm}
-ground:
-  points: {O: [0, 0], D: [-a, -l]}
-bodies:
-  crank: {mass: 0.1, inertia: 1e-5, position: O, points_global: {O: ground.O, A: [m, 0]}}
-  upper:
-    mass: 0.2
-    inertia: 1e-4
-    position: D
-    points_global:
-      D: ground.D
-      E: {from: [D, crank.A], distances: [b, j], side: left}
-      F: {from: [D, E], distances: [d, ee], side: left}
-  leg:
-    mass: 0.3
-    inertia: 2e-4
-    position: H
-    points_global:
-      H: {from: [ground.D, crank.A], distances: [c, k], side: right}
-      G: {from: [H, upper.F], distances: [i, f], side: left}
-      P: {from: [H, G], distances: [h, g], side: left}
-joints:
-  O: {type: revolute, body_i: crank, point_i: O, body_j: ground, point_j: O}
-  D: {type: revolute, body_i: upper, point_i: D, body_j: ground, point_j: D}
-  link_j: {type: distance, body_i: crank, point_i: A, body_j: upper, point_j: E, length: j}
-  link_k: {type: distance, body_i: crank, point_i: A, body_j: leg, point_j: H, length: k}
-  link_c: {type: distance, body_i: ground, point_i: D, body_j: leg, point_j: H, length: c}
-  link_f: {type: distance, body_i: upper, point_i: F, body_j: leg, point_j: G, length: f}
-drivers:
-  motor: {type: angle, body: crank, function: 2*pi*t}
-analyses:
-  kinematics: {type: kinematic, drivers: [motor], t_end: 1, step: 0.01}
-";
+/// A six-bar leg of Jansen's kind, its two ternary links placed by their link lengths (the file
+/// says more; tests/test_builder.py builds the same model in Python).
+const LEG: &str = include_str!("models/jansen_leg.yaml");
 
 /// The third corner of a triangle by the law of cosines in angles: `P = B + d (cos(theta +-
 /// beta), sin(theta +- beta))`, `theta` the direction of BC, `beta = acos((d^2 + |BC|^2 - e^2) /
@@ -178,7 +143,7 @@ fn law_of_cosines(b: [f64; 2], c: [f64; 2], d: f64, e: f64, left: bool) -> [f64;
 }
 
 /// Each point of the leg placed by lengths is where the law of cosines puts it, worked out here
-/// corner after corner, to 1e-12 m (issue 31's tolerance; both are exact to a few roundings of
+/// corner after corner, to 1e-12 m (both are exact to a few roundings of
 /// 0.1 m, ~1e-17 m). The ternary links' frames are parallel to the global one at their pivots
 /// `D` and `H`, so a body-frame point is its global one less the pivot. The mechanism assembles
 /// where it is drawn (the drawing is exact: 1e-12 m, the position solver's tolerance) and turns
@@ -249,12 +214,6 @@ bodies:
 /// place, an unknown body or point in `from`, and a cycle, with its members.
 #[test]
 fn points_that_cannot_be_placed_name_the_field_and_the_lengths() {
-    let problems = |text: &str| -> Vec<(String, String)> {
-        match Model::from_yaml(text) {
-            Err(Error::Model(p)) => p.into_iter().map(|p| (p.path, p.message)).collect(),
-            other => panic!("expected problems, got {other:?}"),
-        }
-    };
     let base = "
 ground:
   points: {O: [0, 0], Q: [0.1, 0]}

@@ -74,8 +74,8 @@ fn a_mechanism_far_from_the_origin_assembles_at_the_round_off_floor() {
 /// `rtol = 1e-16` is below the 100 units of round-off (`2.2e-14`) that an error estimate can
 /// resolve: the integrator raises it to that, says so, and runs the pendulum's first 0.2 s,
 /// matching the exact solution to `1e-6` m (measured 3.2e-11 with `hht`, 1.0e-13 with `bdf`,
-/// 1.7e-15 with `abam`). Before the Newton tests had their round-off floor, `bdf` stopped at
-/// t = 0 with a step of 2.7e-16 s.
+/// 1.7e-15 with `abam`). Without the round-off floor of the Newton tests, `bdf` stops at t = 0
+/// with a step of 2.7e-16 s.
 #[test]
 fn an_integrator_tolerance_below_round_off_warns_and_runs() {
     let model = Model::load(common::example("iftomm_a01_pendulum.yaml")).unwrap();

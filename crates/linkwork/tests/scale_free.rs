@@ -58,13 +58,14 @@ fn with_dynamics(text: &str) -> String {
     serde_yaml_ng::to_string(&doc).unwrap()
 }
 
-/// The slider-crank example scaled by 1e-6, 1e-3, 1e3 and 1e6 (and 1e-4, 1e4, the 10 um and
-/// 4 km of the fault probe) against itself: one degree of freedom alone and none with its motor,
+/// The slider-crank example scaled by 1e-6, 1e-3, 1e3 and 1e6 (and 1e-4, 1e4: a 10 um and a
+/// 4 km mechanism) against itself: one degree of freedom alone and none with its motor,
 /// its kinematics runs to the end, and every output position equals the unscaled one times `s`
-/// (angles equal) to 1e-12 of the largest position (angle) of the run. Before the rank, singularity and residual tests were
-/// scaled, the model at 1e-6, 1e-4 and 1e4 was refused ("1 degree(s) of freedom remain ... add 1
-/// driver(s)"), at 1e6 assembly failed, and at 1e-3 the positions differed by 1.7e-10 (Newton
-/// stopped at 1e-12 m, a thousand times looser relative to the model). Why 1e-12 holds: scaled
+/// (angles equal) to 1e-12 of the largest position (angle) of the run. Rank, singularity and
+/// residual tests in absolute units fail it: they refuse the model at 1e-6, 1e-4 and 1e4 ("1
+/// degree(s) of freedom remain ... add 1 driver(s)"), fail its assembly at 1e6, and at 1e-3 move
+/// the positions by 1.7e-10 (Newton stopping at 1e-12 m, a thousand times looser relative to the
+/// model). Why 1e-12 holds: scaled
 /// to be free of units, every decision of the solvers (ranks, stops, sub-steps) is the same at
 /// every scale, so the runs do the same arithmetic on numbers that differ by the rounding of
 /// `s` times the inputs (half a unit, `1.1e-16`), grown by the conditioning of the mechanism

@@ -4,7 +4,8 @@
 
 mod common;
 
-use linkwork::{Error, Model};
+use common::problems;
+use linkwork::Model;
 use std::f64::consts::PI;
 
 /// The lift the table was sampled from (examples/data/cam_lift.csv): a cycloidal rise of 20 mm
@@ -14,17 +15,11 @@ fn cycloidal_lift(theta: f64) -> (f64, f64, f64) {
     common::cycloidal_cam_lift(theta, 0.02, 2.0 * PI / 3.0, 2.0 * PI / 3.0)
 }
 
-fn cam() -> Model {
-    Model::load(format!("{}/../../examples/cam_table.yaml", env!("CARGO_MANIFEST_DIR"))).unwrap()
-}
-
 #[test]
 fn the_follower_moves_by_the_table_through_its_points_and_close_to_the_law_between() {
-    let r = cam().run("motion").unwrap_or_else(|f| panic!("{}", f.error));
-    // 1.5 s at a degree a step: the cam turns on past 360 deg, where the periodic table repeats.
-    assert_eq!(r.len(), 541);
-    let col = |n: &str| r.column(n).unwrap_or_else(|| panic!("no column {n}")).to_vec();
-    let (y, vy, ay, lift_mm) = (col("follower.y"), col("follower.vy"), col("follower.ay"), col("lift_mm"));
+    // The cam turns on past 360 deg, where the periodic table repeats.
+    let (r, [y, vy, ay]) = common::cam_motion("cam_table.yaml");
+    let lift_mm = common::col(&r, "lift_mm");
     let omega = 2.0 * PI;
     let mut worst = [0.0f64; 3];
     for (k, &t) in r.time.iter().enumerate() {
@@ -54,10 +49,9 @@ fn the_follower_moves_by_the_table_through_its_points_and_close_to_the_law_betwe
 
 #[test]
 fn the_motor_torque_pays_the_followers_work() {
-    let model = cam();
-    let r = model.run("drive").unwrap_or_else(|f| panic!("{}", f.error));
-    let col = |n: &str| r.column(n).unwrap_or_else(|| panic!("no column {n}")).to_vec();
-    let (vy, ay, torque) = (col("follower.vy"), col("follower.ay"), col("motor.effort"));
+    let (_, r) = common::run("cam_table.yaml", "drive");
+    let (vy, ay, torque) =
+        (common::col(&r, "follower.vy"), common::col(&r, "follower.ay"), common::col(&r, "motor.effort"));
     // Virtual work: the cam turns steadily about its centre of mass, so the motor's power T omega
     // goes wholly into the follower, which the guide holds sideways: m (a_y + g) v_y.
     let (m, g, omega) = (0.3, 9.81, 2.0 * PI);
@@ -90,14 +84,6 @@ fn an_inline_table_drives_with_its_derivatives() {
         // point the table continues it (a straight line continues each end).
         let (want, rate) = (PI / 2.0 * t, PI / 2.0);
         assert!((phi[k] - want).abs() < 1e-12 && (omega[k] - rate).abs() < 1e-12 && alpha[k].abs() < 1e-12, "t {t}");
-    }
-}
-
-fn problems(text: &str) -> Vec<String> {
-    match Model::from_yaml(text) {
-        Err(Error::Model(p)) => p.iter().map(|p| p.to_string()).collect(),
-        Err(e) => panic!("expected a model error, got {e}"),
-        Ok(_) => panic!("expected a model error, the model compiled"),
     }
 }
 

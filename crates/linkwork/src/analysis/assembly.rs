@@ -53,46 +53,43 @@ impl Assembly {
     }
 }
 
-/// Assemble `sys` at time `t` from `q0`, `qdot0`. `given: (2n)` marks the positions (first `n`)
-/// and velocities (last `n`) to hold. `tolerance` bounds the residual of `Phi` relative to the
-/// model's size (`scaled_residual`).
-pub fn assemble(
-    sys: &mut System<'_>,
-    q0: &[f64],
-    qdot0: &[f64],
-    given: &[bool],
-    t: f64,
-    tolerance: f64,
-) -> Result<Assembly> {
-    assemble_or_best(sys, q0, qdot0, given, t, tolerance).map_err(|stopped| stopped.0)
+/// Where an assembly starts and what it must reach: the guess, the coordinates it holds, the
+/// time and the tolerance.
+#[derive(Debug, Clone, Copy)]
+pub struct Start<'a> {
+    /// (n) guessed positions.
+    pub q: &'a [f64],
+    /// (n) guessed velocities.
+    pub qdot: &'a [f64],
+    /// (2n) the positions (first `n`) and velocities (last `n`) to hold.
+    pub given: &'a [bool],
+    /// Time, s.
+    pub t: f64,
+    /// Bound on the residual of `Phi` relative to the model's size (`scaled_residual`).
+    pub tolerance: f64,
+}
+
+/// Assemble `sys` from `start`.
+pub fn assemble(sys: &mut System<'_>, start: &Start<'_>) -> Result<Assembly> {
+    assemble_or_best(sys, start).map_err(|stopped| stopped.0)
 }
 
 /// [`assemble`], with the positions Newton reached (its best) beside the error when it fails, and
 /// whether they hold (the positions assembled, the velocities did not).
 pub(crate) fn assemble_or_best(
     sys: &mut System<'_>,
-    q0: &[f64],
-    qdot0: &[f64],
-    given: &[bool],
-    t: f64,
-    tolerance: f64,
+    start: &Start<'_>,
 ) -> std::result::Result<Assembly, Box<(Error, Vec<f64>, bool)>> {
-    let mut best = q0.to_vec();
+    let mut best = start.q.to_vec();
     let mut assembled = false;
-    assemble_tracking(sys, q0, qdot0, given, t, tolerance, &mut best, &mut assembled)
-        .map_err(|e| Box::new((e, best, assembled)))
+    assemble_tracking(sys, start, &mut best, &mut assembled).map_err(|e| Box::new((e, best, assembled)))
 }
 
 /// [`assemble`], keeping in `best` the last positions Newton accepted, and `assembled` true once
 /// they hold.
-#[allow(clippy::too_many_arguments)]
 fn assemble_tracking(
     sys: &mut System<'_>,
-    q0: &[f64],
-    qdot0: &[f64],
-    given: &[bool],
-    t: f64,
-    tolerance: f64,
+    &Start { q: q0, qdot: qdot0, given, t, tolerance }: &Start<'_>,
     best: &mut Vec<f64>,
     assembled: &mut bool,
 ) -> Result<Assembly> {

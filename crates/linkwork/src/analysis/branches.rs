@@ -11,7 +11,7 @@
 //! group whose block has the smallest ratio of singular values is the one that locks.
 
 use super::assembly::assemble_or_best;
-use super::{assemble, Assembly, SINGULAR_RATIO_KINEMATIC};
+use super::{assemble, Assembly, Start, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Result, RowName};
 use crate::linalg::dense::{equilibrated, smallest_singular};
@@ -26,17 +26,13 @@ use faer::Mat;
 /// side. Returns the assembly, each dyad's [`Branch`], and the warnings: a declared side the
 /// drawing disagrees with, a dyad left on the other side of its drawing. With `branch: strict`
 /// each of these is an [`Error::Branch`] instead.
-#[allow(clippy::too_many_arguments)]
 pub fn assemble_on_branches(
     model: &Model,
     drivers: &[usize],
     sys: &mut System<'_>,
-    q0: &[f64],
-    qdot0: &[f64],
-    given: &[bool],
-    t: f64,
-    tolerance: f64,
+    start: &Start<'_>,
 ) -> Result<(Assembly, Vec<Branch>, Vec<String>)> {
+    let (q0, t) = (start.q, start.t);
     let dyads = structure::dyads(model, drivers);
     let strict = model.branch_mode == BranchMode::Strict;
     let mut warnings = Vec::new();
@@ -60,7 +56,7 @@ pub fn assemble_on_branches(
         }
     }
     let target: Vec<Option<Side>> = dyads.iter().map(|(d, declared)| declared.or_else(|| d.drawn_side(q0))).collect();
-    let mut assembly = match assemble_or_best(sys, q0, qdot0, given, t, tolerance).map_err(|stopped| *stopped) {
+    let mut assembly = match assemble_or_best(sys, start).map_err(|stopped| *stopped) {
         Ok(a) => a,
         Err((Error::Assembly { time, iterations, residual, row, hint }, best, assembled)) => {
             // Positions that hold at a singular position whose velocities cannot: a start at a
@@ -88,11 +84,11 @@ pub fn assemble_on_branches(
         if off.is_empty() {
             break;
         }
-        let mut start = assembly.q.clone();
+        let mut reflected = assembly.q.clone();
         for dyad in &off {
-            start = dyad.reflected(&start);
+            reflected = dyad.reflected(&reflected);
         }
-        let Ok(again) = assemble(sys, &start, qdot0, given, t, tolerance) else { break };
+        let Ok(again) = assemble(sys, &Start { q: &reflected, ..*start }) else { break };
         assembly = again;
     }
     assembly.change = assembly.q.iter().zip(q0).map(|(a, b)| a - b).collect();
@@ -164,8 +160,12 @@ pub(crate) fn assemble_into(
     tolerance: f64,
     summary: &mut Summary,
 ) -> Result<Assembly> {
-    let (assembly, branches, mut warnings) =
-        assemble_on_branches(model, drivers, sys, &model.q0(), &model.qdot0(), given, t, tolerance)?;
+    let (assembly, branches, mut warnings) = assemble_on_branches(
+        model,
+        drivers,
+        sys,
+        &Start { q: &model.q0(), qdot: &model.qdot0(), given, t, tolerance },
+    )?;
     summary.branches = Some(branches);
     summary.warnings.append(&mut warnings);
     Ok(assembly)

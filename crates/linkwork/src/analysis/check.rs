@@ -6,7 +6,7 @@
 //! the redundant one, as a designer reading the file would.
 
 use super::setup::{coordinate_names, held, unmet_freedom};
-use super::{assemble_on_branches, Assembly};
+use super::{assemble_on_branches, Assembly, Start};
 use crate::constraints::ConfigBuf;
 use crate::error::{Result, RowName};
 use crate::model::spec::AnalysisKind;
@@ -82,8 +82,12 @@ pub fn check_system(model: &Model, drivers: &[usize], hold_given: bool, t: f64) 
     let n = model.n();
     let given = held(model, hold_given);
     let tolerance = crate::model::SolverSettings::default().tolerance;
-    let (assembly, branches, warnings) =
-        assemble_on_branches(model, drivers, &mut sys, &model.q0(), &model.qdot0(), &given, t, tolerance)?;
+    let (assembly, branches, warnings) = assemble_on_branches(
+        model,
+        drivers,
+        &mut sys,
+        &Start { q: &model.q0(), qdot: &model.qdot0(), given: &given, t, tolerance },
+    )?;
     let jac = sys.jacobian(&ConfigBuf::new(&assembly.q).view(), t);
     let mut rows = super::scaled_row_space(&sys, &jac, 0..n, t)?;
     let (keep, drop) = rows.independent_rows();

@@ -15,7 +15,7 @@ mod run;
 mod setup;
 mod statics;
 
-pub use assembly::{assemble, Assembly};
+pub use assembly::{assemble, Assembly, Start};
 pub(crate) use branches::{assemble_into, singular_start};
 pub use branches::{assemble_on_branches, blame};
 pub use check::{assembled_branches, check, AnalysisCheck, CheckReport, SystemCheck};

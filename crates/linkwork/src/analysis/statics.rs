@@ -46,7 +46,7 @@
 
 use super::dynamic::{factor_error, Dae};
 use super::setup::{coordinate_name, fail, held, output_times};
-use super::{assemble, assemble_into, element_names, independent_rows, indeterminate_rows, residual_floor};
+use super::{assemble, assemble_into, element_names, independent_rows, indeterminate_rows, residual_floor, Start};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Unbalanced};
 use crate::linalg::dense::{equilibrated, min_norm_solve, null_space};
@@ -385,7 +385,8 @@ impl<'a, 'm> Statics<'a, 'm> {
                 return Ok(());
             }
             let trial: Vec<f64> = x[..n].iter().zip(&dir).map(|(q, d)| q + h * d / size).collect();
-            let Ok(moved) = assemble(&mut self.dae.sys, &trial, &zero, &hold, t, self.tolerance) else { return Ok(()) };
+            let start = Start { q: &trial, qdot: &zero, given: &hold, t, tolerance: self.tolerance };
+            let Ok(moved) = assemble(&mut self.dae.sys, &start) else { return Ok(()) };
             travel += h;
             let (lambda, g) = self.balance(&moved.q, t);
             let basis = null_space(self.jac.as_ref());

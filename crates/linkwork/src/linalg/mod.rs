@@ -156,18 +156,13 @@ pub enum FactorError {
     OutOfMemory,
 }
 
-/// Largest order of a matrix [`SparseLu`] factors densely: 48. Measured
-/// (`cargo run --release -p linkwork --example lu_orders`, the Newton matrices of chains of 3 to
-/// 32 bodies, one factorization and two solves): 1.0 against 2.4 us at order 17, 2.4 against
-/// 4.0 us at 29 (the quick-return), 5.1 against 6.7 us at 47, 10.4 against 10.2 us at 71 and
-/// 18.8 against 13.4 us at 95 (2026-11-25). Below about 70 faer's sparse LU spent more on its
-/// bookkeeping (supernode and permutation structures, work-array sizing) than a dense elimination
-/// spent on its zeros; 48 leaves room for patterns denser than a chain's. Since the dense
-/// factors keep their pivot order and eliminate over its structure (`small.rs`, 2026-11-27),
-/// the same command gives 1.7 against 5.6 us at 17, 3.6 against 9.3 at 29, 6.1 against 15.2 at
-/// 47 and 26.6 against 64.2 at 191 (a slower day for both): the kept order would win at larger
-/// orders too, but its first factorization is dense (`n^3 / 3`) and its buffers grow as `n^2`
-/// and `n^3 / 3` (286 kB at 48), so the bound stays until the scale benchmarks say otherwise.
+/// Largest order of a matrix [`SparseLu`] factors densely: 48. Below about order 70 faer's
+/// sparse LU spends more on its bookkeeping (supernode and permutation structures, work-array
+/// sizing) than a dense elimination spends on its zeros (`cargo run --release -p linkwork
+/// --example lu_orders`; docs/performance.md has the timings); 48 leaves room for patterns
+/// denser than a chain's. The kept pivot order (`small.rs`) would win at larger orders too, but
+/// its first factorization is dense (`n^3 / 3`) and its buffers grow as `n^2` and `n^3 / 3`
+/// (286 kB at 48), so the bound stays until the scale benchmarks say otherwise.
 pub const DENSE_LU_MAX_ORDER: usize = 48;
 
 /// The factors of a [`SparseLu`]: sparse (faer), or dense for small orders.

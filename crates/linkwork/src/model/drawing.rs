@@ -35,11 +35,9 @@ pub struct PathPoint {
     pub point: [f64; 2],
 }
 
-/// The coordinate a driver prescribes, as its bodies' coordinates give it: `angle` is `phi` of
-/// `body_i`; `relative_angle` `phi_i - phi_j`; `x` and `y` the global coordinate of the point `p`
-/// of `body_i`; `distance` the distance from `p` of `body_i` to `q` of `body_j`.
+/// An element drawn between two bodies: its name and type, and the point it acts at on each.
 #[derive(Debug, Clone, Serialize)]
-pub struct DriverDrawing {
+pub struct ElementDrawing {
     /// Name in the model file.
     pub name: String,
     /// Its `type` in the model file.
@@ -47,13 +45,19 @@ pub struct DriverDrawing {
     pub kind: &'static str,
     /// The first (or only) body, or `ground`.
     pub body_i: String,
-    /// Its point, body i frame, m (`[0, 0]` for an angle).
+    /// Its point, body i frame (global on ground), m.
     pub p: [f64; 2],
     /// The second body (`ground` where there is none).
     pub body_j: String,
-    /// Its point, body j frame, m (`[0, 0]` but for a distance).
+    /// Its point, body j frame (global on ground), m.
     pub q: [f64; 2],
 }
+
+/// The coordinate a driver prescribes, as its bodies' coordinates give it: `angle` is `phi` of
+/// `body_i`; `relative_angle` `phi_i - phi_j`; `x` and `y` the global coordinate of the point `p`
+/// of `body_i`; `distance` the distance from `p` of `body_i` to `q` of `body_j`. The points are
+/// `[0, 0]` where the coordinate has none.
+pub type DriverDrawing = ElementDrawing;
 
 /// One body's points, body frame, m.
 #[derive(Debug, Clone, Serialize)]
@@ -70,19 +74,9 @@ pub struct BodyDrawing {
 /// One joint as drawn.
 #[derive(Debug, Clone, Serialize)]
 pub struct JointDrawing {
-    /// Name in the model file.
-    pub name: String,
-    /// Its `type` in the model file.
-    #[serde(rename = "type")]
-    pub kind: &'static str,
-    /// The first body, or `ground`.
-    pub body_i: String,
-    /// Its point, body i frame (global on ground), m.
-    pub p: [f64; 2],
-    /// The second body, or `ground`.
-    pub body_j: String,
-    /// Its point, body j frame (global on ground), m.
-    pub q: [f64; 2],
+    /// The joint, its bodies and its point on each.
+    #[serde(flatten)]
+    pub element: ElementDrawing,
     /// What is drawn.
     #[serde(flatten)]
     pub shape: Shape,
@@ -108,15 +102,9 @@ impl Model {
                     }
                 }
             }
-            joints.push(JointDrawing {
-                name: joint.name.clone(),
-                kind: joint.kind,
-                body_i: name(i),
-                p,
-                body_j: name(j),
-                q,
-                shape,
-            });
+            let element =
+                ElementDrawing { name: joint.name.clone(), kind: joint.kind, body_i: name(i), p, body_j: name(j), q };
+            joints.push(JointDrawing { element, shape });
         }
         let drivers = self
             .drivers
@@ -130,7 +118,7 @@ impl Model {
                         (body, point, BodyIx::GROUND, [0.0; 2])
                     }
                 };
-                Some(DriverDrawing { name: d.name.clone(), kind: d.kind, body_i: name(i), p, body_j: name(j), q })
+                Some(ElementDrawing { name: d.name.clone(), kind: d.kind, body_i: name(i), p, body_j: name(j), q })
             })
             .collect();
         Drawing { bodies, joints, paths: self.paths.clone(), drivers }

@@ -15,7 +15,7 @@ pub mod units;
 
 pub use compile::{compile, compile_partial};
 pub(crate) use compile::{revise, time_round_off};
-pub use drawing::{BodyDrawing, Drawing, DriverDrawing, JointDrawing, PathPoint};
+pub use drawing::{BodyDrawing, Drawing, DriverDrawing, ElementDrawing, JointDrawing, PathPoint};
 pub use parse::{parse_partial, parse_partial_with, parse_spec, Parsed};
 pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
 

@@ -388,7 +388,7 @@ mod tests {
 
     /// Triangles of every shape and orientation (acute, right, obtuse, nearly flat, lengths
     /// from 1e-3 to 1e3 m), both sides: the placement equals the law of cosines to 1e-12 relative
-    /// to the triangle's size, the tolerance issue 31 asks for (both are exact to a few roundings,
+    /// to the triangle's size (both are exact to a few roundings,
     /// ~2e-16 relative here; the angle form loses most near flat, where `acos` is steep: 4e-15 on
     /// the case 1e-4 from flat), the distances hold to 4e-15 relative (a few roundings), and the
     /// side is the one asked for.

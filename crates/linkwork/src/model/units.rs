@@ -5,8 +5,7 @@
 //! a product of table units with integer powers, with at most one `/` (everything after it
 //! divides). Dimensions count powers of metre, kilogram, second and radian: the radian is kept
 //! as a dimension of its own so that an angle written in millimetres, or a length in degrees,
-//! is refused. A unit library was considered: `uom` checks dimensions at compile time and has no
-//! run-time parser of unit text, which is what a model file needs, so the table stays here.
+//! is refused.
 
 use std::fmt;
 

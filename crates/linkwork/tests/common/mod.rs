@@ -7,9 +7,10 @@
 
 pub mod references;
 
-use linkwork::analysis::dynamic::IntegratorKind;
+use linkwork::analysis::dynamic::{Formulation, IntegratorKind};
 use linkwork::expr::{HyperDual, Scalar};
 use linkwork::{Model, Overrides, Results};
+use std::time::Instant;
 
 /// Path of a file in the repository's `examples/` folder.
 pub fn example(name: &str) -> String {
@@ -61,6 +62,50 @@ pub fn run(name: &str, analysis: &str) -> (Model, Results) {
     let model = Model::load(example(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
     let results = model.run(analysis).unwrap_or_else(|f| panic!("{name}: {}", f.error));
     (model, results)
+}
+
+/// Run `analysis` of `model` with `bdf` in `formulation` at `rtol = atol = tol`, up to `t_end`
+/// (the analysis's own when `None`); returns the results (up to the failure, if one), the error
+/// message if any, and the CPU time, s.
+pub fn run_bdf(
+    model: &mut Model,
+    analysis: &str,
+    formulation: Formulation,
+    tol: f64,
+    t_end: Option<f64>,
+) -> (Results, Option<String>, f64) {
+    model.analyses[analysis].integrator.formulation = formulation;
+    let o = at_tolerance(IntegratorKind::Bdf, tol, t_end);
+    let start = Instant::now();
+    let r = model.run_with(analysis, &o);
+    let cpu = start.elapsed().as_secs_f64();
+    match r {
+        Ok(r) => (r, None, cpu),
+        Err(f) => (f.results, Some(f.error.to_string()), cpu),
+    }
+}
+
+/// Run `analysis` of `model` with the integrator `kind` at `rtol = atol = tol`, up to `t_end`;
+/// returns the results and the CPU time, s; panics with the engine's message on failure.
+pub fn run_tol(model: &Model, analysis: &str, kind: IntegratorKind, tol: f64, t_end: Option<f64>) -> (Results, f64) {
+    let o = at_tolerance(kind, tol, t_end);
+    let clock = Instant::now();
+    let r = model.run_with(analysis, &o).unwrap_or_else(|f| panic!("{} {analysis} {tol}: {}", model.name, f.error));
+    (r, clock.elapsed().as_secs_f64())
+}
+
+/// The problems loading `text` reports; panics when it loads or fails otherwise.
+pub fn model_problems(text: &str) -> Vec<linkwork::Problem> {
+    match Model::from_yaml(text) {
+        Err(linkwork::Error::Model(p)) => p,
+        Err(e) => panic!("expected a model error, got {e}"),
+        Ok(_) => panic!("expected a model error, the model compiled"),
+    }
+}
+
+/// The problems loading `text` reports, each as `path: message`.
+pub fn problems(text: &str) -> Vec<String> {
+    model_problems(text).iter().map(ToString::to_string).collect()
 }
 
 /// The column `name` of `r`; panics naming it when there is none.
@@ -123,22 +168,23 @@ pub fn c<S: Scalar>(v: f64) -> S {
 }
 
 /// A bar pinned at one end under gravity, driven by the torque `name` of expression `torque`,
-/// N m, its dynamics to 1 s output every `step` s.
+/// N m, its dynamics to 1 s output every `step` s (`tests/models/pendulum_torque.yaml`).
 pub fn pendulum_with_torque(name: &str, torque: &str, step: f64) -> linkwork::Model {
-    let text = format!(
-        "
-gravity: [0, -9.81]
-bodies:
-  bar: {{mass: 1, inertia: 0.1, position: [0.5, 0], angle: 0, points: {{O: [-0.5, 0]}}}}
-joints:
-  O: {{type: revolute, body_i: bar, point_i: O, body_j: ground, point_j: [0, 0]}}
-forces:
-  {name}: {{type: torque, body: bar, torque: \"{torque}\"}}
-analyses:
-  dynamics: {{type: dynamic, t_end: 1, step: {step}}}
-"
+    let text = patch(
+        include_str!("../models/pendulum_torque.yaml"),
+        "kick: {type: torque, body: bar, torque: \"0\"}",
+        &format!("{name}: {{type: torque, body: bar, torque: \"{torque}\"}}"),
     );
-    linkwork::Model::from_yaml(&text).unwrap()
+    linkwork::Model::from_yaml(&patch(&text, "step: 0.01}", &format!("step: {step}}}"))).unwrap()
+}
+
+/// The `motion` analysis of the cam example `name` (1.5 s at a degree a step: 541 rows, the cam
+/// past a whole turn) and its follower's `y`, `vy` and `ay`.
+pub fn cam_motion(name: &str) -> (Results, [Vec<f64>; 3]) {
+    let (_, r) = run(name, "motion");
+    assert_eq!(r.len(), 541, "{name}: 1.5 s at a degree a step");
+    let follower = ["y", "vy", "ay"].map(|q| col(&r, &format!("follower.{q}")).to_vec());
+    (r, follower)
 }
 
 /// A cam's lift in the cam angle `theta` (any turn): a cycloidal rise of `h` over `rise` rad from

@@ -179,6 +179,22 @@ pub fn pendulum_error(r: &Results) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// A01's period, s: `4 sqrt(L / g) K(sin 45 deg)`.
+pub const A01_PERIOD: f64 = 2.3678419;
+
+/// The secular energy change of A01 per period, relative to `m g L = 9.81 J` (positive: a loss):
+/// the mean energy over the first period minus that over the last, per period between them
+/// (the means remove the energy's oscillation within a swing, `1.6e-4` at 1e-8).
+pub fn a01_energy_loss_per_period(r: &Results) -> f64 {
+    let (ke, pe) =
+        (r.column("kinetic_energy").expect("kinetic_energy"), r.column("potential_energy").expect("potential_energy"));
+    let e: Vec<f64> = (0..r.len()).map(|k| ke[k] + pe[k]).collect();
+    let per = ((A01_PERIOD / (r.time[1] - r.time[0])).round() as usize).clamp(1, r.len() / 2);
+    let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
+    let periods = (r.time[r.len() - 1] - A01_PERIOD) / A01_PERIOD;
+    (mean(&e[..per]) - mean(&e[e.len() - per..])) / 9.81 / periods
+}
+
 /// Jacobi's elliptic `sn(u | k)` by the arithmetic-geometric mean and descending Landen
 /// transformation (Abramowitz and Stegun 16.4), with `u` reduced modulo the period `4 K(k)`.
 pub fn sn(u: f64, k: f64) -> f64 {
