@@ -249,9 +249,9 @@ fn a_torque_that_turns_nan_inside_a_step_is_named() {
 }
 
 /// A torque that is NaN at one instant, `(t - 0.5) / abs(t - 0.5)` (0/0 at t = 0.5 s, an output
-/// time, so a run that steps over it would end ok with NaN in the accelerations and reactions
-/// there): with every integrator the run stops at 0.5 s with a `NonFinite` error naming the
-/// force and its expression; the results before it are kept and hold no NaN.
+/// time of a 0.1 s grid): with every integrator the run stops at 0.5 s with a `NonFinite` error
+/// naming the force and its expression, rather than running to the end with status ok and NaN in
+/// the accelerations and reactions there; the results before it are kept and hold no NaN.
 #[test]
 fn a_nan_torque_stops_the_run_naming_it() {
     let model = pendulum_with_torque("flip", "(t-0.5)/abs(t-0.5)", 0.1);

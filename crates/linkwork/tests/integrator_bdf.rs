@@ -16,6 +16,16 @@ fn load(name: &str) -> Model {
     Model::load(common::example(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
+/// A02 (N = 40) with `bdf` in SI2 at `rtol = atol = tol` up to `t_end`, asserted to run to it:
+/// the results and B0's largest distance from the one-degree-of-freedom reference.
+fn a02(model: &mut Model, tol: f64, t_end: Option<f64>) -> (Results, f64) {
+    let (r, e, _) = run(model, "dynamics", Formulation::Si2, tol, t_end);
+    let err = nfourbar_error(&r, 40);
+    eprintln!("A02 to {t_end:?} s at {tol:e}: error {err:.2e}, statistics {}", r.summary_json(None)["statistics"]);
+    assert!(e.is_none(), "{tol:e}: {e:?}");
+    (r, err)
+}
+
 fn stat(r: &Results, name: &str) -> f64 {
     r.summary_json(None)["statistics"][name].as_f64().unwrap_or(f64::NAN)
 }
@@ -99,11 +109,7 @@ fn newton_at_round_off_converges_instead_of_shrinking_the_step() {
 /// reference to `1e-6` m (measured 1.3e-8).
 #[test]
 fn si2_passes_the_flat_n_four_bar_with_index3_steps() {
-    let mut model = load("iftomm_a02_nfourbar.yaml");
-    let (r, e, _) = run(&mut model, "dynamics", Formulation::Si2, 1e-10, Some(1.5));
-    let err = nfourbar_error(&r, 40);
-    eprintln!("A02 to 1.5 s at 1e-10: error {err:.2e}, statistics {}", r.summary_json(None)["statistics"]);
-    assert!(e.is_none(), "{e:?}");
+    let (_, err) = a02(&mut load("iftomm_a02_nfourbar.yaml"), 1e-10, Some(1.5));
     assert!(err < 1e-6, "{err:.3e}");
 }
 
@@ -149,15 +155,12 @@ fn a01_order_five_damps_the_pendulum_and_order_six_does_not() {
 /// and `1e-13` B0 follows the reference to `1e-8` m (measured with order 5 `3.2e-10`,
 /// `2.5e-10`; with order 6 and cause 8's fresh-matrix retry `1.9e-9`, `5.2e-9`, of which
 /// `5e-11`, `3e-10` before the first flat position: each passage adds ~`1e-9`; the bound is 2000
-/// times below the done-when's `2e-5`).
+/// times below the 20 s run's bound `2e-5`, in the next test).
 #[test]
 fn a02_at_1e_12_and_1e_13_passes_the_flat_positions() {
     let mut model = load("iftomm_a02_nfourbar.yaml");
     for tol in [1e-12, 1e-13] {
-        let (r, e, _) = run(&mut model, "dynamics", Formulation::Si2, tol, Some(1.5));
-        let err = nfourbar_error(&r, 40);
-        eprintln!("A02 to 1.5 s at {tol:e}: error {err:.2e}, statistics {}", r.summary_json(None)["statistics"]);
-        assert!(e.is_none(), "{tol:e}: {e:?}");
+        let (_, err) = a02(&mut model, tol, Some(1.5));
         assert!(err < 1e-8, "{tol:e}: {err:.3e}");
     }
 }
@@ -167,16 +170,12 @@ fn a02_at_1e_12_and_1e_13_passes_the_flat_positions() {
 /// stalled at its second iteration at the noise the matrix makes of `Phi`'s round-off (15 times
 /// `roundoff_ratio`'s floor, `Phi` at `8e-4` of it), and the settled test, which needs a fresh
 /// matrix, never ran: a Newton failure at every step size down to `3e-15` s. The retry with a
-/// fresh matrix now applies to both correctors. The done-when: A02 over its 20 s at `1e-12`
+/// fresh matrix now applies to both correctors. Asserted: A02 over its 20 s at `1e-12`
 /// within `2e-5` of the reference (measured `5.5e-6`, 9120 steps, no Newton failure; the error
 /// grows by ~`1e-9` at each flat position and then with the phase, `1.2e-7` at 3 s).
 #[test]
 fn a02_at_1e_12_runs_to_the_end_within_2e_5() {
-    let mut model = load("iftomm_a02_nfourbar.yaml");
-    let (r, e, _) = run(&mut model, "dynamics", Formulation::Si2, 1e-12, None);
-    let err = nfourbar_error(&r, 40);
-    eprintln!("A02 20 s at 1e-12: error {err:.2e}, statistics {}", r.summary_json(None)["statistics"]);
-    assert!(e.is_none(), "{e:?}");
+    let (r, err) = a02(&mut load("iftomm_a02_nfourbar.yaml"), 1e-12, None);
     assert!(err < 2e-5, "{err:.3e}");
     assert_eq!(stat(&r, "newton_failures"), 0.0);
 }

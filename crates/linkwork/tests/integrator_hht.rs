@@ -25,9 +25,9 @@ fn steps(r: &Results) -> u64 {
 /// quadrature reference. Measured: 1.79e-3, 8.22e-5, 3.71e-6 in 886, 4115, 19101 steps: 22 times
 /// smaller per 100 times tighter tolerance, the `tol^(2/3)` of a second-order method whose step
 /// follows a local error `~h^3`. Before the fix of Newton's convergence test: 1.37e-2, 3.33e-3,
-/// 6.37e-4 (4.1 and 5.2 times: first order). Bounds: the issue's "within 1e-4 at 1e-8, and at
-/// least 10 times larger at 1e-6", and the same factor 10 from 1e-8 to 1e-10 (half the
-/// expected 21, twice the first-order 4.6).
+/// 6.37e-4 (4.1 and 5.2 times: first order). Bounds: within 1e-4 (m, rad) at 1e-8, at least 10
+/// times larger at 1e-6, and the same factor 10 from 1e-8 to 1e-10 (half the expected 21, twice
+/// the first-order 4.6).
 #[test]
 fn quick_return_error_follows_the_tolerance() {
     let m = load("quick_return_a.yaml");
@@ -48,8 +48,9 @@ fn quick_return_error_follows_the_tolerance() {
 /// IFToMM A01 over the benchmark's 2000 s (845 swings) at 1e-8 against the exact solution.
 /// Measured: 9.3e-3 m in 1.89 M steps (4 s). Before the step-size controller was centred on the
 /// step it sizes: 8.5e-2 m in the same 1.89 M steps (its energy loss twice the method's own, see
-/// the next test), and 2.0 m before the fix of Newton's convergence test. Bound: the issue's
-/// 5e-2, which the lagging controller missed by 1.7 times.
+/// the next test), and 2.0 m before the fix of Newton's convergence test. Bound: 5e-2 m, a
+/// twentieth of the pendulum's length after 845 swings, which the lagging controller missed by
+/// 1.7 times.
 #[test]
 fn pendulum_a01_keeps_its_phase_over_2000_s() {
     let m = load("iftomm_a01_pendulum.yaml");

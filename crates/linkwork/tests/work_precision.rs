@@ -73,7 +73,7 @@ fn references_are_converged_and_exact() {
 /// goes as `tol^(1/3)` and the global error as `h^2 ~ tol^(2/3)`, 21.5 times smaller per 100 times
 /// tighter tolerance. Asserted: at least 10 times smaller from `1e-6` to `1e-8` (an order
 /// reduction to first order gives 4.6), on the quick-return and on the pendulum's first 20 s;
-/// and at `1e-8` within `1e-4` on the quick-return (the target; measured 8.2e-5) and
+/// and at `1e-8` within `1e-4` on the quick-return (measured 8.2e-5) and
 /// `1e-3` on the pendulum (measured 3.4e-4 after 8 swings: HHT's period error accumulates).
 #[test]
 fn hht_is_second_order_under_error_control() {
@@ -143,7 +143,7 @@ fn a01_over_2000_s_within_1e_3_at_1e_10() {
 }
 
 /// Andrews' mechanism to t = 0.03 at `rtol = atol = 1e-12`: at least 9 significant digits for
-/// `bdf` and 10 for `abam` (the targets), counted as the test set counts them, against the
+/// `bdf` and 10 for `abam` (the test set's digits at this tolerance), counted as the test set counts them, against the
 /// converged solution of the test set's own equations (`ANDREWS_END_CONVERGED`, good to about
 /// 11.5 digits). The published values are only 9.57 digits from that solution (gamma), so against
 /// them no converged run can show more than about 9.6: both runs are also asserted to be that

@@ -119,8 +119,9 @@ pub struct Start {
 /// Weighted root-mean-square norm `sqrt(sum_k (v_k / (atol + rtol |y_k|))^2 / count)` of an
 /// error estimate or correction `v` against the solution `y`, given as the pairs `(v_k, y_k)`,
 /// over `count` components (0 for none), as DASSL and Hairer-Wanner: 1 means "at the tolerance".
-/// The error norm of every integrator's error test and Newton test, and of the starting step;
-/// `count` may exceed the pairs given when some components carry no error (a massless
+/// The norm of `bdf`'s and `hht`'s error tests, of every integrator's Newton test, and of the
+/// starting step (`abam`'s error test takes the largest weighted change of every coordinate
+/// instead, its `Split::norm`); `count` may exceed the pairs given when some components carry no error (a massless
 /// coordinate's load), which then count as zero in the mean.
 pub fn wrms(terms: impl IntoIterator<Item = (f64, f64)>, count: usize, rtol: f64, atol: f64) -> f64 {
     let s: f64 = terms.into_iter().map(|(v, y)| (v / (atol + rtol * y.abs())).powi(2)).sum();

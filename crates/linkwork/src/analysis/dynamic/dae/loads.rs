@@ -1,0 +1,183 @@
+//! The applied loads: gravity and the active force elements' generalised forces and exact
+//! derivatives, the contacts' events and states, and the energies and powers of the forces
+//! and drivers.
+
+use super::{gather, Dae};
+use crate::forces::{derivatives, potential_rate, DualWork};
+use faer::MatMut;
+
+/// Scratch of one force's evaluation: its positions and velocities on its (at most `w`)
+/// columns, its load, and its derivative blocks (`w x w`, row-major).
+#[derive(Debug)]
+pub(super) struct ForceWork {
+    fx: Vec<f64>,
+    fv: Vec<f64>,
+    fq: Vec<f64>,
+    /// The derivative blocks `dQ/dx` and `dQ/dv` of [`Dae::force_derivatives`].
+    pub(super) fdx: Vec<f64>,
+    pub(super) fdv: Vec<f64>,
+    dual: DualWork,
+}
+
+impl ForceWork {
+    /// Scratch for forces of at most `w` columns.
+    pub(super) fn new(w: usize) -> ForceWork {
+        ForceWork {
+            fx: vec![0.0; w],
+            fv: vec![0.0; w],
+            fq: vec![0.0; w],
+            fdx: vec![0.0; w * w],
+            fdv: vec![0.0; w * w],
+            dual: DualWork::new(w),
+        }
+    }
+
+    /// `x` and `v` on the columns `cols` into the positions and velocities; returns their number.
+    fn gather(&mut self, cols: &[usize], x: &[f64], v: &[f64]) -> usize {
+        let w = cols.len();
+        gather(x, cols, &mut self.fx[..w]);
+        gather(v, cols, &mut self.fv[..w]);
+        w
+    }
+}
+
+impl Dae<'_> {
+    /// `(q, qdot, t) => Q`, `out: (n)`: gravity plus every active force.
+    pub fn load(&mut self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) {
+        let s = self.external_scale;
+        for (o, g) in out.iter_mut().zip(&self.gravity) {
+            *o = s * g;
+        }
+        for (f, &applied) in self.forces.iter().zip(&self.applied) {
+            let cols = f.force.columns();
+            let w = self.work.gather(cols, q, qdot);
+            f.force.load(&self.work.fx[..w], &self.work.fv[..w], t, &mut self.work.fq[..w]);
+            let scale = if applied { s } else { 1.0 };
+            for (&c, &v) in cols.iter().zip(&self.work.fq[..w]) {
+                out[c] += scale * v;
+            }
+        }
+    }
+
+    /// `dq (n x n) = dQ/dq` and `dv (n x n) = dQ/dqdot` at `(q, qdot, t)`, dense, exact (dual
+    /// numbers), with [`Dae::external_scale`] applied as in [`Dae::load`].
+    pub fn load_jacobians(
+        &mut self,
+        q: &[f64],
+        qdot: &[f64],
+        t: f64,
+        mut dq: MatMut<'_, f64>,
+        mut dv: MatMut<'_, f64>,
+    ) {
+        dq.fill(0.0);
+        dv.fill(0.0);
+        for k in 0..self.forces.len() {
+            let w = self.force_derivatives(k, q, qdot, t);
+            let cols = self.forces[k].force.columns();
+            let scale = if self.applied[k] { self.external_scale } else { 1.0 };
+            for (ri, &r) in cols.iter().enumerate() {
+                for (ci, &c) in cols.iter().enumerate() {
+                    dq[(r, c)] += scale * self.work.fdx[ri * w + ci];
+                    dv[(r, c)] += scale * self.work.fdv[ri * w + ci];
+                }
+            }
+        }
+    }
+
+    /// `dQ/dx` and `dQ/dv` of the `k`-th force on its `w` columns at `(q, qdot, t)`, exact (dual
+    /// numbers), into `fdx` and `fdv` (`w x w`, row-major); returns `w`.
+    pub(super) fn force_derivatives(&mut self, k: usize, q: &[f64], qdot: &[f64], t: f64) -> usize {
+        let f = self.forces[k].force.as_ref();
+        let cols = f.columns();
+        let w = self.work.gather(cols, q, qdot);
+        let (dx, dv) = (&mut self.work.fdx[..w * w], &mut self.work.fdv[..w * w]);
+        derivatives(f, &self.work.fx[..w], &self.work.fv[..w], t, dx, dv, &mut self.work.dual);
+        w
+    }
+
+    /// Whether a contact is active.
+    pub fn has_contacts(&self) -> bool {
+        !self.contacts.is_empty()
+    }
+
+    /// For a step from `q0` to `q1`: the fraction of it to retry with when it carries a contact
+    /// from separation past its `max_penetration` or further than its smallest radius
+    /// ([`crate::forces::Contact::event`]; the smallest fraction of all contacts), `None` when the
+    /// step may stand (always, without contacts).
+    pub fn contact_event(&mut self, q0: &[f64], q1: &[f64]) -> Option<f64> {
+        let mut fraction: Option<f64> = None;
+        for &k in &self.contacts {
+            let f = self.forces[k].force.as_ref();
+            let Some(contact) = f.contact() else { continue };
+            let cols = f.columns();
+            let w = self.work.gather(cols, q0, q1);
+            if let Some(r) = contact.event(&self.work.fx[..w], &self.work.fv[..w]) {
+                fraction = Some(fraction.map_or(r, |g| g.min(r)));
+            }
+        }
+        fraction
+    }
+
+    /// `(normal force, friction, penetration)` of each active contact at `(q, qdot)`
+    /// ([`crate::forces::Contact::state`]), into `out`.
+    pub fn contact_states(&mut self, q: &[f64], qdot: &[f64], out: &mut Vec<f64>) {
+        for &k in &self.contacts {
+            let f = self.forces[k].force.as_ref();
+            let Some(contact) = f.contact() else { continue };
+            let cols = f.columns();
+            let w = self.work.gather(cols, q, qdot);
+            let s = contact.state(&self.work.fx[..w], &self.work.fv[..w]);
+            out.extend([s.normal, s.friction, s.penetration]);
+        }
+    }
+
+    /// Potential energy of gravity and of the active springs and contacts, J (zero at the origin
+    /// and at each spring's free length).
+    pub fn potential_energy(&mut self, q: &[f64]) -> f64 {
+        let mut v = -self.gravity.iter().zip(q).map(|(g, x)| g * x).sum::<f64>();
+        for f in &self.forces {
+            let cols = f.force.columns();
+            let w = cols.len();
+            gather(q, cols, &mut self.work.fx[..w]);
+            v += f.force.potential(&self.work.fx[..w]);
+        }
+        v
+    }
+
+    /// Power of the non-conservative forces, W: every active force's power `Q_e . qdot` plus the rate
+    /// of its potential (which cancels the conservative part), plus the drivers' power
+    /// `-lambda_d^T Phi_q,d qdot = -lambda_d^T nu_d`. `lambda: (m)`; positions as at the last
+    /// [`Dae::positions`].
+    pub fn nonconservative_power(&mut self, q: &[f64], qdot: &[f64], t: f64, lambda: &[f64], nu: &mut [f64]) -> f64 {
+        let mut p = self.applied_power(q, qdot, t);
+        for f in &self.forces {
+            let cols = f.force.columns();
+            let w = self.work.gather(cols, q, qdot);
+            p += potential_rate(f.force.as_ref(), &self.work.fx[..w], &self.work.fv[..w], &mut self.work.dual);
+        }
+        p + self.driver_power(q, t, lambda, nu) + self.friction_power(q, qdot, lambda)
+    }
+
+    /// Power of the active forces (not gravity) `Q_e . qdot`, W.
+    pub fn applied_power(&mut self, q: &[f64], qdot: &[f64], t: f64) -> f64 {
+        let mut p = 0.0;
+        for f in &self.forces {
+            let cols = f.force.columns();
+            let w = self.work.gather(cols, q, qdot);
+            f.force.load(&self.work.fx[..w], &self.work.fv[..w], t, &mut self.work.fq[..w]);
+            p += self.work.fq[..w].iter().zip(&self.work.fv[..w]).map(|(a, b)| a * b).sum::<f64>();
+        }
+        p
+    }
+
+    /// Power of the active drivers, `-lambda_d^T nu_d` (each effort times its driver's rate), W;
+    /// `nu: (m)` scratch, positions as at the last [`Dae::positions`].
+    pub fn driver_power(&self, q: &[f64], t: f64, lambda: &[f64], nu: &mut [f64]) -> f64 {
+        let joints = self.model.joints.iter().map(|j| j.constraint.rows()).sum::<usize>();
+        if joints == self.m {
+            return 0.0;
+        }
+        self.nu(q, t, nu);
+        -lambda[joints..].iter().zip(&nu[joints..]).map(|(l, v)| l * v).sum::<f64>()
+    }
+}
