@@ -31,12 +31,15 @@ def run_script(*args: str) -> str:
 
 
 def table_rows(output: str) -> list[list[str]]:
-    """The cells of each row of the Markdown tables in `output`, header and rule left out."""
+    """The cells of each row of the Markdown tables in `output`: lines that start with `|`, but
+    a header (the line above a `| ---` rule) and the rule."""
+    lines = output.splitlines()
     rows = []
-    for line in output.splitlines():
-        if line.startswith("|") and not line.startswith("| ---"):
+    for k, line in enumerate(lines):
+        header = k + 1 < len(lines) and lines[k + 1].startswith("| ---")
+        if line.startswith("|") and not line.startswith("| ---") and not header:
             rows.append([cell.strip() for cell in line.strip().strip("|").split("|")])
-    return rows[1:] if rows else rows
+    return rows
 
 
 def positive(text: str) -> float:
@@ -56,7 +59,8 @@ def load_peers_module(name: str) -> ModuleType:
 
 
 def test_equilibrium_timing_prints_a_row_per_case() -> None:
-    rows = table_rows("| file | analysis | rows | ms |\n" + run_script("benches/equilibrium_timing.py"))
+    # Rows only: the header is in docs/equilibrium.md, which holds the table.
+    rows = table_rows(run_script("benches/equilibrium_timing.py"))
     assert [(r[0], r[1]) for r in rows] == [
         ("quick_return_a.yaml", "kinematics"),
         ("quick_return_a.yaml", "inverse"),
