@@ -15,6 +15,9 @@ Prints each integrator's end state, its relative difference from the DOP853 row 
 the significant digits of the published values measured against that row.
 """
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 import sympy as sp
 from scipy.integrate import solve_ivp
@@ -36,7 +39,7 @@ PUBLISHED = [0.1581077119629904e2, -0.1575637105984298e2, 0.4082224013073101e-1,
 NAMES = ["beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon"]
 
 
-def equations():
+def equations() -> list[Callable[..., Any]]:
     """Mass matrix, forces, constraint Jacobian and the constraints' acceleration term, as
     numerical functions of the angles q and rates v."""
     q = sp.symbols("be th ga ph de om ep")
@@ -82,10 +85,10 @@ def equations():
     return [sp.lambdify(args, expr, "numpy") for args, expr in [([q], m), ([q, v], f), ([q], jac), ([q, v], gamma)]]
 
 
-def main():
+def main() -> None:
     mass, force, jacobian, gamma = equations()
 
-    def rhs(_t, y):
+    def rhs(_t: float, y: np.ndarray) -> np.ndarray:
         q, v = y[:7], y[7:]
         jac = np.array(jacobian(q), float)
         kkt = np.zeros((13, 13))
@@ -97,7 +100,7 @@ def main():
     # Each at its rtol floor or just above it (DOP853: 100 eps, 2.2e-14; Radau: 1000 eps; LSODA has none), and
     # DOP853 once more at 1e-13 to show it has converged; atol far below every angle.
     runs = [("DOP853", 3e-14), ("DOP853", 1e-13), ("Radau", 3e-13), ("LSODA", 1e-13)]
-    ends = {}
+    ends: dict[tuple[str, float], np.ndarray] = {}
     for method, tol in runs:
         sol = solve_ivp(rhs, (0.0, 0.03), y0, method=method, rtol=tol, atol=1e-18)
         ends[(method, tol)] = sol.y[:7, -1]

@@ -13,6 +13,7 @@ they are computed. docs/performance.md, "Scale", records the figures.
 
 from __future__ import annotations
 
+import importlib
 import json
 import resource
 import subprocess
@@ -55,7 +56,8 @@ def main() -> None:
     streamed = "--stream" in sys.argv[1:]
     sizes = [int(a) for a in sys.argv[1:] if a != "--stream"] or [10, 100, 1000, 10000]
     sys.path.insert(0, str(ROOT / "examples"))
-    import nfourbar
+    # By name at run time: examples/ is a folder of scripts, not a package the type check sees.
+    nfourbar = importlib.import_module("nfourbar")
 
     linkwork = [sys.executable, "-m", "linkwork"]
     print("| N | coordinates | `linkwork check` | motion | CPU | steps | CPU per step | peak memory | flat positions passed |")

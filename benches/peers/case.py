@@ -27,10 +27,13 @@ count of short runs can fall entirely within one. Both engines get the same budg
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
@@ -38,22 +41,28 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import problems  # noqa: E402
 
+if TYPE_CHECKING:
+    import linkwork
+
+T = TypeVar("T")
+
 TOLERANCES = [10.0**-k for k in range(4, 13)]
 INTEGRATORS = ("bdf", "abam")
 UNMATCHED = ("bdf", 1e-8)
 
 
-def timed(run, repeats, budget):
+def timed(run: Callable[[], tuple[float, T]], repeats: int, budget: float) -> tuple[list[float], T]:
     """CPU seconds of each call of `run` (which returns its own): at least `repeats` calls, and
     more until they add up to `budget` seconds. The last call's other results come back too."""
-    cpus, last = [], None
-    while len(cpus) < repeats or sum(cpus) < budget:
+    cpus: list[float] = []
+    while True:
         cpu, last = run()
         cpus.append(cpu)
-    return cpus, last
+        if len(cpus) >= repeats and sum(cpus) >= budget:
+            return cpus, last
 
 
-def exudyn_case(problem, step, rho, repeats, budget):
+def exudyn_case(problem: problems.Problem, step: float, rho: float | None, repeats: int, budget: float) -> dict[str, Any]:
     import linkwork
     from exudyn_model import ExudynModel
 
@@ -66,7 +75,7 @@ def exudyn_case(problem, step, rho, repeats, budget):
         twin.settings.timeIntegration.generalizedAlpha.spectralRadius = rho
         settings += f", spectral radius {rho:g}"
 
-    def run():
+    def run() -> tuple[float, Any]:
         start = time.process_time()
         it = twin.solve()
         return time.process_time() - start, it
@@ -87,20 +96,33 @@ def exudyn_case(problem, step, rho, repeats, budget):
     }
 
 
-def linkwork_run(problem, model, integrator, tol):
+def linkwork_run(
+    problem: problems.Problem, model: linkwork.Model, integrator: str, tol: float
+) -> tuple[float, float, dict[str, Any]]:
     """One run: its error, CPU seconds and summary statistics (a failed run raises)."""
     cpu, r = linkwork_timed(problem, model, integrator, tol)
-    return linkwork_error(problem, model, r), cpu, dict(r.summary.statistics)
+    return linkwork_error(problem, model, r), cpu, statistics(r)
 
 
-def linkwork_timed(problem, model, integrator, tol):
+def statistics(r: linkwork.Results) -> dict[str, Any]:
+    """The integrator's statistics of a dynamic run (its summary holds them; a kinematic one's
+    does not, and no problem here is kinematic)."""
+    stats = r.summary.statistics
+    if stats is None:
+        raise RuntimeError("the run has no integrator statistics: its analysis is not dynamic")
+    return dict(stats)
+
+
+def linkwork_timed(
+    problem: problems.Problem, model: linkwork.Model, integrator: str, tol: float
+) -> tuple[float, linkwork.Results]:
     """One run: its CPU seconds and results."""
     start = time.process_time()
     r = model.run(problem.analysis, integrator=integrator, rtol=tol, atol=tol, t_end=problem.t_end, step=problem.output_step)
     return time.process_time() - start, r
 
 
-def linkwork_error(problem, model, r):
+def linkwork_error(problem: problems.Problem, model: linkwork.Model, r: linkwork.Results) -> float:
     """A run's error against the problem's reference (the references cost more than a run)."""
     columns = {"time": np.asarray(r.time)}
     for body in problem.bodies:
@@ -109,11 +131,17 @@ def linkwork_error(problem, model, r):
     return problems.error(problem, model, columns)
 
 
-def linkwork_case(problem, target, repeats, budget, candidates=None):
+def linkwork_case(
+    problem: problems.Problem,
+    target: float | None,
+    repeats: int,
+    budget: float,
+    candidates: list[tuple[str, float]] | None = None,
+) -> dict[str, Any]:
     import linkwork
 
     model = linkwork.from_yaml(problem.text)
-    tried = []
+    tried: list[tuple[str, float, float | str]] = []
     met = True
     if candidates:
         return best_candidate(problem, model, candidates, repeats, budget, met, tried)
@@ -126,16 +154,16 @@ def linkwork_case(problem, target, repeats, budget, candidates=None):
                 try:
                     err, _, _ = linkwork_run(problem, model, integrator, tol)
                 except linkwork.LinkworkError as failure:
-                    tried.append([integrator, tol, f"{type(failure).__name__}: {failure}"])
+                    tried.append((integrator, tol, f"{type(failure).__name__}: {failure}"))
                     continue
-                tried.append([integrator, tol, err])
+                tried.append((integrator, tol, err))
                 if err <= target:
                     candidates.append((integrator, tol))
                     break
     met = bool(candidates)
     if not met:
         # No tolerance reached the target: the smallest error found is shown, and said so.
-        finished = [t for t in tried if not isinstance(t[2], str)]
+        finished = [(i, t, e) for i, t, e in tried if not isinstance(e, str)]
         if not finished:
             raise RuntimeError(f"no Linkwork run finished: {tried}")
         best = min(finished, key=lambda t: t[2])
@@ -143,14 +171,21 @@ def linkwork_case(problem, target, repeats, budget, candidates=None):
     return best_candidate(problem, model, candidates, repeats, budget, met, tried)
 
 
-def best_candidate(problem, model, candidates, repeats, budget, met, tried):
+def best_candidate(
+    problem: problems.Problem,
+    model: linkwork.Model,
+    candidates: list[tuple[str, float]],
+    repeats: int,
+    budget: float,
+    met: bool,
+    tried: list[tuple[str, float, float | str]],
+) -> dict[str, Any]:
     """Each of the `(integrator, tol)` candidates timed; the cheaper one's result, with all of
     them under "candidates" (so that run.py can take the least over its rounds)."""
-    measured = []
+    measured: list[dict[str, Any]] = []
     for integrator, tol in candidates:
-
-        cpus, r = timed(lambda i=integrator, t=tol: linkwork_timed(problem, model, i, t), repeats, budget)
-        stats = dict(r.summary.statistics)
+        cpus, r = timed(functools.partial(linkwork_timed, problem, model, integrator, tol), repeats, budget)
+        stats = statistics(r)
         measured.append(
             {
                 "integrator": integrator,
@@ -165,13 +200,13 @@ def best_candidate(problem, model, candidates, repeats, budget, met, tried):
     return {"engine": "linkwork", "met": met, "tried": tried, "candidates": measured, **cheapest(measured)}
 
 
-def cheapest(measured):
+def cheapest(measured: list[dict[str, Any]]) -> dict[str, Any]:
     """The candidate of least CPU, as the result's settings, error, CPU and counts."""
     best = min(measured, key=lambda c: c["cpu"])
     return {**best, "settings": f"{best['integrator']}, rtol = atol = {best['tol']:.0e}"}
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("engine", choices=["exudyn", "linkwork"])
     parser.add_argument("problem", choices=problems.PROBLEMS)

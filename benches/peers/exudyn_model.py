@@ -21,18 +21,25 @@ Anything else (drivers, other joints, forces that are expressions) raises `NotIm
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
 import exudyn as exu
 import exudyn.itemInterface as ei
+import numpy as np
 import yaml
 
+if TYPE_CHECKING:
+    import linkwork
 
-def _number(value, where):
+
+def _number(value: object, where: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise NotImplementedError(f"{where}: {value!r} is not a number (expressions and units are not translated)")
     return float(value)
 
 
-def _point(value, where):
+def _point(value: Sequence[object], where: str) -> list[float]:
     return [_number(value[0], where), _number(value[1], where), 0.0]
 
 
@@ -40,7 +47,17 @@ class ExudynModel:
     """An assembled Exudyn system of one dynamic analysis of a Linkwork `model`, with sensors on
     the x, y and phi of each of `bodies`, written every `output_step` seconds."""
 
-    def __init__(self, model, analysis, bodies, output_step, t_end, step, sparse, assembled=True):
+    def __init__(
+        self,
+        model: linkwork.Model,
+        analysis: str,
+        bodies: Sequence[str],
+        output_step: float,
+        t_end: float,
+        step: float,
+        sparse: bool,
+        assembled: bool = True,
+    ) -> None:
         doc = yaml.safe_load(model.source)
         if doc["analyses"][analysis].get("drivers", list(doc.get("drivers", {}))):
             raise NotImplementedError(f"analysis {analysis}: drivers are not translated")
@@ -53,7 +70,7 @@ class ExudynModel:
         self.sc = exu.SystemContainer()
         mbs = self.mbs = self.sc.AddSystem()
         self.objects = {"ground": mbs.AddObject(ei.ObjectGround())}
-        self.angles = {}
+        self.angles: dict[str, float] = {}
         for name in model.bodies:
             spec = doc["bodies"][name]
             q = [state[f"{name}.{c}"][0] for c in ("x", "y", "phi")]
@@ -118,7 +135,7 @@ class ExudynModel:
             else:
                 raise NotImplementedError(f"{where}: this {kind} is not translated")
 
-        self.sensors = {}
+        self.sensors: dict[str, tuple[Any, Any]] = {}
         for name in bodies:
             body = self.objects[name]
             position = mbs.AddSensor(ei.SensorBody(bodyNumber=body, storeInternal=True, outputVariableType=exu.OutputVariableType.Position))
@@ -135,18 +152,18 @@ class ExudynModel:
             s.linearSolver.solverType = exu.LinearSolverType.EigenSparse
 
     @staticmethod
-    def _assembled(model, analysis):
+    def _assembled(model: linkwork.Model, analysis: str) -> dict[str, tuple[float, float]]:
         """Each coordinate's (position, velocity) as Linkwork assembles them for `analysis`."""
         check = model.check()
         assembly = check["analyses"][analysis]["assembly"]
         return dict(zip(check["coordinate_names"], zip(assembly["q"], assembly["qdot"], strict=True), strict=True))
 
     @staticmethod
-    def _written(doc):
+    def _written(doc: dict[str, Any]) -> dict[str, tuple[float, float]]:
         """Each coordinate's (position, velocity) as the file writes them: for a file whose state
         is consistent as written (the N-four-bar's generator writes it exactly), where
         `Model.check()` would cost more than the runs (its rank test is dense)."""
-        state = {}
+        state: dict[str, tuple[float, float]] = {}
         for name, spec in doc["bodies"].items():
             position, velocity = spec.get("position", [0, 0]), spec.get("velocity", [0, 0])
             state[f"{name}.x"] = (_number(position[0], name), _number(velocity[0], name))
@@ -154,15 +171,17 @@ class ExudynModel:
             state[f"{name}.phi"] = (_number(spec.get("angle", 0), name), _number(spec.get("omega", 0), name))
         return state
 
-    def _marker(self, body, point, rigid=False):
+    def _marker(self, body: str, point: Sequence[object], rigid: bool = False) -> Any:
         kind = ei.MarkerBodyRigid if rigid else ei.MarkerBodyPosition
         return self.mbs.AddMarker(kind(bodyNumber=self.objects[body], localPosition=_point(point, f"{body} point")))
 
     @staticmethod
-    def _resolve(body, point, points, where):
+    def _resolve(
+        body: str, point: str | Sequence[object], points: dict[str, dict[str, list[float]]], where: str
+    ) -> list[float]:
         return points[body][point] if isinstance(point, str) else _point(point, where)
 
-    def solve(self):
+    def solve(self) -> Any:
         """Assemble and integrate with the generalised-alpha solver (Exudyn's default settings
         but the step, end time and linear solver); the solver's iteration data."""
         self.mbs.Assemble()
@@ -175,12 +194,12 @@ class ExudynModel:
             ) from None
         return self.mbs.sys["dynamicSolver"].it
 
-    def columns(self):
+    def columns(self) -> dict[str, np.ndarray]:
         """The output times and each sensed body's `x`, `y`, `phi` columns (the rotation sensor
         gives the angle turned from the reference, so the initial angle is added)."""
-        out = {}
+        out: dict[str, np.ndarray] = {}
         for name, (position, rotation) in self.sensors.items():
-            p, r = self.mbs.GetSensorStoredData(position), self.mbs.GetSensorStoredData(rotation)
+            p, r = np.asarray(self.mbs.GetSensorStoredData(position)), np.asarray(self.mbs.GetSensorStoredData(rotation))
             out["time"] = p[:, 0]
             out[f"{name}.x"], out[f"{name}.y"], out[f"{name}.phi"] = p[:, 1], p[:, 2], self.angles[name] + r[:, 1]
         return out

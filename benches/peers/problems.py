@@ -12,11 +12,15 @@ import importlib.util
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import yaml
 
 import references
+
+if TYPE_CHECKING:
+    import linkwork
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
@@ -45,9 +49,10 @@ class Problem:
 def _nfourbar_text(n: int) -> str:
     """examples/nfourbar.py's model of the N-four-bar (what `python examples/nfourbar.py N` prints)."""
     spec = importlib.util.spec_from_file_location("nfourbar", EXAMPLES / "nfourbar.py")
+    assert spec is not None and spec.loader is not None, "examples/nfourbar.py is a Python file"
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    return module.model(n)
+    return str(module.model(n))
 
 
 PENDULUM_REFERENCE = "exact: Jacobi's sn (the mass's x, y)"
@@ -66,7 +71,7 @@ def problem(key: str, n: int = 0) -> Problem:
         return Problem(key, "IFToMM A01 pendulum, 2000 s", a01, "dynamics", 2000.0, 0.01, (1e-3,), ("P1",), PENDULUM_REFERENCE, "m")
     if key == "slider-crank":
         text = (HERE / "slider_crank_coasting.yaml").read_text()
-        bodies = ("crank", "rod", "slider")
+        bodies: tuple[str, ...] = ("crank", "rod", "slider")
         return Problem(key, "slider-crank, coasting, 2 s", text, "dynamics", 2.0, 0.01, (1e-3,), bodies, ONE_DOF_REFERENCE, "m, rad")
     if key in ("quick-return", "quick-return-loaded"):
         bodies = ("crank", "rocker", "slider_b", "link", "slider_d")
@@ -100,7 +105,7 @@ def problem(key: str, n: int = 0) -> Problem:
 PROBLEMS = ("pendulum", "a01", "slider-crank", "quick-return", "quick-return-loaded", "andrews", "a02", "nfourbar")
 
 
-def _one_dof(problem: Problem, model) -> references.OneDof:
+def _one_dof(problem: Problem, model: linkwork.Model) -> references.OneDof:
     """The quadrature reference of a crank-turned mechanism: its masses from the file, the
     crank's given speed, and the constant crank torque when the analysis applies one."""
     doc = yaml.safe_load(problem.text)
@@ -115,7 +120,7 @@ def _one_dof(problem: Problem, model) -> references.OneDof:
     return references.OneDof(model, "kinematics", "crank", masses, omega0, torque)
 
 
-def error(problem: Problem, model, columns: dict[str, np.ndarray]) -> float:
+def error(problem: Problem, model: linkwork.Model, columns: dict[str, np.ndarray]) -> float:
     """The run's error against the problem's reference (unit: `problem.unit`)."""
     time = np.asarray(columns["time"])
     if problem.key in ("pendulum", "a01"):

@@ -17,8 +17,12 @@ Each is the Python twin of one in crates/linkwork/tests/common/references.rs:
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import linkwork
 
 G = 9.81
 
@@ -47,7 +51,7 @@ def sn(u: np.ndarray, k: float) -> np.ndarray:
     phi = 2.0**levels * a * u
     for n in range(levels, 0, -1):
         phi = 0.5 * (phi + np.arcsin(c[n] / aa[n] * np.sin(phi)))
-    return np.sin(phi)
+    return np.asarray(np.sin(phi))
 
 
 def pendulum_a01(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -72,7 +76,7 @@ class Fourier:
 
     def __call__(self, psi: np.ndarray) -> np.ndarray:
         angles = np.multiply.outer(psi, self.harmonics)
-        return self.a0 + np.cos(angles) @ self.a + np.sin(angles) @ self.b
+        return np.asarray(self.a0 + np.cos(angles) @ self.a + np.sin(angles) @ self.b)
 
 
 class OneDof:
@@ -87,7 +91,16 @@ class OneDof:
     PANELS = 512
     NODES = 12
 
-    def __init__(self, model, kinematics, crank, masses, omega0, torque=0.0, samples=512):
+    def __init__(
+        self,
+        model: linkwork.Model,
+        kinematics: str,
+        crank: str,
+        masses: dict[str, tuple[float, float]],
+        omega0: float,
+        torque: float = 0.0,
+        samples: int = 512,
+    ) -> None:
         r = model.run(kinematics, t_end=1.0, step=1.0 / samples)
         speed = np.asarray(r[f"{crank}.omega"])
         if not np.allclose(speed, 2.0 * math.pi, rtol=1e-9):
@@ -100,7 +113,7 @@ class OneDof:
         self.inertia = Fourier(inertia)
         self.energy = 0.5 * inertia[0] * omega0**2
         self.torque = torque
-        self.columns = {}
+        self.columns: dict[str, tuple[Fourier, float]] = {}
         for b in masses:
             for c in ("x", "y", "phi"):
                 y = np.asarray(r[f"{b}.{c}"])
@@ -111,24 +124,24 @@ class OneDof:
 
     def rate(self, psi: np.ndarray) -> np.ndarray:
         """`dt/dpsi` at crank angle `psi` from the start."""
-        return np.sqrt(self.inertia(psi) / (2.0 * (self.energy + self.torque * psi)))
+        return np.asarray(np.sqrt(self.inertia(psi) / (2.0 * (self.energy + self.torque * psi))))
 
     def integral(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """`int_a^b rate` for each pair, by Gauss-Legendre on `[a, b]` (short intervals)."""
         half = 0.5 * (b - a)
         psi = (0.5 * (a + b))[..., None] + half[..., None] * self.nodes
-        return half * (self.rate(psi) @ self.weights)
+        return np.asarray(half * (self.rate(psi) @ self.weights))
 
     def crank_angle(self, times: np.ndarray) -> np.ndarray:
         """The crank angle from the start at each time, by Newton on `t(psi) = t` inside the
         panel that holds it."""
         width = 2.0 * math.pi / self.PANELS
-        edges = [0.0]
-        while edges[-1] < times.max():
-            start = width * np.arange(len(edges) - 1, len(edges) - 1 + self.PANELS)
+        ends = [0.0]
+        while ends[-1] < times.max():
+            start = width * np.arange(len(ends) - 1, len(ends) - 1 + self.PANELS)
             steps = self.integral(start, start + width)
-            edges.extend(edges[-1] + np.cumsum(steps))
-        edges = np.asarray(edges)
+            ends.extend(ends[-1] + np.cumsum(steps))
+        edges = np.asarray(ends)
         panel = np.clip(np.searchsorted(edges, times, side="right") - 1, 0, len(edges) - 2)
         start = panel * width
         psi = start + width * (times - edges[panel]) / (edges[panel + 1] - edges[panel])
@@ -137,7 +150,7 @@ class OneDof:
             psi = psi - step
             if np.max(np.abs(step)) < 1e-15 * max(1.0, float(np.max(np.abs(psi)))):
                 break
-        return psi
+        return np.asarray(psi)
 
     def error(self, time: np.ndarray, columns: dict[str, np.ndarray]) -> float:
         """The largest error of every body's x, y (m) and phi (rad) over the output times."""

@@ -31,11 +31,17 @@ import sys
 import tempfile
 import textwrap
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import case  # noqa: E402
 import problems  # noqa: E402
+
+# One engine's round (or rounds) on one case: case.py's JSON, or {"status": ...} when it failed.
+Result = dict[str, Any]
+# A row of the table: the problem, Exudyn's result and Linkwork's.
+Row = tuple[problems.Problem, Result, Result]
 
 ROOT = problems.ROOT
 DOC = ROOT / "docs" / "performance.md"
@@ -56,7 +62,7 @@ SERIAL = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
 FALLBACK_RHO = 0.6
 
 
-def run_case(args, timeout):
+def run_case(args: list[str], timeout: float) -> Result:
     """case.py with `args` in a subprocess: its JSON, or `{"status": ...}` on a timeout or failure."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "case.json"
@@ -76,7 +82,7 @@ def run_case(args, timeout):
         return {"status": "ok", **json.loads(out.read_text())}
 
 
-def merge(first, later):
+def merge(first: Result, later: Result) -> Result:
     """One engine's result over its rounds: the first round's, with the least CPU time and the
     runs of all (for Linkwork, of each candidate, the cheaper one then chosen again)."""
     if first["status"] != "ok":
@@ -94,7 +100,7 @@ def merge(first, later):
     return {**first, "candidates": candidates, **case.cheapest(candidates)}
 
 
-def machine():
+def machine() -> dict[str, Any]:
     """CPU model and cores, and the versions that ran."""
     model = "unknown CPU"
     cpuinfo = Path("/proc/cpuinfo")
@@ -118,11 +124,11 @@ def machine():
     }
 
 
-def number(x, digits=3):
+def number(x: float, digits: int = 3) -> str:
     return f"{x:.{digits}g}" if x >= 1e-3 else f"{x:.{digits - 1}e}"
 
 
-def table(rows):
+def table(rows: list[Row]) -> str:
     lines = [
         "| problem | reference | engine | settings | error | CPU s | steps | Newton iterations | Exudyn CPU / Linkwork CPU |",
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
@@ -151,9 +157,12 @@ def table(rows):
     return "\n".join(lines)
 
 
-def findings(rows):
+def findings(rows: list[Row]) -> str:
     """What the table says about the 10-times aim, read from it."""
-    slower, short, timeouts, ratios = [], [], [], []
+    slower: list[str] = []
+    short: list[str] = []
+    timeouts: list[str] = []
+    ratios: list[tuple[float, str]] = []
     for problem, exudyn, linkwork in rows:
         name = f"{problem.label} ({exudyn.get('settings', 'Exudyn')})"
         for engine, r in (("Exudyn", exudyn), ("Linkwork", linkwork)):
@@ -184,7 +193,7 @@ def findings(rows):
     return "\n".join(out)
 
 
-def plot(rows):
+def plot(rows: list[Row]) -> None:
     """CPU seconds per simulated second against N for the N-four-bar, both engines (SVG)."""
     import matplotlib
 
@@ -193,11 +202,11 @@ def plot(rows):
 
     plt.rcParams["svg.hashsalt"] = "linkwork-peers"
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
-    missing = []
-    for engine, index, marker in (("Exudyn", 1, "s"), ("Linkwork", 2, "o")):
-        points = []
-        for row in rows:
-            problem, r = row[0], row[index]
+    missing: list[str] = []
+    for engine, marker in (("Exudyn", "s"), ("Linkwork", "o")):
+        points: list[tuple[int, float]] = []
+        for problem, exudyn, linkwork in rows:
+            r = exudyn if engine == "Exudyn" else linkwork
             if problem.key != "nfourbar":
                 continue
             if r["status"] == "ok":
@@ -219,7 +228,9 @@ def plot(rows):
     plt.close(fig)
 
 
-def section(rows, info, command, with_plot, repeats, budget, rounds):
+def section(
+    rows: list[Row], info: dict[str, Any], command: str, with_plot: bool, repeats: int, budget: float, rounds: int
+) -> str:
     exudyn_steps = sorted({r[1]["step"] for r in rows if r[1]["status"] == "ok"})
     lines = [
         f"Measured {info['date']} with `{command}` on {info['cpu']} ({info['cores']} cores): Linkwork "
@@ -268,7 +279,7 @@ def section(rows, info, command, with_plot, repeats, budget, rounds):
     return "\n".join(lines)
 
 
-def write(text):
+def write(text: str) -> None:
     doc = DOC.read_text()
     if BEGIN not in doc:
         doc = doc.rstrip("\n") + f"\n\n## Against Exudyn\n\n{BEGIN}\n{END}\n"
@@ -277,7 +288,7 @@ def write(text):
     DOC.write_text(f"{head}{BEGIN}\n{text}\n{END}{tail}")
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help=f"only {', '.join(QUICK)} (N = 10, 100), one repeat")
     parser.add_argument("--problems", help=f"comma-separated, of {', '.join(problems.PROBLEMS)}")
@@ -298,9 +309,11 @@ def main(argv=None):
     repeats = args.repeats or (1 if args.quick else 3)
     budget = args.budget if args.budget is not None else (0.0 if args.quick else 3.0)
     rounds = args.rounds or (1 if args.quick else 3)
+    if rounds < 1:
+        parser.error("--rounds must be at least 1")
     command = " ".join(["python benches/peers/run.py", *(argv if argv is not None else sys.argv[1:])])
 
-    rows = []
+    rows: list[Row] = []
     for key in keys:
         for n in ns if key == "nfourbar" else [0]:
             problem = problems.problem(key, n)
@@ -308,8 +321,9 @@ def main(argv=None):
             base = [problem.key, "--n", str(n), *share]
             for step in problem.exudyn_steps:
                 # An engine that failed or timed out in the first round is not run again.
-                exudyn = linkwork = None
-                rho = []
+                exudyn: Result | None = None
+                linkwork: Result | None = None
+                rho: list[str] = []
                 for k in range(rounds):
                     if exudyn is None or exudyn["status"] == "ok":
                         print(f"{problem.label}: Exudyn h = {step:g}, round {k + 1} ...", flush=True)
@@ -336,6 +350,7 @@ def main(argv=None):
                     w = run_case(["linkwork", *base, *chosen], args.timeout)
                     linkwork = w if linkwork is None else merge(linkwork, w)
                     print(f"  {w['status']} {w.get('settings', '')} {w.get('error', '')} {w.get('cpu', '')}", flush=True)
+                assert exudyn is not None and linkwork is not None, "each engine ran in the first round"
                 exudyn.setdefault("settings", f"generalised-alpha, h = {step:g}")
                 exudyn.setdefault("step", step)
                 rows.append((problem, exudyn, linkwork))
