@@ -24,7 +24,7 @@ fn cam() -> Model {
 
 #[test]
 fn the_follower_moves_by_the_law_and_the_pressure_angle_is_its_closed_form() {
-    let r = cam().run("motion").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = cam().run("motion", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     // 1.5 s at a degree a step: the cam turns on past 360 deg, across the pitch curve's seam
     // (psi = +-pi, at theta = 270 deg) twice.
     assert_eq!(r.len(), 541);
@@ -59,7 +59,7 @@ fn the_follower_moves_by_the_law_and_the_pressure_angle_is_its_closed_form() {
 
 #[test]
 fn the_motor_torque_pays_the_followers_work() {
-    let r = cam().run("drive").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = cam().run("drive", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let col = |n: &str| r.column(n).unwrap_or_else(|| panic!("no column {n}")).to_vec();
     let (ay, torque) = (col("follower.ay"), col("motor.effort"));
     // Virtual work: the cam turns steadily about its centre of mass and the guide is frictionless,
@@ -247,7 +247,7 @@ fn roller_lift_error(joint: &str) -> f64 {
     let from = "    radius: \"base + cycloidal(pi/2 - psi, 0, 0, 2*pi/3, lift) + cycloidal(pi/2 - psi, pi, lift, 3*pi/2, 0) - lift\"\n";
     let text = common::patched_example("cam_roller.yaml", &[(from, joint)]);
     let model = Model::from_yaml(&text).unwrap_or_else(|e| panic!("{e}"));
-    let r = model.run("motion").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = model.run("motion", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let y = common::col(&r, "follower.y");
     r.time.iter().enumerate().map(|(k, &t)| (y[k] - BASE - lift(2.0 * PI * t).0).abs()).fold(0.0, f64::max)
 }
@@ -331,7 +331,8 @@ fn a_roller_with_no_unique_nearest_point_stops_the_analysis_naming_the_joint() {
                 profile: {x: '0.04*cos(u)', y: '0.04*sin(u)'}}\n\
                 drivers:\n  motor: {type: angle, body: cam, function: 't'}\n\
                 analyses:\n  motion: {type: kinematic, drivers: [motor], t_end: 1, step: 0.1}\n";
-    let error = Model::from_yaml(text).unwrap().run("motion").map(|_| ()).unwrap_err().error.to_string();
+    let error =
+        Model::from_yaml(text).unwrap().run("motion", &Default::default()).map(|_| ()).unwrap_err().error.to_string();
     eprintln!("{error}");
     assert!(error.contains("joints.contact is NaN at t = 0 s"), "{error}");
     assert!(error.contains("no unique, regular nearest point on the working surface"), "{error}");

@@ -39,7 +39,7 @@ fn run(
     }
     let o = at_tolerance(IntegratorKind::Bdf, tol, t_end);
     let start = Instant::now();
-    let r = model.run_with(analysis, &o);
+    let r = model.run(analysis, &o.clone().into());
     let cpu = start.elapsed().as_secs_f64();
     match r {
         Ok(r) => (r, None, cpu),
@@ -88,7 +88,7 @@ fn velocities_in_the_error_test_make_the_error_follow_the_tolerance() {
     let reference = QuickReturn::new(&model, 6.283, SAMPLES);
     let tol = 1e-8;
     let o = at_tolerance(IntegratorKind::Bdf, tol, None);
-    let default = model.run_with("dynamics", &o).unwrap_or_else(|f| panic!("{}", f.error));
+    let default = model.run("dynamics", &o.clone().into()).unwrap_or_else(|f| panic!("{}", f.error));
     assert_eq!(default.summary_json(None)["integrator"]["formulation"], "si2");
     let si2 = quick_return_error(&default, &reference);
     let (r, e, _) = run(&mut model, "dynamics", Formulation::Index3, tol, None);

@@ -22,7 +22,9 @@ fn load(name: &str) -> Model {
 fn run_tol(model: &Model, analysis: &str, kind: IntegratorKind, tol: f64, t_end: Option<f64>) -> (Results, f64) {
     let o = at_tolerance(kind, tol, t_end);
     let clock = std::time::Instant::now();
-    let r = model.run_with(analysis, &o).unwrap_or_else(|f| panic!("{} {analysis} {tol}: {}", model.name, f.error));
+    let r = model
+        .run(analysis, &o.clone().into())
+        .unwrap_or_else(|f| panic!("{} {analysis} {tol}: {}", model.name, f.error));
     (r, clock.elapsed().as_secs_f64())
 }
 
@@ -171,7 +173,7 @@ fn diag() {
         for &tol in &tols {
             let o = at_tolerance(IntegratorKind::Hht, tol, t_end);
             let clock = std::time::Instant::now();
-            match m.run_with("dynamics", &o) {
+            match m.run("dynamics", &o.clone().into()) {
                 Ok(r) => eprintln!(
                     "{name} hht {tol:e}: ok in {:.2} s, {}",
                     clock.elapsed().as_secs_f64(),

@@ -56,7 +56,7 @@ fn time_loop_allocates_nothing() {
     let mut count = |t_end: f64| {
         model.analyses[0].t_end = t_end;
         let before = allocations();
-        let r = model.run("kinematics").unwrap();
+        let r = model.run("kinematics", &Default::default()).unwrap();
         (allocations() - before, r.len())
     };
     let (short, n_short) = count(2.0);
@@ -82,7 +82,7 @@ fn a_cam_surface_allocates_nothing_in_the_time_loop() {
     let mut count = |t_end: f64| {
         model.analyses[0].t_end = t_end;
         let before = allocations();
-        let r = model.run("motion").unwrap();
+        let r = model.run("motion", &Default::default()).unwrap();
         (allocations() - before, r.len())
     };
     let (short, n_short) = count(0.25);
@@ -113,7 +113,7 @@ fn dynamic_steps_allocate_nothing() {
                 let integrator = IntegratorKind::from_name(name);
                 let overrides = linkwork::Overrides { integrator, t_end: Some(t_end), ..Default::default() };
                 let before = allocations();
-                let r = model.run_with("dynamics", &overrides).unwrap();
+                let r = model.run("dynamics", &overrides.clone().into()).unwrap();
                 (allocations() - before, r.len())
             };
             let ((short, rows_short), (long, rows_long)) = (count(t_end), count(10.0 * t_end));

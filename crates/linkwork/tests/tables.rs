@@ -20,7 +20,7 @@ fn cam() -> Model {
 
 #[test]
 fn the_follower_moves_by_the_table_through_its_points_and_close_to_the_law_between() {
-    let r = cam().run("motion").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = cam().run("motion", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     // 1.5 s at a degree a step: the cam turns on past 360 deg, where the periodic table repeats.
     assert_eq!(r.len(), 541);
     let col = |n: &str| r.column(n).unwrap_or_else(|| panic!("no column {n}")).to_vec();
@@ -55,7 +55,7 @@ fn the_follower_moves_by_the_table_through_its_points_and_close_to_the_law_betwe
 #[test]
 fn the_motor_torque_pays_the_followers_work() {
     let model = cam();
-    let r = model.run("drive").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = model.run("drive", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let col = |n: &str| r.column(n).unwrap_or_else(|| panic!("no column {n}")).to_vec();
     let (vy, ay, torque) = (col("follower.vy"), col("follower.ay"), col("motor.effort"));
     // Virtual work: the cam turns steadily about its centre of mass, so the motor's power T omega
@@ -82,7 +82,7 @@ fn an_inline_table_drives_with_its_derivatives() {
          analyses:\n  run: {type: kinematic, drivers: [turn], t_end: 3, step: 0.25}\n",
     )
     .unwrap();
-    let r = model.run("run").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = model.run("run", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let (phi, omega, alpha) =
         (r.column("crank.phi").unwrap(), r.column("crank.omega").unwrap(), r.column("crank.alpha").unwrap());
     for (k, &t) in r.time.iter().enumerate() {
@@ -156,7 +156,10 @@ fn a_files_columns_are_found_by_name_and_read_as_numbers() {
     };
     // A model loaded from a file reads the table's file beside it.
     std::fs::write(dir.join("model.yaml"), model("good.csv", "angle")).unwrap();
-    let r = Model::load(dir.join("model.yaml")).unwrap().run("run").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = Model::load(dir.join("model.yaml"))
+        .unwrap()
+        .run("run", &Default::default())
+        .unwrap_or_else(|f| panic!("{}", f.error));
     assert_eq!(r.column("crank.phi").unwrap(), &[0.0, 1.0, 2.0, 3.0, 4.0]);
     let list = problems(&model(&dir.join("good.csv").display().to_string(), "angel"));
     assert!(

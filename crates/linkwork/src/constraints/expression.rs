@@ -18,10 +18,7 @@
 //! 3.5 (general constraints and drivers); derivatives by hyper-dual numbers (Fike and Alonso, 2011).
 
 use super::{Anchor, BodyIx, Config, Constraint};
-use crate::expr::{Dual, Expr, HyperDual, Scalar};
-
-/// The most slots (distinct names) a general constraint may use.
-pub const MAX_SLOTS: usize = 64;
+use crate::expr::{Dual, Expr, HyperDual, Scalar, MAX_SLOTS};
 
 /// What an expression slot stands for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

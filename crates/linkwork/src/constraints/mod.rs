@@ -29,7 +29,7 @@ pub use cam::{Cam, CamFrame, CamRow, PitchPoint};
 pub use cam_profile::{CamProfile, Curve, CurveError};
 pub use distance::Distance;
 pub use driver::{Driver, DriverKind};
-pub use expression::{GeneralConstraint, Var, MAX_SLOTS};
+pub use expression::{GeneralConstraint, Var};
 pub use friction::{Friction, FrictionLaw, DEFAULT_TRANSITION_VELOCITY};
 pub use gear::{GearKind, GearPair};
 pub use point_line::PointOnLine;

@@ -6,10 +6,8 @@ use super::spec::*;
 use super::structure::Dyad;
 use super::{
     Analysis, Body, Effort, Element, ForceElement, IntegratorSettings, Measure, MeasureKind, Model, PathPoint,
-    SolverSettings, REACTION_QUANTITIES,
+    SolverSettings, ENERGY_COLUMNS, INVERSE_COLUMNS, REACTION_QUANTITIES,
 };
-use crate::analysis::dynamic::ENERGY_COLUMNS;
-use crate::analysis::INVERSE_COLUMNS;
 use crate::constraints::{
     Absolute, AbsoluteKind, BodyIx, Cam, CamProfile, CamRow, Constraint, Curve, Distance, Driver, DriverKind, Frame,
     Friction, FrictionLaw, GearKind, GearPair, GeneralConstraint, PointOnLine, RackPinion, Revolute, RollingDisc,

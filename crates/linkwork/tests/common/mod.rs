@@ -59,7 +59,7 @@ pub fn patched_example(name: &str, changes: &[(&str, &str)]) -> String {
 /// Load and run an example's analysis; panics with the engine's message on failure.
 pub fn run(name: &str, analysis: &str) -> (Model, Results) {
     let model = Model::load(example(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let results = model.run(analysis).unwrap_or_else(|f| panic!("{name}: {}", f.error));
+    let results = model.run(analysis, &Default::default()).unwrap_or_else(|f| panic!("{name}: {}", f.error));
     (model, results)
 }
 
