@@ -1,8 +1,9 @@
 //! Linkwork: a planar multibody kinematics and dynamics engine.
 //!
 //! Data flows one way, and the imports follow it: each module imports only the ones above it
-//! here ([`error`] and [`progress`] from anywhere), save that an analysis writes its
-//! [`Results`], and `results` imports nothing of `analysis`.
+//! here, not its peer on the same line ([`error`], [`progress`] and [`linalg`] from anywhere,
+//! and they import none of the others), save that an analysis writes its [`Results`], and
+//! `results` imports nothing of `analysis` (`tests/layers.rs` reads every import against this).
 //!
 //! ```text
 //! expr                      expressions of time and state, differentiated exactly; tables;
