@@ -94,8 +94,7 @@ fn fuzz_one(text: &str) {
         Err(e) => assert!(!e.to_string().is_empty(), "an error says what went wrong"),
     }
     for (name, a) in model.analyses.iter().take(MAX_ANALYSES) {
-        let overrides = short(a);
-        match model.run(name, &overrides.clone().into()) {
+        match model.run(name, &short(a).into()) {
             Ok(results) => whole_and_finite(&results, name, "ok"),
             Err(failure) => {
                 assert!(!failure.error.to_string().is_empty(), "an error says what went wrong");
