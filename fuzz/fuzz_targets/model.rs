@@ -2,7 +2,7 @@
 //! input is the YAML text; each execution parses and compiles it (`Model::from_yaml`), checks
 //! and assembles the mechanism and every analysis's system (`analysis::check`), then runs every
 //! analysis over a few output steps and at most [`MAX_STEPS`] integrator steps
-//! (`Model::run_with`). It holds the engine's promises
+//! (`Model::run`). It holds the engine's promises
 //! (docs/reliability.md), not only "no panic":
 //!
 //! - every step returns its value or a typed [`Error`] whose message can be written;
@@ -94,8 +94,7 @@ fn fuzz_one(text: &str) {
         Err(e) => assert!(!e.to_string().is_empty(), "an error says what went wrong"),
     }
     for (name, a) in model.analyses.iter().take(MAX_ANALYSES) {
-        let overrides = short(a);
-        match model.run_with(name, &overrides) {
+        match model.run(name, &short(a).into()) {
             Ok(results) => whole_and_finite(&results, name, "ok"),
             Err(failure) => {
                 assert!(!failure.error.to_string().is_empty(), "an error says what went wrong");

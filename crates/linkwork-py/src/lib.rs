@@ -9,14 +9,15 @@ mod json;
 
 use errors::{guard, to_pyerr};
 use linkwork::analysis::check;
-use linkwork::progress::Progress;
-use linkwork::results::stream::{CsvSink, RowSink};
-use linkwork::{Error, Results};
+use linkwork::progress::{Progress, StopToken};
+use linkwork::results::stream::RowSink;
+use linkwork::{Error, Results, RunOptions, Sink};
 use numpy::ndarray::{Array2, ShapeBuilder};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 use std::sync::mpsc::RecvTimeoutError;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// How often a run's thread of Python wakes to handle signals and report progress: Ctrl-C
@@ -27,10 +28,10 @@ const POLL: Duration = Duration::from_millis(50);
 
 /// Run `work` on a thread of its own with the GIL released. This thread wakes every [`POLL`] to
 /// let Python handle its signals (Ctrl-C) and to call `report`; the first exception from either
-/// stops `watch` (the work ends at its next step) and is returned beside the work's outcome.
+/// stops `stop` (the work ends at its next step) and is returned beside the work's outcome.
 fn watched<T: Send>(
     py: Python<'_>,
-    watch: &Progress,
+    stop: &StopToken,
     work: impl FnOnce() -> T + Send,
     mut report: impl FnMut(Python<'_>) -> PyResult<()> + Send,
 ) -> (PyResult<T>, Option<PyErr>) {
@@ -50,7 +51,7 @@ fn watched<T: Send>(
                 }
                 Python::attach(|py| {
                     if let Err(e) = py.check_signals().and_then(|()| report(py)) {
-                        watch.stop();
+                        stop.stop();
                         stopped_by = Some(e);
                     }
                 });
@@ -121,11 +122,11 @@ impl PyModel {
                 })
             })
             .collect::<PyResult<_>>()?;
-        let watch = Progress::new();
+        let (watch, stop) = (Progress::new(), StopToken::new());
         let (outcome, stopped_by) = watched(
             py,
-            &watch,
-            || linkwork::sweep::sweep(&self.model, analysis, &variants, &parsed, workers, &watch),
+            &stop,
+            || linkwork::sweep::sweep(&self.model, analysis, &variants, &parsed, workers, &watch, &stop),
             |py| match &progress {
                 Some(f) => f.call1(py, (watch.finished(),)).map(drop),
                 None => Ok(()),
@@ -288,13 +289,13 @@ impl PyModel {
         stream: Option<Bound<'_, PyAny>>,
     ) -> PyResult<PyResults> {
         use linkwork::analysis::dynamic::IntegratorKind;
-        let sink: Option<Box<dyn RowSink>> = match stream {
-            None => None,
+        let sink = match stream {
+            None => Sink::Memory,
             Some(s) => match s.extract::<PathBuf>() {
-                Ok(path) => Some(Box::new(CsvSink::at(&path))),
+                Ok(path) => Sink::csv(&path),
                 Err(_) => {
                     let path = s.getattr("path")?.str()?.to_string();
-                    Some(Box::new(PySink { sink: s.unbind(), path }))
+                    Sink::stream(Box::new(PySink { sink: s.unbind(), path }))
                 }
             },
         };
@@ -313,13 +314,11 @@ impl PyModel {
         };
         let overrides = linkwork::Overrides { integrator, rtol, atol, t_end, step };
         let watch = Progress::new();
+        let options = RunOptions { overrides, progress: Some(Arc::clone(&watch)), stop: StopToken::new(), sink };
         let (outcome, stopped_by) = watched(
             py,
-            &watch,
-            || match sink {
-                Some(sink) => self.model.run_streamed(analysis, &overrides, &watch, sink),
-                None => self.model.run_watched(analysis, &overrides, &watch),
-            },
+            &options.stop,
+            || self.model.run(analysis, &options),
             |py| match &progress {
                 Some(f) => {
                     let (t0, t1) = watch.span();

@@ -15,9 +15,11 @@ fn quick_return(c: &mut Criterion) {
     let mut group = c.benchmark_group("quick_return_a");
     for (label, t_end) in [("kinematics_2s", 2.0), ("kinematics_100s", 100.0)] {
         model.analyses[0].t_end = t_end;
-        let points = model.run("kinematics").expect("the example runs").len();
+        let points = model.run("kinematics", &Default::default()).expect("the example runs").len();
         group.throughput(Throughput::Elements(points as u64));
-        group.bench_function(label, |b| b.iter(|| black_box(&model).run("kinematics").map(|r| r.len()).ok()));
+        group.bench_function(label, |b| {
+            b.iter(|| black_box(&model).run("kinematics", &Default::default()).map(|r| r.len()).ok())
+        });
     }
     group.finish();
 }

@@ -81,7 +81,7 @@ fn main() {
         for &tol in &tols {
             let o = at_tolerance(IntegratorKind::Hht, tol, t_end);
             let clock = std::time::Instant::now();
-            match m.run_with("dynamics", &o) {
+            match m.run("dynamics", &o.clone().into()) {
                 Ok(r) => eprintln!(
                     "{name} hht {tol:e}: ok in {:.2} s, {}",
                     clock.elapsed().as_secs_f64(),

@@ -19,7 +19,7 @@
 //! Prints a Markdown table: the error (largest over the output times of the positions named
 //! per model, m or rad; for Andrews the significant digits at t = 0.03 as the test set counts
 //! them, `-log10` of the largest relative error, against the converged solution
-//! `ANDREWS_END_CONVERGED`), the CPU time of `Model::run_with` (the best of
+//! `ANDREWS_END_CONVERGED`), the CPU time of `Model::run` (the best of
 //! three for runs under a second), steps, rejected steps and factorizations. A failed run prints
 //! its error and where it stopped.
 
@@ -102,7 +102,7 @@ fn output_step_effect() {
                 let model = Model::from_yaml(yaml).expect("model");
                 let o = Overrides { integrator: Some(kind), rtol: Some(tol), atol: Some(tol), ..Default::default() };
                 let start = Instant::now();
-                let (r, note) = match model.run_with("dynamics", &o) {
+                let (r, note) = match model.run("dynamics", &o.clone().into()) {
                     Ok(r) => (r, String::new()),
                     Err(f) => (f.results, format!(" (failed: {})", f.error)),
                 };
@@ -140,7 +140,7 @@ fn sweep(filter: &str, integrator: &str) {
                     let o =
                         Overrides { integrator: Some(kind), rtol: Some(tol), atol: Some(tol), ..Default::default() };
                     let start = Instant::now();
-                    let run = model.run_with(analysis, &o);
+                    let run = model.run(analysis, &o.clone().into());
                     let time = start.elapsed().as_secs_f64();
                     runs += 1;
                     let (outcome, r) = match run {
@@ -167,7 +167,7 @@ fn one(file: &str, integrator: &str, tol: f64) {
     let model = Model::load(example(file)).expect("model");
     let o = Overrides { integrator: Some(kind), rtol: Some(tol), atol: Some(tol), ..Default::default() };
     let start = Instant::now();
-    let run = model.run_with("dynamics", &o);
+    let run = model.run("dynamics", &o.clone().into());
     let time = start.elapsed().as_secs_f64();
     let r = match run {
         Ok(r) => r,
@@ -196,7 +196,7 @@ fn spread(file: &str, integrator: &str, tol: f64, count: usize) {
     for k in 0..count {
         let t = tol * (1.0 + k as f64 * 1e-6);
         let o = Overrides { integrator: Some(kind), rtol: Some(t), atol: Some(t), ..Default::default() };
-        let r = match model.run_with("dynamics", &o) {
+        let r = match model.run("dynamics", &o.clone().into()) {
             Ok(r) => r,
             Err(f) => {
                 println!("{t:e}: stopped: {}", f.error);
@@ -244,7 +244,7 @@ fn main() {
                 let (mut best, mut outcome) = (f64::INFINITY, None);
                 for _ in 0..3 {
                     let start = Instant::now();
-                    let run = model.run_with("dynamics", &o);
+                    let run = model.run("dynamics", &o.clone().into());
                     best = best.min(start.elapsed().as_secs_f64());
                     outcome = Some(run);
                     if best > 1.0 {

@@ -1,8 +1,9 @@
 //! Linkwork: a planar multibody kinematics and dynamics engine.
 //!
 //! Data flows one way, and the imports follow it: each module imports only the ones above it
-//! here ([`error`] and [`progress`] from anywhere), save that an analysis writes its
-//! [`Results`], and `results` imports nothing of `analysis`.
+//! here, not its peer on the same line ([`error`], [`progress`] and [`linalg`] from anywhere,
+//! and they import none of the others), save that an analysis writes its [`Results`], and
+//! `results` imports nothing of `analysis` (`tests/layers.rs` reads every import against this).
 //!
 //! ```text
 //! expr                      expressions of time and state, differentiated exactly; tables;
@@ -13,7 +14,7 @@
 //!                           compiled into an immutable Model (compile) whose analyses carry
 //!                           the compiled solver: section (settings); its picture (drawing)
 //!  -> system                an analysis' joints and active drivers stacked into one system
-//!  -> analysis              the run entry point (Model::run, Overrides) and every analysis:
+//!  -> analysis              the run entry point (Model::run, RunOptions) and every analysis:
 //!                           assembly, checks, kinematic, inverse, static, modes, dynamic
 //!  -> results               columnar time series, the typed summary (with the model's
 //!                           summaries, functionals of the columns), and their files
@@ -21,20 +22,21 @@
 //!                           outputs (functionals of result columns)
 //!
 //! linalg                    sparse patterns and LU, dense SVD helpers (rank, null space,
-//!                           minimum-norm solve), knowing no mechanics, below system
-//! error, progress           errors; a run's progress and stop request (Ctrl-C), per thread
+//!                           minimum-norm solve), knowing no mechanics
+//! error, progress           errors; a run's progress and its stop token (Ctrl-C)
 //! ```
 //!
 //! A model file ([`model::spec`]) is read and validated with every problem located
 //! ([`model::parse_spec`]) and compiled into a [`Model`] (indices, constraints, and
 //! [`model::SolverSettings`] and [`model::IntegratorSettings`] per analysis). [`Model::run`]
-//! ([`analysis`]) checks the run's [`Overrides`] as the file's own fields, stacks the active
+//! ([`analysis`]) checks the run's [`Overrides`] (in its [`RunOptions`], with its watcher, stop
+//! token and [`Sink`]) as the file's own fields, stacks the active
 //! constraints into a [`system::System`], solves with sparse factorizations ([`linalg`]) and
 //! writes [`Results`].
 //!
 //! ```no_run
 //! let model = linkwork::Model::load("examples/quick_return_a.yaml")?;
-//! let results = model.run("kinematics").map_err(|f| f.error)?;
+//! let results = model.run("kinematics", &linkwork::RunOptions::default()).map_err(|f| f.error)?;
 //! println!("{} output points", results.len());
 //! # Ok::<(), linkwork::Error>(())
 //! ```
@@ -51,7 +53,7 @@ pub mod results;
 pub mod sweep;
 pub mod system;
 
-pub use analysis::Overrides;
+pub use analysis::{Overrides, RunOptions, Sink};
 pub use error::{Error, Problem, RowName, Unbalanced};
 pub use model::Model;
 pub use results::{Failure, Results};

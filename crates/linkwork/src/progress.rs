@@ -1,20 +1,16 @@
-//! Where a run is, and a request to stop it, shared by the thread that runs an analysis and a
+//! Where a run is, and a request to stop it: shared by the thread that runs an analysis and a
 //! thread that watches it (a progress bar, Ctrl-C).
 //!
-//! [`Model::run_watched`](crate::Model::run_watched) makes a [`Progress`] the running thread's
-//! own for the length of the run. The analyses report every output time and every step attempt
-//! of an integrator to it (`reached`), so that no analysis has to pass it along; once
-//! [`Progress::stop`] has been called, the next time reached ends the run with
-//! [`Error::Interrupted`], and the results up to there are kept as after any failure.
-//! A sweep watches its variants through one [`Progress`]: each variant's run has a
-//! [`Progress::part`] of it, which shares its request to stop, and the whole counts the
-//! variants finished.
+//! A run is given both in its [`RunOptions`](crate::RunOptions): the analysis reports every
+//! output time and every step attempt of an integrator to its [`Progress`], and at each of them
+//! reads its [`StopToken`]; once the token is stopped, the run ends there with
+//! [`Error::Interrupted`](crate::Error::Interrupted), and the results up to there are kept as
+//! after any failure. A sweep gives every variant's run the sweep's token, and counts the
+//! variants finished in its own [`Progress`].
 //!
 //! The cost is an atomic store and load per output point and step: nothing beside a step's
 //! factorization.
 
-use crate::error::Error;
-use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 
@@ -30,20 +26,12 @@ pub struct Progress {
     steps: AtomicU64,
     /// Parts finished: the variants of a sweep.
     finished: AtomicU64,
-    /// The request to stop, shared with the parts ([`Progress::part`]).
-    stop: Arc<AtomicBool>,
 }
 
 impl Progress {
     /// A run not started: at time 0 of the span `[0, 0]`.
     pub fn new() -> Arc<Progress> {
         Arc::new(Progress::default())
-    }
-
-    /// The progress of one part of this work (one variant of a sweep): its own time and steps,
-    /// and this one's request to stop, so that a stop asked here stops every part running.
-    pub fn part(&self) -> Arc<Progress> {
-        Arc::new(Progress { stop: Arc::clone(&self.stop), ..Progress::default() })
     }
 
     /// Parts finished so far (the variants of a sweep).
@@ -54,16 +42,6 @@ impl Progress {
     /// One more part is finished.
     pub(crate) fn finish_part(&self) {
         self.finished.fetch_add(1, Ordering::Relaxed);
-    }
-
-    /// Whether a stop has been asked.
-    pub fn stopped(&self) -> bool {
-        self.stop.load(Ordering::Relaxed)
-    }
-
-    /// Ask the run (and every part of it) to stop at the next time it reaches.
-    pub fn stop(&self) {
-        self.stop.store(true, Ordering::Relaxed);
     }
 
     /// The last time the run reached (an output time or a step attempt), s.
@@ -87,41 +65,34 @@ impl Progress {
         self.end.store(end.to_bits(), Ordering::Relaxed);
         self.time.store(start.to_bits(), Ordering::Relaxed);
     }
-}
 
-thread_local! {
-    /// The progress of the run on this thread, if it is watched.
-    static CURRENT: RefCell<Option<Arc<Progress>>> = const { RefCell::new(None) };
-}
-
-/// Run `f` with `progress` as this thread's current one, the previous one back afterwards (also
-/// when `f` panics).
-pub(crate) fn scope<T>(progress: &Arc<Progress>, f: impl FnOnce() -> T) -> T {
-    struct Restore(Option<Arc<Progress>>);
-    impl Drop for Restore {
-        fn drop(&mut self) {
-            CURRENT.set(self.0.take());
-        }
+    /// The run reached time `t` (an output time or a step attempt).
+    pub(crate) fn reached(&self, t: f64) {
+        self.time.store(t.to_bits(), Ordering::Relaxed);
+        self.steps.fetch_add(1, Ordering::Relaxed);
     }
-    let _restore = Restore(CURRENT.replace(Some(Arc::clone(progress))));
-    f()
 }
 
-/// The run on this thread reached time `t`: recorded for its watcher, and
-/// [`Error::Interrupted`] if the watcher asked it to stop.
-pub(crate) fn reached(t: f64) -> Result<(), Error> {
-    CURRENT.with_borrow(|current| match current {
-        Some(p) => {
-            p.time.store(t.to_bits(), Ordering::Relaxed);
-            p.steps.fetch_add(1, Ordering::Relaxed);
-            if p.stopped() {
-                Err(Error::Interrupted { time: t })
-            } else {
-                Ok(())
-            }
-        }
-        None => Ok(()),
-    })
+/// A request to stop a run (or every run of a sweep): clones share one request, so that the
+/// thread that watches keeps one and the run is given another.
+#[derive(Debug, Clone, Default)]
+pub struct StopToken(Arc<AtomicBool>);
+
+impl StopToken {
+    /// A token not stopped.
+    pub fn new() -> StopToken {
+        StopToken::default()
+    }
+
+    /// Ask every run given this token (or a clone of it) to stop at the next time it reaches.
+    pub fn stop(&self) {
+        self.0.store(true, Ordering::Relaxed);
+    }
+
+    /// Whether a stop has been asked.
+    pub fn stopped(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
 }
 
 #[cfg(test)]
@@ -129,32 +100,24 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_stopped_run_is_interrupted_at_the_next_time_and_only_in_its_scope() {
-        let progress = Progress::new();
-        progress.begin(0.0, 2.0);
-        scope(&progress, || {
-            assert!(reached(0.5).is_ok());
-            progress.stop();
-            assert!(matches!(reached(0.75), Err(Error::Interrupted { time }) if time == 0.75));
-        });
-        assert_eq!((progress.time(), progress.steps(), progress.span()), (0.75, 2, (0.0, 2.0)));
-        // Outside the scope nothing watches: a stop asked of another run changes nothing.
-        assert!(reached(1.0).is_ok());
-        assert_eq!(progress.steps(), 2);
+    fn a_stop_asked_through_one_clone_is_seen_through_every_other() {
+        let token = StopToken::new();
+        let given = token.clone();
+        assert!(!given.stopped());
+        token.stop();
+        assert!(given.stopped() && token.stopped());
+        // A token of its own is another request.
+        assert!(!StopToken::new().stopped());
     }
 
     #[test]
-    fn a_stop_asked_of_the_whole_stops_its_parts() {
-        let whole = Progress::new();
-        let part = whole.part();
-        scope(&part, || {
-            assert!(reached(0.1).is_ok());
-            whole.stop();
-            assert!(matches!(reached(0.2), Err(Error::Interrupted { .. })));
-        });
-        // The part keeps its own time and steps; the whole counts parts finished.
-        assert_eq!((part.time(), part.steps(), whole.steps()), (0.2, 2, 0));
-        whole.finish_part();
-        assert_eq!(whole.finished(), 1);
+    fn progress_keeps_the_last_time_and_counts_the_times_and_parts() {
+        let progress = Progress::new();
+        progress.begin(0.0, 2.0);
+        progress.reached(0.5);
+        progress.reached(0.75);
+        assert_eq!((progress.time(), progress.steps(), progress.span()), (0.75, 2, (0.0, 2.0)));
+        progress.finish_part();
+        assert_eq!(progress.finished(), 1);
     }
 }

@@ -60,8 +60,8 @@ pub struct Results {
     row: Vec<f64>,
     /// (3 bodies) the positions of the first output point.
     first_positions: Vec<f64>,
-    /// The sink the rows go to when the run is streamed ([`stream`]), claimed at the start.
-    stream: Option<stream::Stream>,
+    /// The rows of a streamed run that its sink has, and how many are held for it ([`stream`]).
+    streamed: Option<Streamed>,
     /// Whether [`Results::start`] ran.
     started: bool,
     /// The dyads' branches from one output to the next.
@@ -70,6 +70,18 @@ pub struct Results {
     strict_branches: bool,
     /// Why the rows do not fit in memory ([`Results::reserve`]): the first push fails with it.
     refused: Option<String>,
+}
+
+/// The rows of a streamed run ([`stream`]): those its sink has, and how many are held before the
+/// next chunk goes to it.
+#[derive(Debug, Clone, Copy)]
+struct Streamed {
+    /// Rows already given to the sink.
+    sent: usize,
+    /// Bytes of output values the sink takes a chunk ([`stream::RowSink::chunk_bytes`]).
+    chunk_bytes: usize,
+    /// Rows a chunk, once every column is named ([`Results::start`]).
+    chunk: usize,
 }
 
 /// What a run whose results do not fit in memory is told to do.
@@ -228,7 +240,7 @@ impl Results {
             summaries: Summaries::None,
             row: Vec::new(),
             first_positions: Vec::new(),
-            stream: None,
+            streamed: None,
             started: false,
             branches: BranchWatch::default(),
             strict_branches: false,
@@ -238,7 +250,7 @@ impl Results {
 
     /// Number of output points (those streamed to a file included).
     pub fn len(&self) -> usize {
-        self.time.len() + self.stream.as_ref().map_or(0, |s| s.rows)
+        self.time.len() + self.streamed.map_or(0, |s| s.sent)
     }
 
     /// True when no output point was computed.
@@ -249,7 +261,29 @@ impl Results {
     /// Whether the rows went to a file as they were computed (then `time` and `columns` hold
     /// none of them; [`Results::len`] counts them).
     pub fn is_streamed(&self) -> bool {
-        self.stream.is_some()
+        self.streamed.is_some()
+    }
+
+    /// The rows of these results go to a sink ([`stream`]) that takes `chunk_bytes` of output
+    /// values a chunk: only a chunk's rows are held ([`Results::reserve`]), and the summaries
+    /// copy every column they read. Before the first [`Results::reserve`] or [`Results::push`].
+    pub(crate) fn stream_in_chunks(&mut self, chunk_bytes: usize) {
+        debug_assert!(!self.started, "streamed from the first row");
+        self.streamed = Some(Streamed { sent: 0, chunk_bytes, chunk: 1 });
+    }
+
+    /// Whether a streamed run holds a whole chunk, for its sink ([`stream::Stream::flush`]).
+    pub(crate) fn chunk_full(&self) -> bool {
+        self.streamed.is_some_and(|s| self.time.len() >= s.chunk)
+    }
+
+    /// The rows held went to the sink: counted, and emptied.
+    fn rows_sent(&mut self) {
+        if let Some(s) = &mut self.streamed {
+            s.sent += self.time.len();
+        }
+        self.time.clear();
+        self.columns.iter_mut().for_each(Vec::clear);
     }
 
     /// The positions `(x, y, phi)` of every body at the first output point, if there is one.
@@ -273,7 +307,7 @@ impl Results {
     /// aborted the process).
     pub(crate) fn reserve(&mut self, rows: usize) {
         self.start();
-        let held = self.stream.as_ref().map_or(rows, |s| rows.min(s.chunk));
+        let held = self.streamed.map_or(rows, |s| rows.min(s.chunk));
         let copies = match &self.summaries {
             Summaries::Reading { copies, .. } => copies.len(),
             _ => 0,
@@ -304,8 +338,6 @@ impl Results {
     /// columns after the body quantities, `extra`; or, when one of them is not finite, append
     /// nothing and name its column: no NaN or infinity leaves as a result, whatever the analysis
     /// (each analysis first looks for the element to blame; this is the net under all of them).
-    /// Every output time is reported to the run's [`progress`](crate::progress), which may stop
-    /// the run there (after the row is kept).
     pub(crate) fn push(&mut self, t: f64, q: &[f64], qdot: &[f64], qddot: &[f64], extra: &[f64]) -> Result<(), Error> {
         self.start();
         let bodies = q.len() / 3;
@@ -372,17 +404,11 @@ impl Results {
             }
             None => self.columns.iter_mut().zip(&self.row).for_each(|(c, &v)| c.push(v)),
         }
-        if let Some(s) = &mut self.stream {
-            if self.time.len() >= s.chunk {
-                s.flush(&self.names, &mut self.time, &mut self.columns)?;
-            }
-        }
-        crate::progress::reached(t)
+        Ok(())
     }
 
     /// Once every column is named (the first [`Results::reserve`] or [`Results::push`]): apply
-    /// the choice of columns, find the peaks' columns, and take the run's sink if it has one
-    /// ([`stream`]).
+    /// the choice of columns, find the peaks' columns, and size a streamed run's chunks.
     fn start(&mut self) {
         if self.started {
             return;
@@ -390,9 +416,8 @@ impl Results {
         self.started = true;
         self.select();
         self.watch_peaks();
-        self.stream = stream::claim();
-        if let Some(s) = &mut self.stream {
-            s.set_columns(self.columns.len());
+        if let Some(s) = &mut self.streamed {
+            s.chunk = (s.chunk_bytes / (8 * (self.columns.len() + 1))).max(1);
         }
         self.read_summaries();
     }
@@ -424,7 +449,7 @@ impl Results {
                 return;
             }
         }
-        let streamed = self.stream.is_some();
+        let streamed = self.streamed.is_some();
         let mut read: Vec<&str> = if streamed { vec![TIME] } else { Vec::new() };
         for c in functionals.values().flat_map(Functional::columns) {
             if !read.contains(&c) {
@@ -508,20 +533,6 @@ impl Results {
             }
         }
         self.peaks = Peaks::Watching(watching);
-    }
-
-    /// Close the stream of a streamed run: the rows still held go to its sink, which is then
-    /// finished. `unclaimed` is the run's sink when no row claimed it (a run that failed before
-    /// its first output point): it gets the header. A no-op for results that are not streamed.
-    pub(crate) fn finish_stream(&mut self, unclaimed: Option<stream::Stream>) -> Result<(), Error> {
-        if let Some(s) = unclaimed {
-            self.select();
-            self.stream = Some(s);
-        }
-        match &mut self.stream {
-            Some(s) => s.finish(&self.names, &mut self.time, &mut self.columns),
-            None => Ok(()),
-        }
     }
 
     /// Apply a pending choice of columns, once every column is named: keep each body's nine

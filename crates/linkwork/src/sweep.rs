@@ -12,10 +12,9 @@
 use crate::error::{Error, Problem};
 use crate::expr::functional::Functional;
 use crate::model::structure::Dyad;
-use crate::progress::Progress;
-use crate::{Model, Overrides, Results};
+use crate::progress::{Progress, StopToken};
+use crate::{Model, Results, RunOptions};
 use rayon::prelude::*;
-use std::sync::Arc;
 
 /// An output of a sweep: a name and a functional of result columns.
 #[derive(Debug, Clone)]
@@ -50,8 +49,8 @@ pub type Row = Result<Vec<f64>, Error>;
 /// [`Model::with_parameters`] takes them) on `workers` threads (all cores when `None`), each run
 /// reduced to `outputs`. A variant that fails is an `Err` row, not the end of the sweep; an
 /// output that cannot be evaluated on a run is a model error at `outputs.<name>`. Rows are in the
-/// order of `variants` whatever the threads. `watch` counts the variants finished
-/// ([`Progress::finished`]); once it is stopped, the variants running end as
+/// order of `variants` whatever the threads. `progress` counts the variants finished
+/// ([`Progress::finished`]); once `stop` is stopped, the variants running end as
 /// [`Error::Interrupted`] at their next step, and so does every later one at its first.
 pub fn sweep(
     model: &Model,
@@ -59,7 +58,8 @@ pub fn sweep(
     variants: &[Vec<(String, String)>],
     outputs: &[Output],
     workers: Option<usize>,
-    watch: &Arc<Progress>,
+    progress: &Progress,
+    stop: &StopToken,
 ) -> Result<Vec<Row>, Error> {
     let t_start = model.analysis(analysis)?.t_start;
     // The file's text parsed once; each variant reads its parameters from the document.
@@ -70,12 +70,14 @@ pub fn sweep(
     // "Branches"). A nominal model that cannot be assembled leaves each variant its own
     // `branches:`; one that fails its run, its changes unchecked.
     let nominal = crate::analysis::assembled_branches(model, analysis);
-    let nominal_changes: Option<Vec<String>> =
-        model.run(analysis).ok().map(|r| r.summary.branch_changes.iter().map(|c| c.joint.clone()).collect());
+    let nominal_changes: Option<Vec<String>> = model
+        .run(analysis, &RunOptions::default())
+        .ok()
+        .map(|r| r.summary.branch_changes.iter().map(|c| c.joint.clone()).collect());
     let one = |values: &Vec<(String, String)>| -> Row {
         let run = || -> Row {
             // Stopped before this variant began: not compiled, not run.
-            if watch.stopped() {
+            if stop.stopped() {
                 return Err(Error::Interrupted { time: t_start });
             }
             let mut variant = model.with_parameters_in(&document, values)?;
@@ -87,7 +89,8 @@ pub fn sweep(
                     })
                     .collect();
             }
-            let results = variant.run_watched(analysis, &Overrides::default(), &watch.part()).map_err(|f| f.error)?;
+            let options = RunOptions { stop: stop.clone(), ..RunOptions::default() };
+            let results = variant.run(analysis, &options).map_err(|f| f.error)?;
             if let Some(expected) = &nominal_changes {
                 let changes = &results.summary.branch_changes;
                 let same = |k: usize| changes.get(k).map(|c| &c.joint) == expected.get(k);
@@ -113,7 +116,7 @@ pub fn sweep(
                 .collect()
         };
         let row = run();
-        watch.finish_part();
+        progress.finish_part();
         row
     };
     let mut pool = rayon::ThreadPoolBuilder::new();

@@ -18,7 +18,7 @@ const R_J: f64 = 0.5;
 
 fn run(text: &str, analysis: &str) -> Results {
     let model = Model::from_yaml(text).unwrap_or_else(|e| panic!("{e}"));
-    model.run(analysis).unwrap_or_else(|f| panic!("{}", f.error))
+    model.run(analysis, &Default::default()).unwrap_or_else(|f| panic!("{}", f.error))
 }
 
 /// Pulley `a` (radius 0.2, at the origin) and pulley `b` (radius 0.5, starting at 0.3 rad) on

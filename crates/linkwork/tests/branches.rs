@@ -61,7 +61,7 @@ fn drawn_wrong(text: &str) -> String {
 
 /// Largest distance of the run's foot point from the closed form, m.
 fn foot_error(model: &Model) -> f64 {
-    let results = model.run("kinematics").unwrap_or_else(|f| panic!("{}", f.error));
+    let results = model.run("kinematics", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let (t, x, y) =
         (results.column("time").unwrap(), results.column("foot_x").unwrap(), results.column("foot_y").unwrap());
     let mut worst = 0.0f64;
@@ -93,7 +93,7 @@ fn a_leg_drawn_right_runs_on_its_branch_without_a_warning() {
     let text = example_text("sixbar_leg.yaml");
     let text = patch(&text, "branches:\n  B: {line: [A, Q], side: left}\n  F: {line: [C, D], side: right}\n", "");
     let model = Model::from_yaml(&text).unwrap();
-    let results = model.run("kinematics").unwrap();
+    let results = model.run("kinematics", &Default::default()).unwrap();
     assert!(results.summary.warnings.is_empty(), "{:?}", results.summary.warnings);
     let branches = results.summary.branches.clone().unwrap();
     let f = branches.iter().find(|b| b.joint == "F").unwrap();
@@ -129,7 +129,7 @@ fn a_leg_drawn_on_the_wrong_side_is_stated_and_a_declared_branch_wins() {
     assert!(foot_error(&model) > 1e-2);
     // Declared: the right mechanism, to the closed form, with a warning that the drawing disagrees.
     let model = Model::from_yaml(&drawn_wrong(&text)).unwrap();
-    let results = model.run("kinematics").unwrap();
+    let results = model.run("kinematics", &Default::default()).unwrap();
     let warning = results.summary.warnings.iter().find(|w| w.starts_with("branches.F")).expect("a warning");
     assert!(warning.contains("the drawing puts joint F left of the line C -> D"), "{warning}");
     let f = results.summary.branches.clone().unwrap().into_iter().find(|b| b.joint == "F").unwrap();
@@ -138,7 +138,7 @@ fn a_leg_drawn_on_the_wrong_side_is_stated_and_a_declared_branch_wins() {
     assert!(error < 1e-11, "foot point {error:e} m from the closed form");
     // Strict: the disagreement is a branch error naming the dyad's joint, the sides and the mode.
     let strict = Model::from_yaml(&format!("{}\nbranch: strict\n", drawn_wrong(&text))).unwrap();
-    match strict.run("kinematics").map_err(|f| f.error) {
+    match strict.run("kinematics", &Default::default()).map_err(|f| f.error) {
         Err(Error::Branch { joint, detail, time }) => {
             assert_eq!((joint.as_str(), time), ("F", 0.0));
             assert!(detail.contains("left of the line C -> D") && detail.contains("branch: strict"), "{detail}");
@@ -181,7 +181,7 @@ fn root(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
 
 /// The singular error of `model`'s kinematics, as `(time, joints, detail)`.
 fn lock(model: &Model) -> (f64, Vec<String>, String) {
-    match model.run("kinematics").map_err(|f| f.error) {
+    match model.run("kinematics", &Default::default()).map_err(|f| f.error) {
         Err(Error::Singular { time, rows, detail }) => {
             let mut joints: Vec<String> = rows.iter().map(|r| r.element.clone()).collect();
             joints.dedup();
@@ -269,7 +269,7 @@ fn a_dyad_too_short_to_close_is_named_by_assembly() {
     // A link CF of 20 mm: |CD| = 75.7 mm at the start, beyond |CF| + |FD| = 57 mm.
     let text = patch(&example_text("sixbar_leg.yaml"), "cf: 40 mm ", "cf: 20 mm ");
     let model = Model::from_yaml(&text).unwrap();
-    match model.run("kinematics").map_err(|f| f.error) {
+    match model.run("kinematics", &Default::default()).map_err(|f| f.error) {
         Err(Error::Assembly { hint, .. }) => assert!(
             hint.starts_with("cannot close: the dyad C-F-D (links linkf and foot) is too short, |CD| = 75.6655 mm > |CF| + |FD| = 20.0000 mm + 37.0000 mm = 57.0000 mm"),
             "{hint}"
@@ -292,7 +292,7 @@ fn a_sweep_keeps_the_nominal_branches_whatever_a_variant_draws() {
     let model = Model::from_yaml(&text).unwrap();
     let folded = model.with_parameters(&[("alpha".into(), "-110.5 deg".into())]).unwrap();
     let reach = |m: &Model| {
-        let r = m.run("kinematics").unwrap();
+        let r = m.run("kinematics", &Default::default()).unwrap();
         r.column("foot_x").unwrap().iter().fold(f64::INFINITY, |a, &x| a.min(x))
     };
     let (nominal, alone) = (reach(&model), reach(&folded));
@@ -307,6 +307,7 @@ fn a_sweep_keeps_the_nominal_branches_whatever_a_variant_draws() {
         &outputs,
         Some(1),
         &linkwork::progress::Progress::new(),
+        &linkwork::progress::StopToken::new(),
     )
     .unwrap();
     for row in &rows {
@@ -346,7 +347,7 @@ fn a_parallelogram_passing_its_change_points_warns_once_and_sweeps_ok() {
     // a sweep's variants that pass where the nominal run passes are ok.
     let model = Model::from_yaml(&example_text("parallelogram.yaml")).unwrap();
     let name = model.analyses.keys().next().unwrap().clone();
-    let results = model.run(&name).unwrap();
+    let results = model.run(&name, &Default::default()).unwrap();
     let changes = &results.summary.branch_changes;
     assert!(changes.len() >= 2, "{changes:?}");
     let warned = results.summary.warnings.iter().filter(|w| w.contains("changed branch")).count();
@@ -362,6 +363,7 @@ fn a_parallelogram_passing_its_change_points_warns_once_and_sweeps_ok() {
         &outputs,
         Some(1),
         &linkwork::progress::Progress::new(),
+        &linkwork::progress::StopToken::new(),
     )
     .unwrap();
     assert!(rows.iter().all(|r| r.is_ok()), "{rows:?}");

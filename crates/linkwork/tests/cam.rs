@@ -233,7 +233,7 @@ fn roller_lift_error(joint: &str) -> f64 {
     let from = "    radius: \"base + cycloidal(pi/2 - psi, 0, 0, 2*pi/3, lift) + cycloidal(pi/2 - psi, pi, lift, 3*pi/2, 0) - lift\"\n";
     let text = common::patched_example("cam_roller.yaml", &[(from, joint)]);
     let model = Model::from_yaml(&text).unwrap_or_else(|e| panic!("{e}"));
-    let r = model.run("motion").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = model.run("motion", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let y = common::col(&r, "follower.y");
     r.time.iter().enumerate().map(|(k, &t)| (y[k] - BASE - lift(2.0 * PI * t).0).abs()).fold(0.0, f64::max)
 }
@@ -317,7 +317,8 @@ fn a_roller_with_no_unique_nearest_point_stops_the_analysis_naming_the_joint() {
                 profile: {x: '0.04*cos(u)', y: '0.04*sin(u)'}}\n\
                 drivers:\n  motor: {type: angle, body: cam, function: 't'}\n\
                 analyses:\n  motion: {type: kinematic, drivers: [motor], t_end: 1, step: 0.1}\n";
-    let error = Model::from_yaml(text).unwrap().run("motion").map(|_| ()).unwrap_err().error.to_string();
+    let error =
+        Model::from_yaml(text).unwrap().run("motion", &Default::default()).map(|_| ()).unwrap_err().error.to_string();
     eprintln!("{error}");
     assert!(error.contains("joints.contact is NaN at t = 0 s"), "{error}");
     assert!(error.contains("no unique, regular nearest point on the working surface"), "{error}");

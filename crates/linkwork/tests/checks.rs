@@ -38,7 +38,7 @@ fn redundant_parallelogram() {
 #[test]
 fn lockup_is_reported_with_time_joints_and_partial_results() {
     let model = Model::load(example("slider_crank_lockup.yaml")).unwrap();
-    let failure = model.run("kinematics").expect_err("the mechanism locks up");
+    let failure = model.run("kinematics", &Default::default()).expect_err("the mechanism locks up");
     let t_lock = 0.6f64.asin();
     match &failure.error {
         Error::Singular { time, rows, .. } => {
@@ -67,7 +67,7 @@ fn kinematic_analysis_needs_a_fully_driven_model() {
         "kinematics: {type: kinematic, drivers: [],",
     );
     let model = Model::from_yaml(&text).unwrap();
-    let failure = model.run("kinematics").expect_err("not fully driven");
+    let failure = model.run("kinematics", &Default::default()).expect_err("not fully driven");
     match &failure.error {
         Error::Model(problems) => {
             assert_eq!(problems.len(), 1);
@@ -139,13 +139,13 @@ fn assembly_is_the_least_change() {
 #[test]
 fn condition_limit_stops_the_analysis() {
     let mut model = Model::load(example("quick_return_a.yaml")).unwrap();
-    let full = model.run("kinematics").unwrap();
+    let full = model.run("kinematics", &Default::default()).unwrap();
     let max = full.summary_json(None)["statistics"]["max_condition"].as_f64().unwrap();
     assert!(max > 100.0 && max < 1e3, "max condition {max}");
     model.analyses[0].settings.singular_condition = 1e3;
-    assert_eq!(model.run("kinematics").unwrap().len(), 41);
+    assert_eq!(model.run("kinematics", &Default::default()).unwrap().len(), 41);
     model.analyses[0].settings.singular_condition = 100.0;
-    let failure = model.run("kinematics").expect_err("stops above the limit");
+    let failure = model.run("kinematics", &Default::default()).expect_err("stops above the limit");
     match &failure.error {
         Error::Singular { rows, detail, .. } => {
             assert!(!rows.is_empty());
@@ -177,7 +177,7 @@ fn a_start_at_a_dead_centre_is_a_singular_position_naming_its_dyad() {
             ],
         );
         let model = Model::from_yaml(&text).unwrap();
-        let failure = model.run("kinematics").expect_err("singular start");
+        let failure = model.run("kinematics", &Default::default()).expect_err("singular start");
         let message = failure.error.to_string();
         assert!(matches!(failure.error, Error::Singular { time: 0.0, .. }), "{function}: {message}");
         assert!(
@@ -225,7 +225,7 @@ analyses:
 fn a_driver_without_bound_stops_the_kinematics_naming_it() {
     for (function, blows_up) in [("1/(t-1)", 1.0), ("tan(pi*t)", 0.5), ("exp(40*t)", 2.0)] {
         let model = crank_driven_by(function, 2.0);
-        let failure = model.run("kinematics").expect_err("the driver cannot be followed");
+        let failure = model.run("kinematics", &Default::default()).expect_err("the driver cannot be followed");
         let message = failure.error.to_string();
         match &failure.error {
             Error::NonFinite { element, expression, .. } | Error::Unbounded { element, expression, .. } => {
@@ -248,7 +248,8 @@ fn a_driver_without_bound_stops_the_kinematics_naming_it() {
 /// not as a position solution that did not converge.
 #[test]
 fn a_nan_driver_is_named_not_blamed_on_newton() {
-    let at_start = crank_driven_by("sqrt(t-1)", 2.0).run("kinematics").expect_err("NaN at the start");
+    let at_start =
+        crank_driven_by("sqrt(t-1)", 2.0).run("kinematics", &Default::default()).expect_err("NaN at the start");
     let message = at_start.error.to_string();
     let Error::NonFinite { element, expression, time, value } = &at_start.error else {
         panic!("expected the driver to be named, got {message}")
@@ -257,7 +258,7 @@ fn a_nan_driver_is_named_not_blamed_on_newton() {
     assert!(value.is_nan() && message == "drivers.motor is NaN at t = 0 s (sqrt(t-1))", "{message}");
     assert!(at_start.results.is_empty(), "no row may be written from a NaN driver");
 
-    let later = crank_driven_by("sqrt(1-t)", 2.0).run("kinematics").expect_err("NaN past 1 s");
+    let later = crank_driven_by("sqrt(1-t)", 2.0).run("kinematics", &Default::default()).expect_err("NaN past 1 s");
     let message = later.error.to_string();
     let Error::NonFinite { element, time, .. } = &later.error else { panic!("expected the driver, got {message}") };
     assert_eq!(element, "drivers.motor", "{message}");
@@ -271,7 +272,8 @@ fn a_nan_driver_is_named_not_blamed_on_newton() {
 /// non-finite: it is named, not reported as conflicting velocities.
 #[test]
 fn an_infinite_driver_rate_at_the_start_is_named() {
-    let failure = crank_driven_by("sqrt(t)", 1.0).run("kinematics").expect_err("infinite rate at 0");
+    let failure =
+        crank_driven_by("sqrt(t)", 1.0).run("kinematics", &Default::default()).expect_err("infinite rate at 0");
     let message = failure.error.to_string();
     assert!(message.starts_with("drivers.motor is inf at t = 0 s (sqrt(t))"), "{message}");
 }
@@ -292,7 +294,8 @@ fn conflicting_drivers_are_not_blamed_on_given_velocities() {
             ("drivers: [motor]", "drivers: [motor, motor2]"),
         ],
     );
-    let failure = Model::from_yaml(&patched).unwrap().run("kinematics").expect_err("the drivers conflict");
+    let failure =
+        Model::from_yaml(&patched).unwrap().run("kinematics", &Default::default()).expect_err("the drivers conflict");
     let message = failure.error.to_string();
     assert!(matches!(failure.error, Error::Assembly { .. }), "{message}");
     assert!(!message.contains("given velocities"), "{message}");
@@ -320,7 +323,7 @@ analyses:
 "#;
     let model = Model::from_yaml(far).unwrap();
     assert_ne!(model.q0()[0], 1e9 + 0.5, "the guess is off the assembled position");
-    let r = model.run("kinematics").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = model.run("kinematics", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let warnings = r.summary_json(None)["warnings"].to_string();
     assert!(warnings.contains("below what round-off allows"), "{warnings}");
     // Independent check: the pin stays at the ground point to the round-off of 1e9 m.
@@ -350,7 +353,7 @@ analyses:
     let model = Model::from_yaml(wheel).unwrap();
     let warning = check(&model).unwrap().analyses["dyn"].warning.clone().unwrap_or_default();
     assert!(warning.starts_with("bodies.wheel.inertia: wheel.phi can move with no mass or inertia"), "{warning}");
-    let e = model.run("dyn").unwrap_err().error;
+    let e = model.run("dyn", &Default::default()).unwrap_err().error;
     let Error::Model(problems) = &e else { panic!("expected a model error, got {e}") };
     assert_eq!(problems[0].path, "bodies.wheel.inertia", "{e}");
     assert!(problems[0].message.contains("wheel.phi can move with no mass or inertia"), "{e}");
@@ -368,7 +371,7 @@ analyses:
     );
     let model = Model::from_yaml(&massless_rod).unwrap();
     assert_eq!(check(&model).unwrap().analyses["dyn"].warning, None);
-    let r = model.run("dyn").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = model.run("dyn", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     assert!(r.column("crank.phi").unwrap().iter().all(|x| x.is_finite()));
 }
 
@@ -379,7 +382,7 @@ analyses:
 #[test]
 fn a_driver_that_jumps_is_named_with_its_jump_and_time() {
     let model = crank_driven_by("2*pi*t + 0.5*(t > 0.5)", 1.0);
-    let failure = model.run("kinematics").expect_err("the jump cannot be followed");
+    let failure = model.run("kinematics", &Default::default()).expect_err("the jump cannot be followed");
     let message = failure.error.to_string();
     match &failure.error {
         Error::Jump { time, element, expression, jump, .. } => {
@@ -404,7 +407,8 @@ fn a_huge_time_span_names_the_step_or_the_time_round_off() {
     let crank = |times: &str| {
         Model::from_yaml(&patch(&example_text("slider_crank.yaml"), "t_end: 2.0, step: 0.01", times)).unwrap()
     };
-    let error = crank("t_end: 1e15, step: 1e8").run("kinematics").expect_err("too long a step").error;
+    let error =
+        crank("t_end: 1e15, step: 1e8").run("kinematics", &Default::default()).expect_err("too long a step").error;
     let message = error.to_string();
     assert!(
         message.contains("analyses.kinematics.step: the output step 1e8 s is too long for the motion"),

@@ -159,7 +159,10 @@ fn elastic_impacts_conserve_energy() {
     for analysis in ["dynamics", "dynamics_hht", "dynamics_abam"] {
         let text = patch(&example_text("bouncing_disc.yaml"), "damping: 0.05", "damping: 0");
         let text = patch(&text, "friction: {mu: 0.3}", "friction: {mu: 0}");
-        let r = Model::from_yaml(&text).unwrap().run(analysis).unwrap_or_else(|f| panic!("{}", f.error));
+        let r = Model::from_yaml(&text)
+            .unwrap()
+            .run(analysis, &Default::default())
+            .unwrap_or_else(|f| panic!("{}", f.error));
         let (t, v) = (col(&r, "kinetic_energy"), col(&r, "potential_energy"));
         let drift = (0..r.len()).map(|k| (t[k] + v[k] - t[0] - v[0]).abs()).fold(0.0, f64::max);
         let p = col(&r, "bounce.penetration");
@@ -204,7 +207,10 @@ analyses:
     );
     let want = 1.0 / (2.0 * 0.3 * G);
     for analysis in ["slide", "slide_hht", "slide_abam"] {
-        let r = Model::from_yaml(&text).unwrap().run(analysis).unwrap_or_else(|f| panic!("{}", f.error));
+        let r = Model::from_yaml(&text)
+            .unwrap()
+            .run(analysis, &Default::default())
+            .unwrap_or_else(|f| panic!("{}", f.error));
         let x = col(&r, "block.x");
         let stop = x[r.len() - 1];
         println!("{analysis}: stopped at {stop} m, want {want}");

@@ -21,7 +21,10 @@ fn double_pendulum_energy() {
             "dynamics: {type: dynamic, t_end: 5, step: 0.01}",
             &format!("dynamics: {{type: dynamic, integrator: {integrator}, t_end: 5, step: 0.01{settings}}}"),
         );
-        let r = linkwork::Model::from_yaml(&text).unwrap().run("dynamics").unwrap_or_else(|f| panic!("{}", f.error));
+        let r = linkwork::Model::from_yaml(&text)
+            .unwrap()
+            .run("dynamics", &Default::default())
+            .unwrap_or_else(|f| panic!("{}", f.error));
         // The run is the one patched in, not the file's default integrator and formulation.
         assert_eq!(r.summary_json(None)["integrator"]["kind"], integrator);
         if !formulation.is_empty() {
@@ -75,7 +78,7 @@ analyses:
 fn reactions_balance_every_body() {
     for driven in [false, true] {
         let model = linkwork::Model::from_yaml(&loaded_fourbar(driven)).unwrap();
-        let r = model.run("dynamics").unwrap_or_else(|f| panic!("{}", f.error));
+        let r = model.run("dynamics", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
         let g = model.gravity;
         for k in 0..r.len() {
             let at = |name: &str| col(&r, name)[k];
@@ -180,7 +183,7 @@ fn error_follows_the_tolerance() {
                 let text = torsion_bar(integrator, &format!("rtol: {tol}, atol: {tol}{extra}"));
                 let r = linkwork::Model::from_yaml(&text)
                     .unwrap()
-                    .run("dynamics")
+                    .run("dynamics", &Default::default())
                     .unwrap_or_else(|f| panic!("{}", f.error));
                 let phi = col(&r, "bar.phi");
                 let e = r.time.iter().zip(phi).map(|(t, p)| (p - 0.5 * (2.0 * t).cos()).abs()).fold(0.0, f64::max);
@@ -208,7 +211,7 @@ fn a_vanishing_step_stops_the_run() {
         "integrator: hht\n    solver: {rtol: 1e-9, atol: 1e-9, alpha: 0}",
     );
     let model = linkwork::Model::from_yaml(&text).unwrap();
-    let failure = model.run("dynamics").expect_err("the undamped run cannot finish");
+    let failure = model.run("dynamics", &Default::default()).expect_err("the undamped run cannot finish");
     match failure.error {
         linkwork::Error::Integration { time, step, .. } => {
             assert!(time > 0.0 && time < 0.03 && step < 1e-15, "t {time}, step {step}");
@@ -225,7 +228,7 @@ fn a_vanishing_step_stops_the_run() {
 fn stops(model: &linkwork::Model, why: &str) -> Vec<(IntegratorKind, linkwork::Failure, String)> {
     let stop = |(_, integrator)| {
         let o = linkwork::Overrides { integrator: Some(integrator), ..Default::default() };
-        let failure = *model.run_with("dynamics", &o).expect_err(why);
+        let failure = *model.run("dynamics", &o.clone().into()).expect_err(why);
         let message = failure.error.to_string();
         (integrator, failure, message)
     };

@@ -8,7 +8,7 @@ use linkwork::{Error, Model, Results};
 
 fn run(yaml: &str, analysis: &str) -> Results {
     let model = Model::from_yaml(yaml).unwrap_or_else(|e| panic!("{e}"));
-    model.run(analysis).unwrap_or_else(|f| panic!("{}", f.error))
+    model.run(analysis, &Default::default()).unwrap_or_else(|f| panic!("{}", f.error))
 }
 
 /// A centred slider-crank (crank r = 0.1, rod L = 0.3) with a force `P` along the guide on the
@@ -65,7 +65,7 @@ fn slider_crank_torque_is_virtual_work() {
 #[test]
 fn ellipse_trammel_rests_where_the_virtual_work_vanishes() {
     let model = Model::load(format!("{}/../../examples/ellipse_trammel.yaml", env!("CARGO_MANIFEST_DIR"))).unwrap();
-    let r = model.run("equilibrium").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = model.run("equilibrium", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let (fx, fy) = (30.0f64, -40.0f64);
     let psi = col(&r, "bar.phi")[0];
     assert!((psi - (-fy / fx).atan()).abs() < 1e-10, "psi = {psi}");
@@ -289,12 +289,12 @@ fn statics_and_inverse_refuse_what_they_cannot_solve() {
     let free =
         slider_crank("", "  none: {type: torque, body: crank, torque: 0}", "  rest: {type: static, drivers: []}");
     let model = Model::from_yaml(&free).unwrap();
-    let e = model.run("rest").unwrap_err().error.to_string();
+    let e = model.run("rest", &Default::default()).unwrap_err().error.to_string();
     assert!(e.contains("analyses.rest") && e.contains("free to move") && e.contains("crank.phi"), "{e}");
     // A modes analysis about the equilibrium names itself, not "a static analysis".
     let free_modes =
         slider_crank("", "  none: {type: torque, body: crank, torque: 0}", "  shake: {type: modes, drivers: []}");
-    let e = Model::from_yaml(&free_modes).unwrap().run("shake").unwrap_err().error.to_string();
+    let e = Model::from_yaml(&free_modes).unwrap().run("shake", &Default::default()).unwrap_err().error.to_string();
     assert!(e.contains("analyses.shake: a modes analysis needs every degree of freedom held"), "{e}");
     assert!(!e.contains("static"), "{e}");
     let undriven = slider_crank(
@@ -303,7 +303,7 @@ fn statics_and_inverse_refuse_what_they_cannot_solve() {
         "  inv: {type: inverse, drivers: [], t_end: 1, step: 0.1}",
     );
     let model = Model::from_yaml(&undriven).unwrap();
-    let e = model.run("inv").unwrap_err().error.to_string();
+    let e = model.run("inv", &Default::default()).unwrap_err().error.to_string();
     assert!(e.contains("analyses.inv.drivers") && e.contains("an inverse analysis needs a fully driven model"), "{e}");
 }
 
@@ -326,7 +326,7 @@ analyses:
   rest: {type: static}
 "#;
     let model = Model::from_yaml(yaml).unwrap();
-    let failure = model.run("rest").unwrap_err();
+    let failure = model.run("rest", &Default::default()).unwrap_err();
     match &failure.error {
         linkwork::Error::NoEquilibrium { time, index, coordinates, .. } => {
             assert_eq!(*time, 0.0);
@@ -511,7 +511,7 @@ fn hanging_fourbar_rests_at_the_energy_minimum_from_every_start() {
     for degrees in (0..360).step_by(10) {
         let start = (degrees as f64).to_radians();
         let model = Model::from_yaml(&hanging_fourbar_at(start)).unwrap_or_else(|e| panic!("{e}"));
-        let r = model.run("rest").unwrap_or_else(|f| panic!("from {degrees} deg: {}", f.error));
+        let r = model.run("rest", &Default::default()).unwrap_or_else(|f| panic!("from {degrees} deg: {}", f.error));
         let theta = col(&r, "crank.phi")[0];
         let off = (theta - minimum) - tau * ((theta - minimum) / tau).round();
         assert!(off.abs() < 1e-7, "from {degrees} deg: rests at {theta} rad, the minimum is {minimum} rad");
@@ -617,7 +617,7 @@ fn a_non_finite_equilibrium_is_not_written() {
     );
     let model = Model::from_yaml(&nan).unwrap();
     for analysis in ["rest", "swing"] {
-        let failure = model.run(analysis).unwrap_err();
+        let failure = model.run(analysis, &Default::default()).unwrap_err();
         let Error::NonFinite { element, time, .. } = &failure.error else { panic!("{analysis}: {}", failure.error) };
         assert_eq!((element.as_str(), *time), ("odd", 0.0), "{analysis}");
         assert!(failure.results.is_empty(), "{analysis}: a row was written");
@@ -658,7 +658,7 @@ analyses:
     let r = run(&parallelogram("1e-8"), "inv");
     assert_eq!(r.len(), 2);
     for d in ["1e-9", "2e-9"] {
-        let failure = Model::from_yaml(&parallelogram(d)).unwrap().run("inv").unwrap_err();
+        let failure = Model::from_yaml(&parallelogram(d)).unwrap().run("inv", &Default::default()).unwrap_err();
         let Error::Singular { time, rows, detail } = &failure.error else { panic!("{d}: {}", failure.error) };
         assert_eq!(*time, 0.1, "{d}");
         assert!(rows.iter().any(|r| r.element == "coupler_2"), "{d}: {}", failure.error);

@@ -34,7 +34,9 @@ fn tight(integrator: &str, tol: f64) -> Overrides {
 
 /// Run `analysis` of `model`; panics with the engine's message on failure.
 fn run(model: &Model, analysis: &str, overrides: &Overrides) -> Results {
-    let r = model.run_with(analysis, overrides).unwrap_or_else(|f| panic!("{} {analysis}: {}", model.name, f.error));
+    let r = model
+        .run(analysis, &overrides.clone().into())
+        .unwrap_or_else(|f| panic!("{} {analysis}: {}", model.name, f.error));
     eprintln!(
         "{} {analysis} {:?}: {} outputs, statistics {}",
         model.name,
@@ -267,7 +269,7 @@ fn nfourbar_a02_moves_as_one_degree_of_freedom() {
     let n = 40;
     for &integrator in INTEGRATORS {
         let o = Overrides { t_end: Some(2.5), ..tight(integrator, 1e-8) };
-        let (r, error) = match model.run_with("dynamics", &o) {
+        let (r, error) = match model.run("dynamics", &o.clone().into()) {
             Ok(r) => (r, None),
             Err(f) => (f.results, Some(f.error)),
         };
@@ -383,7 +385,7 @@ fn nfourbar_a02_abam_crosses_the_flat_positions_at_1e_11_to_1e_13() {
     let mut model = load("iftomm_a02_nfourbar.yaml");
     model.analyses["dynamics"].integrator.max_steps = 50_000;
     for (tol, bound) in [(1e-11, 2e-6), (1e-12, 2e-5), (1e-13, 2e-5)] {
-        let r = model.run_with("dynamics", &tight("abam", tol)).unwrap_or_else(|f| panic!("{tol:e}: {}", f.error));
+        let r = model.run("dynamics", &tight("abam", tol).into()).unwrap_or_else(|f| panic!("{tol:e}: {}", f.error));
         assert!((r.time[r.len() - 1] - 20.0).abs() < 1e-9, "{tol:e}: ran to {}", r.time[r.len() - 1]);
         // Every output time once, in order, across the hand-overs to bdf and back.
         assert_eq!(r.len(), 2001, "{tol:e}: output rows");
@@ -401,7 +403,7 @@ fn nfourbar_a02_abam_crosses_the_flat_positions_at_1e_11_to_1e_13() {
     // The budget counts abam's steps and bdf's together (the first crossing comes before step
     // 400 at 1e-12): it named the remainder bdf was given, "more than 141 steps".
     model.analyses["dynamics"].integrator.max_steps = 400;
-    let f = model.run_with("dynamics", &tight("abam", 1e-12)).expect_err("a budget of 400 steps");
+    let f = model.run("dynamics", &tight("abam", 1e-12).into()).expect_err("a budget of 400 steps");
     assert!(f.error.to_string().contains("more than 400 steps"), "{}", f.error);
     assert!(
         f.results.summary_json(None)["statistics"]["crossings"].as_u64().unwrap_or(0) > 0,

@@ -192,7 +192,7 @@ fn integral(t: &[f64], y: impl Fn(usize) -> f64, count: usize) -> f64 {
 #[test]
 fn slider_crank_inverse_matches_free_body_diagrams() {
     let model = Model::load(example("slider_crank_friction.yaml")).unwrap();
-    let r = model.run("inverse").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = model.run("inverse", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let names = ["O.friction", "A.friction", "B.friction", "guide.friction"];
     let (mut worst, mut most_iterations) = (0.0f64, 0);
     for k in 0..r.len() {
@@ -331,7 +331,8 @@ fn slider_crank_efficiency() {
     let text = example_text("slider_crank_friction.yaml");
     assert_eq!(text.matches("{mu: 0.1, ").count() + text.matches("{mu: 0.15, ").count(), 4);
     let text = text.replace("{mu: 0.1, ", "{mu: 0, ").replace("{mu: 0.15, ", "{mu: 0, ");
-    let free = Model::from_yaml(&text).unwrap().run("inverse").unwrap_or_else(|f| panic!("{}", f.error));
+    let free =
+        Model::from_yaml(&text).unwrap().run("inverse", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let eta_free = summary(&free, "efficiency");
     println!("without friction: {eta_free:.12}");
     assert!((eta_free - 1.0).abs() < 1e-8, "{eta_free}");
@@ -354,7 +355,8 @@ fn slider_crank_efficiency() {
 fn steep_guide_friction_converges_and_matches_free_body_diagrams() {
     let text =
         patch(&example_text("slider_crank_friction.yaml"), "{mu: 0.15, length: 50 mm}", "{mu: 2.5, length: 50 mm}");
-    let r = Model::from_yaml(&text).unwrap().run("inverse").unwrap_or_else(|f| panic!("{}", f.error));
+    let r =
+        Model::from_yaml(&text).unwrap().run("inverse", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let names = ["O.friction", "A.friction", "B.friction", "guide.friction"];
     let (mut worst, mut most_iterations) = (0.0f64, 0);
     for k in 0..r.len() {
@@ -385,7 +387,7 @@ fn steep_guide_friction_converges_and_matches_free_body_diagrams() {
 fn self_locking_friction_is_named() {
     let text =
         patch(&example_text("slider_crank_friction.yaml"), "{mu: 0.15, length: 50 mm}", "{mu: 4, length: 50 mm}");
-    let failure = Model::from_yaml(&text).unwrap().run("inverse").unwrap_err();
+    let failure = Model::from_yaml(&text).unwrap().run("inverse", &Default::default()).unwrap_err();
     let message = failure.error.to_string();
     assert!(matches!(failure.error, Error::Friction { .. }), "{message}");
     assert!(message.contains("in guide.friction") && message.contains("self-locking"), "{message}");
@@ -435,7 +437,10 @@ analyses:
         ms = -s,
         form = if kind == "bdf" { format!(", formulation: {formulation}") } else { String::new() },
     );
-    Model::from_yaml(&text).unwrap().run("slide").unwrap_or_else(|f| panic!("{kind} {formulation}: {}", f.error))
+    Model::from_yaml(&text)
+        .unwrap()
+        .run("slide", &Default::default())
+        .unwrap_or_else(|f| panic!("{kind} {formulation}: {}", f.error))
 }
 
 /// The integrators, with bdf's two formulations.

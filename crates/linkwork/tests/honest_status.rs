@@ -21,7 +21,7 @@ fn meaningless_tolerances_are_refused() {
         (Overrides { rtol: Some(0.1), atol: Some(1e-6), ..Default::default() }, "--rtol"),
     ];
     for (overrides, option) in cases {
-        let failure = model.run_with("dynamics", &overrides).unwrap_err();
+        let failure = model.run("dynamics", &overrides.clone().into()).unwrap_err();
         let Error::Model(problems) = &failure.error else { panic!("{option}: {}", failure.error) };
         assert_eq!(problems.len(), 1, "{problems:?}");
         assert_eq!(problems[0].path, option);
@@ -34,7 +34,7 @@ fn meaningless_tolerances_are_refused() {
     let Err(Error::Model(problems)) = Model::from_yaml(&text) else { panic!("atol 0.05 was accepted") };
     assert!(problems.iter().any(|p| p.path == "analyses.dynamics.solver.atol"), "{problems:?}");
     let loosest = Overrides { rtol: Some(1e-2), atol: Some(1e-2), t_end: Some(1.0), ..Default::default() };
-    model.run_with("dynamics", &loosest).unwrap_or_else(|f| panic!("{}", f.error));
+    model.run("dynamics", &loosest.clone().into()).unwrap_or_else(|f| panic!("{}", f.error));
 }
 
 /// The distance of the double pendulum's pin `O` from its anchor at the origin, largest over the
@@ -55,7 +55,7 @@ fn the_loosest_tolerances_keep_the_pin_within_what_they_ask() {
     let model = Model::load(example("double_pendulum.yaml")).unwrap();
     for (name, kind) in integrators() {
         let o = Overrides { integrator: Some(kind), rtol: Some(1e-2), atol: Some(1e-2), ..Default::default() };
-        let r = match model.run_with("dynamics", &o) {
+        let r = match model.run("dynamics", &o.clone().into()) {
             Ok(r) => r,
             // The energy check may fail such a run; never the residual check.
             Err(f) => {
@@ -90,7 +90,7 @@ fn a_stiff_spring_keeps_its_energy_or_says_so() {
     let energy = 0.5 * 1e12 * 1e-3f64.powi(2);
     for (name, kind) in integrators() {
         let o = Overrides { integrator: Some(kind), ..Default::default() };
-        let (r, failure) = match model.run_with("free", &o) {
+        let (r, failure) = match model.run("free", &o.clone().into()) {
             Ok(r) => (r, None),
             Err(f) => (f.results, Some(f.error)),
         };
@@ -121,7 +121,7 @@ fn a_damped_system_is_not_held_to_its_energy() {
         "t_end: 0.001, step: 0.0001",
         "t_end: 1, step: 0.01",
     );
-    let r = Model::from_yaml(&text).unwrap().run("free").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = Model::from_yaml(&text).unwrap().run("free", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let kinetic = col(&r, "kinetic_energy");
     assert!(kinetic[kinetic.len() - 1] < 1e-6 * 5e-3, "the damper took the energy");
     assert!(r.summary.warnings.is_empty(), "{:?}", r.summary.warnings);
@@ -134,7 +134,7 @@ fn a_damped_system_is_not_held_to_its_energy() {
 #[test]
 fn kinematics_at_a_huge_time_fails_saying_why() {
     let late = patched_example("slider_crank.yaml", &[("t_end: 2.0,", "t_start: 1.0e12, t_end: 1000000000000.5,")]);
-    let failure = Model::from_yaml(&late).unwrap().run("kinematics").unwrap_err();
+    let failure = Model::from_yaml(&late).unwrap().run("kinematics", &Default::default()).unwrap_err();
     let message = failure.error.to_string();
     let Error::Accuracy { quantity, time, rows, value, .. } = &failure.error else { panic!("{message}") };
     assert_eq!((*quantity, *time), ("position residual", 1e12), "{message}");

@@ -55,7 +55,7 @@ analyses:
 /// Largest error of the angle and the angular velocity against `A cos(2t)`, and the statistics.
 fn torsion_errors(rtol: f64, extra: &str) -> (f64, f64, serde_json::Value) {
     let model = linkwork::Model::from_yaml(&torsion_pendulum(rtol, extra)).unwrap();
-    let r = model.run("dynamics").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = model.run("dynamics", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let (phi, omega) = (col(&r, "rod.phi"), col(&r, "rod.omega"));
     let mut worst = (0.0f64, 0.0f64);
     for (k, &t) in r.time.iter().enumerate() {
@@ -116,7 +116,7 @@ bodies:
 #[test]
 fn slider_crank_repartitions_through_full_turns() {
     let model = linkwork::Model::from_yaml(&free_slider_crank(3.0)).unwrap();
-    let r = model.run("dynamics").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = model.run("dynamics", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let stats = &r.summary_json(None)["statistics"];
     let crank = col(&r, "crank.phi");
     let turns = (crank[crank.len() - 1] - crank[0]) / std::f64::consts::TAU;

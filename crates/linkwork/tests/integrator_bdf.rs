@@ -67,7 +67,7 @@ fn velocities_in_the_error_test_make_the_error_follow_the_tolerance() {
     let reference = QuickReturn::new(&model, 6.283, SAMPLES);
     let tol = 1e-8;
     let o = at_tolerance(IntegratorKind::Bdf, tol, None);
-    let default = model.run_with("dynamics", &o).unwrap_or_else(|f| panic!("{}", f.error));
+    let default = model.run("dynamics", &o.clone().into()).unwrap_or_else(|f| panic!("{}", f.error));
     assert_eq!(default.summary_json(None)["integrator"]["formulation"], "si2");
     let si2 = quick_return_error(&default, &reference);
     let (r, e, _) = run(&mut model, "dynamics", Formulation::Index3, tol, None);

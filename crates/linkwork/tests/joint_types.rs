@@ -11,7 +11,7 @@ const TOL: f64 = 1e-10;
 
 fn run(text: &str) -> Results {
     let model = Model::from_yaml(text).unwrap_or_else(|e| panic!("{e}"));
-    model.run("k").unwrap_or_else(|f| panic!("{}", f.error))
+    model.run("k", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error))
 }
 
 /// Two gears on fixed ground pins, external then internal: `r1 omega1 = -r2 omega2` (external),

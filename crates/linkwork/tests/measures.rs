@@ -49,7 +49,7 @@ fn closed_velocity_ratio(theta2: f64) -> f64 {
 fn run(text: &str, analysis: &str, set: &[(&str, &str)]) -> Results {
     let set: Vec<(String, String)> = set.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
     let model = Model::from_yaml_with(text, &set).unwrap_or_else(|e| panic!("{e}"));
-    model.run(analysis).unwrap_or_else(|f| panic!("{}", f.error))
+    model.run(analysis, &Default::default()).unwrap_or_else(|f| panic!("{}", f.error))
 }
 
 /// The example as written (links with mass): the transmission angle and the velocity ratio
@@ -188,7 +188,7 @@ fn measures_read_the_reaction_and_effort_columns_of_every_analysis() {
 /// The problems of running `analysis` of `text` (it compiles; the run is refused).
 fn run_problems(text: &str, analysis: &str) -> Vec<String> {
     let model = Model::from_yaml(text).unwrap_or_else(|e| panic!("{e}"));
-    match model.run(analysis) {
+    match model.run(analysis, &Default::default()) {
         Err(f) => match f.error {
             Error::Model(p) => {
                 assert!(f.results.is_empty(), "nothing is computed");

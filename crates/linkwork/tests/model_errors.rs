@@ -167,7 +167,7 @@ fn no_input_panics() {
                 mutated.replace_range(k..k + 1, replacement);
                 if let Ok(model) = Model::from_yaml(&mutated) {
                     // A model that compiles must also run to an answer or a typed error.
-                    let _ = model.run("kinematics");
+                    let _ = model.run("kinematics", &Default::default());
                 }
                 tried += 1;
             }
@@ -304,12 +304,12 @@ fn ground_and_one_body_twice_are_refused() {
 fn overrides_are_checked() {
     let model = Model::load(example("double_pendulum.yaml")).unwrap();
     let bad = linkwork::Overrides { rtol: Some(0.0), t_end: Some(-1.0), ..Default::default() };
-    let e = model.run_with("dynamics", &bad).unwrap_err().error;
+    let e = model.run("dynamics", &bad.clone().into()).unwrap_err().error;
     let Error::Model(p) = e else { panic!("expected a model error") };
     let p: Vec<String> = p.iter().map(|p| p.to_string()).collect();
     has_each(&p, &[("--rtol", "positive"), ("--t-end", "start")]);
     let kin = Model::load(example("fourbar.yaml")).unwrap();
-    let e = kin.run_with("kinematics", &linkwork::Overrides { atol: Some(1e-3), ..Default::default() }).unwrap_err();
+    let e = kin.run("kinematics", &linkwork::Overrides { atol: Some(1e-3), ..Default::default() }.into()).unwrap_err();
     // In the model file's words, not the engine's type names ("is Kinematic" before).
     assert!(
         e.error.to_string().contains("--atol: only a dynamic analysis has an integrator; 'kinematics' is kinematic"),
@@ -320,13 +320,13 @@ fn overrides_are_checked() {
     // and as an override. The option blamed is the one given: the end time that the file's step
     // no longer fits, not `--step`, which the user did not pass.
     let short = linkwork::Overrides { t_end: Some(0.005), ..Default::default() };
-    let e = kin.run_with("kinematics", &short).unwrap_err().error;
+    let e = kin.run("kinematics", &short.clone().into()).unwrap_err().error;
     assert!(e.to_string().contains("--t-end: the output step (0.02 s) is longer than the analysis (0.005 s"), "{e}");
     let long = linkwork::Overrides { t_end: Some(1e6), ..Default::default() };
-    let e = kin.run_with("kinematics", &long).unwrap_err().error;
+    let e = kin.run("kinematics", &long.clone().into()).unwrap_err().error;
     assert!(e.to_string().contains("--t-end: 50000000 output points requested"), "{e}");
     let both = linkwork::Overrides { t_end: Some(1.0), step: Some(1e-8), ..Default::default() };
-    let e = kin.run_with("kinematics", &both).unwrap_err().error;
+    let e = kin.run("kinematics", &both.clone().into()).unwrap_err().error;
     assert!(e.to_string().contains("--step: 100000000 output points requested"), "{e}");
 }
 

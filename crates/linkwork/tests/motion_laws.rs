@@ -58,7 +58,7 @@ fn motion(name: &str, t: f64) -> (Option<f64>, f64) {
 fn sliders_follow_their_laws_and_need_m_times_their_acceleration() {
     let path = format!("{}/../../examples/motion_laws.yaml", env!("CARGO_MANIFEST_DIR"));
     let model = Model::load(path).unwrap();
-    let r = model.run("drive").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = model.run("drive", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     assert_eq!(r.len(), 121);
     let column = |name: String| r.column(&name).unwrap_or_else(|| panic!("no column {name}")).to_vec();
     for name in ["step", "step5", "cycloidal", "harmonic", "modified_trapezoid"] {

@@ -61,8 +61,9 @@ fn ending_at(t_end: f64) -> Overrides {
 
 /// The allocations of one run of `analysis` of `model` under `overrides`, and the rows it wrote.
 fn run_counted(model: &Model, analysis: &str, overrides: &Overrides) -> (usize, usize) {
+    let options = overrides.clone().into();
     let before = allocations();
-    let r = model.run_with(analysis, overrides).unwrap_or_else(|f| panic!("{analysis}: {}", f.error));
+    let r = model.run(analysis, &options).unwrap_or_else(|f| panic!("{analysis}: {}", f.error));
     (allocations() - before, r.len())
 }
 

@@ -34,7 +34,7 @@ fn the_parametrised_slider_crank_strokes_twice_the_crank_radius() {
     for r in ["0.05", "75 mm", "0.1", "0.15"] {
         let m = model.with_parameters(&set(&[("r", r)])).unwrap();
         let radius = m.parameters["r"];
-        let results = m.run("kinematics").map_err(|f| f.error).unwrap();
+        let results = m.run("kinematics", &Default::default()).map_err(|f| f.error).unwrap();
         let x = column(&results, "slider.x");
         let (max, min) = (x.iter().copied().fold(f64::MIN, f64::max), x.iter().copied().fold(f64::MAX, f64::min));
         assert!((max - min - 2.0 * radius).abs() < 1e-9, "r = {r}: stroke {} against {}", max - min, 2.0 * radius);
@@ -80,7 +80,10 @@ analyses:
     for (a, b) in param.bodies.iter().zip(&plain.bodies) {
         assert_eq!((a.mass, a.inertia, a.q0), (b.mass, b.inertia, b.q0), "{}", a.name);
     }
-    let (p, q) = (param.run("kinematics").map_err(|f| f.error).unwrap(), plain.run("kinematics").unwrap());
+    let (p, q) = (
+        param.run("kinematics", &Default::default()).map_err(|f| f.error).unwrap(),
+        plain.run("kinematics", &Default::default()).unwrap(),
+    );
     assert_eq!(p.len(), q.len());
     for name in ["slider.x", "rod.phi", "crank.omega", "slider.ax"] {
         assert_eq!(column(&p, name), column(&q, name), "{name}");
@@ -99,7 +102,10 @@ fn values_given_from_outside_equal_an_edited_file() {
     for m in [&given, &by_unit] {
         assert_eq!(m.parameters, edited.parameters);
         assert!((m.parameters["m_rod"] - 5.0 * 0.28).abs() < 1e-15);
-        let (a, b) = (m.run("kinematics").map_err(|f| f.error).unwrap(), edited.run("kinematics").unwrap());
+        let (a, b) = (
+            m.run("kinematics", &Default::default()).map_err(|f| f.error).unwrap(),
+            edited.run("kinematics", &Default::default()).unwrap(),
+        );
         for name in ["slider.x", "rod.phi", "slider.vx"] {
             assert_eq!(column(&a, name), column(&b, name), "{name}");
         }
@@ -156,7 +162,7 @@ fn the_quick_return_strokes_as_its_lengths_say() {
     for crank in ["1.35", "1.5", "1650 mm"] {
         let m = model.with_parameters(&set(&[("crank", crank)])).unwrap();
         let p = &m.parameters;
-        let results = m.run_with("kinematics", &fine).map_err(|f| f.error).unwrap();
+        let results = m.run("kinematics", &fine.clone().into()).map_err(|f| f.error).unwrap();
         let x = column(&results, "slider_d.x");
         let range =
             |x: &mut dyn Iterator<Item = f64>| x.fold((f64::MAX, f64::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));

@@ -25,7 +25,10 @@ fn example(name: &str) -> Model {
 #[test]
 fn a_placed_four_bar_moves_as_the_one_in_body_frames() {
     let (placed, reference) = (example("fourbar_placed.yaml"), example("fourbar.yaml"));
-    let (p, r) = (placed.run("kinematics").unwrap(), reference.run("kinematics").unwrap());
+    let (p, r) = (
+        placed.run("kinematics", &Default::default()).unwrap(),
+        reference.run("kinematics", &Default::default()).unwrap(),
+    );
     assert_eq!(p.len(), r.len());
     for body in ["crank", "coupler", "rocker"] {
         for c in ["x", "y", "vx", "vy"] {
@@ -176,7 +179,7 @@ fn a_leg_placed_by_lengths_is_where_the_law_of_cosines_puts_it() {
     }
     let leg = &model.bodies[2];
     assert!((leg.q0[0] - h_[0]).abs() < 1e-12 && (leg.q0[1] - h_[1]).abs() < 1e-12, "{:?} vs {h_:?}", leg.q0);
-    let run = model.run("kinematics").unwrap_or_else(|e| panic!("{e:?}"));
+    let run = model.run("kinematics", &Default::default()).unwrap_or_else(|e| panic!("{e:?}"));
     for (column, want) in [("leg.x", h_[0]), ("leg.y", h_[1]), ("leg.phi", 0.0), ("upper.phi", 0.0)] {
         let got = run.column(column).unwrap()[0];
         assert!((got - want).abs() < 1e-12, "{column} at the start: {got} vs {want}");

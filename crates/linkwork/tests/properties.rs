@@ -572,7 +572,7 @@ fn run(m: &Mechanism, kind: &str, settings: &str) -> (String, Result<Results, (E
         Ok(model) => model,
         Err(e) => panic!("the generated model does not load: {e}\n{text}"),
     };
-    let outcome = model.run("run").map_err(|f| (f.error, f.results));
+    let outcome = model.run("run", &Default::default()).map_err(|f| (f.error, f.results));
     let driven = kind == "kinematic" || kind == "inverse";
     if let Err((e @ Error::Model(_), _)) = &outcome {
         // The model errors expected: a driven analysis of a mechanism with freedom left, and a

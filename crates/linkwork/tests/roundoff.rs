@@ -27,9 +27,12 @@ fn a_position_tolerance_below_round_off_warns_and_runs() {
         "kinematics: {type: kinematic, drivers: [crank_drive], t_end: 2.0, step: 0.05}",
         "kinematics: {type: kinematic, drivers: [crank_drive], t_end: 2.0, step: 0.05, solver: {tolerance: 1e-18}}",
     );
-    let reference = Model::from_yaml(&text).unwrap().run("kinematics").unwrap();
+    let reference = Model::from_yaml(&text).unwrap().run("kinematics", &Default::default()).unwrap();
     assert_eq!(warnings(&reference), Vec::<String>::new());
-    let r = Model::from_yaml(&tight).unwrap().run("kinematics").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = Model::from_yaml(&tight)
+        .unwrap()
+        .run("kinematics", &Default::default())
+        .unwrap_or_else(|f| panic!("{}", f.error));
     let w = warnings(&r);
     assert!(w.len() == 1 && w[0].contains("solver.tolerance 1e-18"), "{w:?}");
     for name in ["rocker.phi", "slider_d.x", "slider_d.vx", "link.omega"] {
@@ -57,10 +60,10 @@ fn a_mechanism_far_from_the_origin_assembles_at_the_round_off_floor() {
     );
     for (integrator, kind) in integrators() {
         let o = linkwork::Overrides { atol: Some(1e-8), ..at_tolerance(kind, 1e-11, Some(1.0)) };
-        let near = Model::from_yaml(&text).unwrap().run_with("dynamics", &o).unwrap();
+        let near = Model::from_yaml(&text).unwrap().run("dynamics", &o.clone().into()).unwrap();
         let r = Model::from_yaml(&far)
             .unwrap()
-            .run_with("dynamics", &o)
+            .run("dynamics", &o.clone().into())
             .unwrap_or_else(|f| panic!("{integrator}: {}", f.error));
         let w = warnings(&r);
         assert!(w.iter().any(|w| w.contains("solver.tolerance")), "{integrator}: {w:?}");
@@ -81,7 +84,7 @@ fn an_integrator_tolerance_below_round_off_warns_and_runs() {
     let model = Model::load(common::example("iftomm_a01_pendulum.yaml")).unwrap();
     for (integrator, kind) in integrators() {
         let o = at_tolerance(kind, 1e-16, Some(0.2));
-        let r = model.run_with("dynamics", &o).unwrap_or_else(|f| panic!("{integrator}: {}", f.error));
+        let r = model.run("dynamics", &o.clone().into()).unwrap_or_else(|f| panic!("{integrator}: {}", f.error));
         let w = warnings(&r);
         assert!(w.iter().any(|w| w.contains("solver.rtol 1e-16")), "{integrator}: {w:?}");
         let worst = common::references::pendulum_error(&r);

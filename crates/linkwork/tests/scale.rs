@@ -79,7 +79,7 @@ fn a_large_chain_names_its_redundant_link_as_a_small_one_does() {
 #[test]
 fn a_large_chain_with_a_redundant_link_runs_and_keeps_its_energy() {
     let model = Model::from_yaml(&nfourbar(60, true)).unwrap();
-    let r = model.run("dynamics").unwrap();
+    let r = model.run("dynamics", &Default::default()).unwrap();
     assert_eq!(r.summary.redundant_rows.as_ref().map(Vec::len), Some(1));
     let (kinetic, potential) = (r.column("kinetic_energy").unwrap(), r.column("potential_energy").unwrap());
     let total: Vec<f64> = kinetic.iter().zip(potential).map(|(k, p)| k + p).collect();
@@ -100,7 +100,8 @@ fn outputs_keep_the_columns_named() {
     );
     assert_ne!(chosen, full_text, "the analysis line was found");
     let (all, some) = (Model::from_yaml(&full_text).unwrap(), Model::from_yaml(&chosen).unwrap());
-    let (all, some) = (all.run("dynamics").unwrap(), some.run("dynamics").unwrap());
+    let (all, some) =
+        (all.run("dynamics", &Default::default()).unwrap(), some.run("dynamics", &Default::default()).unwrap());
     let mut expected: Vec<String> = linkwork::results::BODY_QUANTITIES.iter().map(|q| format!("c60.{q}")).collect();
     expected.extend(["r1.phi".to_string()]);
     expected.extend(["A0.fx", "A0.fy", "A0.torque", "kinetic_energy"].map(String::from));
@@ -113,7 +114,7 @@ fn outputs_keep_the_columns_named() {
         assert_eq!(some.column(name), all.column(name), "{name}");
     }
     let unknown = chosen.replace("columns: [kinetic_energy, r1.phi]", "columns: [kinetic_energy, r1.psi]");
-    let error = Model::from_yaml(&unknown).unwrap().run("dynamics").unwrap_err().error;
+    let error = Model::from_yaml(&unknown).unwrap().run("dynamics", &Default::default()).unwrap_err().error;
     assert!(error.to_string().contains("analyses.dynamics.outputs.columns[1]: no result column 'r1.psi'"), "{error}");
     let unknown_body = chosen.replace("bodies: [c60]", "bodies: [c61]");
     let error = Model::from_yaml(&unknown_body).unwrap_err();
@@ -130,7 +131,7 @@ fn static_and_modes_analyses_refuse_a_chain_too_large_for_them() {
     );
     let model = Model::from_yaml(&text).unwrap();
     for name in ["rest", "vibration"] {
-        let error = model.run(name).unwrap_err().error;
+        let error = model.run(name, &Default::default()).unwrap_err().error;
         assert!(
             error.to_string().contains(&format!("analyses.{name}.type: a "))
                 && error.to_string().contains("2402 x 2403"),

@@ -74,7 +74,7 @@ fn with_dynamics(text: &str) -> String {
 fn the_slider_crank_scaled_from_1e_6_to_1e6_has_the_same_freedom_and_positions() {
     let text =
         std::fs::read_to_string(format!("{}/../../examples/slider_crank.yaml", env!("CARGO_MANIFEST_DIR"))).unwrap();
-    let reference = Model::from_yaml(&text).unwrap().run("kinematics").unwrap();
+    let reference = Model::from_yaml(&text).unwrap().run("kinematics", &Default::default()).unwrap();
     // The largest position (m) and angle (rad) of the run: "relative" is to the mechanism's size,
     // not to each coordinate (the slider's y is zero up to round-off).
     let size = |quantity: &str| {
@@ -88,13 +88,13 @@ fn the_slider_crank_scaled_from_1e_6_to_1e6_has_the_same_freedom_and_positions()
         let driven = report.analyses["kinematics"].system.as_ref().unwrap_or_else(|| panic!("scale {s:e}: {report:?}"));
         assert_eq!((report.mechanism.dof, driven.dof), (1, 0), "scale {s:e}");
         assert!(report.mechanism.redundant.is_empty() && driven.redundant.is_empty(), "scale {s:e}");
-        let run = model.run("kinematics").unwrap_or_else(|f| panic!("scale {s:e}: {}", f.error));
+        let run = model.run("kinematics", &Default::default()).unwrap_or_else(|f| panic!("scale {s:e}: {}", f.error));
         assert_eq!(run.time, reference.time, "scale {s:e}");
         // Its dynamics runs too, with a flywheel: the massless-motion check compared inertias
         // (kg m^2) with masses (kg), so at 1e-6 the flywheel's inertia (1e-15 kg m^2) counted as
         // none and its free turning was refused as a motion no mass resists.
         let free = Model::from_yaml(&scaled(&with_dynamics(&text), s)).unwrap();
-        let dynamics = free.run("free").unwrap_or_else(|f| panic!("scale {s:e}: {}", f.error));
+        let dynamics = free.run("free", &Default::default()).unwrap_or_else(|f| panic!("scale {s:e}: {}", f.error));
         assert_eq!(dynamics.summary.dof, Some(2), "scale {s:e}");
         for name in &reference.names {
             let Some(quantity) = [".x", ".y", ".phi"].into_iter().find(|q| name.ends_with(q)) else { continue };

@@ -55,7 +55,7 @@ fn every_example_loads_and_runs() {
                 },
                 _ => Overrides::default(),
             };
-            let outcome = model.run_with(name, &overrides).map_err(|f| f.error);
+            let outcome = model.run(name, &overrides.clone().into()).map_err(|f| f.error);
             match (file.as_str(), outcome) {
                 ("slider_crank_lockup.yaml", Err(Error::Singular { .. })) => {}
                 ("slider_crank_lockup.yaml", Ok(_)) => {

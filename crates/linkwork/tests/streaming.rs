@@ -1,4 +1,4 @@
-//! Results streamed to a file as they are computed (`Model::run_streamed`): the file is the one a
+//! Results streamed to a file as they are computed (`Model::run` with a `Sink::Stream`): the file is the one a
 //! run held in memory writes, byte for byte, whatever the chunks; the summary is the same; a
 //! failed run's file has every row up to the failure; a file that cannot be written fails the
 //! run naming it.
@@ -6,14 +6,18 @@
 mod common;
 
 use common::{example, pendulum_with_torque};
-use linkwork::progress::Progress;
 use linkwork::results::stream::{CsvSink, RowSink};
-use linkwork::{Error, Model, Overrides};
+use linkwork::{Error, Model, RunOptions, Sink};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 fn temp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("linkwork-stream-{}-{name}", std::process::id()))
+}
+
+/// A run with its rows going to `sink`.
+fn streaming(sink: Box<dyn RowSink>) -> RunOptions {
+    RunOptions { sink: Sink::stream(sink), ..RunOptions::default() }
 }
 
 /// A [`CsvSink`] that writes a chunk every `rows_per_chunk` rows of `columns` columns, and
@@ -50,7 +54,7 @@ impl RowSink for Chunked {
 fn a_streamed_file_is_the_file_a_run_in_memory_writes() {
     let model = Model::load(example("quick_return_a.yaml")).unwrap();
     for analysis in ["kinematics", "dynamics_loaded", "inverse"] {
-        let held = model.run(analysis).unwrap();
+        let held = model.run(analysis, &Default::default()).unwrap();
         if analysis != "kinematics" {
             // The peaks kept as the rows go by are those of the columns: every joint's largest
             // resultant force.
@@ -70,8 +74,7 @@ fn a_streamed_file_is_the_file_a_run_in_memory_writes() {
             let chunks = Arc::new(Mutex::new(0));
             let bytes = rows_per_chunk.map_or(linkwork::results::stream::CHUNK_BYTES, |r| 8 * columns * r);
             let sink = Chunked { csv: CsvSink::at(&path), bytes, chunks: Arc::clone(&chunks) };
-            let streamed =
-                model.run_streamed(analysis, &Overrides::default(), &Progress::new(), Box::new(sink)).unwrap();
+            let streamed = model.run(analysis, &streaming(Box::new(sink))).unwrap();
             assert!(std::fs::read(&path).unwrap() == expected, "{analysis} {rows_per_chunk:?}: the files differ");
             assert!(streamed.is_streamed() && streamed.time.is_empty(), "{analysis}: no row held");
             assert_eq!(streamed.len(), held.len());
@@ -89,12 +92,12 @@ fn a_streamed_file_is_the_file_a_run_in_memory_writes() {
 #[test]
 fn a_failed_streamed_run_keeps_its_rows() {
     let model = pendulum_with_torque("kick", "sqrt(0.503-t)", 0.01);
-    let held = model.run("dynamics").unwrap_err();
+    let held = model.run("dynamics", &Default::default()).unwrap_err();
     let reference = temp("failed-held.csv");
     held.results.write_csv(&reference).unwrap();
     let path = temp("failed-streamed.csv");
     let sink = Box::new(CsvSink::at(&path));
-    let streamed = model.run_streamed("dynamics", &Overrides::default(), &Progress::new(), sink).unwrap_err();
+    let streamed = model.run("dynamics", &streaming(sink)).unwrap_err();
     assert_eq!(streamed.error.to_string(), held.error.to_string());
     assert_eq!(streamed.results.len(), 51);
     assert_eq!(std::fs::read_to_string(&path).unwrap(), std::fs::read_to_string(&reference).unwrap());
@@ -111,7 +114,7 @@ fn a_run_that_cannot_start_leaves_the_file_alone() {
     std::fs::write(&path, "kept\n").unwrap();
     let model = Model::load(example("quick_return_a.yaml")).unwrap();
     let sink = Box::new(CsvSink::at(&path));
-    let failure = model.run_streamed("kinematcs", &Overrides::default(), &Progress::new(), sink).unwrap_err();
+    let failure = model.run("kinematcs", &streaming(sink)).unwrap_err();
     assert!(failure.error.to_string().contains("kinematcs"), "{}", failure.error);
     assert_eq!(std::fs::read_to_string(&path).unwrap(), "kept\n");
     std::fs::remove_file(path).unwrap();
@@ -139,8 +142,7 @@ fn a_sink_that_cannot_be_written_fails_the_run_naming_it() {
         }
     }
     let model = Model::load(example("quick_return_a.yaml")).unwrap();
-    let failure =
-        model.run_streamed("kinematics", &Overrides::default(), &Progress::new(), Box::new(Full)).unwrap_err();
+    let failure = model.run("kinematics", &streaming(Box::new(Full))).unwrap_err();
     assert!(
         matches!(&failure.error, Error::Io { path, message } if path == "/full/results.csv" && message.contains("no space")),
         "{}",

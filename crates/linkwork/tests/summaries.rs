@@ -6,9 +6,8 @@
 mod common;
 
 use common::example_text;
-use linkwork::progress::Progress;
 use linkwork::results::stream::{CsvSink, RowSink};
-use linkwork::{Error, Model, Overrides, Results};
+use linkwork::{Error, Model, Results, RunOptions, Sink};
 
 /// A wheel pinned to ground and turned at `w = 3` rad/s, with the measures `s = sin(3 t)` and
 /// `p = t^3 - t`; a kinematic analysis from 0 to 2 s every `step` s, and `summaries` (lines of
@@ -59,7 +58,7 @@ fn summaries_match_their_closed_forms() {
   final: \"final(p)\"
   time: \"integral(time * w)\"",
     );
-    let r = model.run("kinematics").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = model.run("kinematics", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let min_p = -2.0 / (3.0 * 3f64.sqrt()); // at t = 1/sqrt(3), not a row: the rows' least
     let rows_min = r.column("p").unwrap().iter().copied().fold(f64::INFINITY, f64::min);
     assert!(rows_min > min_p && rows_min - min_p < 1e-2);
@@ -97,7 +96,9 @@ fn the_integral_converges_at_fourth_order() {
     let errors: Vec<f64> = [0.1, 0.05, 0.025]
         .iter()
         .map(|&h| {
-            let r = wheel(h, "  s: \"integral(s)\"").run("kinematics").unwrap_or_else(|f| panic!("{}", f.error));
+            let r = wheel(h, "  s: \"integral(s)\"")
+                .run("kinematics", &Default::default())
+                .unwrap_or_else(|f| panic!("{}", f.error));
             (summary(&r, "s") - exact).abs()
         })
         .collect();
@@ -135,10 +136,10 @@ impl RowSink for EveryRow {
 fn streamed_and_selected_runs_have_the_same_summaries() {
     let list = "  a: \"integral(p * wheel.omega)\"\n  b: \"max(s) - at(1.05, wheel.phi)\"";
     let model = wheel(0.05, list);
-    let held = model.run("kinematics").unwrap();
+    let held = model.run("kinematics", &Default::default()).unwrap();
     let path = std::env::temp_dir().join(format!("linkwork-summaries-{}.csv", std::process::id()));
     let sink = Box::new(EveryRow(CsvSink::at(&path)));
-    let streamed = model.run_streamed("kinematics", &Overrides::default(), &Progress::new(), sink).unwrap();
+    let streamed = model.run("kinematics", &RunOptions { sink: Sink::stream(sink), ..RunOptions::default() }).unwrap();
     std::fs::remove_file(&path).unwrap();
     assert!(streamed.time.is_empty());
     assert_eq!(streamed.summary.summaries, held.summary.summaries);
@@ -146,7 +147,7 @@ fn streamed_and_selected_runs_have_the_same_summaries() {
         "kinematics: {type: kinematic, t_end: span, step: 0.05}",
         "kinematics: {type: kinematic, t_end: span, step: 0.05, outputs: {columns: [s]}}",
     );
-    let selected = Model::from_yaml(&text).unwrap().run("kinematics").unwrap();
+    let selected = Model::from_yaml(&text).unwrap().run("kinematics", &Default::default()).unwrap();
     assert_eq!(selected.names, ["s"]);
     assert_eq!(selected.summary.summaries, held.summary.summaries);
 }
@@ -158,11 +159,11 @@ fn runs_without_a_span_or_that_fail_write_no_summaries() {
     let text = example_text("hanging_fourbar.yaml") + "summaries:\n  top: \"max(crank.phi)\"\n";
     let model = Model::from_yaml(&text).unwrap();
     for analysis in ["rest", "vibration"] {
-        let r = model.run(analysis).unwrap_or_else(|f| panic!("{analysis}: {}", f.error));
+        let r = model.run(analysis, &Default::default()).unwrap_or_else(|f| panic!("{analysis}: {}", f.error));
         assert!(r.summary.summaries.is_none() && r.summary_json(None).get("summaries").is_none(), "{analysis}");
     }
     let text = example_text("slider_crank_lockup.yaml") + "summaries:\n  top: \"max(crank.phi)\"\n";
-    let failure = Model::from_yaml(&text).unwrap().run("kinematics").unwrap_err();
+    let failure = Model::from_yaml(&text).unwrap().run("kinematics", &Default::default()).unwrap_err();
     assert!(matches!(failure.error, Error::Singular { .. }), "{}", failure.error);
     assert!(failure.results.len() > 1 && failure.results.summary.summaries.is_none());
 }
@@ -205,13 +206,13 @@ fn each_error_names_its_summary() {
         ),
         ("  x: \"at(3, p)\"", "at(3, p): the output is from t = 0 to 2 s"),
     ] {
-        let failure = wheel(0.1, summaries).run("kinematics").unwrap_err();
+        let failure = wheel(0.1, summaries).run("kinematics", &Default::default()).unwrap_err();
         let message = problem(&failure.error);
         assert!(message.starts_with("summaries.x: ") && message.contains(says), "{message}");
         assert_eq!(failure.results.len(), 0, "refused before the first row");
     }
 
-    let failure = wheel(0.1, "  x: \"final(p) / initial(time)\"").run("kinematics").unwrap_err();
+    let failure = wheel(0.1, "  x: \"final(p) / initial(time)\"").run("kinematics", &Default::default()).unwrap_err();
     let message = failure.error.to_string();
     let Error::NonFinite { time, ref element, value, .. } = failure.error else { panic!("{message}") };
     assert_eq!((element.as_str(), time, value), ("summaries.x", 2.0, f64::INFINITY), "{message}");
@@ -221,7 +222,7 @@ fn each_error_names_its_summary() {
     let json = failure.results.summary_json(Some(&failure.error));
     assert_eq!((json["status"].as_str(), json.get("summaries")), (Some("failed"), None));
 
-    let failure = wheel(0.1, "  x: \"max(1 / (p - 6))\"").run("kinematics").unwrap_err();
+    let failure = wheel(0.1, "  x: \"max(1 / (p - 6))\"").run("kinematics", &Default::default()).unwrap_err();
     let message = failure.error.to_string();
     let Error::NonFinite { time, .. } = failure.error else { panic!("{message}") };
     assert_eq!(time, 2.0, "{message}");

@@ -5,7 +5,7 @@
 mod common;
 
 use common::example;
-use linkwork::progress::Progress;
+use linkwork::progress::{Progress, StopToken};
 use linkwork::sweep::{sweep, Output};
 use linkwork::{Error, Model};
 use std::f64::consts::PI;
@@ -34,6 +34,7 @@ fn the_stroke_of_each_radius_is_twice_it() {
         &outputs(&[("stroke", "max(slider.x) - min(slider.x)")]),
         None,
         &Progress::new(),
+        &StopToken::new(),
     )
     .unwrap();
     for (r, row) in r.iter().zip(&rows) {
@@ -62,7 +63,9 @@ fn aggregations_match_their_closed_forms() {
         ("nested", "max(max(crank.phi, 1) * 2) + 1"),
         ("omega", "mean(crank.omega)"),
     ];
-    let rows = sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&list), Some(1), &Progress::new()).unwrap();
+    let rows =
+        sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&list), Some(1), &Progress::new(), &StopToken::new())
+            .unwrap();
     let got = rows[0].as_ref().unwrap();
     let expected = [
         2.0 * PI,
@@ -93,14 +96,23 @@ fn a_failed_variant_is_a_row() {
         &outputs(&[("s", "final(slider.x)")]),
         None,
         &Progress::new(),
+        &StopToken::new(),
     )
     .unwrap();
     assert!(rows[0].is_ok() && rows[2].is_ok(), "{rows:?}");
     let error = rows[1].as_ref().unwrap_err();
     assert!(!matches!(error, Error::Model(_)), "{error}");
     let bad = vec![vec![("r".to_string(), "2 kg".to_string())]];
-    let rows =
-        sweep(&model(), "kinematics", &bad, &outputs(&[("s", "final(slider.x)")]), None, &Progress::new()).unwrap();
+    let rows = sweep(
+        &model(),
+        "kinematics",
+        &bad,
+        &outputs(&[("s", "final(slider.x)")]),
+        None,
+        &Progress::new(),
+        &StopToken::new(),
+    )
+    .unwrap();
     assert!(rows[0].as_ref().unwrap_err().to_string().contains("parameters.r"), "{rows:?}");
 }
 
@@ -114,16 +126,30 @@ fn bad_outputs_name_what_is_wrong() {
     assert!(e.contains("peak() takes one expression, found 2 arguments"), "{e}");
     let e = Output::parse("s", "at(t1, slider.x)").unwrap_err();
     assert!(e.contains("needs a number for time"), "{e}");
-    let rows =
-        sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&[("s", "max(slider.xx)")]), None, &Progress::new())
-            .unwrap();
+    let rows = sweep(
+        &model(),
+        "kinematics",
+        &radii(&[0.1]),
+        &outputs(&[("s", "max(slider.xx)")]),
+        None,
+        &Progress::new(),
+        &StopToken::new(),
+    )
+    .unwrap();
     let message = rows[0].as_ref().unwrap_err().to_string();
     assert!(message.contains("outputs.s") && message.contains("no result column 'slider.xx'"), "{message}");
-    let rows =
-        sweep(&model(), "kinematics", &radii(&[0.1]), &outputs(&[("s", "at(2, slider.x)")]), None, &Progress::new())
-            .unwrap();
+    let rows = sweep(
+        &model(),
+        "kinematics",
+        &radii(&[0.1]),
+        &outputs(&[("s", "at(2, slider.x)")]),
+        None,
+        &Progress::new(),
+        &StopToken::new(),
+    )
+    .unwrap();
     assert!(rows[0].as_ref().unwrap_err().to_string().contains("from t = 0 to 1 s"), "{rows:?}");
-    assert!(sweep(&model(), "nonesuch", &radii(&[0.1]), &[], None, &Progress::new()).is_err());
+    assert!(sweep(&model(), "nonesuch", &radii(&[0.1]), &[], None, &Progress::new(), &StopToken::new()).is_err());
 }
 
 /// One thread or two: the same rows, bit for bit, in the order of the variants.
@@ -131,8 +157,8 @@ fn bad_outputs_name_what_is_wrong() {
 fn threads_do_not_change_the_table() {
     let r: Vec<f64> = (0..12).map(|k| 0.05 + 0.01 * k as f64).collect();
     let out = outputs(&[("stroke", "max(slider.x) - min(slider.x)"), ("torque", "peak(motor.effort)")]);
-    let one = sweep(&model(), "inverse", &radii(&r), &out, Some(1), &Progress::new()).unwrap();
-    let two = sweep(&model(), "inverse", &radii(&r), &out, Some(2), &Progress::new()).unwrap();
+    let one = sweep(&model(), "inverse", &radii(&r), &out, Some(1), &Progress::new(), &StopToken::new()).unwrap();
+    let two = sweep(&model(), "inverse", &radii(&r), &out, Some(2), &Progress::new(), &StopToken::new()).unwrap();
     let bits = |rows: &[linkwork::sweep::Row]| -> Vec<Vec<u64>> {
         rows.iter().map(|r| r.as_ref().unwrap().iter().map(|v| v.to_bits()).collect()).collect()
     };
@@ -145,12 +171,12 @@ fn threads_do_not_change_the_table() {
 fn a_stopped_sweep_ends_its_variants_as_interrupted() {
     let out = outputs(&[("s", "final(slider.x)")]);
     let watch = Progress::new();
-    let rows = sweep(&model(), "kinematics", &radii(&[0.1, 0.12]), &out, Some(1), &watch).unwrap();
+    let rows = sweep(&model(), "kinematics", &radii(&[0.1, 0.12]), &out, Some(1), &watch, &StopToken::new()).unwrap();
     assert!(rows.iter().all(Result::is_ok));
     assert_eq!(watch.finished(), 2);
-    let stopped = Progress::new();
-    stopped.stop();
-    let rows = sweep(&model(), "kinematics", &radii(&[0.1, 0.12, 0.14]), &out, Some(2), &stopped).unwrap();
+    let (stopped, stop) = (Progress::new(), StopToken::new());
+    stop.stop();
+    let rows = sweep(&model(), "kinematics", &radii(&[0.1, 0.12, 0.14]), &out, Some(2), &stopped, &stop).unwrap();
     assert_eq!(rows.len(), 3);
     assert!(rows.iter().all(|r| matches!(r, Err(Error::Interrupted { .. }))), "{rows:?}");
     assert_eq!(stopped.finished(), 3);

@@ -76,7 +76,7 @@ fn an_inline_table_drives_with_its_derivatives() {
          analyses:\n  run: {type: kinematic, drivers: [turn], t_end: 3, step: 0.25}\n",
     )
     .unwrap();
-    let r = model.run("run").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = model.run("run", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let (phi, omega, alpha) =
         (r.column("crank.phi").unwrap(), r.column("crank.omega").unwrap(), r.column("crank.alpha").unwrap());
     for (k, &t) in r.time.iter().enumerate() {
@@ -142,7 +142,10 @@ fn a_files_columns_are_found_by_name_and_read_as_numbers() {
     };
     // A model loaded from a file reads the table's file beside it.
     std::fs::write(dir.join("model.yaml"), model("good.csv", "angle")).unwrap();
-    let r = Model::load(dir.join("model.yaml")).unwrap().run("run").unwrap_or_else(|f| panic!("{}", f.error));
+    let r = Model::load(dir.join("model.yaml"))
+        .unwrap()
+        .run("run", &Default::default())
+        .unwrap_or_else(|f| panic!("{}", f.error));
     assert_eq!(r.column("crank.phi").unwrap(), &[0.0, 1.0, 2.0, 3.0, 4.0]);
     let list = problems(&model(&dir.join("good.csv").display().to_string(), "angel"));
     assert!(

@@ -21,7 +21,9 @@ fn load(name: &str) -> Model {
 /// Run `analysis` with `integrator` at `rtol = atol = tol` (and `t_end` if given).
 fn run(model: &Model, analysis: &str, integrator: IntegratorKind, tol: f64, t_end: Option<f64>) -> Results {
     let o = Overrides { integrator: Some(integrator), rtol: Some(tol), atol: Some(tol), t_end, ..Default::default() };
-    model.run_with(analysis, &o).unwrap_or_else(|f| panic!("{} {integrator:?} {tol:e}: {}", model.name, f.error))
+    model
+        .run(analysis, &o.clone().into())
+        .unwrap_or_else(|f| panic!("{} {integrator:?} {tol:e}: {}", model.name, f.error))
 }
 
 /// The references are what they claim. The quick-return's quadrature from 256 and from 512

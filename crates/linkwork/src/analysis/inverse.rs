@@ -16,7 +16,7 @@
 
 use super::dynamic::{factor_error, Dae, FRICTION_RTOL, NEWTON_FRICTION_ITERATIONS};
 use super::kinematic::run_driven;
-use super::{element_names, row_space};
+use super::{element_names, row_space, Run};
 use crate::error::Error;
 use crate::linalg::rows::RowSpace;
 use crate::linalg::{ColMatrix, Pattern};
@@ -32,12 +32,11 @@ use faer::Mat;
 /// whole load along it.
 pub const BALANCE_TOLERANCE: f64 = 1e-5;
 
-/// Columns after the reactions and efforts.
-pub const INVERSE_COLUMNS: [&str; 4] = ["kinetic_energy", "potential_energy", "driver_power", "applied_power"];
+pub use crate::model::INVERSE_COLUMNS;
 
 /// Run an inverse dynamic analysis. On failure the results up to the last good output time are
 /// kept.
-pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
+pub(crate) fn run_inverse(model: &Model, analysis: &Analysis, run: &mut Run<'_>) -> Result<Results, Box<Failure>> {
     let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
         Ok(d) => d,
         Err(e) => {
@@ -55,7 +54,7 @@ pub fn run_inverse(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
     let mut reactions = Vec::new();
     let pattern = Pattern::new(m, n, dae.jacobian_entries().0.iter().map(|&e| Some(e)));
     let mut indeterminate: Option<Vec<String>> = None;
-    let outcome = run_driven(model, analysis, names, |t, q, qdot, qddot, extra| {
+    let outcome = run_driven(model, analysis, run, names, |t, q, qdot, qddot, extra| {
         dae.positions(q, t);
         dae.load(q, qdot, t, &mut rhs);
         let mut size = 0.0f64;

@@ -13,7 +13,7 @@
 //! loop except the growth of the output columns, reserved up front.
 
 use super::setup::{fail, held, output_times, unmet_freedom};
-use super::{assemble_into, scaled_residual, scaled_residual_floor, Assembly, SINGULAR_RATIO_KINEMATIC};
+use super::{assemble_into, scaled_residual, scaled_residual_floor, Assembly, Run, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::{Config, ConfigBuf};
 use crate::error::{Error, Problem, RowName};
 use crate::linalg::rows::row_scales;
@@ -191,9 +191,9 @@ fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// Run a kinematic analysis. On failure the results up to the last good output time are kept.
-pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
+pub(crate) fn run_kinematic(model: &Model, analysis: &Analysis, run: &mut Run<'_>) -> Result<Results, Box<Failure>> {
     let names = model.measures.iter().map(|m| m.name.clone()).collect();
-    run_driven(model, analysis, names, |t, q, qdot, qddot, extra| {
+    run_driven(model, analysis, run, names, |t, q, qdot, qddot, extra| {
         extra.clear();
         extra.extend(model.measures.iter().map(|m| m.value(q, qdot, qddot, &[], t)));
         Ok(())
@@ -202,14 +202,16 @@ pub fn run_kinematic(model: &Model, analysis: &Analysis) -> Result<Results, Box<
 
 /// The kinematic solution of a fully driven mechanism, with the columns `names` after the body
 /// quantities, whose values at each output time `extra(t, q, qdot, qddot, values)` writes into
-/// `values`. Shared by the kinematic and the inverse dynamic analyses.
+/// `values`, each output point pushed as `run`. Shared by the kinematic and the inverse dynamic
+/// analyses.
 pub(crate) fn run_driven(
     model: &Model,
     analysis: &Analysis,
+    run: &mut Run<'_>,
     names: Vec<String>,
     mut extra_values: impl FnMut(f64, &[f64], &[f64], &[f64], &mut Vec<f64>) -> Result<(), Error>,
 ) -> Result<Results, Box<Failure>> {
-    let mut results = Results::new(model, analysis);
+    let mut results = run.results(model, analysis);
     let mut extra = Vec::with_capacity(names.len());
     results.add_columns(names);
     let settings = analysis.settings;
@@ -286,7 +288,7 @@ pub(crate) fn run_driven(
         check_condition(&mut s, model, &analysis.drivers, settings.singular_condition)?;
         s.check_output()?;
         extra_values(t0, &s.q, &s.qdot, &s.qddot, &mut extra)?;
-        results.push(t0, &s.q, &s.qdot, &s.qddot, &extra)?;
+        run.push(&mut results, t0, &s.q, &s.qdot, &s.qddot, &extra)?;
         let mut dt = h;
         let mut q_pred = vec![0.0; n];
         for &target in &times[1..] {
@@ -353,7 +355,7 @@ pub(crate) fn run_driven(
             check_condition(&mut s, model, &analysis.drivers, settings.singular_condition)?;
             s.check_output()?;
             extra_values(target, &s.q, &s.qdot, &s.qddot, &mut extra)?;
-            results.push(target, &s.q, &s.qdot, &s.qddot, &extra)?;
+            run.push(&mut results, target, &s.q, &s.qdot, &s.qddot, &extra)?;
         }
         Ok(())
     })();

@@ -1,4 +1,4 @@
-//! Analyses: the run entry point ([`crate::Model::run`], with the run's [`Overrides`]) and its
+//! Analyses: the run entry point ([`crate::Model::run`], with the run's [`RunOptions`]) and its
 //! dispatch; assembly of an initial guess, checks (degrees of freedom, redundant rows), and the
 //! kinematic, inverse, static, modes and dynamic analyses. Each reads a compiled
 //! [`crate::model::Model`] and writes [`crate::results::Results`].
@@ -15,17 +15,20 @@ mod run;
 mod setup;
 mod statics;
 
+pub use crate::system::length_scale;
 pub use assembly::{assemble, Assembly, Start};
 pub(crate) use branches::{assemble_into, singular_start};
 pub use branches::{assemble_on_branches, blame};
 pub use check::{assembled_branches, check, AnalysisCheck, CheckReport, SystemCheck};
 pub(crate) use inverse::reaction_columns;
-pub use inverse::{run_inverse, INVERSE_COLUMNS};
-pub use kinematic::run_kinematic;
-pub use modes::run_modes;
-pub use run::Overrides;
+pub(crate) use inverse::run_inverse;
+pub use inverse::INVERSE_COLUMNS;
+pub(crate) use kinematic::run_kinematic;
+pub(crate) use modes::run_modes;
+pub(crate) use run::Run;
+pub use run::{Overrides, RunOptions, Sink};
 pub(crate) use setup::measure_reactions;
-pub use statics::run_static;
+pub(crate) use statics::run_static;
 
 use crate::linalg::dense::null_space;
 use crate::linalg::rows::{RowSpace, Scaled};
@@ -245,17 +248,6 @@ pub(crate) fn massless_motion(model: &crate::model::Model, jac: &ColMatrix) -> O
 pub(crate) fn row_space(jac: &ColMatrix, t: f64) -> crate::error::Result<RowSpace> {
     RowSpace::new(jac.as_ref())
         .map_err(|_| crate::Error::OutOfMemory { time: t, what: "in the rank of the constraint Jacobian".into() })
-}
-
-/// The model's length scale `L`, m: the largest distance of a named point from its body's
-/// centre of mass (the lever arms that make the angle columns of `Phi_q`), else, for a model
-/// without points, the largest distance of a body's guessed position from the origin, else 1.
-/// It scales with the model: every length multiplied by `s` multiplies it by `s`.
-pub fn length_scale(model: &crate::model::Model) -> f64 {
-    let largest = |v: &mut dyn Iterator<Item = [f64; 2]>| v.map(|p| p[0].hypot(p[1])).fold(0.0f64, f64::max);
-    let arms = largest(&mut model.bodies.iter().flat_map(|b| b.points.values().copied()));
-    let positions = largest(&mut model.bodies.iter().map(|b| [b.q0[0], b.q0[1]]));
-    [arms, positions].into_iter().find(|&l| l > 0.0 && l.is_finite()).unwrap_or(1.0)
 }
 
 /// The scale of each coordinate of `columns` (indices into `q`) for [`Scaled`]: 1 for `x` and

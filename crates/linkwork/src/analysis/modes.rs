@@ -26,7 +26,7 @@
 use super::dynamic::{factor_error, Dae};
 use super::setup::{coordinate_names, fail, held, unmet_freedom};
 use super::statics::{solve, Statics, ZERO_STIFFNESS};
-use super::{assemble_into, element_names, independent_rows, indeterminate_rows};
+use super::{assemble_into, element_names, independent_rows, indeterminate_rows, Run};
 use crate::error::Error;
 use crate::linalg::dense::equilibrated;
 use crate::model::spec::LinearisePoint;
@@ -36,14 +36,14 @@ use faer::linalg::solvers::DenseSolveCore;
 use faer::Mat;
 
 /// Run a modes analysis.
-pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
+pub(crate) fn run_modes(model: &Model, analysis: &Analysis, run: &mut Run<'_>) -> Result<Results, Box<Failure>> {
     let t = analysis.t_start;
     let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
         Ok(d) => d,
         Err(e) => return Err(fail(Results::new(model, analysis), factor_error(e, t))),
     };
     let n = dae.n;
-    let mut results = Results::new(model, analysis);
+    let mut results = run.results(model, analysis);
     if let Err(e) = super::dense_size(analysis, dae.m, n) {
         return Err(fail(results, e));
     }
@@ -115,7 +115,7 @@ pub fn run_modes(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fail
     let stable = modes.iter().all(|m| m.growth_rate.is_none());
     let zero = vec![0.0; n];
     let extra: Vec<f64> = model.measures.iter().map(|m| m.value(&q, &qdot, &zero, &[], t)).collect();
-    if let Err(e) = results.push(t, &q, &qdot, &zero, &extra) {
+    if let Err(e) = run.push(&mut results, t, &q, &qdot, &zero, &extra) {
         return Err(fail(results, e));
     }
     st.dae.positions(&q, t);

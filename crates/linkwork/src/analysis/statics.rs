@@ -46,7 +46,9 @@
 
 use super::dynamic::{factor_error, Dae};
 use super::setup::{coordinate_name, fail, held, output_times};
-use super::{assemble, assemble_into, element_names, independent_rows, indeterminate_rows, residual_floor, Start};
+use super::{
+    assemble, assemble_into, element_names, independent_rows, indeterminate_rows, residual_floor, Run, Start,
+};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Unbalanced};
 use crate::linalg::dense::{equilibrated, min_norm_solve, null_space};
@@ -611,13 +613,13 @@ fn free(analysis: &Analysis, t: f64, coordinates: &[String]) -> Error {
 
 /// Run a static (or quasi-static) analysis. On failure the equilibria found until then are
 /// kept.
-pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
+pub(crate) fn run_static(model: &Model, analysis: &Analysis, run: &mut Run<'_>) -> Result<Results, Box<Failure>> {
     let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
         Ok(d) => d,
         Err(e) => return Err(fail(Results::new(model, analysis), factor_error(e, analysis.t_start))),
     };
     let n = dae.n;
-    let mut results = Results::new(model, analysis);
+    let mut results = run.results(model, analysis);
     if let Err(e) = super::dense_size(analysis, dae.m, n) {
         return Err(fail(results, e));
     }
@@ -678,7 +680,7 @@ pub fn run_static(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fai
                 row.extend_from_slice(&react);
                 row.push(st.dae.potential_energy(&eq.q));
                 row.extend(model.measures.iter().map(|me| me.value(&eq.q, &zero, &zero, &reactions, t)));
-                if let Err(e) = results.push(t, &eq.q, &zero, &zero, &row) {
+                if let Err(e) = run.push(&mut results, t, &eq.q, &zero, &zero, &row) {
                     error = Some(e);
                     break;
                 }

@@ -20,12 +20,9 @@
 use super::schema::Context;
 use super::CompiledJoint;
 use super::{Anchor, BodyIx, Config, Constraint};
-use crate::expr::{Dual, Expr, HyperDual, Scalar};
+use crate::expr::{Dual, Expr, HyperDual, Scalar, MAX_SLOTS};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
-
-/// The most slots (distinct names) a general constraint may use.
-pub const MAX_SLOTS: usize = 64;
 
 /// What an expression slot stands for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

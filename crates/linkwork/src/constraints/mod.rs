@@ -33,8 +33,7 @@ pub use cam::{Cam, CamFrame, CamJoint, CamProfileSpec, CamRow, PitchPoint, Profi
 pub use cam_profile::{CamProfile, Curve, CurveError};
 pub use distance::{Distance, DistanceJoint};
 pub use driver::{AngleDriver, DistanceDriver, Driver, DriverKind, PointDriver, RelativeAngleDriver};
-pub use expression::ExpressionJoint;
-pub use expression::{GeneralConstraint, Var, MAX_SLOTS};
+pub use expression::{ExpressionJoint, GeneralConstraint, Var};
 pub use friction::{Friction, FrictionLaw, DEFAULT_TRANSITION_VELOCITY};
 pub use gear::{GearJoint, GearKind, GearPair};
 pub use point_line::{PointOnLine, PointOnLineJoint, RevoluteTranslationalJoint};

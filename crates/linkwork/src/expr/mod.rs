@@ -74,6 +74,11 @@ pub use parse::MAX_DEPTH;
 pub use scalar::{Dual, HyperDual, Scalar};
 pub use spline::Spline;
 
+/// The most slots (distinct names of coordinates, velocities and the like) an expression over a
+/// mechanism's state may use: a general constraint's or a state-dependent force's. Its derivative
+/// passes run on stack arrays of this many numbers.
+pub const MAX_SLOTS: usize = 64;
+
 /// What a model names besides an expression's variables: values folded as numbers (its
 /// parameters) and tables for `spline(name, x)`. A closure `Fn(&str) -> Option<f64>` names
 /// values and no tables.

@@ -4,7 +4,7 @@
 //! time); the force element then maps the coordinates onto its local columns
 //! ([`Load::localize`]), so that evaluation reads only the element's `x` and `v`.
 
-use crate::constraints::MAX_SLOTS;
+use crate::expr::MAX_SLOTS;
 use crate::expr::{Expr, Scalar};
 
 /// What an expression slot stands for.

@@ -31,6 +31,19 @@ use std::path::{Path, PathBuf};
 /// global frame, N, and the torque, N m. Measures read them by these names.
 pub const REACTION_QUANTITIES: [&str; 3] = ["fx", "fy", "torque"];
 
+/// The columns of a dynamic analysis written after the body quantities, reactions and efforts
+/// (measures read them by these names).
+pub const ENERGY_COLUMNS: [&str; 5] =
+    ["kinetic_energy", "potential_energy", "nonconservative_work", "position_residual", "velocity_residual"];
+
+/// The columns of an inverse dynamic analysis written after the reactions and efforts.
+pub const INVERSE_COLUMNS: [&str; 4] = ["kinetic_energy", "potential_energy", "driver_power", "applied_power"];
+
+/// The columns of each contact, `<contact>.<quantity>`, after the measures: its normal force
+/// `fn` (N, `>= 0`), its friction `ft` on the circle's body along the tangent `R90 n` (N) and
+/// its penetration (m, 0 when separated).
+pub const CONTACT_QUANTITIES: [&str; 3] = ["fn", "ft", "penetration"];
+
 /// A moving body.
 #[derive(Debug, Clone)]
 pub struct Body {

@@ -3,10 +3,8 @@
 //! ([`crate::model::units::Display`]) and the labels of tables and plots.
 
 use super::{BODY_QUANTITIES, FRICTION_QUANTITY, REACTION_QUANTITIES};
-use crate::analysis::dynamic::{CONTACT_QUANTITIES, ENERGY_COLUMNS};
-use crate::analysis::INVERSE_COLUMNS;
 use crate::model::spec::PointComponent;
-use crate::model::{MeasureKind, Model};
+use crate::model::{MeasureKind, Model, CONTACT_QUANTITIES, ENERGY_COLUMNS, INVERSE_COLUMNS};
 
 /// The quantity of each body column, in the order of [`BODY_QUANTITIES`].
 const BODY: [&str; 9] = [
@@ -89,7 +87,7 @@ mod tests {
         let model = Model::load(&path).unwrap();
         let analysis = model.analyses.keys().next().unwrap().clone();
         let overrides = Overrides { t_end: Some(0.01), ..Overrides::default() };
-        let results = model.run_with(&analysis, &overrides).unwrap();
+        let results = model.run(&analysis, &overrides.clone().into()).unwrap();
         (model, results.names)
     }
 

@@ -1,18 +1,16 @@
 //! Results streamed to a file as they are computed, instead of held in memory.
 //!
-//! [`Model::run_streamed`](crate::Model::run_streamed) makes a [`RowSink`] the running thread's
-//! own for the length of the run (as [`crate::progress`] does with the watcher, so that no
-//! analysis has to pass it along). The [`Results`](super::Results) that pushes the run's first
-//! output point claims it; from then on its rows go to the sink in chunks of about
-//! [`CHUNK_BYTES`], and only the chunk being filled is in memory. The run's summary is the same
-//! as without a sink: the reaction peaks are kept as the rows go by, and `output_points` counts
-//! the rows written.
+//! A run given a [`RowSink`] ([`Sink::Stream`](crate::Sink::Stream) in its
+//! [`RunOptions`](crate::RunOptions)) sends it its rows in chunks of about [`CHUNK_BYTES`]: its
+//! analysis hands each full chunk of its [`Results`] to the sink, and only the chunk being filled
+//! is in memory. The run's summary is the same as without a sink: the reaction peaks are kept as
+//! the rows go by, and `output_points` counts the rows written.
 //!
 //! [`CsvSink`] writes `results.csv` exactly as [`Results::write_csv`](super::Results::write_csv)
 //! does (the same bytes); the Python package adds Parquet through the same trait.
 
+use super::Results;
 use crate::error::Error;
-use std::cell::RefCell;
 use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -122,94 +120,58 @@ impl RowSink for CsvSink {
     }
 }
 
-/// A sink being written: how many rows it has, and the rows per chunk.
-pub(crate) struct Stream {
-    sink: Box<dyn RowSink>,
-    /// Rows already given to the sink.
-    pub(crate) rows: usize,
-    /// Rows per chunk.
-    pub(crate) chunk: usize,
+/// A sink being written by one run: its header goes before the first chunk.
+pub(crate) struct Stream<'a> {
+    sink: &'a mut dyn RowSink,
     begun: bool,
-    finished: bool,
 }
 
-impl std::fmt::Debug for Stream {
+impl std::fmt::Debug for Stream<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Stream").field("path", &self.sink.path()).field("rows", &self.rows).finish()
+        f.debug_struct("Stream").field("path", &self.sink.path()).field("begun", &self.begun).finish()
     }
 }
 
-impl Stream {
-    /// The rows per chunk for rows of `columns` values and their time.
-    pub(crate) fn set_columns(&mut self, columns: usize) {
-        self.chunk = (self.sink.chunk_bytes() / (8 * (columns + 1))).max(1);
+impl<'a> Stream<'a> {
+    /// The run's writer of `sink`, nothing written yet.
+    pub(crate) fn new(sink: &'a mut dyn RowSink) -> Stream<'a> {
+        Stream { sink, begun: false }
+    }
+
+    /// Bytes of output values the sink takes a chunk ([`RowSink::chunk_bytes`]).
+    pub(crate) fn chunk_bytes(&self) -> usize {
+        self.sink.chunk_bytes()
     }
 
     fn io(&self, e: std::io::Error) -> Error {
         Error::Io { path: self.sink.path(), message: e.to_string() }
     }
 
-    /// Give the sink the rows held (its header first), and empty them.
-    pub(crate) fn flush(
-        &mut self,
-        names: &[String],
-        time: &mut Vec<f64>,
-        columns: &mut [Vec<f64>],
-    ) -> Result<(), Error> {
+    /// Give the sink the rows `results` holds (its header first), and empty them.
+    pub(crate) fn flush(&mut self, results: &mut Results) -> Result<(), Error> {
         if !self.begun {
             self.begun = true;
-            self.sink.begin(names).map_err(|e| self.io(e))?;
+            self.sink.begin(&results.names).map_err(|e| self.io(e))?;
         }
-        if !time.is_empty() {
-            self.sink.write(time, columns).map_err(|e| self.io(e))?;
-            self.rows += time.len();
-            time.clear();
-            columns.iter_mut().for_each(Vec::clear);
+        if !results.time.is_empty() {
+            self.sink.write(&results.time, &results.columns).map_err(|e| self.io(e))?;
+            results.rows_sent();
         }
         Ok(())
     }
 
-    /// Flush what is held and close the sink (once).
-    pub(crate) fn finish(
-        &mut self,
-        names: &[String],
-        time: &mut Vec<f64>,
-        columns: &mut [Vec<f64>],
-    ) -> Result<(), Error> {
-        if self.finished {
-            return Ok(());
+    /// The end of the run whose results are `results`: the rows still held go to the sink
+    /// (after its header, which a run that failed before its first output point has not
+    /// written), and the sink is finished.
+    pub(crate) fn finish(mut self, results: &mut Results) -> Result<(), Error> {
+        if !results.is_streamed() {
+            results.stream_in_chunks(self.chunk_bytes());
         }
-        self.finished = true;
+        results.select();
         // The sink is finished even when the last rows could not be written (a Parquet file
         // then still gets its footer, and holds the rows before).
-        let flushed = self.flush(names, time, columns);
+        let flushed = self.flush(results);
         let finished = self.sink.finish().map_err(|e| self.io(e));
         flushed.and(finished)
     }
-}
-
-thread_local! {
-    /// The sink of the run on this thread not yet claimed by its results.
-    static PENDING: RefCell<Option<Stream>> = const { RefCell::new(None) };
-}
-
-/// Run `f` with `sink` waiting for the run's results on this thread; returns `f`'s value and the
-/// sink if no results claimed it (the run pushed no row). The slot is emptied afterwards, also
-/// when `f` panics.
-pub(crate) fn scope<T>(sink: Box<dyn RowSink>, f: impl FnOnce() -> T) -> (T, Option<Stream>) {
-    struct Clear;
-    impl Drop for Clear {
-        fn drop(&mut self) {
-            PENDING.set(None);
-        }
-    }
-    let _clear = Clear;
-    PENDING.set(Some(Stream { sink, rows: 0, chunk: 1, begun: false, finished: false }));
-    let value = f();
-    (value, PENDING.take())
-}
-
-/// The sink waiting on this thread, if any: the first results to push a row take it.
-pub(crate) fn claim() -> Option<Stream> {
-    PENDING.take()
 }

@@ -302,7 +302,7 @@ mod tests {
     /// `summary.json` of `analysis` of the model in `yaml`, failed or not.
     fn summary(yaml: &str, analysis: &str) -> Value {
         let model = Model::from_yaml(yaml).unwrap();
-        match model.run(analysis) {
+        match model.run(analysis, &Default::default()) {
             Ok(r) => r.summary_json(None),
             Err(f) => f.results.summary_json(Some(&f.error)),
         }

@@ -8,6 +8,17 @@ use crate::linalg::{ColMatrix, Pattern};
 use crate::model::{Element, Model};
 use faer::MatMut;
 
+/// The model's length scale `L`, m: the largest distance of a named point from its body's
+/// centre of mass (the lever arms that make the angle columns of `Phi_q`), else, for a model
+/// without points, the largest distance of a body's guessed position from the origin, else 1.
+/// It scales with the model: every length multiplied by `s` multiplies it by `s`.
+pub fn length_scale(model: &Model) -> f64 {
+    let largest = |v: &mut dyn Iterator<Item = [f64; 2]>| v.map(|p| p[0].hypot(p[1])).fold(0.0f64, f64::max);
+    let arms = largest(&mut model.bodies.iter().flat_map(|b| b.points.values().copied()));
+    let positions = largest(&mut model.bodies.iter().map(|b| [b.q0[0], b.q0[1]]));
+    [arms, positions].into_iter().find(|&l| l > 0.0 && l.is_finite()).unwrap_or(1.0)
+}
+
 /// Stacked constraints of an analysis. Evaluation allocates nothing.
 #[derive(Debug)]
 pub struct System<'m> {
@@ -20,7 +31,7 @@ pub struct System<'m> {
     pub n: usize,
     /// Number of equations.
     pub m: usize,
-    /// The model's length scale, m ([`crate::analysis::length_scale`]).
+    /// The model's length scale, m ([`length_scale`]).
     pub length: f64,
     /// (max rows x width) one element's Jacobian block.
     block: Vec<f64>,
@@ -44,7 +55,7 @@ impl<'m> System<'m> {
             offsets,
             n: model.n(),
             m,
-            length: crate::analysis::length_scale(model),
+            length: length_scale(model),
             block: vec![0.0; big],
         }
     }

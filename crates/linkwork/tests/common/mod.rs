@@ -60,7 +60,7 @@ pub fn patched_example(name: &str, changes: &[(&str, &str)]) -> String {
 /// Load and run an example's analysis; panics with the engine's message on failure.
 pub fn run(name: &str, analysis: &str) -> (Model, Results) {
     let model = Model::load(example(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let results = model.run(analysis).unwrap_or_else(|f| panic!("{name}: {}", f.error));
+    let results = model.run(analysis, &Default::default()).unwrap_or_else(|f| panic!("{name}: {}", f.error));
     (model, results)
 }
 
@@ -77,7 +77,7 @@ pub fn run_bdf(
     model.analyses[analysis].integrator.formulation = formulation;
     let o = at_tolerance(IntegratorKind::Bdf, tol, t_end);
     let start = Instant::now();
-    let r = model.run_with(analysis, &o);
+    let r = model.run(analysis, &o.into());
     let cpu = start.elapsed().as_secs_f64();
     match r {
         Ok(r) => (r, None, cpu),
@@ -90,7 +90,7 @@ pub fn run_bdf(
 pub fn run_tol(model: &Model, analysis: &str, kind: IntegratorKind, tol: f64, t_end: Option<f64>) -> (Results, f64) {
     let o = at_tolerance(kind, tol, t_end);
     let clock = Instant::now();
-    let r = model.run_with(analysis, &o).unwrap_or_else(|f| panic!("{} {analysis} {tol}: {}", model.name, f.error));
+    let r = model.run(analysis, &o.into()).unwrap_or_else(|f| panic!("{} {analysis} {tol}: {}", model.name, f.error));
     (r, clock.elapsed().as_secs_f64())
 }
 

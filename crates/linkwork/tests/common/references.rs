@@ -88,7 +88,7 @@ impl QuickReturn {
     /// angle) at `samples` points of one turn, and the crank's given initial speed `omega0`, rad/s.
     pub fn new(model: &Model, omega0: f64, samples: usize) -> QuickReturn {
         let o = Overrides { t_end: Some(1.0), step: Some(1.0 / samples as f64), ..Default::default() };
-        let r = model.run_with("kinematics", &o).unwrap_or_else(|f| panic!("kinematics: {}", f.error));
+        let r = model.run("kinematics", &o.clone().into()).unwrap_or_else(|f| panic!("kinematics: {}", f.error));
         assert_eq!(r.len(), samples + 1);
         let col = |name: &str| r.column(name).unwrap_or_else(|| panic!("no column {name}"));
         let crank = col("crank.phi");

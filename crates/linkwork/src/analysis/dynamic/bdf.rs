@@ -508,7 +508,7 @@ pub fn run_until(
     let outcome = (|| -> Result<(), Error> {
         while run.before_end(s.ts[0]) {
             let t0 = s.ts[0];
-            let h_min = run.smallest_step(s.dae, &s.qs[0], s.stats.steps, t0, h, settings, true)?;
+            let h_min = run.smallest_step(out, s.dae, &s.qs[0], s.stats.steps, t0, h, settings, true)?;
             h = run.fit(t0, h);
             let t1 = t0 + h;
             // Order k needs k + 1 nodes for its predictor (the first step uses the start's

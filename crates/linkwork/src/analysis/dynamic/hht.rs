@@ -384,7 +384,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     let (mut noise_amp, mut noise_memory) = (1.0f64, 0usize);
     let outcome = (|| -> Result<(), Error> {
         while run.before_end(s.t) {
-            let h_min = run.smallest_step(s.dae, &s.q, s.stats.steps, s.t, h, settings, true)?;
+            let h_min = run.smallest_step(out, s.dae, &s.q, s.stats.steps, s.t, h, settings, true)?;
             h = run.fit(s.t, h);
             // Predictor: qddot and mu extrapolated linearly from the last two steps (constant on
             // the first step): the starting error O(h^2) rather than O(h), so that Newton's

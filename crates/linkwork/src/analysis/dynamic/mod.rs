@@ -35,9 +35,9 @@ pub use dae::{Dae, LinearStats, EPS_REL};
 pub(crate) use dae::{FRICTION_RTOL, NEWTON_FRICTION_ITERATIONS};
 pub use output::{factor_error, Output, CONTACT_QUANTITIES, ENERGY_COLUMNS};
 
-use super::assemble_into;
 use super::promise;
 use super::setup::{fail, held};
+use super::{assemble_into, Run};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, RowName};
 use crate::model::{Analysis, IntegratorSettings, Model};
@@ -211,12 +211,13 @@ impl Span {
     }
 
     /// The smallest step at `t` ([`min_step`] over this run), or the error that stops the run:
-    /// an interruption (every step attempt reports its time to the run's progress), the step
-    /// budget spent, or (`shrunk`: for methods whose accepted steps can shrink the step
+    /// an interruption (every step attempt reports its time to the run through `out`, and
+    /// stops there once the run has been asked to stop), the step budget spent, or (`shrunk`: for methods whose accepted steps can shrink the step
     /// too, as an error estimate that grows from step to step) `h` already below the smallest.
     #[allow(clippy::too_many_arguments)]
     pub fn smallest_step(
         &self,
+        out: &Output<'_, '_>,
         dae: &mut Dae<'_>,
         q: &[f64],
         steps: usize,
@@ -225,7 +226,7 @@ impl Span {
         settings: &IntegratorSettings,
         shrunk: bool,
     ) -> Result<f64, Error> {
-        crate::progress::reached(t)?;
+        out.attempt(t)?;
         let h_min = min_step(dae, q, self.taken + steps, t, h, self.length, settings)?;
         if shrunk && h < h_min {
             // Stop here rather than creep towards zero.
@@ -349,7 +350,7 @@ pub fn hermite5(theta: f64, h: f64, y0: [&[f64]; 3], y1: [&[f64]; 3], q: &mut [f
 }
 
 /// Run a dynamic analysis. On failure the results up to the last good output time are kept.
-pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Failure>> {
+pub(crate) fn run_dynamic(model: &Model, analysis: &Analysis, run: &mut Run<'_>) -> Result<Results, Box<Failure>> {
     let mut settings = analysis.integrator;
     // A tighter rtol would ask the error test to resolve round-off (warned in the summary).
     settings.rtol = settings.rtol.max(super::RTOL_FLOOR);
@@ -359,7 +360,7 @@ pub fn run_dynamic(model: &Model, analysis: &Analysis) -> Result<Results, Box<Fa
         Err(e) => return Err(fail(Results::new(model, analysis), factor_error(e, analysis.t_start))),
     };
     let m = dae.m;
-    let mut out = Output::new(model, analysis, n, m);
+    let mut out = Output::new(model, analysis, n, m, run);
     let t0 = analysis.t_start;
     // Assembly holds what the user marked as given.
     let given = held(model, true);

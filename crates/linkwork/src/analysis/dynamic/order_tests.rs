@@ -19,6 +19,7 @@
 //! such floor (this is why Adams offers SI2).
 
 use crate::analysis::dynamic::{run_dynamic, Formulation, IntegratorKind};
+use crate::analysis::Run;
 use crate::Model;
 
 /// The first step of BDF's start-up, s.
@@ -40,7 +41,8 @@ fn error(kind: IntegratorKind, formulation: Formulation, order: usize, h: f64, t
     s.fixed_step = Some(h);
     s.initial_step = start;
     analysis.t_end = t_end;
-    let r = run_dynamic(&model, &analysis).unwrap_or_else(|f| panic!("{kind:?} h {h}: {}", f.error));
+    let r =
+        run_dynamic(&model, &analysis, &mut Run::default()).unwrap_or_else(|f| panic!("{kind:?} h {h}: {}", f.error));
     let phi = r.column("bar.phi").unwrap();
     r.time.iter().zip(phi).map(|(t, p)| (p - 0.5 * (2.0 * t).cos()).abs()).fold(0.0, f64::max)
 }
@@ -98,7 +100,7 @@ fn hht_fixed(model: &Model, analysis: &str, h: f64, tol: f64, t_end: Option<f64>
     s.rtol = tol;
     s.atol = tol;
     s.fixed_step = Some(h);
-    let r = run_dynamic(model, &a).unwrap_or_else(|f| panic!("hht h {h}: {}", f.error));
+    let r = run_dynamic(model, &a, &mut Run::default()).unwrap_or_else(|f| panic!("hht h {h}: {}", f.error));
     let stats = &r.summary_json(None)["statistics"];
     assert_eq!(stats["newton_failures"], 0, "h {h}: {stats}");
     r

@@ -10,23 +10,17 @@
 
 use super::dae::Dae;
 use crate::analysis::promise::Audit;
+use crate::analysis::Run;
 use crate::error::Error;
 use crate::linalg::FactorError;
 use crate::model::{Analysis, Model};
 use crate::results::Results;
 
-/// Columns written after the body quantities, reactions and efforts.
-pub const ENERGY_COLUMNS: [&str; 5] =
-    ["kinetic_energy", "potential_energy", "nonconservative_work", "position_residual", "velocity_residual"];
+pub use crate::model::{CONTACT_QUANTITIES, ENERGY_COLUMNS};
 
-/// Columns of each contact, `<contact>.<quantity>`, after the measures: its normal force `fn`
-/// (N, `>= 0`), its friction `ft` on the circle's body along the tangent `R90 n` (N) and its
-/// penetration (m, 0 when separated).
-pub const CONTACT_QUANTITIES: [&str; 3] = ["fn", "ft", "penetration"];
-
-/// The requested output times and the results written so far.
+/// The requested output times and the results written so far, as the run `run` is given.
 #[derive(Debug)]
-pub struct Output {
+pub struct Output<'r, 'a> {
     /// Output times, ascending.
     times: Vec<f64>,
     /// Index of the next time to write.
@@ -35,6 +29,8 @@ pub struct Output {
     h: f64,
     /// The results.
     pub results: Results,
+    /// The run: its rows' sink, its watcher and its stop token.
+    run: &'r mut Run<'a>,
     /// Indices into the model's drivers of the active ones.
     drivers: Vec<usize>,
     /// `(t, W)` at the last two accepted steps, and the power at the last.
@@ -53,10 +49,10 @@ pub struct Output {
     pub audit: Audit,
 }
 
-impl Output {
-    /// Empty results with the columns of a dynamic analysis.
-    pub fn new(model: &Model, analysis: &Analysis, n: usize, m: usize) -> Output {
-        let mut results = Results::new(model, analysis);
+impl<'r, 'a> Output<'r, 'a> {
+    /// Empty results with the columns of a dynamic analysis, run as `run`.
+    pub(crate) fn new(model: &Model, analysis: &Analysis, n: usize, m: usize, run: &'r mut Run<'a>) -> Output<'r, 'a> {
+        let mut results = run.results(model, analysis);
         let mut names = crate::analysis::reaction_columns(model, analysis);
         names.extend(ENERGY_COLUMNS.map(String::from));
         names.extend(model.measures.iter().map(|m| m.name.clone()));
@@ -75,6 +71,7 @@ impl Output {
             next: 0,
             h,
             results,
+            run,
             drivers: analysis.drivers.clone(),
             work_prev: (t0, 0.0),
             work_last: (t0, 0.0),
@@ -97,6 +94,12 @@ impl Output {
     /// The end time.
     pub fn t_end(&self) -> f64 {
         self.times[self.times.len() - 1]
+    }
+
+    /// The integrator attempts a step from `t` ([`Run::reached`]): reported, and
+    /// [`Error::Interrupted`] if the run has been asked to stop.
+    pub(crate) fn attempt(&self, t: f64) -> Result<(), Error> {
+        self.run.reached(t)
     }
 
     /// The next output time if it is not after `t` (with a margin of `1e-9` output steps for
@@ -178,7 +181,7 @@ impl Output {
         }
         // No non-finite number leaves as a result: the row's own check finds the first, and the
         // analysis stops naming the element that gave it rather than the column.
-        self.results.push(t, q, qdot, qddot, &self.row).map_err(|e| match e {
+        self.run.push(&mut self.results, t, q, qdot, qddot, &self.row).map_err(|e| match e {
             Error::NonFinite { value, .. } => dae.non_finite(q, qdot, qddot, &self.reactions, t, value),
             other => other,
         })?;

@@ -16,10 +16,8 @@ use super::spec::*;
 use super::structure::Dyad;
 use super::{
     Analysis, Body, Effort, Element, ForceElement, IntegratorSettings, Measure, MeasureKind, Model, PathPoint,
-    SolverSettings, REACTION_QUANTITIES,
+    SolverSettings, ENERGY_COLUMNS, INVERSE_COLUMNS, REACTION_QUANTITIES,
 };
-use crate::analysis::dynamic::ENERGY_COLUMNS;
-use crate::analysis::INVERSE_COLUMNS;
 use crate::constraints::{
     cam_row, finite, positive, BodyIx, Context, Frame, GeneralConstraint, Shape, Sketch, Var,
     DEFAULT_TRANSITION_VELOCITY,

@@ -170,7 +170,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
         while run.before_end(ad.x) {
             // Adams' accepted steps shrink the step only by a bounded factor; the error test
             // decides below the smallest step.
-            let h_min = run.smallest_step(s.dae, &s.accepted.qa, stats.steps, ad.x, h, settings, false)?;
+            let h_min = run.smallest_step(out, s.dae, &s.accepted.qa, stats.steps, ad.x, h, settings, false)?;
             h = run.fit(ad.x, h);
             // (y, phi, h) => prediction p at x + h => y'(p).
             s.error.weights(&s.accepted);
