@@ -17,7 +17,7 @@ use crate::error::{Error, Result, RowName};
 use crate::linalg::dense::{equilibrated, smallest_singular};
 use crate::model::spec::{BranchMode, Side};
 use crate::model::structure::{self, side_name, Branch, Dyad};
-use crate::model::Model;
+use crate::model::{Analysis, Model};
 use crate::results::Summary;
 use crate::system::System;
 use faer::Mat;
@@ -149,23 +149,19 @@ fn cannot_close(model: &Model, drivers: &[usize], q: &[f64]) -> Option<String> {
     })
 }
 
-/// Assemble the model's guess as [`assemble_on_branches`] does, with every dyad's branch and the
-/// warnings written into `summary`.
+/// Assemble the model's guess at time `t` as [`assemble_on_branches`] does, with `analysis`'s
+/// drivers and tolerance, and every dyad's branch and the warnings written into `summary`.
 pub(crate) fn assemble_into(
     model: &Model,
-    drivers: &[usize],
+    analysis: &Analysis,
     sys: &mut System<'_>,
     given: &[bool],
     t: f64,
-    tolerance: f64,
     summary: &mut Summary,
 ) -> Result<Assembly> {
-    let (assembly, branches, mut warnings) = assemble_on_branches(
-        model,
-        drivers,
-        sys,
-        &Start { q: &model.q0(), qdot: &model.qdot0(), given, t, tolerance },
-    )?;
+    let tolerance = analysis.settings.tolerance;
+    let start = Start { q: &model.q0(), qdot: &model.qdot0(), given, t, tolerance };
+    let (assembly, branches, mut warnings) = assemble_on_branches(model, &analysis.drivers, sys, &start)?;
     summary.branches = Some(branches);
     summary.warnings.append(&mut warnings);
     Ok(assembly)

@@ -220,11 +220,10 @@ pub(crate) fn run_driven(
     let t0 = analysis.t_start;
     // The drivers determine every coordinate, so nothing is held: least change from the guess.
     let given = held(model, false);
-    let assembly: Assembly =
-        match assemble_into(model, &analysis.drivers, &mut sys, &given, t0, settings.tolerance, &mut results.summary) {
-            Ok(a) => a,
-            Err(e) => return Err(fail(results, e)),
-        };
+    let assembly: Assembly = match assemble_into(model, analysis, &mut sys, &given, t0, &mut results.summary) {
+        Ok(a) => a,
+        Err(e) => return Err(fail(results, e)),
+    };
     let jac = sys.jacobian(&ConfigBuf::new(&assembly.q).view(), t0);
     let (rows, redundant) = match super::scaled_row_space(&sys, &jac, 0..n, t0) {
         Ok(space) => space.independent_rows(),

@@ -52,15 +52,7 @@ pub(crate) fn run_modes(model: &Model, analysis: &Analysis, run: &mut Run<'_>) -
     let equilibrium = analysis.about == LinearisePoint::Equilibrium;
     // The initial state keeps what the user gave, as dynamics does; an equilibrium moves it.
     let given = held(model, !equilibrium);
-    let assembly = match assemble_into(
-        model,
-        &analysis.drivers,
-        &mut dae.sys,
-        &given,
-        t,
-        analysis.settings.tolerance,
-        &mut results.summary,
-    ) {
+    let assembly = match assemble_into(model, analysis, &mut dae.sys, &given, t, &mut results.summary) {
         Ok(a) => a,
         Err(e) => return Err(fail(results, e)),
     };

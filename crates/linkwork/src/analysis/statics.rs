@@ -46,9 +46,7 @@
 
 use super::dynamic::{factor_error, Dae};
 use super::setup::{coordinate_name, fail, held, output_times};
-use super::{
-    assemble, assemble_into, element_names, independent_rows, indeterminate_rows, residual_floor, Run, Start,
-};
+use super::{assemble, assemble_into, element_names, independent_rows, indeterminate_rows, residual_floor, Run, Start};
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, Unbalanced};
 use crate::linalg::dense::{equilibrated, min_norm_solve, null_space};
@@ -630,15 +628,7 @@ pub(crate) fn run_static(model: &Model, analysis: &Analysis, run: &mut Run<'_>) 
     let t0 = analysis.t_start;
     let times = output_times(analysis);
     let given = held(model, false);
-    let assembly = match assemble_into(
-        model,
-        &analysis.drivers,
-        &mut dae.sys,
-        &given,
-        t0,
-        analysis.settings.tolerance,
-        &mut results.summary,
-    ) {
+    let assembly = match assemble_into(model, analysis, &mut dae.sys, &given, t0, &mut results.summary) {
         Ok(a) => a,
         Err(e) => return Err(fail(results, e)),
     };

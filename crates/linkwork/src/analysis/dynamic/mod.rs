@@ -364,15 +364,7 @@ pub(crate) fn run_dynamic(model: &Model, analysis: &Analysis, run: &mut Run<'_>)
     let t0 = analysis.t_start;
     // Assembly holds what the user marked as given.
     let given = held(model, true);
-    let assembly = match assemble_into(
-        model,
-        &analysis.drivers,
-        &mut dae.sys,
-        &given,
-        t0,
-        analysis.settings.tolerance,
-        &mut out.results.summary,
-    ) {
+    let assembly = match assemble_into(model, analysis, &mut dae.sys, &given, t0, &mut out.results.summary) {
         Ok(a) => a,
         Err(e) => return Err(fail(out.results, e)),
     };
