@@ -12,8 +12,9 @@
 //! price of a multiplier that is a force divided by `2 L`. Haug (1989) section 3.4.1; Nikravesh
 //! (2018) section 7.2.
 
-use super::schema::{Context, PointRef};
+use super::schema::JointContext;
 use super::CompiledJoint;
+use super::PointRef;
 use super::{dot, Anchor, BodyIx, Config, Constraint, PointPair, Shape, Sketch};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -83,7 +84,7 @@ pub struct DistanceJoint {
 
 /// A distance joint at `path` compiled in `cx`: its length as given, or as the initial
 /// configuration has it.
-pub(crate) fn compile(spec: &DistanceJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile(spec: &DistanceJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     let DistanceJoint { body_i, point_i, body_j, point_j, length } = spec;
     let ends = cx.ends(path, body_i, point_i, body_j, point_j)?;
     let [(i, sp), (j, sq)] = ends;

@@ -13,9 +13,10 @@
 //! `e > 0` puts `Q` on the left of the line (the side `R90 v'_i` points to). Haug (1989) sections
 //! 3.3.2 and 3.4.2; Nikravesh (2018) section 7.1.
 
-use super::schema::{Context, PointRef};
+use super::schema::JointContext;
 use super::CompiledJoint;
 use super::Frame;
+use super::PointRef;
 use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Pair, Projection, Shape, Sketch};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -120,7 +121,7 @@ pub struct RevoluteTranslationalJoint {
 }
 
 /// A point-on-line joint at `path` compiled in `cx`.
-pub(crate) fn compile(spec: &PointOnLineJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile(spec: &PointOnLineJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     let PointOnLineJoint { body_i, point_i, axis_i, body_j, point_j, at, axis } = spec;
     let points = cx.placed_points(path, [body_i, body_j], [point_i, point_j], at);
     let axes = cx.placed_axes(path, [("axis_i", body_i, axis_i)], axis);
@@ -135,7 +136,7 @@ pub(crate) fn compile(spec: &PointOnLineJoint, cx: &mut impl Context, path: &str
 /// initial configuration has it.
 pub(crate) fn compile_offset(
     spec: &RevoluteTranslationalJoint,
-    cx: &mut impl Context,
+    cx: &mut impl JointContext,
     path: &str,
 ) -> Option<CompiledJoint> {
     let RevoluteTranslationalJoint { body_i, point_i, axis_i, body_j, point_j, offset } = spec;

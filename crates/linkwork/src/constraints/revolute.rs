@@ -8,8 +8,9 @@
 //! ```
 //! with `B = dA/dphi`. Haug (1989) section 3.3.1; Nikravesh (2018) section 7.1.
 
-use super::schema::{Context, PointRef};
+use super::schema::JointContext;
 use super::CompiledJoint;
+use super::PointRef;
 use super::{Anchor, BodyIx, Config, Constraint, Frame, Friction, FrictionLaw, Pair, Separation, Shape, Sketch};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -109,7 +110,7 @@ pub struct PinFriction {
 }
 
 /// A revolute joint at `path` compiled in `cx`, with its friction.
-pub(crate) fn compile(spec: &RevoluteJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile(spec: &RevoluteJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     let RevoluteJoint { body_i, point_i, body_j, point_j, at, friction: pin } = spec;
     let points = cx.placed_points(path, [body_i, body_j], [point_i, point_j], at);
     // The bodies are checked (`ends`) whether or not the points could be placed.

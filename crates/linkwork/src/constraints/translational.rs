@@ -18,8 +18,9 @@
 //! takes the whole turns from the starting relative angle, so that a body written a turn away
 //! (`phi = 2 pi + 0.1` against the axes' `0.1`) stays on its branch. Haug (1989) section 3.3.2; Nikravesh (2018) section 7.1.
 
-use super::schema::{Context, PointRef};
+use super::schema::JointContext;
 use super::CompiledJoint;
+use super::PointRef;
 use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Friction, FrictionLaw, Pair, Projection, Shape, Sketch};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -141,7 +142,7 @@ pub struct TranslationalJoint {
 }
 
 /// A translational joint at `path` compiled in `cx`, with its friction.
-pub(crate) fn compile(spec: &TranslationalJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile(spec: &TranslationalJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     let TranslationalJoint { body_i, point_i, axis_i, body_j, point_j, axis_j, at, axis, friction: slide } = spec;
     let points = cx.placed_points(path, [body_i, body_j], [point_i, point_j], at);
     let axes = cx.placed_axes(path, [("axis_i", body_i, axis_i), ("axis_j", body_j, axis_j)], axis);
