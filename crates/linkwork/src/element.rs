@@ -99,6 +99,99 @@ macro_rules! registry {
 }
 pub(crate) use registry;
 
+/// A model file entry's fields (an element's), its shared ones named once in a list before its
+/// own: `[body_i, point_i?, axis_i?, body_j, point_j?, at, axis,]`, in their order in the entry.
+/// Each shared field is declared here once, with one description; `?` marks a point or a
+/// direction that `at` or `axis` may place instead (optional, default none). The serde names,
+/// order and types are what the list says, so a bad entry's errors and their field paths are
+/// those of the struct written out (serde's `flatten` would refuse `deny_unknown_fields` and lose
+/// the paths).
+macro_rules! fields {
+    (
+        $(#[$attr:meta])*
+        pub struct $Name:ident { [$($shared:tt)*] $($own:tt)* }
+    ) => {
+        $crate::element::fields! { @munch [$(#[$attr])*] $Name [] [$($shared)*] [$($own)*] }
+    };
+    (@munch [$($attr:tt)*] $Name:ident [$($done:tt)*] [] [$($own:tt)*]) => {
+        $($attr)* pub struct $Name { $($done)* $($own)* }
+    };
+    (@munch $attr:tt $Name:ident [$($done:tt)*] [body_i, $($more:tt)*] $own:tt) => {
+        $crate::element::fields! { @munch $attr $Name [$($done)*
+            /// First body (or `ground`).
+            pub body_i: String,
+        ] [$($more)*] $own }
+    };
+    (@munch $attr:tt $Name:ident [$($done:tt)*] [body_j, $($more:tt)*] $own:tt) => {
+        $crate::element::fields! { @munch $attr $Name [$($done)*
+            /// Second body (or `ground`).
+            pub body_j: String,
+        ] [$($more)*] $own }
+    };
+    (@munch $attr:tt $Name:ident [$($done:tt)*] [point_i, $($more:tt)*] $own:tt) => {
+        $crate::element::fields! { @munch $attr $Name [$($done)*
+            /// A point of the first body, in its frame.
+            pub point_i: $crate::element::PointRef,
+        ] [$($more)*] $own }
+    };
+    (@munch $attr:tt $Name:ident [$($done:tt)*] [point_j, $($more:tt)*] $own:tt) => {
+        $crate::element::fields! { @munch $attr $Name [$($done)*
+            /// A point of the second body, in its frame.
+            pub point_j: $crate::element::PointRef,
+        ] [$($more)*] $own }
+    };
+    (@munch $attr:tt $Name:ident [$($done:tt)*] [point_i?, $($more:tt)*] $own:tt) => {
+        $crate::element::fields! { @munch $attr $Name [$($done)*
+            /// A point of the first body, in its frame (or `at`).
+            #[serde(default)]
+            pub point_i: Option<$crate::element::PointRef>,
+        ] [$($more)*] $own }
+    };
+    (@munch $attr:tt $Name:ident [$($done:tt)*] [point_j?, $($more:tt)*] $own:tt) => {
+        $crate::element::fields! { @munch $attr $Name [$($done)*
+            /// A point of the second body, in its frame (or `at`).
+            #[serde(default)]
+            pub point_j: Option<$crate::element::PointRef>,
+        ] [$($more)*] $own }
+    };
+    (@munch $attr:tt $Name:ident [$($done:tt)*] [axis_i, $($more:tt)*] $own:tt) => {
+        $crate::element::fields! { @munch $attr $Name [$($done)*
+            /// A direction of the first body, in its frame, any non-zero length.
+            pub axis_i: [f64; 2],
+        ] [$($more)*] $own }
+    };
+    (@munch $attr:tt $Name:ident [$($done:tt)*] [axis_i?, $($more:tt)*] $own:tt) => {
+        $crate::element::fields! { @munch $attr $Name [$($done)*
+            /// A direction of the first body, in its frame, any non-zero length (or `axis`).
+            #[serde(default)]
+            pub axis_i: Option<[f64; 2]>,
+        ] [$($more)*] $own }
+    };
+    (@munch $attr:tt $Name:ident [$($done:tt)*] [axis_j?, $($more:tt)*] $own:tt) => {
+        $crate::element::fields! { @munch $attr $Name [$($done)*
+            /// A direction of the second body, in its frame, any non-zero length (or `axis`).
+            #[serde(default)]
+            pub axis_j: Option<[f64; 2]>,
+        ] [$($more)*] $own }
+    };
+    (@munch $attr:tt $Name:ident [$($done:tt)*] [at, $($more:tt)*] $own:tt) => {
+        $crate::element::fields! { @munch $attr $Name [$($done)*
+            /// The global position, m, at the initial position, of the point that `point_i` and
+            /// `point_j` give, instead of them.
+            #[serde(default)]
+            pub at: Option<[f64; 2]>,
+        ] [$($more)*] $own }
+    };
+    (@munch $attr:tt $Name:ident [$($done:tt)*] [axis, $($more:tt)*] $own:tt) => {
+        $crate::element::fields! { @munch $attr $Name [$($done)*
+            /// The global direction at the initial position, instead of `axis_i` (and `axis_j`).
+            #[serde(default)]
+            pub axis: Option<[f64; 2]>,
+        ] [$($more)*] $own }
+    };
+}
+pub(crate) use fields;
+
 /// The kinds of a section's entries (joints, drivers, forces), which name theirs in `type`.
 pub trait Tagged: Sized {
     /// Every `type`, as written in model files (the enum's `NAMES`).

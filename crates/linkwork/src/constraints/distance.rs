@@ -14,8 +14,8 @@
 
 use super::schema::JointContext;
 use super::CompiledJoint;
-use super::PointRef;
 use super::{dot, Anchor, BodyIx, Config, Constraint, PointPair, Shape, Sketch};
+use crate::element::fields;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -65,21 +65,16 @@ impl Constraint for Distance {
     }
 }
 
-/// Distance (revolute-revolute link): the two points stay `length` apart. 1 equation.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct DistanceJoint {
-    /// First body.
-    pub body_i: String,
-    /// Point on the first body.
-    pub point_i: PointRef,
-    /// Second body.
-    pub body_j: String,
-    /// Point on the second body.
-    pub point_j: PointRef,
-    /// Distance, m. Default: its value in the initial configuration.
-    #[serde(default)]
-    pub length: Option<f64>,
+fields! {
+    /// Distance (revolute-revolute link): the two points stay `length` apart. 1 equation.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(deny_unknown_fields)]
+    pub struct DistanceJoint {
+        [body_i, point_i, body_j, point_j,]
+        /// Distance, m. Default: its value in the initial configuration.
+        #[serde(default)]
+        pub length: Option<f64>,
+    }
 }
 
 /// A distance joint at `path` compiled in `cx`: its length as given, or as the initial

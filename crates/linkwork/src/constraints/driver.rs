@@ -21,6 +21,7 @@
 use super::schema::JointContext;
 use super::PointRef;
 use super::{dot, Absolute, AbsoluteKind, Anchor, BodyIx, Config, Constraint, Pair, PointPair};
+use crate::element::fields;
 use crate::expr::TimeFunction;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -189,20 +190,15 @@ pub struct RelativeAngleDriver {
     pub function: String,
 }
 
-/// Distance between two points, m.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct DistanceDriver {
-    /// First body.
-    pub body_i: String,
-    /// Point on the first body.
-    pub point_i: PointRef,
-    /// Second body.
-    pub body_j: String,
-    /// Point on the second body.
-    pub point_j: PointRef,
-    /// Distance as a function of `t`, m (must stay positive).
-    pub function: String,
+fields! {
+    /// Distance between two points, m.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(deny_unknown_fields)]
+    pub struct DistanceDriver {
+        [body_i, point_i, body_j, point_j,]
+        /// Distance as a function of `t`, m (must stay positive).
+        pub function: String,
+    }
 }
 
 /// `x` / `y` drivers: a global coordinate of a body point.

@@ -10,8 +10,8 @@
 
 use super::schema::JointContext;
 use super::CompiledJoint;
-use super::PointRef;
 use super::{Anchor, BodyIx, Config, Constraint, Frame, Friction, FrictionLaw, Pair, Separation, Shape, Sketch};
+use crate::element::fields;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -71,26 +71,16 @@ impl Constraint for Revolute {
     }
 }
 
-/// Pin: `point_i` of `body_i` coincides with `point_j` of `body_j`. 2 equations.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct RevoluteJoint {
-    /// First body.
-    pub body_i: String,
-    /// Pin location on the first body (or `at`).
-    #[serde(default)]
-    pub point_i: Option<PointRef>,
-    /// Second body.
-    pub body_j: String,
-    /// Pin location on the second body (or `at`).
-    #[serde(default)]
-    pub point_j: Option<PointRef>,
-    /// The pin's global position at the initial position, m, instead of `point_i` and `point_j`.
-    #[serde(default)]
-    pub at: Option<[f64; 2]>,
-    /// Coulomb friction in the pin.
-    #[serde(default)]
-    pub friction: Option<PinFriction>,
+fields! {
+    /// Pin: `point_i` of `body_i` coincides with `point_j` of `body_j`. 2 equations.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(deny_unknown_fields)]
+    pub struct RevoluteJoint {
+        [body_i, point_i?, body_j, point_j?, at,]
+        /// Coulomb friction in the pin.
+        #[serde(default)]
+        pub friction: Option<PinFriction>,
+    }
 }
 
 /// Coulomb friction in a revolute joint: a torque `mu tanh(r omega / v_s) r |F|` opposing the

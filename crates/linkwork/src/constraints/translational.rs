@@ -20,8 +20,8 @@
 
 use super::schema::JointContext;
 use super::CompiledJoint;
-use super::PointRef;
 use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Friction, FrictionLaw, Pair, Projection, Shape, Sketch};
+use crate::element::fields;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -108,37 +108,18 @@ pub struct SlideFriction {
     pub transition_velocity: Option<f64>,
 }
 
-/// Prismatic: `point_j` of `body_j` slides on the line of `body_i` through `point_i` along
-/// `axis_i`, and the bodies keep the relative angle that makes `axis_i` and `axis_j` parallel.
-/// 2 equations.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct TranslationalJoint {
-    /// Body carrying the line.
-    pub body_i: String,
-    /// A point of the line, body i frame (or `at`).
-    #[serde(default)]
-    pub point_i: Option<PointRef>,
-    /// Direction of the line, body i frame, any non-zero length (or `axis`).
-    #[serde(default)]
-    pub axis_i: Option<[f64; 2]>,
-    /// The sliding body.
-    pub body_j: String,
-    /// The point of body j that stays on the line (or `at`).
-    #[serde(default)]
-    pub point_j: Option<PointRef>,
-    /// Direction in body j that stays parallel to `axis_i` (or `axis`).
-    #[serde(default)]
-    pub axis_j: Option<[f64; 2]>,
-    /// A global point of the line at the initial position, m, instead of `point_i` and `point_j`.
-    #[serde(default)]
-    pub at: Option<[f64; 2]>,
-    /// The line's global direction at the initial position, instead of `axis_i` and `axis_j`.
-    #[serde(default)]
-    pub axis: Option<[f64; 2]>,
-    /// Coulomb friction in the slider.
-    #[serde(default)]
-    pub friction: Option<SlideFriction>,
+fields! {
+    /// Prismatic: `point_j` of `body_j` slides on the line of `body_i` through `point_i` along
+    /// `axis_i`, and the bodies keep the relative angle that makes `axis_i` and `axis_j` parallel.
+    /// 2 equations.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(deny_unknown_fields)]
+    pub struct TranslationalJoint {
+        [body_i, point_i?, axis_i?, body_j, point_j?, axis_j?, at, axis,]
+        /// Coulomb friction in the slider.
+        #[serde(default)]
+        pub friction: Option<SlideFriction>,
+    }
 }
 
 /// A translational joint at `path` compiled in `cx`, with its friction.

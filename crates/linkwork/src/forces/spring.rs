@@ -11,6 +11,7 @@
 //! A point's velocity is `rdot + omega R90 A s'`.
 
 use super::{cross, layout, rotate, Force, ForceContext, ForceLaw, Load, Local, Quantity};
+use crate::element::fields;
 use crate::element::PointRef;
 use crate::expr::Scalar;
 use schemars::JsonSchema;
@@ -140,30 +141,25 @@ impl ForceLaw for RotationalSpringDamper {
     }
 }
 
-/// Translational spring-damper-actuator between two points.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct SpringDamperSpec {
-    /// First body.
-    pub body_i: String,
-    /// Attachment on the first body.
-    pub point_i: PointRef,
-    /// Second body.
-    pub body_j: String,
-    /// Attachment on the second body.
-    pub point_j: PointRef,
-    /// Stiffness, N/m. Default 0.
-    #[serde(default)]
-    pub stiffness: f64,
-    /// Damping, N s/m. Default 0.
-    #[serde(default)]
-    pub damping: f64,
-    /// Length at which the spring exerts no force, m. Default: the distance in the initial guess.
-    #[serde(default)]
-    pub free_length: Option<f64>,
-    /// Actuator force pushing the points apart, N: a number or an expression. Default 0.
-    #[serde(default)]
-    pub actuator: Quantity,
+fields! {
+    /// Translational spring-damper-actuator between two points.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(deny_unknown_fields)]
+    pub struct SpringDamperSpec {
+        [body_i, point_i, body_j, point_j,]
+        /// Stiffness, N/m. Default 0.
+        #[serde(default)]
+        pub stiffness: f64,
+        /// Damping, N s/m. Default 0.
+        #[serde(default)]
+        pub damping: f64,
+        /// Length at which the spring exerts no force, m. Default: the distance in the initial guess.
+        #[serde(default)]
+        pub free_length: Option<f64>,
+        /// Actuator force pushing the points apart, N: a number or an expression. Default 0.
+        #[serde(default)]
+        pub actuator: Quantity,
+    }
 }
 
 /// Rotational spring-damper-actuator between two bodies (or a body and ground).
