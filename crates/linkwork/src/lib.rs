@@ -45,7 +45,7 @@
 
 pub mod analysis;
 pub mod constraints;
-pub mod element;
+mod element;
 pub mod error;
 pub mod expr;
 pub mod forces;

@@ -1,8 +1,9 @@
 //! [`ModelSpec`] => [`Model`]: check names, numbers and expressions (every problem, with its path),
-//! resolve names to indices and build each joint's constraint. The compiler [`Cx`] is the joints'
-//! and drivers' [`Context`] (each compiles itself in its `constraints` module); its other pieces
-//! are the sections' own: [`bodies`], [`expressions`], [`measures`], [`analyses`]. It is also the
-//! force elements' [`ForceContext`] (each compiles itself in its `forces` module).
+//! resolve names to indices and build each element. The compiler [`Cx`] is every element's
+//! [`Context`], the joints' and drivers' [`JointContext`] (each compiles itself in its
+//! `constraints` module) and the force elements' [`ForceContext`] (each in its `forces` module);
+//! its other pieces are the sections' own: [`bodies`], [`expressions`], [`measures`],
+//! [`analyses`].
 
 mod analyses;
 mod bodies;
