@@ -8,7 +8,7 @@
 //! ```
 //! with `B = dA/dphi`. Haug (1989) section 3.3.1; Nikravesh (2018) section 7.1.
 
-use super::schema::JointContext;
+use super::schema::{with_friction, JointContext};
 use super::CompiledJoint;
 use super::{Anchor, BodyIx, Config, Constraint, Frame, Friction, FrictionLaw, Pair, Separation, Shape, Sketch};
 use crate::element::fields;
@@ -106,17 +106,9 @@ pub(crate) fn compile(spec: &RevoluteJoint, cx: &mut impl JointContext, path: &s
     // The bodies are checked (`ends`) whether or not the points could be placed.
     let (pi, pj) = points.clone().unwrap_or_default();
     let ends = cx.ends(path, body_i, &pi, body_j, &pj);
-    let law = pin.as_ref().map(|f| {
-        let at = format!("{path}.friction");
-        (cx.friction_law(&at, f.mu, f.transition_velocity), cx.positive(&format!("{at}.radius"), f.radius))
-    });
+    let law = pin.as_ref().map(|f| cx.sized_friction(path, f.mu, f.transition_velocity, ("radius", f.radius)));
     let (_, [(i, sp), (j, sq)]) = (points?, ends?);
-    let joint = Revolute::new(i, sp, j, sq);
-    let friction = match law {
-        Some((law, radius)) => Some(joint.friction(law?, radius?)),
-        None => None,
-    };
-    Some((Box::new(joint), friction))
+    with_friction(Revolute::new(i, sp, j, sq), law, Revolute::friction)
 }
 
 #[cfg(test)]

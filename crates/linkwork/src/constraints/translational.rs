@@ -18,7 +18,7 @@
 //! takes the whole turns from the starting relative angle, so that a body written a turn away
 //! (`phi = 2 pi + 0.1` against the axes' `0.1`) stays on its branch. Haug (1989) section 3.3.2; Nikravesh (2018) section 7.1.
 
-use super::schema::JointContext;
+use super::schema::{with_friction, JointContext};
 use super::CompiledJoint;
 use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Friction, FrictionLaw, Pair, Projection, Shape, Sketch};
 use crate::element::fields;
@@ -131,18 +131,10 @@ pub(crate) fn compile(spec: &TranslationalJoint, cx: &mut impl JointContext, pat
     let ends = cx.ends(path, body_i, &pi, body_j, &pj);
     let vi = axes.and_then(|[ai, _]| cx.axis(&format!("{path}.axis_i"), ai));
     let vj = axes.and_then(|[_, aj]| cx.axis(&format!("{path}.axis_j"), aj));
-    let law = slide.as_ref().map(|f| {
-        let at = format!("{path}.friction");
-        (cx.friction_law(&at, f.mu, f.transition_velocity), cx.positive(&format!("{at}.length"), f.length))
-    });
+    let law = slide.as_ref().map(|f| cx.sized_friction(path, f.mu, f.transition_velocity, ("length", f.length)));
     let (_, [(i, sp), (j, sq)], vi, vj) = (points?, ends?, vi?, vj?);
     let relative = i.coords(cx.q0())[2] - j.coords(cx.q0())[2];
-    let joint = Translational::new(i, sp, vi, j, sq, vj).near(relative);
-    let friction = match law {
-        Some((law, length)) => Some(joint.friction(law?, length?)),
-        None => None,
-    };
-    Some((Box::new(joint), friction))
+    with_friction(Translational::new(i, sp, vi, j, sq, vj).near(relative), law, Translational::friction)
 }
 
 #[cfg(test)]
