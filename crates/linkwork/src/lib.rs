@@ -8,7 +8,11 @@
 //! ```text
 //! expr                      expressions of time and state, differentiated exactly; tables;
 //!                           functionals of sampled columns (integral, mean, max, ...)
-//!  -> constraints, forces   joint and driver rows (Phi, Phi_q, nu, gamma); force laws
+//!  -> element               what joints, drivers and force elements share: a body and its
+//!                           frame, a body point, the named types and their registries, and the
+//!                           context an element is compiled in
+//!  -> constraints, forces   joint and driver rows (Phi, Phi_q, nu, gamma); force laws; each
+//!                           type's file schema and compile step, in its own module
 //!  -> model                 a file's schema (spec), its parameters and units (params, units),
 //!                           read with every problem located (parse),
 //!                           compiled into an immutable Model (compile) whose analyses carry
@@ -43,6 +47,7 @@
 
 pub mod analysis;
 pub mod constraints;
+mod element;
 pub mod error;
 pub mod expr;
 pub mod forces;

@@ -6,8 +6,16 @@ use std::path::{Path, PathBuf};
 
 /// The layers in the order of `lib.rs`: a module may import those of earlier layers, not one
 /// of its own layer but itself (`constraints` and `forces` are peers).
-const LAYERS: [&[&str]; 7] =
-    [&["expr"], &["constraints", "forces"], &["model"], &["system"], &["analysis"], &["results"], &["sweep"]];
+const LAYERS: [&[&str]; 8] = [
+    &["expr"],
+    &["element"],
+    &["constraints", "forces"],
+    &["model"],
+    &["system"],
+    &["analysis"],
+    &["results"],
+    &["sweep"],
+];
 
 /// Modules below every layer and knowing none: imported from anywhere, importing only each
 /// other (errors; a run's progress and stop token; linear algebra, which knows no mechanics).

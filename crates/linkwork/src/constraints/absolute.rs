@@ -9,9 +9,10 @@
 //! ```
 //! Haug (1989) section 3.2; Nikravesh (2018) section 7.3.
 
-use super::schema::{Context, PointRef};
+use super::schema::JointContext;
 use super::CompiledJoint;
 use super::Frame;
+use super::PointRef;
 use super::{Anchor, BodyIx, Config, Constraint, Pair, Separation, Shape, Sketch};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -128,18 +129,23 @@ pub struct AbsoluteAngleJoint {
 }
 
 /// An `absolute_x` joint at `path` compiled in `cx`.
-pub(crate) fn compile_x(spec: &AbsolutePoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile_x(spec: &AbsolutePoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     held_point(AbsoluteKind::X, spec, cx, path)
 }
 
 /// An `absolute_y` joint at `path` compiled in `cx`.
-pub(crate) fn compile_y(spec: &AbsolutePoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile_y(spec: &AbsolutePoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     held_point(AbsoluteKind::Y, spec, cx, path)
 }
 
 /// The joint holding coordinate `kind` (x or y) of a body point: its value as given, or as the
 /// initial configuration has it.
-fn held_point(kind: AbsoluteKind, spec: &AbsolutePoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+fn held_point(
+    kind: AbsoluteKind,
+    spec: &AbsolutePoint,
+    cx: &mut impl JointContext,
+    path: &str,
+) -> Option<CompiledJoint> {
     let AbsolutePoint { body, point, value } = spec;
     let (b, s) = cx.moving_point(path, body, point, "constrained")?;
     let value = match value {
@@ -150,7 +156,11 @@ fn held_point(kind: AbsoluteKind, spec: &AbsolutePoint, cx: &mut impl Context, p
 }
 
 /// An `absolute_angle` joint at `path` compiled in `cx`.
-pub(crate) fn compile_angle(spec: &AbsoluteAngleJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile_angle(
+    spec: &AbsoluteAngleJoint,
+    cx: &mut impl JointContext,
+    path: &str,
+) -> Option<CompiledJoint> {
     let AbsoluteAngleJoint { body, value } = spec;
     let (b, _) = cx.moving_point(path, body, &PointRef::default(), "constrained")?;
     let value = match value {

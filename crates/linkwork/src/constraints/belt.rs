@@ -15,7 +15,7 @@
 //! tight side less its slack side, `F_tight - F_slack = -lambda`, at each radius. The pulleys'
 //! centres are kept by other joints (usually revolute joints on the carrier).
 
-use super::schema::Context;
+use super::schema::JointContext;
 use super::{Anchor, BodyIx, CompiledJoint, Config, Constraint};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -103,7 +103,7 @@ pub struct BeltJoint {
 }
 
 /// A belt joint at `path` compiled in `cx`.
-pub(crate) fn compile(spec: &BeltJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile(spec: &BeltJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     let BeltJoint { body_i, radius_i, body_j, radius_j, crossed, carrier } = spec;
     let i = cx.body(&format!("{path}.body_i"), body_i);
     let j = cx.body(&format!("{path}.body_j"), body_j);

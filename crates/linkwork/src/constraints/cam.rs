@@ -17,8 +17,9 @@
 //! need. The row is undefined where `P` is at the centre (`d = 0`). Norton, Design of Machinery,
 //! chapter 8; Haug (1989) section 3.5.
 
-use super::schema::{Context, PointRef};
+use super::schema::JointContext;
 use super::CompiledJoint;
+use super::PointRef;
 use super::{Anchor, BodyIx, CamProfile, Config, Constraint};
 use super::{Curve, CurveError};
 use crate::expr::{Dual, Expr, HyperDual, Scalar};
@@ -258,14 +259,14 @@ pub enum ProfileColumn {
 }
 
 /// A cam joint at `path` compiled in `cx`.
-pub(crate) fn compile(cam: &CamJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile(cam: &CamJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     Some((cam_row(cam, cx, path)?.boxed(), None))
 }
 
 /// A cam joint's row at `path` compiled in `cx`: its ends, and its pitch curve (`radius`) or its
 /// working surface (`surface_radius`, `profile`) with the roller on it. Every field is read
 /// before any problem returns, so that each is reported.
-pub(crate) fn cam_row(cam: &CamJoint, cx: &mut impl Context, path: &str) -> Option<CamRow> {
+pub(crate) fn cam_row(cam: &CamJoint, cx: &mut impl JointContext, path: &str) -> Option<CamRow> {
     let CamJoint { body_i, point_i, body_j, point_j, radius, surface_radius, profile, roller_radius } = cam;
     let ends = cx.ends(path, body_i, point_i, body_j, point_j);
     let roller = cx.non_negative(&format!("{path}.roller_radius"), *roller_radius);
@@ -314,12 +315,12 @@ pub(crate) fn cam_row(cam: &CamJoint, cx: &mut impl Context, path: &str) -> Opti
 }
 
 /// A curve, or its problem at its field of the joint at `path`.
-fn curve_at(cx: &mut impl Context, path: &str, curve: Result<Curve, CurveError>) -> Option<Curve> {
+fn curve_at(cx: &mut impl JointContext, path: &str, curve: Result<Curve, CurveError>) -> Option<Curve> {
     curve.map_err(|e| cx.problem(format!("{path}.{}", e.field), e.message)).ok()
 }
 
 /// Whether the points of a profile at `path` come without a `period`; a problem there when not.
-fn no_period(cx: &mut impl Context, path: &str, period: Option<f64>) -> bool {
+fn no_period(cx: &mut impl JointContext, path: &str, period: Option<f64>) -> bool {
     if period.is_some() {
         cx.problem(format!("{path}.period"), "points take no period (their parameter is the chord length)");
         return false;
@@ -328,7 +329,7 @@ fn no_period(cx: &mut impl Context, path: &str, period: Option<f64>) -> bool {
 }
 
 /// A cam's `profile` at `path`: expressions of `u`, or points inline or from a file.
-fn profile_curve(cx: &mut impl Context, path: &str, p: &CamProfileSpec) -> Option<Curve> {
+fn profile_curve(cx: &mut impl JointContext, path: &str, p: &CamProfileSpec) -> Option<Curve> {
     use ProfileColumn::{Text, Values};
     let joint = path.strip_suffix(".profile").unwrap_or(path).to_string();
     let points = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(&a, &b)| [a, b]).collect::<Vec<[f64; 2]>>();

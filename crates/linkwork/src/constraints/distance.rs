@@ -12,9 +12,10 @@
 //! price of a multiplier that is a force divided by `2 L`. Haug (1989) section 3.4.1; Nikravesh
 //! (2018) section 7.2.
 
-use super::schema::{Context, PointRef};
+use super::schema::JointContext;
 use super::CompiledJoint;
 use super::{dot, Anchor, BodyIx, Config, Constraint, PointPair, Shape, Sketch};
+use crate::element::fields;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -64,26 +65,21 @@ impl Constraint for Distance {
     }
 }
 
-/// Distance (revolute-revolute link): the two points stay `length` apart. 1 equation.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct DistanceJoint {
-    /// First body.
-    pub body_i: String,
-    /// Point on the first body.
-    pub point_i: PointRef,
-    /// Second body.
-    pub body_j: String,
-    /// Point on the second body.
-    pub point_j: PointRef,
-    /// Distance, m. Default: its value in the initial configuration.
-    #[serde(default)]
-    pub length: Option<f64>,
+fields! {
+    /// Distance (revolute-revolute link): the two points stay `length` apart. 1 equation.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(deny_unknown_fields)]
+    pub struct DistanceJoint {
+        [body_i, point_i, body_j, point_j,]
+        /// Distance, m. Default: its value in the initial configuration.
+        #[serde(default)]
+        pub length: Option<f64>,
+    }
 }
 
 /// A distance joint at `path` compiled in `cx`: its length as given, or as the initial
 /// configuration has it.
-pub(crate) fn compile(spec: &DistanceJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile(spec: &DistanceJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     let DistanceJoint { body_i, point_i, body_j, point_j, length } = spec;
     let ends = cx.ends(path, body_i, point_i, body_j, point_j)?;
     let [(i, sp), (j, sq)] = ends;

@@ -18,8 +18,10 @@
 //! `P Q` (its effort); it is singular when `P` and `Q` coincide (`|d| = 0`, division by zero), which
 //! the prescribed `f(t)` must keep away from. Haug (1989) section 3.5; Nikravesh (2018) section 7.5.
 
-use super::schema::{Context, PointRef};
+use super::schema::JointContext;
+use super::PointRef;
 use super::{dot, Absolute, AbsoluteKind, Anchor, BodyIx, Config, Constraint, Pair, PointPair};
+use crate::element::fields;
 use crate::expr::TimeFunction;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -188,20 +190,15 @@ pub struct RelativeAngleDriver {
     pub function: String,
 }
 
-/// Distance between two points, m.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct DistanceDriver {
-    /// First body.
-    pub body_i: String,
-    /// Point on the first body.
-    pub point_i: PointRef,
-    /// Second body.
-    pub body_j: String,
-    /// Point on the second body.
-    pub point_j: PointRef,
-    /// Distance as a function of `t`, m (must stay positive).
-    pub function: String,
+fields! {
+    /// Distance between two points, m.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(deny_unknown_fields)]
+    pub struct DistanceDriver {
+        [body_i, point_i, body_j, point_j,]
+        /// Distance as a function of `t`, m (must stay positive).
+        pub function: String,
+    }
 }
 
 /// `x` / `y` drivers: a global coordinate of a body point.
@@ -219,13 +216,18 @@ pub struct PointDriver {
 
 /// The driver of `kind` prescribing `function` (the field at `path`), or `None` when either has
 /// a problem.
-fn driver(cx: &mut impl Context, path: &str, kind: Option<DriverKind>, function: &str) -> Option<Box<dyn Constraint>> {
+fn driver(
+    cx: &mut impl JointContext,
+    path: &str,
+    kind: Option<DriverKind>,
+    function: &str,
+) -> Option<Box<dyn Constraint>> {
     let f = cx.time_function(&format!("{path}.function"), function);
     Some(Box::new(Driver::new(kind?, f?)))
 }
 
 /// An `angle` driver at `path` compiled in `cx`.
-pub(crate) fn compile_angle(spec: &AngleDriver, cx: &mut impl Context, path: &str) -> Option<Box<dyn Constraint>> {
+pub(crate) fn compile_angle(spec: &AngleDriver, cx: &mut impl JointContext, path: &str) -> Option<Box<dyn Constraint>> {
     let b = cx.moving_point(path, &spec.body, &PointRef::default(), "driven");
     driver(cx, path, b.map(|(body, _)| DriverKind::Angle { body }), &spec.function)
 }
@@ -233,7 +235,7 @@ pub(crate) fn compile_angle(spec: &AngleDriver, cx: &mut impl Context, path: &st
 /// A `relative_angle` driver at `path` compiled in `cx`.
 pub(crate) fn compile_relative(
     spec: &RelativeAngleDriver,
-    cx: &mut impl Context,
+    cx: &mut impl JointContext,
     path: &str,
 ) -> Option<Box<dyn Constraint>> {
     let origin = PointRef::default();
@@ -244,7 +246,7 @@ pub(crate) fn compile_relative(
 /// A `distance` driver at `path` compiled in `cx`.
 pub(crate) fn compile_distance(
     spec: &DistanceDriver,
-    cx: &mut impl Context,
+    cx: &mut impl JointContext,
     path: &str,
 ) -> Option<Box<dyn Constraint>> {
     let ends = cx.ends(path, &spec.body_i, &spec.point_i, &spec.body_j, &spec.point_j);
@@ -253,13 +255,13 @@ pub(crate) fn compile_distance(
 }
 
 /// An `x` driver at `path` compiled in `cx`.
-pub(crate) fn compile_x(spec: &PointDriver, cx: &mut impl Context, path: &str) -> Option<Box<dyn Constraint>> {
+pub(crate) fn compile_x(spec: &PointDriver, cx: &mut impl JointContext, path: &str) -> Option<Box<dyn Constraint>> {
     let bp = cx.moving_point(path, &spec.body, &spec.point, "driven");
     driver(cx, path, bp.map(|(body, point)| DriverKind::X { body, point }), &spec.function)
 }
 
 /// A `y` driver at `path` compiled in `cx`.
-pub(crate) fn compile_y(spec: &PointDriver, cx: &mut impl Context, path: &str) -> Option<Box<dyn Constraint>> {
+pub(crate) fn compile_y(spec: &PointDriver, cx: &mut impl JointContext, path: &str) -> Option<Box<dyn Constraint>> {
     let bp = cx.moving_point(path, &spec.body, &spec.point, "driven");
     driver(cx, path, bp.map(|(body, point)| DriverKind::Y { body, point }), &spec.function)
 }

@@ -17,7 +17,7 @@
 //! [`MAX_SLOTS`] slots, so that the derivative passes run on stack arrays. Haug (1989) section
 //! 3.5 (general constraints and drivers); derivatives by hyper-dual numbers (Fike and Alonso, 2011).
 
-use super::schema::Context;
+use super::schema::JointContext;
 use super::CompiledJoint;
 use super::{Anchor, BodyIx, Config, Constraint};
 use crate::expr::{Dual, Expr, HyperDual, Scalar, MAX_SLOTS};
@@ -174,7 +174,7 @@ pub struct ExpressionJoint {
 }
 
 /// An expression joint at `path` compiled in `cx`.
-pub(crate) fn compile(spec: &ExpressionJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile(spec: &ExpressionJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     let c = cx.coordinate_constraint(&format!("{path}.expression"), &spec.expression)?;
     Some((Box::new(c), None))
 }

@@ -30,15 +30,6 @@
 use super::{dot, perp, reaction, Anchor, BodyIx, Config, Frame, Separation};
 use crate::expr::{Dual, Scalar};
 
-/// The default transition velocity `v_s`, m/s: 1 mm/s. Below the sticking limit the joint creeps
-/// at less than `v_s` (see the module docs), 1 mm/s, a creep of a millimetre a second that a
-/// mechanism of a metre hardly shows; the coefficient's slope at rest, `mu N / v_s`, makes the
-/// equations stiff with a time constant `m v_s / (mu N)` (`3e-4` s for a block of any mass held
-/// by gravity at `mu = 0.3`), which the implicit integrators step over. A smaller `v_s` creeps less
-/// and is stiffer: Adams' default is `0.1` length units per second, `1e-4` m/s in its default
-/// millimetres.
-pub const DEFAULT_TRANSITION_VELOCITY: f64 = 1e-3;
-
 /// The friction law of a joint: its coefficient and transition velocity.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FrictionLaw {

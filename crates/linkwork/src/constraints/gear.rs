@@ -31,8 +31,9 @@
 
 use std::f64::consts::TAU;
 
-use super::schema::{Context, PointRef};
+use super::schema::JointContext;
 use super::CompiledJoint;
+use super::PointRef;
 use super::{dot, perp, Anchor, BodyIx, Config, ConfigBuf, Constraint, Pair, Separation, Shape, Sketch};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -175,7 +176,7 @@ pub struct GearJoint {
 }
 
 /// A gear joint at `path` compiled in `cx`.
-pub(crate) fn compile(spec: &GearJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile(spec: &GearJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     let GearJoint { body_i, point_i, radius_i, body_j, point_j, radius_j, internal } = spec;
     let ends = cx.ends(path, body_i, point_i, body_j, point_j);
     let ri = cx.positive(&format!("{path}.radius_i"), *radius_i);

@@ -26,6 +26,8 @@ mod rolling;
 mod schema;
 mod translational;
 
+pub(crate) use crate::element::Frame;
+pub use crate::element::{BodyIx, PointRef, Tagged, DEFAULT_TRANSITION_VELOCITY};
 use crate::expr::Scalar;
 pub use absolute::{Absolute, AbsoluteAngleJoint, AbsoluteKind, AbsolutePoint};
 pub(crate) use cam::cam_row;
@@ -34,14 +36,13 @@ pub use cam_profile::{CamProfile, Curve, CurveError};
 pub use distance::{Distance, DistanceJoint};
 pub use driver::{AngleDriver, DistanceDriver, Driver, DriverKind, PointDriver, RelativeAngleDriver};
 pub use expression::{ExpressionJoint, GeneralConstraint, Var};
-pub use friction::{Friction, FrictionLaw, DEFAULT_TRANSITION_VELOCITY};
+pub use friction::{Friction, FrictionLaw};
 pub use gear::{GearJoint, GearKind, GearPair};
 pub use point_line::{PointOnLine, PointOnLineJoint, RevoluteTranslationalJoint};
 pub use registry::{CompiledJoint, DriverSpec, JointSpec};
 pub use revolute::{PinFriction, Revolute, RevoluteJoint};
 pub use rolling::{RackPinion, Rolling, RollingDisc, RollingJoint};
-pub(crate) use schema::{finite, named, pair, positive, Context};
-pub use schema::{PointRef, Tagged};
+pub(crate) use schema::JointContext;
 use std::fmt::Debug;
 use std::ops::Deref;
 pub use translational::{SlideFriction, Translational, TranslationalJoint};
@@ -267,35 +268,6 @@ pub fn reaction<S: Scalar>(
     }
 }
 
-/// Where a body's coordinates sit in `q`: the index of its `x` (`y` and `phi` follow), or `None`
-/// for ground, which has no coordinates.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct BodyIx(pub Option<usize>);
-
-impl BodyIx {
-    /// Ground.
-    pub const GROUND: BodyIx = BodyIx(None);
-
-    /// `(x, y, phi)` of the body from a coordinate vector (zeros for ground).
-    #[inline]
-    pub fn coords(self, q: &[f64]) -> [f64; 3] {
-        match self.0 {
-            Some(k) => [q[k], q[k + 1], q[k + 2]],
-            None => [0.0; 3],
-        }
-    }
-}
-
-/// The pose of a body frame: origin and rotation `A(phi)`.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Frame {
-    pub x: f64,
-    pub y: f64,
-    pub phi: f64,
-    pub c: f64,
-    pub s: f64,
-}
-
 impl Frame {
     #[inline]
     pub fn of(body: BodyIx, q: &Config<'_>) -> Frame {
@@ -306,39 +278,6 @@ impl Frame {
             }
             None => Frame { x: 0.0, y: 0.0, phi: 0.0, c: 1.0, s: 0.0 },
         }
-    }
-    /// The frame from a bare coordinate vector (computes the rotation), outside the hot loops.
-    pub fn of_slice(body: BodyIx, q: &[f64]) -> Frame {
-        Frame::at(body.coords(q))
-    }
-    /// The frame at `(x, y, phi)` (computes the rotation), outside the hot loops.
-    pub fn at([x, y, phi]: [f64; 3]) -> Frame {
-        let (s, c) = phi.sin_cos();
-        Frame { x, y, phi, c, s }
-    }
-    /// `A s'`: a body-frame vector in the global frame.
-    #[inline]
-    pub fn rotate(&self, v: [f64; 2]) -> [f64; 2] {
-        [self.c * v[0] - self.s * v[1], self.s * v[0] + self.c * v[1]]
-    }
-    /// `B s' = dA/dphi s' = R90 A s'`.
-    #[inline]
-    pub fn rotate_d(&self, v: [f64; 2]) -> [f64; 2] {
-        [-self.s * v[0] - self.c * v[1], self.c * v[0] - self.s * v[1]]
-    }
-    /// `r + A s'`: a body point in the global frame.
-    #[inline]
-    pub fn point(&self, v: [f64; 2]) -> [f64; 2] {
-        let a = self.rotate(v);
-        [self.x + a[0], self.y + a[1]]
-    }
-    /// `A^T v`: a global vector in the body frame.
-    pub fn unrotate(&self, v: [f64; 2]) -> [f64; 2] {
-        [self.c * v[0] + self.s * v[1], -self.s * v[0] + self.c * v[1]]
-    }
-    /// `A^T (p - r)`: a global point in the body frame.
-    pub fn local(&self, p: [f64; 2]) -> [f64; 2] {
-        self.unrotate([p[0] - self.x, p[1] - self.y])
     }
 }
 

@@ -13,10 +13,11 @@
 //! `e > 0` puts `Q` on the left of the line (the side `R90 v'_i` points to). Haug (1989) sections
 //! 3.3.2 and 3.4.2; Nikravesh (2018) section 7.1.
 
-use super::schema::{Context, PointRef};
+use super::schema::JointContext;
 use super::CompiledJoint;
 use super::Frame;
 use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Pair, Projection, Shape, Sketch};
+use crate::element::fields;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -70,57 +71,33 @@ impl Constraint for PointOnLine {
     }
 }
 
-/// Pin in slot: `point_j` of `body_j` stays on the line of `body_i` through `point_i` along
-/// `axis_i`; rotation stays free. 1 equation.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct PointOnLineJoint {
-    /// Body carrying the slot (line).
-    pub body_i: String,
-    /// A point of the line, body i frame (or `at`).
-    #[serde(default)]
-    pub point_i: Option<PointRef>,
-    /// Direction of the line, body i frame (or `axis`).
-    #[serde(default)]
-    pub axis_i: Option<[f64; 2]>,
-    /// Body carrying the pin.
-    pub body_j: String,
-    /// The pin, body j frame (or `at`).
-    #[serde(default)]
-    pub point_j: Option<PointRef>,
-    /// The pin's global position at the initial position, m (on the line), instead of `point_i`
-    /// and `point_j`.
-    #[serde(default)]
-    pub at: Option<[f64; 2]>,
-    /// The line's global direction at the initial position, instead of `axis_i`.
-    #[serde(default)]
-    pub axis: Option<[f64; 2]>,
+fields! {
+    /// Pin in slot: `point_j` of `body_j` stays on the line of `body_i` through `point_i` along
+    /// `axis_i`; rotation stays free. 1 equation.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(deny_unknown_fields)]
+    pub struct PointOnLineJoint {
+        [body_i, point_i?, axis_i?, body_j, point_j?, at, axis,]
+        }
 }
 
-/// Revolute-translational composite: `point_j` of `body_j` keeps a constant signed distance
-/// `offset` from the line of `body_i` (a link pinned at `point_j` and sliding, at right angles,
-/// on the line). 1 equation.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct RevoluteTranslationalJoint {
-    /// Body carrying the line.
-    pub body_i: String,
-    /// A point of the line, body i frame.
-    pub point_i: PointRef,
-    /// Direction of the line, body i frame.
-    pub axis_i: [f64; 2],
-    /// Body carrying the pin.
-    pub body_j: String,
-    /// The pin, body j frame.
-    pub point_j: PointRef,
-    /// Signed distance from the line to the pin (positive to the left of `axis_i`), m.
-    /// Default: its value in the initial configuration.
-    #[serde(default)]
-    pub offset: Option<f64>,
+fields! {
+    /// Revolute-translational composite: `point_j` of `body_j` keeps a constant signed distance
+    /// `offset` from the line of `body_i` (a link pinned at `point_j` and sliding, at right angles,
+    /// on the line). 1 equation.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(deny_unknown_fields)]
+    pub struct RevoluteTranslationalJoint {
+        [body_i, point_i, axis_i, body_j, point_j,]
+        /// Signed distance from the line to the pin (positive to the left of `axis_i`), m.
+        /// Default: its value in the initial configuration.
+        #[serde(default)]
+        pub offset: Option<f64>,
+    }
 }
 
 /// A point-on-line joint at `path` compiled in `cx`.
-pub(crate) fn compile(spec: &PointOnLineJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile(spec: &PointOnLineJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     let PointOnLineJoint { body_i, point_i, axis_i, body_j, point_j, at, axis } = spec;
     let points = cx.placed_points(path, [body_i, body_j], [point_i, point_j], at);
     let axes = cx.placed_axes(path, [("axis_i", body_i, axis_i)], axis);
@@ -135,7 +112,7 @@ pub(crate) fn compile(spec: &PointOnLineJoint, cx: &mut impl Context, path: &str
 /// initial configuration has it.
 pub(crate) fn compile_offset(
     spec: &RevoluteTranslationalJoint,
-    cx: &mut impl Context,
+    cx: &mut impl JointContext,
     path: &str,
 ) -> Option<CompiledJoint> {
     let RevoluteTranslationalJoint { body_i, point_i, axis_i, body_j, point_j, offset } = spec;

@@ -1,9 +1,9 @@
 //! The joint and driver types, by the name model files call them in `type`: one line each, the
 //! only place besides the type's own module that names it.
 
-use super::schema::registry;
 use super::{absolute, cam, distance, driver, expression, gear, point_line, revolute, rolling, translational};
 use super::{Constraint, Friction};
+use crate::element::registry;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -15,7 +15,7 @@ registry! {
     /// (`body_i`) is the one whose reaction is reported.
     #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
     #[serde(tag = "type")]
-    pub enum JointSpec -> CompiledJoint {
+    pub enum JointSpec -> CompiledJoint, in super::JointContext {
         /// Pin: `point_i` of `body_i` coincides with `point_j` of `body_j`. 2 equations.
         "revolute" => Revolute(revolute::RevoluteJoint, revolute::compile),
         /// Prismatic: `point_j` of `body_j` slides on the line of `body_i` through `point_i` along
@@ -65,7 +65,7 @@ registry! {
     /// expression such as `"6.1506 + 2*pi*t"`; its derivatives are exact).
     #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
     #[serde(tag = "type")]
-    pub enum DriverSpec -> Box<dyn Constraint> {
+    pub enum DriverSpec -> Box<dyn Constraint>, in super::JointContext {
         /// Angle of `body`, rad.
         "angle" => Angle(driver::AngleDriver, driver::compile_angle),
         /// Angle of `body_i` minus angle of `body_j`, rad.

@@ -8,9 +8,10 @@
 //! ```
 //! with `B = dA/dphi`. Haug (1989) section 3.3.1; Nikravesh (2018) section 7.1.
 
-use super::schema::{Context, PointRef};
+use super::schema::{with_friction, JointContext};
 use super::CompiledJoint;
 use super::{Anchor, BodyIx, Config, Constraint, Frame, Friction, FrictionLaw, Pair, Separation, Shape, Sketch};
+use crate::element::fields;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -70,26 +71,16 @@ impl Constraint for Revolute {
     }
 }
 
-/// Pin: `point_i` of `body_i` coincides with `point_j` of `body_j`. 2 equations.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct RevoluteJoint {
-    /// First body.
-    pub body_i: String,
-    /// Pin location on the first body (or `at`).
-    #[serde(default)]
-    pub point_i: Option<PointRef>,
-    /// Second body.
-    pub body_j: String,
-    /// Pin location on the second body (or `at`).
-    #[serde(default)]
-    pub point_j: Option<PointRef>,
-    /// The pin's global position at the initial position, m, instead of `point_i` and `point_j`.
-    #[serde(default)]
-    pub at: Option<[f64; 2]>,
-    /// Coulomb friction in the pin.
-    #[serde(default)]
-    pub friction: Option<PinFriction>,
+fields! {
+    /// Pin: `point_i` of `body_i` coincides with `point_j` of `body_j`. 2 equations.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(deny_unknown_fields)]
+    pub struct RevoluteJoint {
+        [body_i, point_i?, body_j, point_j?, at,]
+        /// Coulomb friction in the pin.
+        #[serde(default)]
+        pub friction: Option<PinFriction>,
+    }
 }
 
 /// Coulomb friction in a revolute joint: a torque `mu tanh(r omega / v_s) r |F|` opposing the
@@ -109,23 +100,15 @@ pub struct PinFriction {
 }
 
 /// A revolute joint at `path` compiled in `cx`, with its friction.
-pub(crate) fn compile(spec: &RevoluteJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile(spec: &RevoluteJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     let RevoluteJoint { body_i, point_i, body_j, point_j, at, friction: pin } = spec;
     let points = cx.placed_points(path, [body_i, body_j], [point_i, point_j], at);
     // The bodies are checked (`ends`) whether or not the points could be placed.
     let (pi, pj) = points.clone().unwrap_or_default();
     let ends = cx.ends(path, body_i, &pi, body_j, &pj);
-    let law = pin.as_ref().map(|f| {
-        let at = format!("{path}.friction");
-        (cx.friction_law(&at, f.mu, f.transition_velocity), cx.positive(&format!("{at}.radius"), f.radius))
-    });
+    let law = pin.as_ref().map(|f| cx.sized_friction(path, f.mu, f.transition_velocity, ("radius", f.radius)));
     let (_, [(i, sp), (j, sq)]) = (points?, ends?);
-    let joint = Revolute::new(i, sp, j, sq);
-    let friction = match law {
-        Some((law, radius)) => Some(joint.friction(law?, radius?)),
-        None => None,
-    };
-    Some((Box::new(joint), friction))
+    with_friction(Revolute::new(i, sp, j, sq), law, Revolute::friction)
 }
 
 #[cfg(test)]

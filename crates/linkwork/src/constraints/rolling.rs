@@ -32,9 +32,11 @@
 //! frame and the rack on a translational joint), so it has only the rolling row; a rolling disc
 //! adds the contact row. Haug (1989) section 3.4.5; Nikravesh (2018) section 7.4.
 
-use super::schema::{Context, End, PointRef};
+use super::schema::JointContext;
 use super::CompiledJoint;
+use super::PointRef;
 use super::{perp, unit, Anchor, BodyIx, Config, ConfigBuf, Constraint, Pair, Projection, Shape, Sketch};
+use crate::element::End;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -180,7 +182,7 @@ pub struct RollingJoint {
 
 /// The fields of a rolling joint at `path`, resolved: the circle's centre and radius, the line's
 /// point and direction.
-fn rolling_ends(spec: &RollingJoint, cx: &mut impl Context, path: &str) -> Option<([End; 2], f64, [f64; 2])> {
+fn rolling_ends(spec: &RollingJoint, cx: &mut impl JointContext, path: &str) -> Option<([End; 2], f64, [f64; 2])> {
     let RollingJoint { body_i, point_i, radius, body_j, point_j, axis_j } = spec;
     let ends = cx.ends(path, body_i, point_i, body_j, point_j);
     let r = cx.positive(&format!("{path}.radius"), *radius);
@@ -189,13 +191,13 @@ fn rolling_ends(spec: &RollingJoint, cx: &mut impl Context, path: &str) -> Optio
 }
 
 /// A `rack_pinion` joint at `path` compiled in `cx`.
-pub(crate) fn compile_rack(spec: &RollingJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile_rack(spec: &RollingJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     let ([(i, sc), (j, sl)], r, v) = rolling_ends(spec, cx, path)?;
     Some((Box::new(RackPinion::new(i, sc, r, j, sl, v, cx.q0())), None))
 }
 
 /// A `rolling_disc` joint at `path` compiled in `cx`.
-pub(crate) fn compile_disc(spec: &RollingJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile_disc(spec: &RollingJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     let ([(i, sc), (j, sl)], r, v) = rolling_ends(spec, cx, path)?;
     Some((Box::new(RollingDisc::new(i, sc, r, j, sl, v, cx.q0())), None))
 }

@@ -1,309 +1,14 @@
-//! What the joints' file schema and compile steps share: the `named!` enums that model files call
-//! by name, the [`Tagged`] sections, a body point ([`PointRef`]), and the [`Context`] a joint is
-//! compiled in, which the model's compiler implements (the joints stay below the model).
+//! What the joints' and drivers' compile steps ask beyond the [`Context`] every element shares:
+//! general constraints of the coordinates and the joints' friction ([`JointContext`]).
 
-use super::{BodyIx, Frame, FrictionLaw, GeneralConstraint, DEFAULT_TRANSITION_VELOCITY};
-use crate::error::Problem;
-use crate::expr::{Expr, TimeFunction};
-use schemars::JsonSchema;
-use serde::{Deserialize, Deserializer, Serialize};
+use super::{CompiledJoint, Constraint, Friction, FrictionLaw, GeneralConstraint, DEFAULT_TRANSITION_VELOCITY};
+use crate::element::Context;
 
-/// An enum whose variants model files call by name (`integrator: hht`, `type: revolute`), each
-/// name written once, as `"name" => Variant`: it is the variant's serde name, the enum's `NAMES`
-/// list it, and `name()` returns it. A plain enum also gets `from_name`; the `tagged` form, for a
-/// section whose entries name their kind in `type` (each variant holding the struct of its
-/// fields), implements [`Tagged`] with the same names.
-macro_rules! named {
-    (
-        tagged $(#[$attr:meta])*
-        pub enum $Enum:ident { $( $(#[$vattr:meta])* $name:literal => $Variant:ident($Inner:ty), )* }
-    ) => {
-        $crate::constraints::named! { @enum $(#[$attr])* pub enum $Enum { $( $(#[$vattr])* $name => $Variant($Inner), )* } }
-
-        impl $crate::constraints::Tagged for $Enum {
-            const TYPES: &'static [&'static str] = $Enum::NAMES;
-
-            fn read<'de, D: serde::Deserializer<'de>>(kind: &str, d: D) -> Option<Result<Self, D::Error>> {
-                Some(match kind {
-                    $( $name => <$Inner as serde::Deserialize>::deserialize(d).map($Enum::$Variant), )*
-                    _ => return None,
-                })
-            }
-        }
-    };
-    (
-        $(#[$attr:meta])*
-        pub enum $Enum:ident { $( $(#[$vattr:meta])* $name:literal => $Variant:ident, )* }
-    ) => {
-        $crate::constraints::named! { @enum $(#[$attr])* pub enum $Enum { $( $(#[$vattr])* $name => $Variant, )* } }
-
-        impl $Enum {
-            /// The variant called `name` in model files, if there is one.
-            pub fn from_name(name: &str) -> Option<Self> {
-                match name {
-                    $( $name => Some($Enum::$Variant), )*
-                    _ => None,
-                }
-            }
-        }
-    };
-    (
-        @enum $(#[$attr:meta])*
-        pub enum $Enum:ident { $( $(#[$vattr:meta])* $name:literal => $Variant:ident $(($Inner:ty))?, )* }
-    ) => {
-        $(#[$attr])*
-        pub enum $Enum {
-            $( $(#[$vattr])* #[serde(rename = $name)] $Variant $(($Inner))?, )*
-        }
-
-        impl $Enum {
-            /// Every name, as written in model files.
-            pub const NAMES: &'static [&'static str] = &[$($name),*];
-
-            /// Its name in the model file.
-            pub fn name(&self) -> &'static str {
-                match self {
-                    $( $Enum::$Variant { .. } => $name, )*
-                }
-            }
-        }
-    };
-}
-pub(crate) use named;
-
-/// A registry: a [`Tagged`] section (`named!`'s `tagged` form) whose every kind is compiled by a
-/// function of its own module, `"name" => Variant(Fields, module::compile)`, into `$Out`. The
-/// enum gets `compile(&self, cx, path)`, which calls that function.
-macro_rules! registry {
-    (
-        $(#[$attr:meta])*
-        pub enum $Enum:ident -> $Out:ty {
-            $( $(#[$vattr:meta])* $name:literal => $Variant:ident($Inner:ty, $compile:path), )*
-        }
-    ) => {
-        $crate::constraints::named! { tagged $(#[$attr])* pub enum $Enum { $( $(#[$vattr])* $name => $Variant($Inner), )* } }
-
-        impl $Enum {
-            /// The entry compiled in `cx`, its problems reported there at `path` (`joints.<name>`,
-            /// `drivers.<name>`).
-            pub(crate) fn compile(&self, cx: &mut impl $crate::constraints::Context, path: &str) -> Option<$Out> {
-                match self {
-                    $( $Enum::$Variant(fields) => $compile(fields, cx, path), )*
-                }
-            }
-        }
-    };
-}
-pub(crate) use registry;
-
-/// The kinds of a section's entries (joints, drivers, forces), which name theirs in `type`.
-pub trait Tagged: Sized {
-    /// Every `type`, as written in model files (the enum's `NAMES`).
-    const TYPES: &'static [&'static str];
-
-    /// The entry of `type: kind` read from `d`, the entry without its `type`; `None` when no
-    /// kind has that name. Reading the variant's struct straight from `d` keeps the path of a
-    /// bad field (serde's internally tagged enums buffer the entry first, which loses it).
-    fn read<'de, D: Deserializer<'de>>(kind: &str, d: D) -> Option<Result<Self, D::Error>>;
-}
-
-/// Two numbers of a sequence, `[x, y]`; a sequence of another length is refused as not what
-/// `expected` describes.
-pub(crate) fn pair<'de, A: serde::de::SeqAccess<'de>>(
-    mut seq: A,
-    expected: &dyn serde::de::Expected,
-) -> Result<[f64; 2], A::Error> {
-    use serde::de::Error;
-    let x: f64 = seq.next_element()?.ok_or_else(|| A::Error::invalid_length(0, expected))?;
-    let y: f64 = seq.next_element()?.ok_or_else(|| A::Error::invalid_length(1, expected))?;
-    if seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
-        return Err(A::Error::invalid_length(3, expected));
-    }
-    Ok([x, y])
-}
-
-/// A point of a body: its coordinates `[x, y]` in the body frame, m, or the name of one of the
-/// body's `points`.
-#[derive(Debug, Clone, Serialize, JsonSchema)]
-#[serde(untagged)]
-pub enum PointRef {
-    /// Coordinates in the body frame.
-    Coords([f64; 2]),
-    /// A named point of the body.
-    Name(String),
-}
-
-/// Read by hand rather than derived: an untagged enum's error ("data did not match any variant")
-/// would lose the field's path and say nothing useful.
-impl<'de> Deserialize<'de> for PointRef {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct Visitor;
-        impl<'de> serde::de::Visitor<'de> for Visitor {
-            type Value = PointRef;
-            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-                f.write_str("a point: [x, y] in the body frame, or the name of one of the body's points")
-            }
-            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<PointRef, E> {
-                Ok(PointRef::Name(v.to_string()))
-            }
-            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<PointRef, A::Error> {
-                pair(seq, &self).map(PointRef::Coords)
-            }
-        }
-        d.deserialize_any(Visitor)
-    }
-}
-
-impl Default for PointRef {
-    fn default() -> Self {
-        PointRef::Coords([0.0, 0.0])
-    }
-}
-
-/// A body and a point of it, body frame.
-pub(crate) type End = (BodyIx, [f64; 2]);
-
-/// `v`, or a problem at `path` when it is not finite.
-pub(crate) fn finite(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f64> {
-    if v.is_finite() {
-        Some(v)
-    } else {
-        problems.push(Problem::new(path, format!("expected a finite number, found {v}")));
-        None
-    }
-}
-
-/// `v`, or a problem at `path` when it is not a finite number above zero.
-pub(crate) fn positive(problems: &mut Vec<Problem>, path: &str, v: f64) -> Option<f64> {
-    let v = finite(problems, path, v)?;
-    if v > 0.0 {
-        Some(v)
-    } else {
-        problems.push(Problem::new(path, format!("expected a positive number, found {v}")));
-        None
-    }
-}
-
-/// What a joint's (or a driver's, or a force's) compile step asks of the model it is compiled
-/// in: its bodies and points by name, the initial configuration, expressions of its names, and a
-/// list of problems, each at the path of its field. The model's compiler implements the required
-/// methods; the provided ones, built on them, check and resolve the fields elements share.
-pub(crate) trait Context {
-    /// The problems found so far; each step adds its own.
-    fn problems(&mut self) -> &mut Vec<Problem>;
-    /// The body `name` named at `path`: ground or a moving body; `None`, with a problem at
-    /// `path` when no body has that name (none when it exists but could not be read).
-    fn body(&mut self, path: &str, name: &str) -> Option<BodyIx>;
-    /// The point `p` of body `body` in its frame, named at `path`; `None`, with its problem, when
-    /// it is not a point of the body.
-    fn point(&mut self, path: &str, body: &str, p: &PointRef) -> Option<[f64; 2]>;
-    /// The initial guess of every body's coordinates, `(3 * bodies)`, for constants that default
-    /// to their value in the initial configuration.
-    fn q0(&self) -> &[f64];
-    /// Body `name`'s frame at its initial position (ground's is the global one); `None` for a
-    /// body that is not known (reported where it is named).
-    fn initial_frame(&self, name: &str) -> Option<Frame>;
-    /// Record that the field at `path` was placed from global coordinates, as `value` in its
-    /// body's frame.
-    fn place(&mut self, path: String, value: [f64; 2]);
-    /// An expression at `path` of the curve parameter `var` (slot 0; `what` it is), parameters
-    /// and tables.
-    fn curve_expr(&mut self, path: &str, src: &str, var: &str, what: &str) -> Option<Expr>;
-    /// The columns `x` and `y` of the CSV file `file` (relative to the model's folder), for the
-    /// entry at `path`.
-    fn csv_columns(&mut self, path: &str, file: &str, x: &str, y: &str) -> Option<(Vec<f64>, Vec<f64>)>;
+/// The [`Context`] of a joint or a driver: it also compiles general constraints and checks a
+/// joint's friction.
+pub(crate) trait JointContext: Context {
     /// A general constraint `src = 0` at `path`: an expression of `<body>.x, .y, .phi` and `t`.
     fn coordinate_constraint(&mut self, path: &str, src: &str) -> Option<GeneralConstraint>;
-    /// A driver's function of time `t` at `path`, of parameters and tables.
-    fn time_function(&mut self, path: &str, src: &str) -> Option<TimeFunction>;
-
-    /// Report `msg` at `path`.
-    fn problem(&mut self, path: impl Into<String>, msg: impl Into<String>) {
-        self.problems().push(Problem::new(path, msg));
-    }
-
-    /// `v`, or a problem at `path` when it is not finite.
-    fn finite(&mut self, path: &str, v: f64) -> Option<f64> {
-        finite(self.problems(), path, v)
-    }
-
-    /// `v`, or a problem at `path` when it is not a finite number above zero.
-    fn positive(&mut self, path: &str, v: f64) -> Option<f64> {
-        positive(self.problems(), path, v)
-    }
-
-    /// `v`, or a problem at `path` when it is not a finite number at or above zero.
-    fn non_negative(&mut self, path: &str, v: f64) -> Option<f64> {
-        let v = self.finite(path, v)?;
-        if v < 0.0 {
-            self.problem(path, format!("expected a number >= 0, found {v}"));
-            return None;
-        }
-        Some(v)
-    }
-
-    /// `[x, y]` at `path`, both finite.
-    fn vec2(&mut self, path: &str, v: [f64; 2]) -> Option<[f64; 2]> {
-        let a = self.finite(&format!("{path}[0]"), v[0]);
-        let b = self.finite(&format!("{path}[1]"), v[1]);
-        Some([a?, b?])
-    }
-
-    /// A direction at `path`: finite and not zero.
-    fn axis(&mut self, path: &str, v: [f64; 2]) -> Option<[f64; 2]> {
-        let v = self.vec2(path, v)?;
-        // Below 1e-12 the direction is round-off, not a length a drawing gives.
-        if v[0].hypot(v[1]) < 1e-12 {
-            self.problem(path, "zero-length axis: expected a non-zero direction [x, y]");
-            return None;
-        }
-        Some(v)
-    }
-
-    /// A body and one of its points, both resolved.
-    fn body_point(&mut self, path: &str, bfield: &str, body: &str, pfield: &str, p: &PointRef) -> Option<End> {
-        let b = self.body(&format!("{path}.{bfield}"), body);
-        let s = self.point(&format!("{path}.{pfield}"), body, p);
-        Some((b?, s?))
-    }
-
-    /// The two ends of an element between two bodies (`body_i`, `point_i`, `body_j`, `point_j`
-    /// at `path`), resolved; a problem at `body_j` when both are the same body. An element between
-    /// the bodies themselves (a torque, a relative angle) takes their origins.
-    fn ends(
-        &mut self,
-        path: &str,
-        body_i: &str,
-        point_i: &PointRef,
-        body_j: &str,
-        point_j: &PointRef,
-    ) -> Option<[End; 2]> {
-        let a = self.body_point(path, "body_i", body_i, "point_i", point_i);
-        let b = self.body_point(path, "body_j", body_j, "point_j", point_j);
-        if body_i == body_j {
-            let message = format!("a joint needs two different bodies, found '{body_i}' twice");
-            self.problem(format!("{path}.body_j"), message);
-            return None;
-        }
-        Some([a?, b?])
-    }
-
-    /// A moving body and one of its points (`body`, `point` at `path`), resolved; ground is
-    /// refused, as what cannot be `verb` ("constrained", "driven").
-    fn moving_point(&mut self, path: &str, body: &str, point: &PointRef, verb: &str) -> Option<End> {
-        let (b, s) = self.body_point(path, "body", body, "point", point)?;
-        if b == BodyIx::GROUND {
-            self.problem(format!("{path}.body"), format!("ground cannot be {verb}; name a moving body"));
-            return None;
-        }
-        Some((b, s))
-    }
-
-    /// The distance between two body points in the initial guess, m.
-    fn initial_distance(&self, [(i, sp), (j, sq)]: [End; 2]) -> f64 {
-        let (p, r) = (Frame::of_slice(i, self.q0()).point(sp), Frame::of_slice(j, self.q0()).point(sq));
-        (r[0] - p[0]).hypot(r[1] - p[1])
-    }
 
     /// The coefficient and transition velocity of the `friction:` mapping at `path`, checked.
     fn friction_law(&mut self, path: &str, mu: f64, transition_velocity: Option<f64>) -> Option<FrictionLaw> {
@@ -322,72 +27,36 @@ pub(crate) trait Context {
         Some(FrictionLaw { mu: mu?, transition_velocity: v_s? })
     }
 
-    /// The two points of a joint at `path` that coincide at the initial position: `point_i` and
-    /// `point_j` as given, or both from `at`, the global point, in each body's frame.
-    fn placed_points(
+    /// The `friction:` mapping at `path` of a joint that has one, checked: its law, and its size
+    /// (`field`: the pin's radius, the block's length) `> 0`. `None` when either is bad.
+    fn sized_friction(
         &mut self,
         path: &str,
-        bodies: [&str; 2],
-        points: [&Option<PointRef>; 2],
-        at: &Option<[f64; 2]>,
-    ) -> Option<(PointRef, PointRef)> {
-        match (at, points) {
-            (Some(_), [Some(_), _] | [_, Some(_)]) => {
-                self.problem(format!("{path}.at"), "give at (global) or point_i and point_j (body frames), not both");
-                None
-            }
-            (Some(at), _) => {
-                let at = self.vec2(&format!("{path}.at"), *at)?;
-                // An unknown body is reported where the joint names it (`ends`).
-                let [pi, pj] = bodies.map(|b| self.initial_frame(b).map_or([0.0; 2], |f| f.local(at)));
-                self.place(format!("{path}.point_i"), pi);
-                self.place(format!("{path}.point_j"), pj);
-                Some((PointRef::Coords(pi), PointRef::Coords(pj)))
-            }
-            (None, [Some(pi), Some(pj)]) => Some((pi.clone(), pj.clone())),
-            (None, [pi, _]) => {
-                let field = if pi.is_none() { "point_i" } else { "point_j" };
-                self.problem(
-                    format!("{path}.{field}"),
-                    "missing: give point_i and point_j (body frames), or at: [x, y] (the global point)",
-                );
-                None
-            }
-        }
+        mu: f64,
+        transition_velocity: Option<f64>,
+        (field, size): (&str, f64),
+    ) -> Option<(FrictionLaw, f64)> {
+        let at = format!("{path}.friction");
+        let law = self.friction_law(&at, mu, transition_velocity);
+        let size = self.positive(&format!("{at}.{field}"), size);
+        Some((law?, size?))
     }
+}
 
-    /// The directions of a joint at `path`, each `(field, body, value)`: as given, or all from
-    /// `axis`, the global direction at the initial position, in each body's frame.
-    fn placed_axes<const N: usize>(
-        &mut self,
-        path: &str,
-        fields: [(&str, &str, &Option<[f64; 2]>); N],
-        axis: &Option<[f64; 2]>,
-    ) -> Option<[[f64; 2]; N]> {
-        let names = fields.map(|(f, _, _)| f).join(" and ");
-        match axis {
-            Some(_) if fields.iter().any(|(_, _, v)| v.is_some()) => {
-                self.problem(format!("{path}.axis"), format!("give axis (global) or {names} (body frames), not both"));
-                None
-            }
-            Some(a) => {
-                let a = self.axis(&format!("{path}.axis"), *a)?;
-                // An unknown body is reported where the joint names it.
-                let local = fields.map(|(_, b, _)| self.initial_frame(b).map_or(a, |f| f.unrotate(a)));
-                for ((field, _, _), v) in fields.iter().zip(&local) {
-                    self.place(format!("{path}.{field}"), *v);
-                }
-                Some(local)
-            }
-            None => {
-                if let Some((field, _, _)) = fields.iter().find(|(_, _, v)| v.is_none()) {
-                    let message =
-                        format!("missing: give {names} (body frames), or axis: [x, y] (the global direction)");
-                    self.problem(format!("{path}.{field}"), message);
-                    return None;
-                }
-                Some(fields.map(|(_, _, v)| v.unwrap_or_default()))
-            }
+/// A joint compiled with its friction: `joint`, and, when it has a `friction:` mapping (`law`,
+/// checked by [`JointContext::sized_friction`]), the friction `make` builds from its law and size;
+/// `None` when the mapping was bad.
+pub(crate) fn with_friction<J: Constraint + 'static>(
+    joint: J,
+    law: Option<Option<(FrictionLaw, f64)>>,
+    make: impl FnOnce(&J, FrictionLaw, f64) -> Friction,
+) -> Option<CompiledJoint> {
+    let friction = match law {
+        Some(law) => {
+            let (law, size) = law?;
+            Some(make(&joint, law, size))
         }
-    }
+        None => None,
+    };
+    Some((Box::new(joint), friction))
 }

@@ -18,9 +18,10 @@
 //! takes the whole turns from the starting relative angle, so that a body written a turn away
 //! (`phi = 2 pi + 0.1` against the axes' `0.1`) stays on its branch. Haug (1989) section 3.3.2; Nikravesh (2018) section 7.1.
 
-use super::schema::{Context, PointRef};
+use super::schema::{with_friction, JointContext};
 use super::CompiledJoint;
 use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Friction, FrictionLaw, Pair, Projection, Shape, Sketch};
+use crate::element::fields;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -107,41 +108,22 @@ pub struct SlideFriction {
     pub transition_velocity: Option<f64>,
 }
 
-/// Prismatic: `point_j` of `body_j` slides on the line of `body_i` through `point_i` along
-/// `axis_i`, and the bodies keep the relative angle that makes `axis_i` and `axis_j` parallel.
-/// 2 equations.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct TranslationalJoint {
-    /// Body carrying the line.
-    pub body_i: String,
-    /// A point of the line, body i frame (or `at`).
-    #[serde(default)]
-    pub point_i: Option<PointRef>,
-    /// Direction of the line, body i frame, any non-zero length (or `axis`).
-    #[serde(default)]
-    pub axis_i: Option<[f64; 2]>,
-    /// The sliding body.
-    pub body_j: String,
-    /// The point of body j that stays on the line (or `at`).
-    #[serde(default)]
-    pub point_j: Option<PointRef>,
-    /// Direction in body j that stays parallel to `axis_i` (or `axis`).
-    #[serde(default)]
-    pub axis_j: Option<[f64; 2]>,
-    /// A global point of the line at the initial position, m, instead of `point_i` and `point_j`.
-    #[serde(default)]
-    pub at: Option<[f64; 2]>,
-    /// The line's global direction at the initial position, instead of `axis_i` and `axis_j`.
-    #[serde(default)]
-    pub axis: Option<[f64; 2]>,
-    /// Coulomb friction in the slider.
-    #[serde(default)]
-    pub friction: Option<SlideFriction>,
+fields! {
+    /// Prismatic: `point_j` of `body_j` slides on the line of `body_i` through `point_i` along
+    /// `axis_i`, and the bodies keep the relative angle that makes `axis_i` and `axis_j` parallel.
+    /// 2 equations.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(deny_unknown_fields)]
+    pub struct TranslationalJoint {
+        [body_i, point_i?, axis_i?, body_j, point_j?, axis_j?, at, axis,]
+        /// Coulomb friction in the slider.
+        #[serde(default)]
+        pub friction: Option<SlideFriction>,
+    }
 }
 
 /// A translational joint at `path` compiled in `cx`, with its friction.
-pub(crate) fn compile(spec: &TranslationalJoint, cx: &mut impl Context, path: &str) -> Option<CompiledJoint> {
+pub(crate) fn compile(spec: &TranslationalJoint, cx: &mut impl JointContext, path: &str) -> Option<CompiledJoint> {
     let TranslationalJoint { body_i, point_i, axis_i, body_j, point_j, axis_j, at, axis, friction: slide } = spec;
     let points = cx.placed_points(path, [body_i, body_j], [point_i, point_j], at);
     let axes = cx.placed_axes(path, [("axis_i", body_i, axis_i), ("axis_j", body_j, axis_j)], axis);
@@ -149,18 +131,10 @@ pub(crate) fn compile(spec: &TranslationalJoint, cx: &mut impl Context, path: &s
     let ends = cx.ends(path, body_i, &pi, body_j, &pj);
     let vi = axes.and_then(|[ai, _]| cx.axis(&format!("{path}.axis_i"), ai));
     let vj = axes.and_then(|[_, aj]| cx.axis(&format!("{path}.axis_j"), aj));
-    let law = slide.as_ref().map(|f| {
-        let at = format!("{path}.friction");
-        (cx.friction_law(&at, f.mu, f.transition_velocity), cx.positive(&format!("{at}.length"), f.length))
-    });
+    let law = slide.as_ref().map(|f| cx.sized_friction(path, f.mu, f.transition_velocity, ("length", f.length)));
     let (_, [(i, sp), (j, sq)], vi, vj) = (points?, ends?, vi?, vj?);
     let relative = i.coords(cx.q0())[2] - j.coords(cx.q0())[2];
-    let joint = Translational::new(i, sp, vi, j, sq, vj).near(relative);
-    let friction = match law {
-        Some((law, length)) => Some(joint.friction(law?, length?)),
-        None => None,
-    };
-    Some((Box::new(joint), friction))
+    with_friction(Translational::new(i, sp, vi, j, sq, vj).near(relative), law, Translational::friction)
 }
 
 #[cfg(test)]

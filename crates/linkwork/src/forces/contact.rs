@@ -18,8 +18,11 @@
 //! vanishes at first touch and at separation, and the clamp keeps it from pulling as the bodies
 //! part. Polylines are two-sided: the penetration must stay below the circle's radius.
 
-use super::{cross, layout, rotate, ForceLaw, Local};
+use super::{cross, layout, rotate, Force, ForceContext, ForceLaw, Local};
+use crate::element::{BodyIx, Context, DEFAULT_TRANSITION_VELOCITY};
 use crate::expr::Scalar;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// The shape of body b.
 #[derive(Debug, Clone, PartialEq)]
@@ -280,6 +283,194 @@ impl ForceLaw for Contact {
     fn contact(&self) -> Option<&Contact> {
         Some(self)
     }
+}
+
+/// The exponent of a contact's penetration when none is given: 1.5, Hertz's for two cylinders'
+/// ends or spheres, the usual choice (Lankarani and Nikravesh 1990).
+pub const DEFAULT_CONTACT_EXPONENT: f64 = 1.5;
+
+/// A contact's `max_penetration` when none is given, as a fraction of the smallest radius of the
+/// pair: 1e-3. A step into first contact then ends at most that deep, where the force is a small
+/// fraction of its peak in any impact that deforms the shapes less than their size.
+pub const DEFAULT_PENETRATION_FRACTION: f64 = 1e-3;
+
+/// Unilateral contact between shapes fixed to two bodies (one may be ground); one of the shapes is
+/// a circle. The normal force is `k delta^n (1 + c ddelta/dt)`, never negative, `delta` the
+/// penetration; the friction `mu tanh(v_t / v_s)` times it opposes the slip `v_t`.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// First body (or ground).
+    pub body_i: String,
+    /// The shape fixed to the first body, in its frame.
+    pub shape_i: ShapeSpec,
+    /// Second body (or ground).
+    pub body_j: String,
+    /// The shape fixed to the second body, in its frame.
+    pub shape_j: ShapeSpec,
+    /// Contact stiffness `k`, N/m^n, `> 0`.
+    pub stiffness: f64,
+    /// Exponent `n` of the penetration, `>= 1`. Default 1.5 (Hertz).
+    #[serde(default)]
+    pub exponent: Option<f64>,
+    /// Hunt-Crossley hysteresis damping factor `c`, s/m, `>= 0`. Default 0 (elastic).
+    #[serde(default)]
+    pub damping: f64,
+    /// Coulomb friction at the contact point. Default: none.
+    #[serde(default)]
+    pub friction: Option<ContactFriction>,
+    /// Penetration at which a step that begins separated and ends in contact is rejected and
+    /// retried shorter, m, `> 0`. Default: 1e-3 of the smallest radius of the pair.
+    #[serde(default)]
+    pub max_penetration: Option<f64>,
+}
+
+/// A shape fixed to a body, in the body's frame (points relative to its reference): exactly one
+/// of `circle`, `segment`, `polyline`.
+#[derive(Debug, Clone, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ShapeSpec {
+    /// A circle (a disc's rim).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub circle: Option<CircleShape>,
+    /// A segment between two points.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segment: Option<[[f64; 2]; 2]>,
+    /// A chain of segments through two or more points.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub polyline: Option<Vec<[f64; 2]>>,
+}
+
+/// A circle fixed to a body.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CircleShape {
+    /// Centre, body frame, m. Default: the body's reference `[0, 0]`.
+    #[serde(default)]
+    pub centre: [f64; 2],
+    /// Radius, m, `> 0`.
+    pub radius: f64,
+}
+
+/// Coulomb friction at a contact: `mu tanh(v_t / v_s)` times the normal force, opposing the
+/// slip velocity `v_t`.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ContactFriction {
+    /// Coefficient of friction, `>= 0`.
+    pub mu: f64,
+    /// Slip velocity at which the coefficient reaches `tanh(1) = 76%` of `mu`, m/s, `> 0`;
+    /// default 0.001.
+    #[serde(default)]
+    pub transition_velocity: Option<f64>,
+}
+
+/// A contact at `path` compiled in `cx`: its bodies, shapes (one a circle), normal law, friction and event depth.
+pub(crate) fn compile(spec: &ContactSpec, cx: &mut impl ForceContext, path: &str) -> Option<Box<dyn Force>> {
+    let bi = cx.body(&format!("{path}.body_i"), &spec.body_i);
+    let bj = cx.body(&format!("{path}.body_j"), &spec.body_j);
+    if spec.body_i == spec.body_j {
+        let message = format!("a contact needs two different bodies, found '{}' twice", spec.body_i);
+        cx.problem(format!("{path}.body_j"), message);
+    }
+    let si = shape(cx, &format!("{path}.shape_i"), &spec.shape_i);
+    let sj = shape(cx, &format!("{path}.shape_j"), &spec.shape_j);
+    let k = cx.positive(&format!("{path}.stiffness"), spec.stiffness);
+    let e = match spec.exponent {
+        Some(e) => cx.finite(&format!("{path}.exponent"), e).and_then(|e| {
+            if e < 1.0 {
+                cx.problem(
+                    format!("{path}.exponent"),
+                    format!(
+                        "expected a number >= 1 (the force's derivative is infinite at first touch below 1), found {e}"
+                    ),
+                );
+                return None;
+            }
+            Some(e)
+        }),
+        None => Some(DEFAULT_CONTACT_EXPONENT),
+    };
+    let c = cx.non_negative(&format!("{path}.damping"), spec.damping);
+    let friction = match &spec.friction {
+        Some(ContactFriction { mu, transition_velocity }) => {
+            let mu = cx.non_negative(&format!("{path}.friction.mu"), *mu);
+            let v_s = match transition_velocity {
+                Some(v) => cx.positive(&format!("{path}.friction.transition_velocity"), *v),
+                None => Some(DEFAULT_TRANSITION_VELOCITY),
+            };
+            mu.zip(v_s)
+        }
+        None => Some((0.0, DEFAULT_TRANSITION_VELOCITY)),
+    };
+    let depth = spec.max_penetration.map(|d| cx.positive(&format!("{path}.max_penetration"), d));
+    let (bi, bj, si, sj, k, e, c, friction) = (bi?, bj?, si?, sj?, k?, e?, c?, friction?);
+    if bi == BodyIx::GROUND && bj == BodyIx::GROUND {
+        cx.problem(format!("{path}.body_j"), "both shapes are on ground: name a moving body");
+        return None;
+    }
+    let ((a, (centre, radius)), (b, other)) = match (si, sj) {
+        (Shape::Circle(centre, radius), other) => ((bi, (centre, radius)), (bj, other)),
+        (other, Shape::Circle(centre, radius)) => ((bj, (centre, radius)), (bi, other)),
+        _ => {
+            cx.problem(
+                format!("{path}.shape_j"),
+                "a contact between two segments or polylines is not supported; expected a circle on one of the bodies",
+            );
+            return None;
+        }
+    };
+    let smallest = match other {
+        Shape::Circle(_, r) => radius.min(r),
+        Shape::Polyline(_) => radius,
+    };
+    let depth = match depth {
+        Some(d) => d?,
+        None => DEFAULT_PENETRATION_FRACTION * smallest,
+    };
+    Some(Box::new(Contact::new(a.0, centre, radius, b.0, other, (k, e, c), friction, depth)))
+}
+
+/// A contact shape, in its body's frame.
+fn shape(cx: &mut impl Context, path: &str, spec: &ShapeSpec) -> Option<Shape> {
+    match (&spec.circle, &spec.segment, &spec.polyline) {
+        (Some(CircleShape { centre, radius }), None, None) => {
+            let c = cx.vec2(&format!("{path}.circle.centre"), *centre);
+            let r = cx.positive(&format!("{path}.circle.radius"), *radius);
+            Some(Shape::Circle(c?, r?))
+        }
+        (None, Some(points), None) => polyline(cx, &format!("{path}.segment"), points),
+        (None, None, Some(points)) => polyline(cx, &format!("{path}.polyline"), points),
+        _ => {
+            cx.problem(path, "expected exactly one of circle, segment, polyline");
+            None
+        }
+    }
+}
+
+/// A chain of two or more points, each segment of positive length.
+fn polyline(cx: &mut impl Context, path: &str, points: &[[f64; 2]]) -> Option<Shape> {
+    if points.len() < 2 {
+        cx.problem(path, format!("expected two or more points, found {}", points.len()));
+        return None;
+    }
+    let mut ok = true;
+    for (k, p) in points.iter().enumerate() {
+        ok &= cx.vec2(&format!("{path}[{k}]"), *p).is_some();
+    }
+    if !ok {
+        return None;
+    }
+    for (k, w) in points.windows(2).enumerate() {
+        if (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]) < 1e-12 {
+            cx.problem(
+                format!("{path}[{}]", k + 1),
+                format!("the point repeats point {k}: a segment needs two distinct ends"),
+            );
+            ok = false;
+        }
+    }
+    ok.then(|| Shape::Polyline(points.to_vec()))
 }
 
 #[cfg(test)]

@@ -11,12 +11,17 @@
 
 mod contact;
 mod point;
+mod registry;
+mod schema;
 mod spring;
 mod state_expr;
 
-pub use contact::{Contact, ContactState, Shape};
-pub use point::{PointLoad, Torque};
-pub use spring::{RotationalSpringDamper, SpringDamper};
+pub use contact::{CircleShape, Contact, ContactFriction, ContactSpec, ContactState, Shape, ShapeSpec};
+pub use point::{ForceFrame, PointForce, PointLoad, Torque, TorqueSpec};
+pub use registry::ForceSpec;
+pub(crate) use schema::ForceContext;
+pub use schema::Quantity;
+pub use spring::{RotationalSpringDamper, RotationalSpringDamperSpec, SpringDamper, SpringDamperSpec};
 pub use state_expr::{Load, StateExpr, StateVar};
 
 use crate::expr::{Dual, Scalar};
@@ -45,6 +50,11 @@ pub trait ForceLaw: Debug + Send + Sync {
     fn contact(&self) -> Option<&Contact> {
         None
     }
+    /// Whether it is a load applied as such to one body (a force or torque), rather than a force
+    /// element between bodies (a mechanical advantage reads only those). No by default.
+    fn applied(&self) -> bool {
+        false
+    }
 }
 
 /// An applied force or force element, object-safe (see [`ForceLaw`]).
@@ -65,6 +75,8 @@ pub trait Force: Debug + Send + Sync {
     fn contact(&self) -> Option<&Contact>;
     /// Whether all its work is the change of its potential.
     fn conservative(&self) -> bool;
+    /// Whether it is a load applied as such to one body ([`ForceLaw::applied`]).
+    fn applied(&self) -> bool;
 }
 
 impl<T: ForceLaw> Force for T {
@@ -91,6 +103,9 @@ impl<T: ForceLaw> Force for T {
     }
     fn conservative(&self) -> bool {
         ForceLaw::conservative(self)
+    }
+    fn applied(&self) -> bool {
+        ForceLaw::applied(self)
     }
 }
 

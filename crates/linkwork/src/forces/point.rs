@@ -8,8 +8,11 @@
 //! ```
 //! The moment term is `dr_P/dphi . f = (B_i s'_P) . f = (A_i s'_P) x f` (Haug 1989 section 6.2).
 
-use super::{cross, layout, rotate, ForceLaw, Load, Local};
+use super::{cross, layout, rotate, Force, ForceContext, ForceLaw, Load, Local, Quantity};
+use crate::element::PointRef;
 use crate::expr::Scalar;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// A force at a point of a body.
 #[derive(Debug, Clone)]
@@ -51,6 +54,9 @@ impl ForceLaw for PointLoad {
     fn potential<S: Scalar>(&self, _x: &[S]) -> S {
         S::constant(0.0)
     }
+    fn applied(&self) -> bool {
+        true
+    }
     fn expressions(&self) -> Vec<(&'static str, &str)> {
         [("fx", &self.fx), ("fy", &self.fy)].into_iter().filter_map(|(k, l)| Some((k, l.source()?))).collect()
     }
@@ -81,12 +87,73 @@ impl ForceLaw for Torque {
         let zero = S::constant(0.0);
         self.body.add(out, [zero, zero, self.torque.value(x, v, t)]);
     }
+    fn applied(&self) -> bool {
+        true
+    }
     fn expressions(&self) -> Vec<(&'static str, &str)> {
         self.torque.source().map(|s| ("torque", s)).into_iter().collect()
     }
     fn potential<S: Scalar>(&self, _x: &[S]) -> S {
         S::constant(0.0)
     }
+}
+
+/// The frame a force's components are given in.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ForceFrame {
+    /// The global frame (the force keeps its direction as the body turns).
+    #[default]
+    Global,
+    /// The body's frame (the force turns with the body, a follower force).
+    Body,
+}
+
+/// A force at a point of a body.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PointForce {
+    /// The body the force acts on.
+    pub body: String,
+    /// Where it acts (default: the centre of mass).
+    #[serde(default)]
+    pub point: PointRef,
+    /// The frame of `fx` and `fy`. Default: global.
+    #[serde(default)]
+    pub frame: ForceFrame,
+    /// x component, N. Default 0.
+    #[serde(default)]
+    pub fx: Quantity,
+    /// y component, N. Default 0.
+    #[serde(default)]
+    pub fy: Quantity,
+}
+
+/// A torque on a body.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TorqueSpec {
+    /// The body.
+    pub body: String,
+    /// Torque, N m, counter-clockwise positive.
+    pub torque: Quantity,
+}
+
+/// A force at `path` compiled in `cx`.
+pub(crate) fn compile_force(spec: &PointForce, cx: &mut impl ForceContext, path: &str) -> Option<Box<dyn Force>> {
+    let PointForce { body, point, frame, fx, fy } = spec;
+    let b = cx.moving(&format!("{path}.body"), body);
+    let s = cx.point(&format!("{path}.point"), body, point);
+    let fx = cx.load(&format!("{path}.fx"), fx);
+    let fy = cx.load(&format!("{path}.fy"), fy);
+    Some(Box::new(PointLoad::new(b?, s?, *frame == ForceFrame::Body, fx?, fy?)))
+}
+
+/// A torque at `path` compiled in `cx`.
+pub(crate) fn compile_torque(spec: &TorqueSpec, cx: &mut impl ForceContext, path: &str) -> Option<Box<dyn Force>> {
+    let b = cx.moving(&format!("{path}.body"), &spec.body);
+    let t = cx.load(&format!("{path}.torque"), &spec.torque);
+    Some(Box::new(Torque::new(b?, t?)))
 }
 
 #[cfg(test)]

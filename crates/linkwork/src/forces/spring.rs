@@ -10,8 +10,12 @@
 //! ```
 //! A point's velocity is `rdot + omega R90 A s'`.
 
-use super::{cross, layout, rotate, ForceLaw, Load, Local};
+use super::{cross, layout, rotate, Force, ForceContext, ForceLaw, Load, Local, Quantity};
+use crate::element::fields;
+use crate::element::PointRef;
 use crate::expr::Scalar;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// Translational spring-damper-actuator between point `s_p` of body i and `s_q` of body j.
 #[derive(Debug, Clone)]
@@ -135,6 +139,88 @@ impl ForceLaw for RotationalSpringDamper {
         let e = self.i.pose(x)[2] - self.j.pose(x)[2] - S::constant(self.free_angle);
         S::constant(0.5 * self.stiffness) * e * e
     }
+}
+
+fields! {
+    /// Translational spring-damper-actuator between two points.
+    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+    #[serde(deny_unknown_fields)]
+    pub struct SpringDamperSpec {
+        [body_i, point_i, body_j, point_j,]
+        /// Stiffness, N/m. Default 0.
+        #[serde(default)]
+        pub stiffness: f64,
+        /// Damping, N s/m. Default 0.
+        #[serde(default)]
+        pub damping: f64,
+        /// Length at which the spring exerts no force, m. Default: the distance in the initial guess.
+        #[serde(default)]
+        pub free_length: Option<f64>,
+        /// Actuator force pushing the points apart, N: a number or an expression. Default 0.
+        #[serde(default)]
+        pub actuator: Quantity,
+    }
+}
+
+/// Rotational spring-damper-actuator between two bodies (or a body and ground).
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RotationalSpringDamperSpec {
+    /// First body (the torque is reported on it).
+    pub body_i: String,
+    /// Second body.
+    pub body_j: String,
+    /// Stiffness, N m/rad. Default 0.
+    #[serde(default)]
+    pub stiffness: f64,
+    /// Damping, N m s/rad. Default 0.
+    #[serde(default)]
+    pub damping: f64,
+    /// Relative angle `phi_i - phi_j` at which the spring exerts no torque, rad. Default: its
+    /// value in the initial guess.
+    #[serde(default)]
+    pub free_angle: Option<f64>,
+    /// Actuator torque on `body_i` (its opposite on `body_j`), N m: a number or an expression.
+    /// Default 0.
+    #[serde(default)]
+    pub actuator: Quantity,
+}
+
+/// A spring-damper at `path` compiled in `cx`; its free length defaults to the initial distance.
+pub(crate) fn compile(spec: &SpringDamperSpec, cx: &mut impl ForceContext, path: &str) -> Option<Box<dyn Force>> {
+    let SpringDamperSpec { body_i, point_i, body_j, point_j, stiffness, damping, free_length, actuator } = spec;
+    let ends = cx.ends(path, body_i, point_i, body_j, point_j);
+    let k = cx.non_negative(&format!("{path}.stiffness"), *stiffness);
+    let c = cx.non_negative(&format!("{path}.damping"), *damping);
+    let act = cx.load(&format!("{path}.actuator"), actuator);
+    let (ends, k, c, act) = (ends?, k?, c?, act?);
+    let [(i, sp), (j, sq)] = ends;
+    let l0 = match free_length {
+        Some(l) => cx.non_negative(&format!("{path}.free_length"), *l)?,
+        None => cx.initial_distance(ends),
+    };
+    Some(Box::new(SpringDamper::new(i.0, sp, j.0, sq, k, c, l0, act)))
+}
+
+/// A rotational spring-damper at `path` compiled in `cx`; its free angle defaults to the initial
+/// relative angle.
+pub(crate) fn compile_rotational(
+    spec: &RotationalSpringDamperSpec,
+    cx: &mut impl ForceContext,
+    path: &str,
+) -> Option<Box<dyn Force>> {
+    let RotationalSpringDamperSpec { body_i, body_j, stiffness, damping, free_angle, actuator } = spec;
+    let origin = PointRef::default();
+    let ends = cx.ends(path, body_i, &origin, body_j, &origin);
+    let k = cx.non_negative(&format!("{path}.stiffness"), *stiffness);
+    let c = cx.non_negative(&format!("{path}.damping"), *damping);
+    let act = cx.load(&format!("{path}.actuator"), actuator);
+    let ([(i, _), (j, _)], k, c, act) = (ends?, k?, c?, act?);
+    let theta0 = match free_angle {
+        Some(a) => cx.finite(&format!("{path}.free_angle"), *a)?,
+        None => i.coords(cx.q0())[2] - j.coords(cx.q0())[2],
+    };
+    Some(Box::new(RotationalSpringDamper::new(i.0, j.0, k, c, theta0, act)))
 }
 
 #[cfg(test)]

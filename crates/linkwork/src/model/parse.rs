@@ -327,28 +327,35 @@ fn summary(path: &str, v: &Value, problems: &mut Vec<Problem>) -> Option<String>
     None
 }
 
-/// The joint types that take a `friction:` mapping.
-const FRICTION_TYPES: [&str; 2] = ["revolute", "translational"];
+/// The joint types that take a `friction:` mapping: those whose fields include one, read from
+/// the registry's schema (so a new joint with friction needs no line here).
+fn friction_types() -> Vec<String> {
+    let schema = serde_json::to_value(schemars::schema_for!(JointSpec)).expect("a schema is JSON");
+    let kinds = schema["oneOf"].as_array().into_iter().flatten();
+    kinds
+        .filter(|kind| kind["properties"].get("friction").is_some())
+        .filter_map(|kind| kind["properties"]["type"]["const"].as_str().map(String::from))
+        .collect()
+}
 
 /// A joint: a [`tagged`] entry, whose `friction:` on a type that has none is reported as that
 /// rather than as an unknown field (the rest of the joint is read without it).
 fn joint(path: &str, v: &Value, problems: &mut Vec<Problem>) -> Option<JointSpec> {
-    let kind = v.get("type").and_then(Value::as_str);
-    match (v, kind) {
-        (Value::Mapping(map), Some(kind)) if map.contains_key("friction") && !FRICTION_TYPES.contains(&kind) => {
+    if let (Value::Mapping(map), Some(kind)) = (v, v.get("type").and_then(Value::as_str)) {
+        if map.contains_key("friction") && !friction_types().iter().any(|t| t == kind) {
             problems.push(Problem::new(
                 format!("{path}.friction"),
                 format!(
                     "a {kind} joint has no friction model; friction is supported on {} joints",
-                    FRICTION_TYPES.join(" and ")
+                    friction_types().join(" and ")
                 ),
             ));
             let mut rest = map.clone();
             rest.remove("friction");
-            tagged::<JointSpec>()(path, &Value::Mapping(rest), problems)
+            return tagged::<JointSpec>()(path, &Value::Mapping(rest), problems);
         }
-        _ => tagged::<JointSpec>()(path, v, problems),
     }
+    tagged::<JointSpec>()(path, v, problems)
 }
 
 /// An entry of a section whose entries name their kind in `type`: the kind read here and the

@@ -13,8 +13,8 @@
 
 use super::compile::{it_has, unknown_body};
 use super::spec::{ByLengths, ModelSpec, PointRef, PointSpec, Side};
-use crate::constraints::finite;
 use crate::constraints::Frame;
+use crate::element::finite;
 use crate::error::Problem;
 use indexmap::IndexMap;
 use std::collections::HashMap;

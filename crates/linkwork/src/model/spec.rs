@@ -1,14 +1,19 @@
 //! The model file schema: plain serde types, one per section, mirrored by the JSON Schema that
 //! `linkwork schema` prints. Units are SI and angles radians throughout. Each joint's fields are
-//! its module's, in `constraints` ([`JointSpec`] lists them); checks beyond types (names that
-//! must exist, finite numbers, non-zero axes) are the compiler's (`compile.rs`).
+//! its module's, in `constraints` ([`JointSpec`] lists them), and each force element's its
+//! module's in `forces` ([`ForceSpec`]); checks beyond types (names that
+//! must exist, finite numbers, non-zero axes) are the compiler's (`compile`) and the elements' compile steps.
 
-use crate::constraints::{named, pair};
 pub use crate::constraints::{
     AbsoluteAngleJoint, AbsolutePoint, AngleDriver, CamJoint, CamProfileSpec, DistanceDriver, DistanceJoint,
     DriverSpec, ExpressionJoint, GearJoint, JointSpec, PinFriction, PointDriver, PointOnLineJoint, PointRef,
     ProfileColumn, RelativeAngleDriver, RevoluteJoint, RevoluteTranslationalJoint, RollingJoint, SlideFriction, Tagged,
     TranslationalJoint,
+};
+use crate::element::{named, pair};
+pub use crate::forces::{
+    CircleShape, ContactFriction, ContactSpec, ForceFrame, ForceSpec, PointForce, Quantity, RotationalSpringDamperSpec,
+    ShapeSpec, SpringDamperSpec, TorqueSpec,
 };
 use indexmap::IndexMap;
 use schemars::JsonSchema;
@@ -88,49 +93,6 @@ pub struct ModelSpec {
     pub analyses: IndexMap<String, AnalysisSpec>,
 }
 
-/// A number, or an expression of time `t` and the state (`crank.phi`, `crank.omega`,
-/// `slider_d.vx`: `<body>.x, .y, .phi, .vx, .vy, .omega`).
-#[derive(Debug, Clone, Serialize, JsonSchema)]
-#[serde(untagged)]
-pub enum Quantity {
-    /// A constant.
-    Number(f64),
-    /// An expression such as `"-20*crank.omega + 100*sin(t)"`.
-    Expression(String),
-}
-
-impl Default for Quantity {
-    fn default() -> Self {
-        Quantity::Number(0.0)
-    }
-}
-
-/// Read by hand: an untagged enum's error would lose the field's path.
-impl<'de> Deserialize<'de> for Quantity {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct Visitor;
-        impl serde::de::Visitor<'_> for Visitor {
-            type Value = Quantity;
-            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-                f.write_str("a number or an expression of t and the state, such as \"-20*crank.omega\"")
-            }
-            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Quantity, E> {
-                Ok(Quantity::Expression(v.to_string()))
-            }
-            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Quantity, E> {
-                Ok(Quantity::Number(v))
-            }
-            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Quantity, E> {
-                Ok(Quantity::Number(v as f64))
-            }
-            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Quantity, E> {
-                Ok(Quantity::Number(v as f64))
-            }
-        }
-        d.deserialize_any(Visitor)
-    }
-}
-
 /// The assembly mode of the dyad whose middle pin is the entry's joint.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -165,193 +127,6 @@ named! {
         /// assembly error.
         "strict" => Strict,
     }
-}
-
-named! {
-    tagged
-    /// An applied force or a force element.
-    #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-    #[serde(tag = "type")]
-    pub enum ForceSpec {
-        /// A force `[fx, fy]` at a point of a body, in the global frame or the body's frame; each
-        /// component a number or an expression of time and state.
-        "force" => Force(PointForce),
-        /// A torque on a body (counter-clockwise positive), a number or an expression.
-        "torque" => Torque(TorqueSpec),
-        /// Translational spring-damper-actuator between two points: the force pushing the points
-        /// apart is `-stiffness (l - free_length) - damping dl/dt + actuator`.
-        "spring_damper" => SpringDamper(SpringDamperSpec),
-        /// Rotational spring-damper-actuator between two bodies: the torque on `body_i` (its
-        /// opposite on `body_j`) is `-stiffness (theta - free_angle) - damping dtheta/dt + actuator`,
-        /// `theta = phi_i - phi_j`.
-        "rotational_spring_damper" => RotationalSpringDamper(RotationalSpringDamperSpec),
-        /// Unilateral contact between a circle and a circle, segment or polyline fixed to two
-        /// bodies: a Hunt-Crossley normal force and smoothed Coulomb friction
-        /// (docs/model-format.md, "Contact").
-        "contact" => Contact(ContactSpec),
-    }
-}
-
-/// The frame a force's components are given in.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum ForceFrame {
-    /// The global frame (the force keeps its direction as the body turns).
-    #[default]
-    Global,
-    /// The body's frame (the force turns with the body, a follower force).
-    Body,
-}
-
-/// A force at a point of a body.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct PointForce {
-    /// The body the force acts on.
-    pub body: String,
-    /// Where it acts (default: the centre of mass).
-    #[serde(default)]
-    pub point: PointRef,
-    /// The frame of `fx` and `fy`. Default: global.
-    #[serde(default)]
-    pub frame: ForceFrame,
-    /// x component, N. Default 0.
-    #[serde(default)]
-    pub fx: Quantity,
-    /// y component, N. Default 0.
-    #[serde(default)]
-    pub fy: Quantity,
-}
-
-/// A torque on a body.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct TorqueSpec {
-    /// The body.
-    pub body: String,
-    /// Torque, N m, counter-clockwise positive.
-    pub torque: Quantity,
-}
-
-/// Translational spring-damper-actuator between two points.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct SpringDamperSpec {
-    /// First body.
-    pub body_i: String,
-    /// Attachment on the first body.
-    pub point_i: PointRef,
-    /// Second body.
-    pub body_j: String,
-    /// Attachment on the second body.
-    pub point_j: PointRef,
-    /// Stiffness, N/m. Default 0.
-    #[serde(default)]
-    pub stiffness: f64,
-    /// Damping, N s/m. Default 0.
-    #[serde(default)]
-    pub damping: f64,
-    /// Length at which the spring exerts no force, m. Default: the distance in the initial guess.
-    #[serde(default)]
-    pub free_length: Option<f64>,
-    /// Actuator force pushing the points apart, N: a number or an expression. Default 0.
-    #[serde(default)]
-    pub actuator: Quantity,
-}
-
-/// Rotational spring-damper-actuator between two bodies (or a body and ground).
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct RotationalSpringDamperSpec {
-    /// First body (the torque is reported on it).
-    pub body_i: String,
-    /// Second body.
-    pub body_j: String,
-    /// Stiffness, N m/rad. Default 0.
-    #[serde(default)]
-    pub stiffness: f64,
-    /// Damping, N m s/rad. Default 0.
-    #[serde(default)]
-    pub damping: f64,
-    /// Relative angle `phi_i - phi_j` at which the spring exerts no torque, rad. Default: its
-    /// value in the initial guess.
-    #[serde(default)]
-    pub free_angle: Option<f64>,
-    /// Actuator torque on `body_i` (its opposite on `body_j`), N m: a number or an expression.
-    /// Default 0.
-    #[serde(default)]
-    pub actuator: Quantity,
-}
-
-/// Unilateral contact between shapes fixed to two bodies (one may be ground); one of the shapes is
-/// a circle. The normal force is `k delta^n (1 + c ddelta/dt)`, never negative, `delta` the
-/// penetration; the friction `mu tanh(v_t / v_s)` times it opposes the slip `v_t`.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct ContactSpec {
-    /// First body (or ground).
-    pub body_i: String,
-    /// The shape fixed to the first body, in its frame.
-    pub shape_i: ShapeSpec,
-    /// Second body (or ground).
-    pub body_j: String,
-    /// The shape fixed to the second body, in its frame.
-    pub shape_j: ShapeSpec,
-    /// Contact stiffness `k`, N/m^n, `> 0`.
-    pub stiffness: f64,
-    /// Exponent `n` of the penetration, `>= 1`. Default 1.5 (Hertz).
-    #[serde(default)]
-    pub exponent: Option<f64>,
-    /// Hunt-Crossley hysteresis damping factor `c`, s/m, `>= 0`. Default 0 (elastic).
-    #[serde(default)]
-    pub damping: f64,
-    /// Coulomb friction at the contact point. Default: none.
-    #[serde(default)]
-    pub friction: Option<ContactFriction>,
-    /// Penetration at which a step that begins separated and ends in contact is rejected and
-    /// retried shorter, m, `> 0`. Default: 1e-3 of the smallest radius of the pair.
-    #[serde(default)]
-    pub max_penetration: Option<f64>,
-}
-
-/// A shape fixed to a body, in the body's frame (points relative to its reference): exactly one
-/// of `circle`, `segment`, `polyline`.
-#[derive(Debug, Clone, Default, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct ShapeSpec {
-    /// A circle (a disc's rim).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub circle: Option<CircleShape>,
-    /// A segment between two points.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub segment: Option<[[f64; 2]; 2]>,
-    /// A chain of segments through two or more points.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub polyline: Option<Vec<[f64; 2]>>,
-}
-
-/// A circle fixed to a body.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct CircleShape {
-    /// Centre, body frame, m. Default: the body's reference `[0, 0]`.
-    #[serde(default)]
-    pub centre: [f64; 2],
-    /// Radius, m, `> 0`.
-    pub radius: f64,
-}
-
-/// Coulomb friction at a contact: `mu tanh(v_t / v_s)` times the normal force, opposing the
-/// slip velocity `v_t`.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct ContactFriction {
-    /// Coefficient of friction, `>= 0`.
-    pub mu: f64,
-    /// Slip velocity at which the coefficient reaches `tanh(1) = 76%` of `mu`, m/s, `> 0`;
-    /// default 0.001.
-    #[serde(default)]
-    pub transition_velocity: Option<f64>,
 }
 
 /// A named output: an expression of time and state (`"slider_d.x + 4"`; besides positions and

@@ -1,12 +1,13 @@
 //! [`ModelSpec`] => [`Model`]: check names, numbers and expressions (every problem, with its path),
-//! resolve names to indices and build each joint's constraint. The compiler [`Cx`] is the joints'
-//! and drivers' [`Context`] (each compiles itself in its `constraints` module); its other pieces
-//! are the sections' own: [`bodies`], [`expressions`], [`forces`], [`measures`], [`analyses`].
+//! resolve names to indices and build each element. The compiler [`Cx`] is every element's
+//! [`Context`], the joints' and drivers' [`JointContext`] (each compiles itself in its
+//! `constraints` module) and the force elements' [`ForceContext`] (each in its `forces` module);
+//! its other pieces are the sections' own: [`bodies`], [`expressions`], [`measures`],
+//! [`analyses`].
 
 mod analyses;
 mod bodies;
 mod expressions;
-mod forces;
 mod measures;
 
 pub(crate) use analyses::{revise, time_round_off};
@@ -18,17 +19,12 @@ use super::{
     Analysis, Body, Effort, Element, ForceElement, IntegratorSettings, Measure, MeasureKind, Model, PathPoint,
     SolverSettings, ENERGY_COLUMNS, INVERSE_COLUMNS, REACTION_QUANTITIES,
 };
-use crate::constraints::{
-    cam_row, finite, positive, BodyIx, Context, Frame, GeneralConstraint, Shape, Sketch, Var,
-    DEFAULT_TRANSITION_VELOCITY,
-};
+use crate::constraints::{cam_row, GeneralConstraint, JointContext, Shape, Sketch, Var};
+use crate::element::{finite, positive, BodyIx, Context, Frame};
 use crate::error::Problem;
 use crate::expr::functional::{Functional, TIME};
 use crate::expr::{Expr, Names, Spline, TimeFunction};
-use crate::forces::{
-    Contact, Force, Load, PointLoad, RotationalSpringDamper, Shape as ContactShape, SpringDamper, StateExpr, StateVar,
-    Torque,
-};
+use crate::forces::{ForceContext, StateExpr, StateVar};
 use indexmap::IndexMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -79,8 +75,8 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
         Some(Element { name: name.into(), kind: d.name(), constraint: d.compile(cx, path)?, friction: None })
     });
     let forces = cx.entries("forces", &spec.forces, |cx, name, path, f| {
-        let applied = matches!(f, ForceSpec::Force(..) | ForceSpec::Torque(..));
-        Some(ForceElement { name: name.into(), kind: f.name(), applied, force: cx.force(path, f)? })
+        let force = f.compile(cx, path)?;
+        Some(ForceElement { name: name.into(), kind: f.name(), applied: force.applied(), force })
     });
     let measures = cx.entries("measures", &spec.measures, |cx, name, path, m| {
         Some(Measure { name: name.into(), kind: cx.measure(path, m, &joints)? })
@@ -243,7 +239,7 @@ impl Cx<'_> {
     }
 }
 
-/// The joints' (and the other elements') [`Context`]: the model's bodies, points and names.
+/// Every element's [`Context`]: the model's bodies, points and names.
 impl Context for Cx<'_> {
     fn problems(&mut self) -> &mut Vec<Problem> {
         &mut self.problems
@@ -341,9 +337,19 @@ impl Context for Cx<'_> {
             }
         }
     }
+}
 
+/// The joints' and drivers' [`JointContext`]: general constraints of the model's coordinates.
+impl JointContext for Cx<'_> {
     fn coordinate_constraint(&mut self, path: &str, src: &str) -> Option<GeneralConstraint> {
         let var = |v: Option<(usize, usize)>| v.map_or(Var::Time, |(col, _)| Var::Coord(col));
         self.expression(path, src, 3, var, None, GeneralConstraint::try_new)
+    }
+}
+
+/// The force elements' [`ForceContext`]: expressions of time and the model's state.
+impl ForceContext for Cx<'_> {
+    fn force_expr(&mut self, path: &str, src: &str) -> Option<StateExpr> {
+        self.state_expr(path, src, false)
     }
 }
