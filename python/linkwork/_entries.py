@@ -131,8 +131,7 @@ class Entries:
     def revolute(self: _Adds, name: str, body_i: str, body_j: str, *, at: Point | None = None, friction: PinFriction | None = None, point_i: Point | str | None = None, point_j: Point | str | None = None) -> str:
         """Pin: `point_i` of `body_i` coincides with `point_j` of `body_j`. 2 equations.
 
-        ``at``: The global position, m, at the initial position, of the point that `point_i` and
-`point_j` give, instead of them. ``body_i``: First body (or `ground`). ``body_j``: Second body (or `ground`). ``friction``: Coulomb friction in the pin. ``point_i``: A point of the first body, in its frame (or `at`). ``point_j``: A point of the second body, in its frame (or `at`)."""
+        ``at``: The global position, m, at the initial position, of the point that `point_i` and `point_j` give, instead of them. ``body_i``: First body (or `ground`). ``body_j``: Second body (or `ground`). ``friction``: Coulomb friction in the pin. ``point_i``: A point of the first body, in its frame (or `at`). ``point_j``: A point of the second body, in its frame (or `at`)."""
         return self.joint(name, "revolute", body_i=body_i, body_j=body_j, at=at, friction=friction, point_i=point_i, point_j=point_j)
 
     def translational(self: _Adds, name: str, body_i: str, body_j: str, *, at: Point | None = None, axis: Point | None = None, axis_i: Point | None = None, axis_j: Point | None = None, friction: SlideFriction | None = None, point_i: Point | str | None = None, point_j: Point | str | None = None) -> str:
@@ -140,16 +139,14 @@ class Entries:
         `axis_i`, and the bodies keep the relative angle that makes `axis_i` and `axis_j` parallel.
         2 equations.
 
-        ``at``: The global position, m, at the initial position, of the point that `point_i` and
-`point_j` give, instead of them. ``axis``: The global direction at the initial position, instead of `axis_i` (and `axis_j`). ``axis_i``: A direction of the first body, in its frame, any non-zero length (or `axis`). ``axis_j``: A direction of the second body, in its frame, any non-zero length (or `axis`). ``body_i``: First body (or `ground`). ``body_j``: Second body (or `ground`). ``friction``: Coulomb friction in the slider. ``point_i``: A point of the first body, in its frame (or `at`). ``point_j``: A point of the second body, in its frame (or `at`)."""
+        ``at``: The global position, m, at the initial position, of the point that `point_i` and `point_j` give, instead of them. ``axis``: The global direction at the initial position, instead of `axis_i` (and `axis_j`). ``axis_i``: A direction of the first body, in its frame, any non-zero length (or `axis`). ``axis_j``: A direction of the second body, in its frame, any non-zero length (or `axis`). ``body_i``: First body (or `ground`). ``body_j``: Second body (or `ground`). ``friction``: Coulomb friction in the slider. ``point_i``: A point of the first body, in its frame (or `at`). ``point_j``: A point of the second body, in its frame (or `at`)."""
         return self.joint(name, "translational", body_i=body_i, body_j=body_j, at=at, axis=axis, axis_i=axis_i, axis_j=axis_j, friction=friction, point_i=point_i, point_j=point_j)
 
     def point_on_line(self: _Adds, name: str, body_i: str, body_j: str, *, at: Point | None = None, axis: Point | None = None, axis_i: Point | None = None, point_i: Point | str | None = None, point_j: Point | str | None = None) -> str:
         """Pin in slot: `point_j` of `body_j` stays on the line of `body_i` through `point_i` along
         `axis_i`; rotation stays free. 1 equation.
 
-        ``at``: The global position, m, at the initial position, of the point that `point_i` and
-`point_j` give, instead of them. ``axis``: The global direction at the initial position, instead of `axis_i` (and `axis_j`). ``axis_i``: A direction of the first body, in its frame, any non-zero length (or `axis`). ``body_i``: First body (or `ground`). ``body_j``: Second body (or `ground`). ``point_i``: A point of the first body, in its frame (or `at`). ``point_j``: A point of the second body, in its frame (or `at`)."""
+        ``at``: The global position, m, at the initial position, of the point that `point_i` and `point_j` give, instead of them. ``axis``: The global direction at the initial position, instead of `axis_i` (and `axis_j`). ``axis_i``: A direction of the first body, in its frame, any non-zero length (or `axis`). ``body_i``: First body (or `ground`). ``body_j``: Second body (or `ground`). ``point_i``: A point of the first body, in its frame (or `at`). ``point_j``: A point of the second body, in its frame (or `at`)."""
         return self.joint(name, "point_on_line", body_i=body_i, body_j=body_j, at=at, axis=axis, axis_i=axis_i, point_i=point_i, point_j=point_j)
 
     def revolute_translational(self: _Adds, name: str, body_i: str, point_i: Point | str, axis_i: Point, body_j: str, point_j: Point | str, *, offset: Number | None = None) -> str:
@@ -157,8 +154,7 @@ class Entries:
         `offset` from the line of `body_i` (a link pinned at `point_j` and sliding, at right angles,
         on the line). 1 equation.
 
-        ``axis_i``: A direction of the first body, in its frame, any non-zero length. ``body_i``: First body (or `ground`). ``body_j``: Second body (or `ground`). ``offset``: Signed distance from the line to the pin (positive to the left of `axis_i`), m.
-Default: its value in the initial configuration. ``point_i``: A point of the first body, in its frame. ``point_j``: A point of the second body, in its frame."""
+        ``axis_i``: A direction of the first body, in its frame, any non-zero length. ``body_i``: First body (or `ground`). ``body_j``: Second body (or `ground`). ``offset``: Signed distance from the line to the pin (positive to the left of `axis_i`), m. Default: its value in the initial configuration. ``point_i``: A point of the first body, in its frame. ``point_j``: A point of the second body, in its frame."""
         return self.joint(name, "revolute_translational", body_i=body_i, point_i=point_i, axis_i=axis_i, body_j=body_j, point_j=point_j, offset=offset)
 
     def distance(self: _Adds, name: str, body_i: str, point_i: Point | str, body_j: str, point_j: Point | str, *, length: Number | None = None) -> str:
@@ -221,13 +217,7 @@ Default: its value in the initial configuration. ``point_i``: A point of the fir
         working surface from outside, given by `surface_radius` (polar) or `profile` (a closed
         Cartesian curve). 1 equation.
 
-        ``body_i``: The cam. ``body_j``: The follower. ``point_i``: The cam's centre, body i frame: the origin of `psi` and of the profile. Default: its
-frame's origin. ``point_j``: The roller's centre (the knife edge), body j frame. ``profile``: The working surface as a closed curve about `point_i` in the cam's frame. ``radius``: The pitch radius, m: an expression of the polar angle `psi` (rad, cam frame, from the
-cam's x axis), parameters and tables, e.g. `"0.05 + cycloidal(psi, 0, 0, 2*pi/3, 0.02)"`.
-The pitch curve `|d| = radius(psi)` is the path of the roller's centre. Give one of
-`radius`, `surface_radius` and `profile`. ``roller_radius``: The roller's radius, m: the pitch curve's offset to the surface. Default: 0, a knife edge
-(on a profile or surface radius: a point on the curve). ``surface_radius``: The working surface's radius, m: an expression of the polar angle `psi` (as `radius`), the
-surface `radius(psi) (cos psi, sin psi)` about `point_i` in the cam's frame."""
+        ``body_i``: The cam. ``body_j``: The follower. ``point_i``: The cam's centre, body i frame: the origin of `psi` and of the profile. Default: its frame's origin. ``point_j``: The roller's centre (the knife edge), body j frame. ``profile``: The working surface as a closed curve about `point_i` in the cam's frame. ``radius``: The pitch radius, m: an expression of the polar angle `psi` (rad, cam frame, from the cam's x axis), parameters and tables, e.g. `"0.05 + cycloidal(psi, 0, 0, 2*pi/3, 0.02)"`. The pitch curve `|d| = radius(psi)` is the path of the roller's centre. Give one of `radius`, `surface_radius` and `profile`. ``roller_radius``: The roller's radius, m: the pitch curve's offset to the surface. Default: 0, a knife edge (on a profile or surface radius: a point on the curve). ``surface_radius``: The working surface's radius, m: an expression of the polar angle `psi` (as `radius`), the surface `radius(psi) (cos psi, sin psi)` about `point_i` in the cam's frame."""
         return self.joint(name, "cam", body_i=body_i, body_j=body_j, point_j=point_j, point_i=point_i, profile=profile, radius=radius, roller_radius=roller_radius, surface_radius=surface_radius)
 
     def belt(self: _Adds, name: str, body_i: str, radius_i: Number, body_j: str, radius_j: Number, *, carrier: str | None = None, crossed: bool | None = None) -> str:
@@ -236,9 +226,7 @@ surface `radius(psi) (cos psi, sin psi)` about `point_i` in the cam's frame."""
         `radius_i (phi_i - phi_c) -/+ radius_j (phi_j - phi_c)` constant (`-` open, `+` crossed).
         The pulleys' centres must be kept by other joints. 1 equation.
 
-        ``body_i``: The first pulley (its reaction is reported: the belt's torque on it). ``body_j``: The second pulley. ``carrier``: The body the pulleys turn in, whose angle their rotations are measured from. Default:
-ground. ``crossed``: True for a crossed belt, the pulleys turning opposite ways. Default: false, an open belt
-(or a chain), the pulleys turning the same way. ``radius_i``: Pitch radius of the first pulley, m. ``radius_j``: Pitch radius of the second pulley, m."""
+        ``body_i``: The first pulley (its reaction is reported: the belt's torque on it). ``body_j``: The second pulley. ``carrier``: The body the pulleys turn in, whose angle their rotations are measured from. Default: ground. ``crossed``: True for a crossed belt, the pulleys turning opposite ways. Default: false, an open belt (or a chain), the pulleys turning the same way. ``radius_i``: Pitch radius of the first pulley, m. ``radius_j``: Pitch radius of the second pulley, m."""
         return self.joint(name, "belt", body_i=body_i, radius_i=radius_i, body_j=body_j, radius_j=radius_j, carrier=carrier, crossed=crossed)
 
     def angle_driver(self: _Adds, name: str, body: str, function: str) -> str:
@@ -296,9 +284,7 @@ ground. ``crossed``: True for a crossed belt, the pulleys turning opposite ways.
         opposite on `body_j`) is `-stiffness (theta - free_angle) - damping dtheta/dt + actuator`,
         `theta = phi_i - phi_j`.
 
-        ``actuator``: Actuator torque on `body_i` (its opposite on `body_j`), N m: a number or an expression.
-Default 0. ``body_i``: First body (the torque is reported on it). ``body_j``: Second body. ``damping``: Damping, N m s/rad. Default 0. ``free_angle``: Relative angle `phi_i - phi_j` at which the spring exerts no torque, rad. Default: its
-value in the initial guess. ``stiffness``: Stiffness, N m/rad. Default 0."""
+        ``actuator``: Actuator torque on `body_i` (its opposite on `body_j`), N m: a number or an expression. Default 0. ``body_i``: First body (the torque is reported on it). ``body_j``: Second body. ``damping``: Damping, N m s/rad. Default 0. ``free_angle``: Relative angle `phi_i - phi_j` at which the spring exerts no torque, rad. Default: its value in the initial guess. ``stiffness``: Stiffness, N m/rad. Default 0."""
         return self.force(name, "rotational_spring_damper", body_i=body_i, body_j=body_j, actuator=actuator, damping=damping, free_angle=free_angle, stiffness=stiffness)
 
     def contact(self: _Adds, name: str, body_i: str, shape_i: Shape, body_j: str, shape_j: Shape, stiffness: Number, *, damping: Number | None = None, exponent: Number | None = None, friction: ContactFriction | None = None, max_penetration: Number | None = None) -> str:
@@ -306,6 +292,5 @@ value in the initial guess. ``stiffness``: Stiffness, N m/rad. Default 0."""
         bodies: a Hunt-Crossley normal force and smoothed Coulomb friction (docs/model-format.md,
         "Contact").
 
-        ``body_i``: First body (or ground). ``body_j``: Second body (or ground). ``damping``: Hunt-Crossley hysteresis damping factor `c`, s/m, `>= 0`. Default 0 (elastic). ``exponent``: Exponent `n` of the penetration, `>= 1`. Default 1.5 (Hertz). ``friction``: Coulomb friction at the contact point. Default: none. ``max_penetration``: Penetration at which a step that begins separated and ends in contact is rejected and
-retried shorter, m, `> 0`. Default: 1e-3 of the smallest radius of the pair. ``shape_i``: The shape fixed to the first body, in its frame. ``shape_j``: The shape fixed to the second body, in its frame. ``stiffness``: Contact stiffness `k`, N/m^n, `> 0`."""
+        ``body_i``: First body (or ground). ``body_j``: Second body (or ground). ``damping``: Hunt-Crossley hysteresis damping factor `c`, s/m, `>= 0`. Default 0 (elastic). ``exponent``: Exponent `n` of the penetration, `>= 1`. Default 1.5 (Hertz). ``friction``: Coulomb friction at the contact point. Default: none. ``max_penetration``: Penetration at which a step that begins separated and ends in contact is rejected and retried shorter, m, `> 0`. Default: 1e-3 of the smallest radius of the pair. ``shape_i``: The shape fixed to the first body, in its frame. ``shape_j``: The shape fixed to the second body, in its frame. ``stiffness``: Contact stiffness `k`, N/m^n, `> 0`."""
         return self.force(name, "contact", body_i=body_i, shape_i=shape_i, body_j=body_j, shape_j=shape_j, stiffness=stiffness, damping=damping, exponent=exponent, friction=friction, max_penetration=max_penetration)
