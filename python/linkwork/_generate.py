@@ -30,8 +30,17 @@ from typing import Any
 
 from . import _linkwork, cli, errors
 
-#: The repository: this file is ``python/linkwork/_generate.py`` in it.
-ROOT = Path(__file__).resolve().parents[2]
+
+def _repository() -> Path:
+    """The repository whose files are generated: the one this file is ``python/linkwork/`` of (a
+    source tree or an editable install), else the current folder (an installed package carries
+    no repository)."""
+    here = Path(__file__).resolve().parents[2]
+    return here if (here / "pyproject.toml").is_file() else Path.cwd()
+
+
+#: The repository the generated files are in.
+ROOT = _repository()
 
 #: Width of the generated text, as the hand-written code around it.
 WIDTH = 100
@@ -388,7 +397,9 @@ def generated(root: Path = ROOT) -> dict[Path, tuple[str, str]]:
     files: dict[Path, tuple[str, str]] = {}
     for relative, part, make in TARGETS:
         path = root / relative
-        now = path.read_text(encoding="utf-8") if path.exists() else ""
+        if not path.is_file():
+            raise FileNotFoundError(f"{path}: not found (run `python -m linkwork._generate` in the repository)")
+        now = path.read_text(encoding="utf-8")
         before, text = files.get(path, (now, now))
         files[path] = (before, make() if part is None else _replaced(text, part, make(), relative))
     return files
