@@ -328,14 +328,17 @@ fn summary(path: &str, v: &Value, problems: &mut Vec<Problem>) -> Option<String>
 }
 
 /// The joint types that take a `friction:` mapping: those whose fields include one, read from
-/// the registry's schema (so a new joint with friction needs no line here).
-fn friction_types() -> Vec<String> {
-    let schema = serde_json::to_value(schemars::schema_for!(JointSpec)).expect("a schema is JSON");
-    let kinds = schema["oneOf"].as_array().into_iter().flatten();
-    kinds
-        .filter(|kind| kind["properties"].get("friction").is_some())
-        .filter_map(|kind| kind["properties"]["type"]["const"].as_str().map(String::from))
-        .collect()
+/// the registry's schema (so a new joint with friction needs no line here); built once.
+fn friction_types() -> &'static [String] {
+    static TYPES: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+    TYPES.get_or_init(|| {
+        let schema = serde_json::to_value(schemars::schema_for!(JointSpec)).expect("a schema is JSON");
+        let kinds = schema["oneOf"].as_array().into_iter().flatten();
+        kinds
+            .filter(|kind| kind["properties"].get("friction").is_some())
+            .filter_map(|kind| kind["properties"]["type"]["const"].as_str().map(String::from))
+            .collect()
+    })
 }
 
 /// A joint: a [`tagged`] entry, whose `friction:` on a type that has none is reported as that
