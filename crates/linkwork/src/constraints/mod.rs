@@ -28,7 +28,7 @@ mod translational;
 
 pub(crate) use crate::element::Frame;
 pub use crate::element::{BodyIx, PointRef, Tagged, DEFAULT_TRANSITION_VELOCITY};
-use crate::expr::Scalar;
+use crate::expr::{Scalar, Tri};
 pub use absolute::{Absolute, AbsoluteAngleJoint, AbsoluteKind, AbsolutePoint};
 pub(crate) use cam::cam_row;
 pub use cam::{Cam, CamFrame, CamJoint, CamProfileSpec, CamRow, PitchPoint, ProfileColumn};
@@ -148,6 +148,34 @@ pub trait Constraint: Debug + Send + Sync {
     fn driven(&self) -> Option<&DriverKind> {
         None
     }
+    /// The numbers of this element that a parameter can move (its points, lengths, radii,
+    /// axes), each named as its field in the model file, with the component for a vector:
+    /// `point_i[0]`, `point_i[1]`, `length`. The model's compiler gives each its derivative with
+    /// respect to the parameters under the same name (design sensitivities, docs/sensitivities.md).
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        Vec::new()
+    }
+    /// `Phi` at `at`, over [`Tri`] numbers, with the element's own numbers `data` in the order of
+    /// [`Constraint::data`] (each seeded with its derivative along a parameter): `out: (rows)`.
+    /// Every derivative of the rows that a sensitivity needs (with respect to the coordinates,
+    /// time, the data and the parameters, to third order) follows from this one function.
+    /// `false`: the element has no derivatives with respect to its data yet.
+    fn phi_tri(&self, _at: &At<'_, Tri>, _data: &[Tri], _out: &mut [Tri]) -> bool {
+        false
+    }
+}
+
+/// Where an element's equations are evaluated over a number type `S` that carries derivatives
+/// (design sensitivities): every coordinate `q (n)`, the time, and the model's parameters
+/// (file order, SI), which expressions in the element (a driver's function) read.
+#[derive(Debug, Clone, Copy)]
+pub struct At<'a, S> {
+    /// All coordinates.
+    pub q: &'a [S],
+    /// Time.
+    pub t: S,
+    /// The parameters' values.
+    pub params: &'a [S],
 }
 
 /// A joint as a picture: the point `p` of body i and the point `q` of body j it joins (each in

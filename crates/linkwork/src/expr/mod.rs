@@ -72,6 +72,11 @@ use parse::{Binary, Op, MAX_STACK};
 
 pub use parse::MAX_DEPTH;
 pub use scalar::{Dual, HyperDual, Scalar};
+
+/// The number type of design sensitivities: a value with three nilpotent directions and their
+/// mixed parts, so that an element's `Phi` gives its parameter derivatives at the position,
+/// velocity and acceleration levels. For now the two-direction [`HyperDual`].
+pub type Tri = HyperDual;
 pub use spline::Spline;
 
 /// The most slots (distinct names of coordinates, velocities and the like) an expression over a

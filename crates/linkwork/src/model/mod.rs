@@ -65,6 +65,28 @@ pub struct Body {
     pub given: [bool; 6],
 }
 
+/// The derivatives of a compiled model's numbers with respect to its parameters: every vector
+/// here has one entry per parameter (file order), in SI per SI unit of the parameter. A number
+/// that no parameter moves has a zero gradient.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DataGradients {
+    /// Each parameter's value, with respect to each parameter given from outside: the identity,
+    /// plus the chain rule through the expressions of earlier parameters (`m: rho * r`).
+    pub params: Vec<Vec<f64>>,
+    /// Each joint ([`Model::joints`] order), each of its numbers ([`Constraint::data`] order).
+    pub joints: Vec<Vec<Vec<f64>>>,
+    /// Each driver ([`Model::drivers`] order), each of its numbers ([`Constraint::data`] order).
+    pub drivers: Vec<Vec<Vec<f64>>>,
+    /// Each body's mass and moment of inertia.
+    pub bodies: Vec<[Vec<f64>; 2]>,
+    /// Each body's named points ([`Body::points`] order), each coordinate.
+    pub points: Vec<Vec<[Vec<f64>; 2]>>,
+    /// Each measure ([`Model::measures`] order), each of its numbers (`MeasureKind::data` order).
+    pub measures: Vec<Vec<Vec<f64>>>,
+    /// Gravity's two components.
+    pub gravity: [Vec<f64>; 2],
+}
+
 /// A named joint or driver and its constraint rows.
 #[derive(Debug)]
 pub struct Element {
@@ -478,6 +500,9 @@ pub struct Model {
     pub branches: Vec<(structure::Dyad, spec::Side)>,
     /// How assembly treats the drawing's branches (`branch:`).
     pub branch_mode: spec::BranchMode,
+    /// The derivatives of the model's numbers with respect to its parameters, which design
+    /// sensitivities seed the elements with (docs/sensitivities.md).
+    pub gradients: DataGradients,
 }
 
 /// The text of the model file at `path`: a regular file (a device such as `/dev/zero`, or a

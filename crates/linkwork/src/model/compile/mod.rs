@@ -134,6 +134,7 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
             placed: cx.placed,
             branches,
             branch_mode: spec.branch.unwrap_or_default(),
+            gradients: super::DataGradients::default(),
         })
     } else {
         Err(cx.problems)
