@@ -61,4 +61,4 @@ pub mod system;
 pub use analysis::{Overrides, RunOptions, Sink};
 pub use error::{Error, Problem, RowName, Unbalanced};
 pub use model::Model;
-pub use results::{Failure, Results};
+pub use results::{Failure, Results, Sensitivities};

@@ -49,6 +49,9 @@ pub struct Results {
     pub columns: Vec<Vec<f64>>,
     /// Everything `summary.json` says besides `output_points`, the status and the error.
     pub summary: Summary,
+    /// The derivatives of the columns with respect to the parameters the run was asked for
+    /// ([`crate::analysis::RunOptions::sensitivities`]); `None` when it was asked for none.
+    pub sensitivities: Option<Sensitivities>,
     /// The analysis's choice of columns, applied once they are all named ([`Results::reserve`]
     /// or the first [`Results::push`]).
     selection: Selection,
@@ -70,6 +73,18 @@ pub struct Results {
     strict_branches: bool,
     /// Why the rows do not fit in memory ([`Results::reserve`]): the first push fails with it.
     refused: Option<String>,
+}
+
+/// The derivatives of a run's columns with respect to parameters (design sensitivities,
+/// docs/sensitivities.md), at the run's output times.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Sensitivities {
+    /// The parameters, by name, in the order asked.
+    pub parameters: Vec<String>,
+    /// The columns that have derivatives (names of [`Results::names`], in their order).
+    pub names: Vec<String>,
+    /// (parameters x names x rows) `d column / d parameter`, SI per SI unit of the parameter.
+    pub values: Vec<Vec<Vec<f64>>>,
 }
 
 /// The rows of a streamed run ([`stream`]): those its sink has, and how many are held before the
@@ -235,6 +250,7 @@ impl Results {
             columns: vec![Vec::new(); names.len()],
             names,
             summary,
+            sensitivities: None,
             selection: Selection::All,
             peaks: Peaks::None,
             summaries: Summaries::None,

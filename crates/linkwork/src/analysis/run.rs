@@ -80,6 +80,9 @@ pub struct RunOptions {
     pub stop: StopToken,
     /// Where the rows go.
     pub sink: Sink,
+    /// The parameters (names of the model's `parameters:`) to differentiate every column with
+    /// respect to ([`crate::results::Sensitivities`]); empty: none.
+    pub sensitivities: Vec<String>,
 }
 
 impl From<Overrides> for RunOptions {
