@@ -4,6 +4,7 @@
 
 mod compile;
 mod drawing;
+mod measure;
 mod params;
 mod parse;
 mod placement;
