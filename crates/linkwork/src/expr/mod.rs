@@ -90,6 +90,12 @@ pub trait Names {
     fn table(&self, _name: &str) -> Option<Arc<Spline>> {
         None
     }
+
+    /// Whether `name` is a variable of the caller's even where a built-in constant has that
+    /// name: a parameter called `e`, read as a variable to differentiate with respect to it.
+    fn shadows(&self, _name: &str) -> bool {
+        false
+    }
 }
 
 impl<F: Fn(&str) -> Option<f64>> Names for F {
