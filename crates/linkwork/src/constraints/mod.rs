@@ -223,6 +223,8 @@ impl Source {
 
 /// The data names of a vector field's two components.
 pub(crate) type Components = [&'static str; 2];
+/// `point`'s components (a single body's point: held coordinates, point drivers).
+pub(crate) const POINT: Components = ["point[0]", "point[1]"];
 /// `point_i`'s components.
 pub(crate) const POINT_I: Components = ["point_i[0]", "point_i[1]"];
 /// `point_j`'s components.
