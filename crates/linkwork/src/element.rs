@@ -6,7 +6,7 @@
 //! (`constraints::JointContext`, `forces::ForceContext`).
 
 use crate::error::Problem;
-use crate::expr::{Expr, TimeFunction};
+use crate::expr::{Expr, Scalar, TimeFunction};
 use schemars::JsonSchema;
 use serde::{Deserialize, Deserializer, Serialize};
 
@@ -292,10 +292,59 @@ impl BodyIx {
     /// `(x, y, phi)` of the body from a coordinate vector (zeros for ground).
     #[inline]
     pub fn coords(self, q: &[f64]) -> [f64; 3] {
+        self.pose(q)
+    }
+
+    /// `(x, y, phi)` of the body from all coordinates over any [`Scalar`] (ground: the origin at
+    /// angle 0, constants), for equations evaluated with derivatives (design sensitivities).
+    #[inline]
+    pub fn pose<S: Scalar>(self, q: &[S]) -> [S; 3] {
         match self.0 {
             Some(k) => [q[k], q[k + 1], q[k + 2]],
-            None => [0.0; 3],
+            None => [S::constant(0.0); 3],
         }
+    }
+}
+
+/// `A(phi) v` from `(cos phi, sin phi)`, over any [`Scalar`]: a body-frame vector in the global
+/// frame. [`Frame::rotate`] is this with the frame's cached rotation.
+#[inline]
+pub(crate) fn rotated<S: Scalar>([c, s]: [S; 2], v: [S; 2]) -> [S; 2] {
+    [c * v[0] - s * v[1], s * v[0] + c * v[1]]
+}
+
+/// A body frame over any [`Scalar`]: its origin, angle and rotation, what [`Frame`] is for `f64`,
+/// for equations evaluated with derivatives (design sensitivities).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Pose<S> {
+    /// `(2)` the origin, global frame.
+    pub o: [S; 2],
+    /// The angle.
+    pub phi: S,
+    /// `(cos phi, sin phi)`.
+    cs: [S; 2],
+}
+
+impl<S: Scalar> Pose<S> {
+    /// Body `body`'s frame at the coordinates `q (n)` (ground's is the global one).
+    #[inline]
+    pub fn of(body: BodyIx, q: &[S]) -> Pose<S> {
+        let [x, y, phi] = body.pose(q);
+        Pose { o: [x, y], phi, cs: [phi.cos(), phi.sin()] }
+    }
+    /// The frame at `(x, y, phi)` held constant (a body's initial pose).
+    #[inline]
+    pub fn held([x, y, phi]: [f64; 3]) -> Pose<S> {
+        Pose {
+            o: [S::constant(x), S::constant(y)],
+            phi: S::constant(phi),
+            cs: [S::constant(phi.cos()), S::constant(phi.sin())],
+        }
+    }
+    /// `A s'`: a body-frame vector in the global frame.
+    #[inline]
+    pub fn rotate(&self, v: [S; 2]) -> [S; 2] {
+        rotated(self.cs, v)
     }
 }
 
@@ -322,7 +371,7 @@ impl Frame {
     /// `A s'`: a body-frame vector in the global frame.
     #[inline]
     pub fn rotate(&self, v: [f64; 2]) -> [f64; 2] {
-        [self.c * v[0] - self.s * v[1], self.s * v[0] + self.c * v[1]]
+        rotated([self.c, self.s], v)
     }
     /// `B s' = dA/dphi s' = R90 A s'`.
     #[inline]
