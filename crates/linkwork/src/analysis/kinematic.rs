@@ -297,7 +297,7 @@ pub(crate) fn run_driven(
         extra_values(t0, &s.q, &s.qdot, &s.qddot, &mut extra)?;
         run.push(&mut results, t0, &s.q, &s.qdot, &s.qddot, &extra)?;
         if let Some(sensitivity) = &mut sensitivity {
-            sensitivity.push(&mut results, &s.lu, &s.rows, t0, (&s.q, &s.qdot, &s.qddot))?;
+            sensitivity.push(&mut results, &mut s.lu, &s.rows, t0, (&s.q, &s.qdot, &s.qddot))?;
         }
         let mut dt = h;
         let mut q_pred = vec![0.0; n];
@@ -367,7 +367,7 @@ pub(crate) fn run_driven(
             extra_values(target, &s.q, &s.qdot, &s.qddot, &mut extra)?;
             run.push(&mut results, target, &s.q, &s.qdot, &s.qddot, &extra)?;
             if let Some(sensitivity) = &mut sensitivity {
-                sensitivity.push(&mut results, &s.lu, &s.rows, target, (&s.q, &s.qdot, &s.qddot))?;
+                sensitivity.push(&mut results, &mut s.lu, &s.rows, target, (&s.q, &s.qdot, &s.qddot))?;
             }
         }
         Ok(())

@@ -123,8 +123,8 @@ impl<'m> Sensitivity<'m> {
         for e in &self.elements {
             let data: Vec<Tri> = e.data.iter().map(|&v| Tri::constant(v)).collect();
             if !e.constraint.phi_tri(&at, &data, &mut out[e.row..]) {
-                let section = if e.constraint.driven().is_some() { "drivers" } else { "joints" };
-                return unsupported(format!("{section}.{}", e.name), &format!("a {} joint", e.kind));
+                let (section, what) = if e.constraint.driven().is_some() { ("drivers", "driver") } else { ("joints", "joint") };
+                return unsupported(format!("{section}.{}", e.name), &format!("the {} {what}", e.kind));
             }
         }
         for m in &self.model.measures {
@@ -141,7 +141,7 @@ impl<'m> Sensitivity<'m> {
     pub(crate) fn push(
         &mut self,
         results: &mut Results,
-        lu: &SparseLu,
+        lu: &mut SparseLu,
         rows: &[usize],
         t: f64,
         (q, qdot, qddot): (&[f64], &[f64], &[f64]),
