@@ -153,7 +153,9 @@ pub(crate) fn compile(spec: &BeltJoint, cx: &mut impl JointContext, path: &str) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::{check_fd_random, check_generic_random, check_rebuilt, evaluate, Lcg};
+    use crate::constraints::testing::{
+        assert_data_fields, check_fd_random, check_generic_random, check_rebuilt, evaluate, Lcg,
+    };
 
     #[test]
     fn derivatives_match_finite_differences() {
@@ -165,6 +167,7 @@ mod tests {
             check_fd_random(&moving, 3, seed);
             check_generic_random(&moving, 3, seed);
             check_rebuilt(&moving, &|d| Belt::new(i, d[0], j, d[1], crossed, c, &q0), 3, seed);
+            assert_data_fields::<BeltJoint>(&moving);
             let fixed = Belt::new(BodyIx(Some(3)), 0.2, BodyIx(Some(0)), 0.5, crossed, BodyIx::GROUND, &q0[..6]);
             check_fd_random(&fixed, 2, seed);
             check_generic_random(&fixed, 2, seed);

@@ -238,7 +238,9 @@ pub(crate) fn compile(spec: &GearJoint, cx: &mut impl JointContext, path: &str) 
 mod tests {
     use super::*;
     use crate::constraints::testing::OnSlice;
-    use crate::constraints::testing::{check_fd_random_where, check_generic_random_where, check_rebuilt, Lcg};
+    use crate::constraints::testing::{
+        assert_data_fields, check_fd_random_where, check_generic_random_where, check_rebuilt, Lcg,
+    };
     use crate::constraints::ConfigBuf;
 
     /// Finite differences lose their accuracy as the centres approach each other (`1 / rho`
@@ -254,6 +256,7 @@ mod tests {
         let build =
             |d: &[f64]| GearPair::new(g.kind, g.pair.i, [d[0], d[1]], d[4], g.pair.j, [d[2], d[3]], d[5], &q0(g));
         check_rebuilt(g, &build, 2, seed);
+        assert_data_fields::<GearJoint>(g);
     }
 
     /// The initial configuration `g` was built at, from the poses it keeps.

@@ -239,7 +239,7 @@ pub(crate) fn compile_disc(spec: &RollingJoint, cx: &mut impl JointContext, path
 mod tests {
     use super::*;
     use crate::constraints::testing::OnSlice;
-    use crate::constraints::testing::{check_fd_random, check_generic_random, check_rebuilt, Lcg};
+    use crate::constraints::testing::{assert_data_fields, check_fd_random, check_generic_random, check_rebuilt, Lcg};
 
     #[test]
     fn derivatives_match_finite_differences() {
@@ -258,6 +258,8 @@ mod tests {
             check_generic_random(&rd, 2, s + 2);
             let build = |d: &[f64]| RollingDisc::new(p, [d[0], d[1]], d[4], l, [d[2], d[3]], [d[5], d[6]], &q0);
             check_rebuilt(&rd, &build, 2, s + 2);
+            assert_data_fields::<RollingJoint>(&rp);
+            assert_data_fields::<RollingJoint>(&rd);
         }
     }
 

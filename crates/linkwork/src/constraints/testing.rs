@@ -256,6 +256,17 @@ pub fn check_rebuilt<C: GenericPhi + Constraint>(c: &C, build: &dyn Fn(&[f64]) -
     });
 }
 
+/// Each of `c`'s data names is a field of its model-file entry `T` (the name before `[`), under
+/// which the model's compiler finds the number's gradient.
+pub fn assert_data_fields<T: schemars::JsonSchema>(c: &dyn Constraint) {
+    let schema = serde_json::to_value(schemars::schema_for!(T)).expect("a schema is JSON");
+    for (name, _) in c.data() {
+        let field = name.split('[').next().unwrap_or(name);
+        let known = schema["properties"].get(field).is_some();
+        assert!(known, "{c:?}: data {name} is not a field of {}", std::any::type_name::<T>());
+    }
+}
+
 /// Run [`check_generic`] at random states of a system with `bodies` bodies.
 pub fn check_generic_random<C: GenericPhi + Constraint>(c: &C, bodies: usize, seed: u64) {
     check_generic_random_where(c, bodies, seed, &|_| true);
