@@ -221,7 +221,7 @@ pub(crate) fn compile_angle(
 mod tests {
     use super::*;
     use crate::constraints::testing::OnSlice;
-    use crate::constraints::testing::{check_fd_random, check_generic_random, Lcg};
+    use crate::constraints::testing::{assert_data_fields, check_fd_random, check_generic_random, Lcg};
 
     #[test]
     fn derivatives_match_finite_differences() {
@@ -230,6 +230,11 @@ mod tests {
             let c = Absolute::new(kind, BodyIx(Some(3)), [0.4, -0.7], 0.25);
             check_fd_random(&c, 2, seed as u64);
             check_generic_random(&c, 2, seed as u64);
+            if kind == AbsoluteKind::Angle {
+                assert_data_fields::<AbsoluteAngleJoint>(&c);
+            } else {
+                assert_data_fields::<AbsolutePoint>(&c);
+            }
             // The value from the initial configuration: the held coordinate there, not data.
             let mut start = Absolute { value_from: Source::start(BodyIx(Some(3)), BodyIx::GROUND, &q0), ..c.clone() };
             let mut phi = [0.0];

@@ -138,7 +138,9 @@ pub(crate) fn compile(spec: &DistanceJoint, cx: &mut impl JointContext, path: &s
 mod tests {
     use super::*;
     use crate::constraints::testing::OnSlice;
-    use crate::constraints::testing::{assert_close, check_fd_random, check_generic_random, evaluate, Lcg};
+    use crate::constraints::testing::{
+        assert_close, assert_data_fields, check_fd_random, check_generic_random, evaluate, Lcg,
+    };
     use crate::expr::HyperDual;
 
     #[test]
@@ -146,6 +148,7 @@ mod tests {
         let c = Distance::new(BodyIx(Some(0)), [0.3, -0.2], BodyIx(Some(3)), [-1.1, 0.4], 1.7);
         check_fd_random(&c, 2, 1);
         check_generic_random(&c, 2, 1);
+        assert_data_fields::<DistanceJoint>(&c);
         let g = Distance::new(BodyIx::GROUND, [0.5, -2.0], BodyIx(Some(3)), [0.75, 0.1], 2.0);
         check_fd_random(&g, 2, 2);
         check_generic_random(&g, 2, 2);

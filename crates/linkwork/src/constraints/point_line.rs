@@ -168,13 +168,16 @@ pub(crate) fn compile_offset(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::{assert_close, check_fd_random, check_generic_random, evaluate, Lcg};
+    use crate::constraints::testing::{
+        assert_close, assert_data_fields, check_fd_random, check_generic_random, evaluate, Lcg,
+    };
 
     #[test]
     fn derivatives_match_finite_differences() {
         let c = PointOnLine::new(BodyIx(Some(0)), [0.3, -0.2], [1.0, 2.0], BodyIx(Some(3)), [-1.1, 0.4], 0.0);
         check_fd_random(&c, 2, 1);
         check_generic_random(&c, 2, 1);
+        assert_data_fields::<RevoluteTranslationalJoint>(&c);
         let g = PointOnLine::new(BodyIx::GROUND, [0.5, -2.0], [2.0, 0.5], BodyIx(Some(3)), [0.7, 0.1], 0.3);
         check_fd_random(&g, 2, 2);
         check_generic_random(&g, 2, 2);
@@ -195,6 +198,7 @@ mod tests {
         };
         let slot = new(Source::Zero);
         assert_eq!(slot.data().len(), 6);
+        assert_data_fields::<PointOnLineJoint>(&slot);
         check_generic_random(&slot, 2, 4);
         let mut start = new(Source::start(BodyIx(Some(0)), BodyIx(Some(3)), &q0));
         start.offset = start.line.value(&crate::constraints::ConfigBuf::new(&q0).view());

@@ -131,13 +131,14 @@ pub(crate) fn compile(spec: &RevoluteJoint, cx: &mut impl JointContext, path: &s
 mod tests {
     use super::*;
     use crate::constraints::testing::OnSlice;
-    use crate::constraints::testing::{check_fd_random, check_generic_random};
+    use crate::constraints::testing::{assert_data_fields, check_fd_random, check_generic_random};
 
     #[test]
     fn derivatives_match_finite_differences() {
         let j = Revolute::new(BodyIx(Some(0)), [0.3, -0.2], BodyIx(Some(3)), [-1.1, 0.4]);
         check_fd_random(&j, 2, 1);
         check_generic_random(&j, 2, 1);
+        assert_data_fields::<RevoluteJoint>(&j);
         let g = Revolute::new(BodyIx(Some(3)), [0.75, 0.0], BodyIx::GROUND, [0.5, -2.0]);
         check_fd_random(&g, 2, 2);
         check_generic_random(&g, 2, 2);

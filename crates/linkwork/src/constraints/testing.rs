@@ -228,6 +228,45 @@ pub fn check_generic<C: GenericPhi + Constraint>(c: &C, q: &[f64], qdot: &[f64],
     }
 }
 
+/// Check that the derivative of `c`'s generic `Phi` along each data slot is that of the element
+/// built anew with the number moved (what setting a parameter and compiling again does, constants
+/// from the initial configuration included): central differences of `phi` of `build(data +- h)`
+/// at random states (`q0` held inside `build`), with the step and tolerance of
+/// [`check_generic`]'s data check, for the same reasons.
+pub fn check_rebuilt<C: GenericPhi + Constraint>(c: &C, build: &dyn Fn(&[f64]) -> C, bodies: usize, seed: u64) {
+    let data: Vec<f64> = c.data().iter().map(|&(_, v)| v).collect();
+    random_states(bodies, seed, &|_| true, &mut |q, _, t| {
+        let big = q.iter().chain(&data).chain([&t]).fold(0.0f64, |a, v| a.max(v.abs()));
+        let constant = |_: usize, v: f64| HyperDual::constant(v);
+        for (k, (name, v)) in c.data().iter().enumerate() {
+            let out = generic_at(c, q, t, &constant, &|j, x| HyperDual::seed(x, if j == k { 1.0 } else { 0.0 }, 0.0));
+            let h = 1e-6 * v.abs().max(1.0);
+            let (mut up, mut down) = (data.clone(), data.clone());
+            up[k] += h;
+            down[k] -= h;
+            let (mut fp, mut fm) = (vec![0.0; c.rows()], vec![0.0; c.rows()]);
+            build(&up).phi_at(q, t, &mut fp);
+            build(&down).phi_at(q, t, &mut fm);
+            for r in 0..c.rows() {
+                let fd = (fp[r] - fm[r]) / (2.0 * h);
+                let tol = 1e-8 * (1.0 + big) * (1.0 + big);
+                assert!((out[r].e1 - fd).abs() <= tol, "rebuilt: {c:?}: row {r} d/d {name} {} vs fd {fd}", out[r].e1);
+            }
+        }
+    });
+}
+
+/// Each of `c`'s data names is a field of its model-file entry `T` (the name before `[`), under
+/// which the model's compiler finds the number's gradient.
+pub fn assert_data_fields<T: schemars::JsonSchema>(c: &dyn Constraint) {
+    let schema = serde_json::to_value(schemars::schema_for!(T)).expect("a schema is JSON");
+    for (name, _) in c.data() {
+        let field = name.split('[').next().unwrap_or(name);
+        let known = schema["properties"].get(field).is_some();
+        assert!(known, "{c:?}: data {name} is not a field of {}", std::any::type_name::<T>());
+    }
+}
+
 /// Run [`check_generic`] at random states of a system with `bodies` bodies.
 pub fn check_generic_random<C: GenericPhi + Constraint>(c: &C, bodies: usize, seed: u64) {
     check_generic_random_where(c, bodies, seed, &|_| true);

@@ -165,13 +165,16 @@ pub(crate) fn compile(spec: &TranslationalJoint, cx: &mut impl JointContext, pat
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::{assert_close, check_fd_random, check_generic_random, evaluate, OnSlice};
+    use crate::constraints::testing::{
+        assert_close, assert_data_fields, check_fd_random, check_generic_random, evaluate, OnSlice,
+    };
 
     #[test]
     fn derivatives_match_finite_differences() {
         let c = Translational::new(BodyIx(Some(0)), [0.3, -0.2], [1.0, 2.0], BodyIx(Some(3)), [-1.1, 0.4], [0.0, -3.0]);
         check_fd_random(&c, 2, 1);
         check_generic_random(&c, 2, 1);
+        assert_data_fields::<TranslationalJoint>(&c);
         let g = Translational::new(BodyIx::GROUND, [0.5, -2.0], [2.0, 0.0], BodyIx(Some(3)), [0.7, 0.1], [1.0, 1.0]);
         check_fd_random(&g, 2, 2);
         check_generic_random(&g.near(-7.0), 2, 2);
