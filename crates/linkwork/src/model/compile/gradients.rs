@@ -203,7 +203,7 @@ mod tests {
     }
 
     /// The model of `text` with the values `set`, and every number handed to its elements.
-    fn build(name: &str, text: &str, set: &[(String, String)]) -> (Model, HashMap<String, (f64, Vec<f64>)>) {
+    fn build(name: &str, text: &str, set: &[(String, String)]) -> (Model, Handed) {
         let parsed = parse_partial_with(text, set).unwrap_or_else(|p| panic!("{name}: {p:?}"));
         assert!(parsed.problems.is_empty(), "{name}: {:?}", parsed.problems);
         let (model, handed) = compiled(&parsed.spec, &parsed.broken, &examples());
@@ -213,7 +213,7 @@ mod tests {
     /// Every number of the model that has derivatives, by a name for the messages, in a fixed
     /// order: the parameters, each body's mass, inertia and points, gravity, each joint's,
     /// driver's and measure's data, and every number handed to an element.
-    fn numbers(model: &Model, handed: &HashMap<String, (f64, Vec<f64>)>) -> Vec<(String, f64, Vec<f64>)> {
+    fn numbers(model: &Model, handed: &Handed) -> Vec<(String, f64, Vec<f64>)> {
         let g = &model.gradients;
         let mut out = Vec::new();
         for ((name, v), d) in model.parameters.iter().zip(&g.params) {
