@@ -262,6 +262,9 @@ mod tests {
     fn every_examples_derivatives_are_central_differences_of_its_compiles() {
         let examples = with_parameters();
         assert!(examples.len() >= 8, "{:?}", examples.iter().map(|e| &e.0).collect::<Vec<_>>());
+        // The derivatives checked that are not zero, each example's, so that the check is
+        // not one of zeros against zeros.
+        let mut moving = Vec::new();
         for (name, text) in &examples {
             let (model, handed) = build(name, text, &[]);
             let base = numbers(&model, &handed);
@@ -283,8 +286,19 @@ mod tests {
                         d[k]
                     );
                 }
+                let handed = base.iter().filter(|(what, ..)| what.starts_with("handed "));
+                moving.push((name, handed.filter(|(_, _, d)| d[k] != 0.0).count()));
             }
         }
+        let at_least = |example: &str, count: usize| {
+            let found: usize = moving.iter().filter(|(n, _)| *n == example).map(|(_, c)| c).sum();
+            assert!(found >= count, "{example}: {found} numbers handed to elements move with a parameter");
+        };
+        // quick_return_a: 6 points named by its joints move; fourbar_placed: its joints' `at`
+        // and the points placed from it; sixbar_leg: points placed by lengths.
+        at_least("quick_return_a.yaml", 6);
+        at_least("fourbar_placed.yaml", 8);
+        at_least("sixbar_leg.yaml", 8);
     }
 
     /// The recording itself, by hand: quick_return_a's joint A holds the rocker to ground at
