@@ -3,7 +3,8 @@
 //! [`Context`], the joints' and drivers' [`JointContext`] (each compiles itself in its
 //! `constraints` module) and the force elements' [`ForceContext`] (each in its `forces` module);
 //! its other pieces are the sections' own: [`bodies`], [`expressions`], [`measures`],
-//! [`analyses`].
+//! [`analyses`], and [`gradients`], the derivatives of the model's numbers with respect to its
+//! parameters.
 
 mod analyses;
 mod bodies;
