@@ -168,11 +168,10 @@ impl Cx<'_> {
     }
 }
 
-/// Whether a section's entry (a tagged enum, serialized as `{kind: {fields}}`) writes `field`.
+/// Whether a section's entry (serialized as its fields, its `type` among them) writes `field`.
 fn writes<T: serde::Serialize>(entry: &T, field: &str) -> bool {
     let value = serde_json::to_value(entry).unwrap_or_default();
-    let fields = value.as_object().and_then(|kind| kind.values().next());
-    fields.and_then(|f| f.get(field)).is_some_and(|v| !v.is_null())
+    value.get(field).is_some_and(|v| !v.is_null())
 }
 
 #[cfg(test)]
@@ -317,6 +316,17 @@ mod tests {
         assert_eq!(handed["joints.A.point_j[1]"], (-2.0, unit("pivots", -1.0)));
         assert_eq!(handed["joints.B_slot.point_j[0]"], (2.0, unit("rocker", 0.5)));
         assert_eq!(handed["joints.B_slot.point_j[1]"], (0.0, zero));
+    }
+
+    /// A field is written when the entry gives it: a distance joint's length, left out, is
+    /// taken from the initial configuration (held); its points are written.
+    #[test]
+    fn an_entry_writes_the_fields_it_gives() {
+        let joint = |text: &str| -> JointSpec { serde_yaml_ng::from_str(text).expect("a joint") };
+        let bare = joint("{type: distance, body_i: a, point_i: [0, 0], body_j: b, point_j: [1, 0]}");
+        let long = joint("{type: distance, body_i: a, point_i: [0, 0], body_j: b, point_j: [1, 0], length: 2}");
+        assert!(!writes(&bare, "length") && writes(&long, "length"));
+        assert!(writes(&bare, "point_i") && writes(&bare, "body_j") && !writes(&bare, "radius"));
     }
 
     /// A file without parameters computes no derivatives at all.
