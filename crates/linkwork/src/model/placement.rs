@@ -56,11 +56,8 @@ pub(super) type Grad2 = [Vec<f64>; 2];
 
 /// The derivatives `(d x, d y)` along each of `count` parameters, `along(k)` the `k`-th.
 fn each(count: usize, along: impl Fn(usize) -> [f64; 2]) -> Grad2 {
-    let mut out = [vec![0.0; count], vec![0.0; count]];
-    for k in 0..count {
-        [out[0][k], out[1][k]] = along(k);
-    }
-    out
+    let (x, y) = (0..count).map(along).map(|[x, y]| (x, y)).unzip();
+    [x, y]
 }
 
 /// The derivatives of `A^T w` (a global vector `w` seen in the frame `f`) from those of `w`

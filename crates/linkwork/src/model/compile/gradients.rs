@@ -168,11 +168,10 @@ impl Cx<'_> {
     }
 }
 
-/// Whether a section's entry (a tagged enum, serialized as `{kind: {fields}}`) writes `field`.
+/// Whether a section's entry (serialized as its fields, its `type` among them) writes `field`.
 fn writes<T: serde::Serialize>(entry: &T, field: &str) -> bool {
     let value = serde_json::to_value(entry).unwrap_or_default();
-    let fields = value.as_object().and_then(|kind| kind.values().next());
-    fields.and_then(|f| f.get(field)).is_some_and(|v| !v.is_null())
+    value.get(field).is_some_and(|v| !v.is_null())
 }
 
 #[cfg(test)]
@@ -203,7 +202,7 @@ mod tests {
     }
 
     /// The model of `text` with the values `set`, and every number handed to its elements.
-    fn build(name: &str, text: &str, set: &[(String, String)]) -> (Model, HashMap<String, (f64, Vec<f64>)>) {
+    fn build(name: &str, text: &str, set: &[(String, String)]) -> (Model, Handed) {
         let parsed = parse_partial_with(text, set).unwrap_or_else(|p| panic!("{name}: {p:?}"));
         assert!(parsed.problems.is_empty(), "{name}: {:?}", parsed.problems);
         let (model, handed) = compiled(&parsed.spec, &parsed.broken, &examples());
@@ -213,7 +212,7 @@ mod tests {
     /// Every number of the model that has derivatives, by a name for the messages, in a fixed
     /// order: the parameters, each body's mass, inertia and points, gravity, each joint's,
     /// driver's and measure's data, and every number handed to an element.
-    fn numbers(model: &Model, handed: &HashMap<String, (f64, Vec<f64>)>) -> Vec<(String, f64, Vec<f64>)> {
+    fn numbers(model: &Model, handed: &Handed) -> Vec<(String, f64, Vec<f64>)> {
         let g = &model.gradients;
         let mut out = Vec::new();
         for ((name, v), d) in model.parameters.iter().zip(&g.params) {
@@ -262,6 +261,9 @@ mod tests {
     fn every_examples_derivatives_are_central_differences_of_its_compiles() {
         let examples = with_parameters();
         assert!(examples.len() >= 8, "{:?}", examples.iter().map(|e| &e.0).collect::<Vec<_>>());
+        // The derivatives checked that are not zero, each example's, so that the check is
+        // not one of zeros against zeros.
+        let mut moving = Vec::new();
         for (name, text) in &examples {
             let (model, handed) = build(name, text, &[]);
             let base = numbers(&model, &handed);
@@ -283,8 +285,19 @@ mod tests {
                         d[k]
                     );
                 }
+                let handed = base.iter().filter(|(what, ..)| what.starts_with("handed "));
+                moving.push((name, handed.filter(|(_, _, d)| d[k] != 0.0).count()));
             }
         }
+        let at_least = |example: &str, count: usize| {
+            let found: usize = moving.iter().filter(|(n, _)| *n == example).map(|(_, c)| c).sum();
+            assert!(found >= count, "{example}: {found} numbers handed to elements move with a parameter");
+        };
+        // quick_return_a: 6 points named by its joints move; fourbar_placed: its joints' `at`
+        // and the points placed from it; sixbar_leg: points placed by lengths.
+        at_least("quick_return_a.yaml", 6);
+        at_least("fourbar_placed.yaml", 8);
+        at_least("sixbar_leg.yaml", 8);
     }
 
     /// The recording itself, by hand: quick_return_a's joint A holds the rocker to ground at
@@ -303,6 +316,17 @@ mod tests {
         assert_eq!(handed["joints.A.point_j[1]"], (-2.0, unit("pivots", -1.0)));
         assert_eq!(handed["joints.B_slot.point_j[0]"], (2.0, unit("rocker", 0.5)));
         assert_eq!(handed["joints.B_slot.point_j[1]"], (0.0, zero));
+    }
+
+    /// A field is written when the entry gives it: a distance joint's length, left out, is
+    /// taken from the initial configuration (held); its points are written.
+    #[test]
+    fn an_entry_writes_the_fields_it_gives() {
+        let joint = |text: &str| -> JointSpec { serde_yaml_ng::from_str(text).expect("a joint") };
+        let bare = joint("{type: distance, body_i: a, point_i: [0, 0], body_j: b, point_j: [1, 0]}");
+        let long = joint("{type: distance, body_i: a, point_i: [0, 0], body_j: b, point_j: [1, 0], length: 2}");
+        assert!(!writes(&bare, "length") && writes(&long, "length"));
+        assert!(writes(&bare, "point_i") && writes(&bare, "body_j") && !writes(&bare, "radius"));
     }
 
     /// A file without parameters computes no derivatives at all.

@@ -3,7 +3,8 @@
 //! [`Context`], the joints' and drivers' [`JointContext`] (each compiles itself in its
 //! `constraints` module) and the force elements' [`ForceContext`] (each in its `forces` module);
 //! its other pieces are the sections' own: [`bodies`], [`expressions`], [`measures`],
-//! [`analyses`].
+//! [`analyses`], and [`gradients`], the derivatives of the model's numbers with respect to its
+//! parameters.
 
 mod analyses;
 mod bodies;
@@ -44,13 +45,13 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
     compiled(spec, broken, folder).0
 }
 
-/// As [`compile_partial`], with every number handed to an element and its derivatives, by path
-/// (`Cx::handed`), which the tests of the derivatives check one by one.
-fn compiled(
-    spec: &ModelSpec,
-    broken: &[String],
-    folder: &Path,
-) -> (Result<Model, Vec<Problem>>, HashMap<String, (f64, Vec<f64>)>) {
+/// Each number handed to an element, with its derivatives with respect to the parameters, by
+/// path ([`Cx::handed`]).
+type Handed = HashMap<String, (f64, Vec<f64>)>;
+
+/// As [`compile_partial`], with every number handed to an element and its derivatives
+/// ([`Handed`]), which the tests of the derivatives check one by one.
+fn compiled(spec: &ModelSpec, broken: &[String], folder: &Path) -> (Result<Model, Vec<Problem>>, Handed) {
     let mut cx = Cx {
         spec,
         points: IndexMap::new(),
@@ -181,7 +182,7 @@ struct Cx<'s> {
     /// Each number handed to an element ([`Context::hand`]) or placed for one, with its
     /// derivatives with respect to the parameters, by path (`joints.A.point_i[0]`); empty for a
     /// file without parameters.
-    handed: HashMap<String, (f64, Vec<f64>)>,
+    handed: Handed,
     /// The derivatives of each owner's named points, in its frame ([`Drawn::gradients`]).
     point_gradients: IndexMap<String, IndexMap<String, Grad2>>,
     /// The derivatives of each body's initial pose ([`Drawn::pose_gradients`]).
