@@ -481,20 +481,13 @@ fn cases() -> Vec<Case> {
             d3: |_| 0.0,
         },
         Case {
-            src: "x^3",
+            // the operator and the function, each x^3
+            src: "x^3 + pow(x, 3)",
             points: &[-1.5, 0.0, 0.5, 2.0],
-            f: |x| x * x * x,
-            d1: |x| 3.0 * x * x,
-            d2: |x| 6.0 * x,
-            d3: |_| 6.0,
-        },
-        Case {
-            src: "pow(x, 3)",
-            points: &[-1.5, 0.0, 2.0],
-            f: |x| x * x * x,
-            d1: |x| 3.0 * x * x,
-            d2: |x| 6.0 * x,
-            d3: |_| 6.0,
+            f: |x| 2.0 * x * x * x,
+            d1: |x| 6.0 * x * x,
+            d2: |x| 12.0 * x,
+            d3: |_| 12.0,
         },
         Case {
             src: "x^-2",
