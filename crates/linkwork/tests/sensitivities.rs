@@ -64,8 +64,7 @@ fn step(model: &Model, name: &str) -> f64 {
 /// The examples with parameters whose kinematic analyses have no sensitivities yet, each with
 /// the element the run names: the cam joints (this increment differentiates the geometric
 /// joints and the drivers).
-const NOT_YET: &[(&str, &str)] =
-    &[("cam_profile.yaml", "joints."), ("cam_roller.yaml", "joints."), ("cam_table.yaml", "joints.")];
+const NOT_YET: &[(&str, &str)] = &[("cam_profile.yaml", "joints."), ("cam_roller.yaml", "joints.")];
 
 /// Every kinematic analysis of every example with parameters: the derivative of every column
 /// with respect to every parameter agrees with the finite differences of whole runs to 1e-7 of
@@ -85,6 +84,7 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
         .collect();
     files.sort();
     let mut checked = Vec::new();
+    let mut refused = Vec::new();
     let mut failures = Vec::new();
     for path in files {
         let file = path.file_name().expect("a name").to_string_lossy().into_owned();
@@ -100,6 +100,7 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
             let results = match run_with(&model, name, &parameters) {
                 Ok(r) => r,
                 Err(Error::Model(problems)) if NOT_YET.iter().any(|(f, p)| *f == file && problems[0].path.starts_with(p)) => {
+                    refused.push(file.clone());
                     continue;
                 }
                 Err(e) => {
@@ -132,6 +133,8 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
         }
     }
     assert!(failures.is_empty(), "{} disagreements:\n{}", failures.len(), failures.join("\n"));
+    // The list of what is not differentiated yet stays true: each example on it is refused.
+    assert_eq!(refused, NOT_YET.iter().map(|(f, _)| f.to_string()).collect::<Vec<_>>());
     for expected in ["slider_crank_param.yaml kinematics", "quick_return_a.yaml kinematics", "sixbar_leg.yaml kinematics"] {
         assert!(checked.iter().any(|c| c == expected), "{expected} was checked; checked: {checked:?}");
     }

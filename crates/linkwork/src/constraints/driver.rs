@@ -97,11 +97,12 @@ impl Driver {
         Driver { kind, f, g }
     }
 
-    /// `f(t)` over any [`Scalar`] at `at`: the one place the generic `Phi` evaluates the
-    /// prescribed function.
+    /// `f(t)` over any [`Scalar`] at `at`, with the parameters of `at` (so that its derivative
+    /// along a parameter is there): the one place the generic `Phi` evaluates the prescribed
+    /// function.
     #[inline]
     fn prescribed<S: Scalar>(&self, at: &At<'_, S>) -> S {
-        self.f.expr().eval(&[at.t])
+        self.f.eval_params(at.t, at.params)
     }
 
     /// What this driver prescribes.

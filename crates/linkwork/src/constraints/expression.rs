@@ -175,7 +175,7 @@ impl GenericPhi for GeneralConstraint {
                 Var::Time => at.t,
             };
         }
-        out[0] = self.expr.eval(&z[..self.vars.len()]);
+        out[0] = self.expr.eval_params(&z[..self.vars.len()], at.params);
     }
 }
 

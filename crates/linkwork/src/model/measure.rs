@@ -15,7 +15,7 @@ impl Measure {
                 if e.reactions().next().is_some() {
                     return None;
                 }
-                { let _ = (t, params); None }
+                Some(e.eval_params(q, qdot, qddot, &[], t, params))
             }
             MeasureKind::Point { body: b, component, .. } => {
                 use spec::PointComponent as C;
