@@ -11,20 +11,96 @@
 //! Phi_q qddot_p = -(d/dp (Phi_q qddot - gamma)) with qddot_p = 0   (acceleration)
 //! ```
 //!
-//! Each right-hand side is one part of `Phi` evaluated over [`Tri`] numbers seeded with the
-//! time direction twice (`e1`, `e2`: `q` along `qdot`, `e12` along `qddot`, `t` along 1) and the
-//! parameter's direction (`e3`: `q` along `q_p`, `e13` and `e23` along `qdot_p`, `e123` along
-//! `qddot_p`; each element's numbers and the parameters along their gradients): its `e3`, `e13`
-//! and `e123` parts, each evaluated with the unknown of its level zero. The square system of
+//! Each right-hand side is one part of `Phi` evaluated over numbers seeded with the time
+//! direction (`q` along `qdot`, and `qddot` for the second derivative; `t` along 1) and the
+//! parameter's direction (`q` along `q_p`, `qdot_p`, `qddot_p`; each element's numbers and the
+//! parameters along their gradients), each evaluated with the unknown of its level zero: the
+//! [`Dual`] part along the parameter at the position level, the [`HyperDual`] mixed part of time
+//! and parameter at the velocity level, and the [`Tri`] part `e123` (time twice, then the
+//! parameter) at the acceleration level. Each level uses the cheapest type that carries its part. The square system of
 //! the independent rows is the one the analysis solves; rows it found redundant hold
 //! implicitly. The measures follow from one more evaluation over the same numbers.
 
 use crate::constraints::{At, Constraint};
 use crate::error::{Error, Problem};
-use crate::expr::{Scalar, Tri};
+use crate::expr::{Dual, HyperDual, Scalar, Tri};
 use crate::linalg::SparseLu;
 use crate::model::{Analysis, Model};
 use crate::results::Results;
+
+/// The numbers of one level of the sensitivity equations: how a coordinate, the time and a
+/// number that depends on the parameters only are seeded, the element's rows over them, and
+/// the part of a row that is the level's right-hand side.
+trait Level: Scalar {
+    /// A coordinate `x = [q, qdot, qddot]` with its derivatives `d = [q_p, qdot_p, qddot_p]`
+    /// along the parameter.
+    fn coordinate(x: [f64; 3], d: [f64; 3]) -> Self;
+    /// The time `t`, moving along the time direction.
+    fn time(t: f64) -> Self;
+    /// A number `v` that depends on the parameters only, with derivative `g` along the one.
+    fn fixed(v: f64, g: f64) -> Self;
+    /// The part of a row that the level solves for.
+    fn part(self) -> f64;
+    /// `c`'s rows over these numbers ([`Constraint::phi_tri`] and its kin).
+    fn rows(c: &dyn Constraint, at: &At<'_, Self>, data: &[Self], out: &mut [Self]) -> bool;
+}
+
+/// Position level: the derivative along the parameter alone.
+impl Level for Dual {
+    fn coordinate(x: [f64; 3], d: [f64; 3]) -> Dual {
+        Dual::new(x[0], d[0])
+    }
+    fn time(t: f64) -> Dual {
+        Dual::new(t, 0.0)
+    }
+    fn fixed(v: f64, g: f64) -> Dual {
+        Dual::new(v, g)
+    }
+    fn part(self) -> f64 {
+        self.d
+    }
+    fn rows(c: &dyn Constraint, at: &At<'_, Dual>, data: &[Dual], out: &mut [Dual]) -> bool {
+        c.phi_dual(at, data, out)
+    }
+}
+
+/// Velocity level: time in the first direction, the parameter in the second, their mixed part.
+impl Level for HyperDual {
+    fn coordinate(x: [f64; 3], d: [f64; 3]) -> HyperDual {
+        HyperDual::new(x[0], x[1], d[0], d[1])
+    }
+    fn time(t: f64) -> HyperDual {
+        HyperDual::new(t, 1.0, 0.0, 0.0)
+    }
+    fn fixed(v: f64, g: f64) -> HyperDual {
+        HyperDual::new(v, 0.0, g, 0.0)
+    }
+    fn part(self) -> f64 {
+        self.e12
+    }
+    fn rows(c: &dyn Constraint, at: &At<'_, HyperDual>, data: &[HyperDual], out: &mut [HyperDual]) -> bool {
+        c.phi_hyper(at, data, out)
+    }
+}
+
+/// Acceleration level: time twice, then the parameter ([`Tri::trajectory`]), the part `e123`.
+impl Level for Tri {
+    fn coordinate(x: [f64; 3], d: [f64; 3]) -> Tri {
+        Tri::trajectory(x, d)
+    }
+    fn time(t: f64) -> Tri {
+        Tri::trajectory([t, 1.0, 0.0], [0.0; 3])
+    }
+    fn fixed(v: f64, g: f64) -> Tri {
+        Tri::trajectory([v, 0.0, 0.0], [g, 0.0, 0.0])
+    }
+    fn part(self) -> f64 {
+        self.e123
+    }
+    fn rows(c: &dyn Constraint, at: &At<'_, Tri>, data: &[Tri], out: &mut [Tri]) -> bool {
+        c.phi_tri(at, data, out)
+    }
+}
 
 /// One element of the system with its numbers and their gradients.
 struct Seeded<'m> {
@@ -40,6 +116,21 @@ struct Seeded<'m> {
     grads: &'m [Vec<f64>],
 }
 
+/// The buffers of one level: the coordinates, parameters, an element's numbers and the rows.
+struct Buffers<S> {
+    q: Vec<S>,
+    params: Vec<S>,
+    data: Vec<S>,
+    full: Vec<S>,
+}
+
+impl<S: Level> Buffers<S> {
+    fn new(n: usize, parameters: usize, m: usize) -> Buffers<S> {
+        let zero = S::constant(0.0);
+        Buffers { q: vec![zero; n], params: vec![zero; parameters], data: Vec::new(), full: vec![zero; m] }
+    }
+}
+
 /// The sensitivities of a kinematic analysis: its elements, the parameters asked, and the
 /// buffers of one output time.
 pub(crate) struct Sensitivity<'m> {
@@ -48,24 +139,15 @@ pub(crate) struct Sensitivity<'m> {
     asked: Vec<usize>,
     names: Vec<String>,
     elements: Vec<Seeded<'m>>,
-    /// (m) the system's rows over `Tri`.
-    full: Vec<Tri>,
-    /// (n) coordinates over `Tri`.
-    q: Vec<Tri>,
-    /// (parameters) over `Tri`, and the element's numbers.
-    params: Vec<Tri>,
-    data: Vec<Tri>,
+    position: Buffers<Dual>,
+    velocity: Buffers<HyperDual>,
+    acceleration: Buffers<Tri>,
     /// (n) a right-hand side in the independent rows.
     rhs: Vec<f64>,
     /// (n) `q_p`, `qdot_p`, `qddot_p` of the parameter being solved for.
     dq: [Vec<f64>; 3],
     /// (parameters) each one's row of derivatives of every column.
     rows: Vec<Vec<f64>>,
-}
-
-/// A number that depends on the parameters only, `v` with derivative `g` along the parameter.
-fn fixed(v: f64, g: f64) -> Tri {
-    Tri::trajectory([v, 0.0, 0.0], [g, 0.0, 0.0])
 }
 
 impl<'m> Sensitivity<'m> {
@@ -89,17 +171,16 @@ impl<'m> Sensitivity<'m> {
             });
             row += element.constraint.rows();
         }
-        let n = model.n();
+        let (n, count) = (model.n(), model.parameters.len());
         let names = asked.iter().map(|&k| model.parameters.get_index(k).map_or_else(String::new, |(p, _)| p.clone()));
         let sensitivity = Sensitivity {
             model,
             asked: asked.to_vec(),
             names: names.collect(),
             elements,
-            full: vec![Tri::constant(0.0); row],
-            q: vec![Tri::constant(0.0); n],
-            params: model.parameters.values().map(|&v| Tri::constant(v)).collect(),
-            data: Vec::new(),
+            position: Buffers::new(n, count, row),
+            velocity: Buffers::new(n, count, row),
+            acceleration: Buffers::new(n, count, row),
             rhs: vec![0.0; n],
             dq: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
             rows: vec![Vec::new(); asked.len()],
@@ -116,20 +197,19 @@ impl<'m> Sensitivity<'m> {
                 format!("{what} has no design sensitivities yet (asked for with `sensitivities`)"),
             )]))
         };
-        let n = self.model.n();
-        let zero = vec![Tri::constant(0.0); n];
-        let at = At { q: &zero, t: Tri::constant(0.0), params: &self.params };
-        let mut out = vec![Tri::constant(0.0); self.full.len()];
+        let b = &self.position;
+        let at = At { q: &b.q, t: Dual::constant(0.0), params: &b.params };
+        let mut out = b.full.clone();
         for e in &self.elements {
-            let data: Vec<Tri> = e.data.iter().map(|&v| Tri::constant(v)).collect();
-            if !e.constraint.phi_tri(&at, &data, &mut out[e.row..]) {
+            let data: Vec<Dual> = e.data.iter().map(|&v| Dual::constant(v)).collect();
+            if !e.constraint.phi_dual(&at, &data, &mut out[e.row..]) {
                 let (section, what) = if e.constraint.driven().is_some() { ("drivers", "driver") } else { ("joints", "joint") };
                 return unsupported(format!("{section}.{}", e.name), &format!("the {} {what}", e.kind));
             }
         }
         for m in &self.model.measures {
-            let data: Vec<Tri> = m.kind.data().iter().map(|&(_, v)| Tri::constant(v)).collect();
-            if m.value_generic(&zero, &zero, &zero, Tri::constant(0.0), &data, &self.params).is_none() {
+            let data: Vec<Dual> = m.kind.data().iter().map(|&(_, v)| Dual::constant(v)).collect();
+            if m.value_generic(&b.q, &b.q, &b.q, Dual::constant(0.0), &data, &b.params).is_none() {
                 return unsupported(format!("measures.{}", m.name), "this measure");
             }
         }
@@ -144,68 +224,80 @@ impl<'m> Sensitivity<'m> {
         lu: &mut SparseLu,
         rows: &[usize],
         t: f64,
-        (q, qdot, qddot): (&[f64], &[f64], &[f64]),
+        x: (&[f64], &[f64], &[f64]),
     ) -> Result<(), Error> {
         for k in 0..self.asked.len() {
             let p = self.asked[k];
-            for (x, g) in self.params.iter_mut().zip(&self.model.gradients.params) {
-                *x = fixed(x.v, g[p]);
-            }
             self.dq.iter_mut().for_each(|d| d.fill(0.0));
-            for level in 0..3 {
-                self.seed(q, qdot, qddot);
-                self.evaluate(p, t);
-                // The level's part of each independent row: e3, e13, e123.
-                for (r, &row) in self.rhs.iter_mut().zip(rows) {
-                    let x = self.full[row];
-                    *r = -[x.e3, x.e13, x.e123][level];
-                }
-                lu.solve(&mut self.rhs);
-                self.dq[level].copy_from_slice(&self.rhs);
-            }
-            self.rows[k] = self.columns(p, t, q, qdot, qddot);
+            let mut rhs = std::mem::take(&mut self.rhs);
+            level(&mut self.position, &self.elements, self.model, p, t, x, &self.dq, rows, &mut rhs);
+            lu.solve(&mut rhs);
+            self.dq[0].copy_from_slice(&rhs);
+            level(&mut self.velocity, &self.elements, self.model, p, t, x, &self.dq, rows, &mut rhs);
+            lu.solve(&mut rhs);
+            self.dq[1].copy_from_slice(&rhs);
+            level(&mut self.acceleration, &self.elements, self.model, p, t, x, &self.dq, rows, &mut rhs);
+            lu.solve(&mut rhs);
+            self.dq[2].copy_from_slice(&rhs);
+            self.rhs = rhs;
+            self.rows[k] = self.columns(p, t, x);
         }
         results.push_sensitivities(t, &self.names, &self.rows)
     }
 
-    /// The coordinates over `Tri` at `(q, qdot, qddot)` with the derivatives found so far.
-    fn seed(&mut self, q: &[f64], qdot: &[f64], qddot: &[f64]) {
-        let [dq, dv, da] = &self.dq;
-        for (i, x) in self.q.iter_mut().enumerate() {
-            *x = Tri::trajectory([q[i], qdot[i], qddot[i]], [dq[i], dv[i], da[i]]);
-        }
-    }
-
-    /// Every element's rows at time `t` over the seeded coordinates, with the numbers seeded
-    /// along parameter `p`.
-    fn evaluate(&mut self, p: usize, t: f64) {
-        let at = At { q: &self.q, t: Tri::trajectory([t, 1.0, 0.0], [0.0; 3]), params: &self.params };
-        for e in &self.elements {
-            self.data.clear();
-            self.data.extend(e.data.iter().zip(e.grads).map(|(&v, g)| fixed(v, g[p])));
-            e.constraint.phi_tri(&at, &self.data, &mut self.full[e.row..]);
-        }
-    }
-
     /// The derivatives of the columns (each body's quantities, then the measures) with respect
     /// to parameter `p`, from `q_p`, `qdot_p`, `qddot_p`.
-    fn columns(&self, p: usize, t: f64, q: &[f64], qdot: &[f64], qddot: &[f64]) -> Vec<f64> {
+    fn columns(&mut self, p: usize, t: f64, (q, qdot, qddot): (&[f64], &[f64], &[f64])) -> Vec<f64> {
         let [dq, dv, da] = &self.dq;
         let bodies = q.len() / 3;
         let mut row: Vec<f64> = (0..bodies)
             .flat_map(|b| [dq, dv, da].into_iter().flat_map(move |v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]]))
             .collect();
-        let along = |x: &[f64], d: &[f64]| -> Vec<Tri> {
-            x.iter().zip(d).map(|(&v, &e)| fixed(v, e)).collect()
-        };
+        let along = |x: &[f64], d: &[f64]| -> Vec<Dual> { x.iter().zip(d).map(|(&v, &e)| Dual::new(v, e)).collect() };
         let (q, qdot, qddot) = (along(q, dq), along(qdot, dv), along(qddot, da));
-        let time = Tri::constant(t);
+        let b = &mut self.position;
+        for (x, g) in b.params.iter_mut().zip(&self.model.gradients.params).zip(self.model.parameters.values()).map(|((x, g), v)| (x, Dual::new(*v, g[p]))) {
+            *x = g;
+        }
         for (m, grads) in self.model.measures.iter().zip(&self.model.gradients.measures) {
-            let data: Vec<f64> = m.kind.data().iter().map(|&(_, v)| v).collect();
-            let data: Vec<Tri> = data.iter().zip(grads).map(|(&v, g)| fixed(v, g[p])).collect();
-            let value = m.value_generic(&q, &qdot, &qddot, time, &data, &self.params);
-            row.push(value.map_or(f64::NAN, |v| v.e3));
+            b.data.clear();
+            b.data.extend(m.kind.data().iter().zip(grads).map(|(&(_, v), g)| Dual::new(v, g[p])));
+            let value = m.value_generic(&q, &qdot, &qddot, Dual::constant(t), &b.data, &b.params);
+            row.push(value.map_or(f64::NAN, |v| v.d));
         }
         row
+    }
+}
+
+/// One level of the sensitivity equations of parameter `p` at `(t, x)` in the numbers of `b`:
+/// every element's rows with the coordinates seeded with `dq` (the unknown of the level and
+/// those after it zero), the level's part of the independent `rows` negated into `rhs`.
+#[allow(clippy::too_many_arguments)]
+fn level<S: Level>(
+    b: &mut Buffers<S>,
+    elements: &[Seeded<'_>],
+    model: &Model,
+    p: usize,
+    t: f64,
+    (q, qdot, qddot): (&[f64], &[f64], &[f64]),
+    dq: &[Vec<f64>; 3],
+    rows: &[usize],
+    rhs: &mut [f64],
+) {
+    for (i, x) in b.q.iter_mut().enumerate() {
+        *x = S::coordinate([q[i], qdot[i], qddot[i]], [dq[0][i], dq[1][i], dq[2][i]]);
+    }
+    for ((x, g), &v) in b.params.iter_mut().zip(&model.gradients.params).zip(model.parameters.values()) {
+        *x = S::fixed(v, g[p]);
+    }
+    let at = At { q: &b.q, t: S::time(t), params: &b.params };
+    for e in elements {
+        b.data.clear();
+        b.data.extend(e.data.iter().zip(e.grads).map(|(&v, g)| S::fixed(v, g[p])));
+        let supported = S::rows(e.constraint, &at, &b.data, &mut b.full[e.row..]);
+        debug_assert!(supported, "{} was checked to have derivatives", e.name);
+    }
+    for (r, &row) in rhs.iter_mut().zip(rows) {
+        *r = -b.full[row].part();
     }
 }

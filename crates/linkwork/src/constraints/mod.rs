@@ -28,7 +28,7 @@ mod translational;
 
 pub use crate::element::{BodyIx, PointRef, Tagged, DEFAULT_TRANSITION_VELOCITY};
 pub(crate) use crate::element::{Frame, Pose};
-use crate::expr::{Scalar, Tri};
+use crate::expr::{Dual, HyperDual, Scalar, Tri};
 pub use absolute::{Absolute, AbsoluteAngleJoint, AbsoluteKind, AbsolutePoint};
 pub(crate) use cam::cam_row;
 pub use cam::{Cam, CamFrame, CamJoint, CamProfileSpec, CamRow, PitchPoint, ProfileColumn};
@@ -163,6 +163,16 @@ pub trait Constraint: Debug + Send + Sync {
     fn phi_tri(&self, _at: &At<'_, Tri>, _data: &[Tri], _out: &mut [Tri]) -> bool {
         false
     }
+    /// [`Constraint::phi_tri`] over [`Dual`] numbers: the first derivatives alone, which the
+    /// position level of a sensitivity needs, at a quarter of the work.
+    fn phi_dual(&self, _at: &At<'_, Dual>, _data: &[Dual], _out: &mut [Dual]) -> bool {
+        false
+    }
+    /// [`Constraint::phi_tri`] over [`HyperDual`] numbers: the derivatives to the second order
+    /// along two directions, which the velocity level of a sensitivity needs, at half the work.
+    fn phi_hyper(&self, _at: &At<'_, HyperDual>, _data: &[HyperDual], _out: &mut [HyperDual]) -> bool {
+        false
+    }
 }
 
 /// An element's `Phi` written once over any [`Scalar`], with the element's data in the order of
@@ -174,16 +184,16 @@ pub(crate) trait GenericPhi {
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]);
 }
 
-/// [`Constraint::phi_tri`] of an element that implements [`GenericPhi`], written inside its
-/// `impl Constraint`.
+/// [`Constraint::phi_tri`], [`Constraint::phi_dual`] and [`Constraint::phi_hyper`] of an element
+/// that implements [`GenericPhi`], written inside its `impl Constraint`.
 macro_rules! phi_tri_generic {
     () => {
-        fn phi_tri(
-            &self,
-            at: &$crate::constraints::At<'_, $crate::expr::Tri>,
-            data: &[$crate::expr::Tri],
-            out: &mut [$crate::expr::Tri],
-        ) -> bool {
+        $crate::constraints::phi_tri_generic!(phi_tri, $crate::expr::Tri);
+        $crate::constraints::phi_tri_generic!(phi_dual, $crate::expr::Dual);
+        $crate::constraints::phi_tri_generic!(phi_hyper, $crate::expr::HyperDual);
+    };
+    ($name:ident, $S:ty) => {
+        fn $name(&self, at: &$crate::constraints::At<'_, $S>, data: &[$S], out: &mut [$S]) -> bool {
             $crate::constraints::GenericPhi::phi_generic(self, at, data, out);
             true
         }
