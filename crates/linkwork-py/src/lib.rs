@@ -314,7 +314,13 @@ impl PyModel {
         };
         let overrides = linkwork::Overrides { integrator, rtol, atol, t_end, step };
         let watch = Progress::new();
-        let options = RunOptions { overrides, progress: Some(Arc::clone(&watch)), stop: StopToken::new(), sink, sensitivities: Vec::new() };
+        let options = RunOptions {
+            overrides,
+            progress: Some(Arc::clone(&watch)),
+            stop: StopToken::new(),
+            sink,
+            sensitivities: Vec::new(),
+        };
         let (outcome, stopped_by) = watched(
             py,
             &options.stop,
