@@ -6,7 +6,7 @@
 //! (`constraints::JointContext`, `forces::ForceContext`).
 
 use crate::error::Problem;
-use crate::expr::{Expr, TimeFunction};
+use crate::expr::{Expr, Scalar, TimeFunction};
 use schemars::JsonSchema;
 use serde::{Deserialize, Deserializer, Serialize};
 
@@ -292,10 +292,59 @@ impl BodyIx {
     /// `(x, y, phi)` of the body from a coordinate vector (zeros for ground).
     #[inline]
     pub fn coords(self, q: &[f64]) -> [f64; 3] {
+        self.pose(q)
+    }
+
+    /// `(x, y, phi)` of the body from all coordinates over any [`Scalar`] (ground: the origin at
+    /// angle 0, constants), for equations evaluated with derivatives (design sensitivities).
+    #[inline]
+    pub fn pose<S: Scalar>(self, q: &[S]) -> [S; 3] {
         match self.0 {
             Some(k) => [q[k], q[k + 1], q[k + 2]],
-            None => [0.0; 3],
+            None => [S::constant(0.0); 3],
         }
+    }
+}
+
+/// `A(phi) v` from `(cos phi, sin phi)`, over any [`Scalar`]: a body-frame vector in the global
+/// frame. [`Frame::rotate`] is this with the frame's cached rotation.
+#[inline]
+pub(crate) fn rotated<S: Scalar>([c, s]: [S; 2], v: [S; 2]) -> [S; 2] {
+    [c * v[0] - s * v[1], s * v[0] + c * v[1]]
+}
+
+/// A body frame over any [`Scalar`]: its origin, angle and rotation, what [`Frame`] is for `f64`,
+/// for equations evaluated with derivatives (design sensitivities).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Pose<S> {
+    /// `(2)` the origin, global frame.
+    pub o: [S; 2],
+    /// The angle.
+    pub phi: S,
+    /// `(cos phi, sin phi)`.
+    cs: [S; 2],
+}
+
+impl<S: Scalar> Pose<S> {
+    /// Body `body`'s frame at the coordinates `q (n)` (ground's is the global one).
+    #[inline]
+    pub fn of(body: BodyIx, q: &[S]) -> Pose<S> {
+        let [x, y, phi] = body.pose(q);
+        Pose { o: [x, y], phi, cs: [phi.cos(), phi.sin()] }
+    }
+    /// The frame at `(x, y, phi)` held constant (a body's initial pose).
+    #[inline]
+    pub fn held([x, y, phi]: [f64; 3]) -> Pose<S> {
+        Pose {
+            o: [S::constant(x), S::constant(y)],
+            phi: S::constant(phi),
+            cs: [S::constant(phi.cos()), S::constant(phi.sin())],
+        }
+    }
+    /// `A s'`: a body-frame vector in the global frame.
+    #[inline]
+    pub fn rotate(&self, v: [S; 2]) -> [S; 2] {
+        rotated(self.cs, v)
     }
 }
 
@@ -322,7 +371,7 @@ impl Frame {
     /// `A s'`: a body-frame vector in the global frame.
     #[inline]
     pub fn rotate(&self, v: [f64; 2]) -> [f64; 2] {
-        [self.c * v[0] - self.s * v[1], self.s * v[0] + self.c * v[1]]
+        rotated([self.c, self.s], v)
     }
     /// `B s' = dA/dphi s' = R90 A s'`.
     #[inline]
@@ -354,6 +403,17 @@ impl Frame {
 /// millimetres.
 pub const DEFAULT_TRANSITION_VELOCITY: f64 = 1e-3;
 
+/// What a number an element places in a body frame from the global frame was computed from
+/// ([`Context::place`]): a global point or direction, written at `field`, seen in `body`'s frame
+/// at the initial position.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Placed<'a> {
+    /// A point: `A^T (global - r)`.
+    Point { body: &'a str, global: [f64; 2], field: &'a str },
+    /// A direction: `A^T global`.
+    Direction { body: &'a str, global: [f64; 2], field: &'a str },
+}
+
 /// What an element's (a joint's, a driver's, a force's) compile step asks of the model it is
 /// compiled in: its bodies and points by name, the initial configuration, expressions of its names, and a
 /// list of problems, each at the path of its field. The model's compiler implements the required
@@ -374,8 +434,12 @@ pub(crate) trait Context {
     /// body that is not known (reported where it is named).
     fn initial_frame(&self, name: &str) -> Option<Frame>;
     /// Record that the field at `path` was placed from global coordinates, as `value` in its
-    /// body's frame.
-    fn place(&mut self, path: String, value: [f64; 2]);
+    /// body's frame, `from` what (for its derivatives with respect to the model's parameters).
+    fn place(&mut self, path: String, value: [f64; 2], from: Placed<'_>);
+    /// Note that the number `v` at `path` (a field of the file, or one placed there) was handed
+    /// to the element being compiled: the model keeps its derivatives with respect to the
+    /// parameters under that path, for the element's data (design sensitivities).
+    fn hand(&mut self, path: &str, v: f64);
     /// An expression at `path` of the curve parameter `var` (slot 0; `what` it is), parameters
     /// and tables.
     fn curve_expr(&mut self, path: &str, src: &str, var: &str, what: &str) -> Option<Expr>;
@@ -392,12 +456,16 @@ pub(crate) trait Context {
 
     /// `v`, or a problem at `path` when it is not finite.
     fn finite(&mut self, path: &str, v: f64) -> Option<f64> {
-        finite(self.problems(), path, v)
+        let v = finite(self.problems(), path, v)?;
+        self.hand(path, v);
+        Some(v)
     }
 
     /// `v`, or a problem at `path` when it is not a finite number above zero.
     fn positive(&mut self, path: &str, v: f64) -> Option<f64> {
-        positive(self.problems(), path, v)
+        let v = positive(self.problems(), path, v)?;
+        self.hand(path, v);
+        Some(v)
     }
 
     /// `v`, or a problem at `path` when it is not a finite number at or above zero.
@@ -501,8 +569,9 @@ pub(crate) trait Context {
                 let at = self.vec2(&format!("{path}.at"), *at)?;
                 // An unknown body is reported where the joint names it (`ends`).
                 let [pi, pj] = bodies.map(|b| self.initial_frame(b).map_or([0.0; 2], |f| f.local(at)));
-                self.place(format!("{path}.point_i"), pi);
-                self.place(format!("{path}.point_j"), pj);
+                let field = format!("{path}.at");
+                self.place(format!("{path}.point_i"), pi, Placed::Point { body: bodies[0], global: at, field: &field });
+                self.place(format!("{path}.point_j"), pj, Placed::Point { body: bodies[1], global: at, field: &field });
                 Some((PointRef::Coords(pi), PointRef::Coords(pj)))
             }
             (None, [Some(pi), Some(pj)]) => Some((pi.clone(), pj.clone())),
@@ -535,8 +604,9 @@ pub(crate) trait Context {
                 let a = self.axis(&format!("{path}.axis"), *a)?;
                 // An unknown body is reported where the joint names it.
                 let local = fields.map(|(_, b, _)| self.initial_frame(b).map_or(a, |f| f.unrotate(a)));
-                for ((field, _, _), v) in fields.iter().zip(&local) {
-                    self.place(format!("{path}.{field}"), *v);
+                let global = format!("{path}.axis");
+                for ((field, body, _), v) in fields.iter().zip(&local) {
+                    self.place(format!("{path}.{field}"), *v, Placed::Direction { body, global: a, field: &global });
                 }
                 Some(local)
             }

@@ -446,6 +446,39 @@ impl Results {
         Ok(())
     }
 
+    /// The derivatives of the row just pushed ([`Results::push`]) with respect to `parameters`
+    /// (names): `rows[k]`, for `parameters[k]`, in the row's layout (every column before the
+    /// choice of columns: each body's quantities, then the extra columns). The first call names
+    /// [`Results::sensitivities`]; a derivative that is not finite is an error at `t`.
+    pub(crate) fn push_sensitivities(&mut self, t: f64, parameters: &[String], rows: &[Vec<f64>]) -> Result<(), Error> {
+        let (names, keep) = match &self.selection {
+            Selection::Applied { names, keep } => (names, Some(keep)),
+            _ => (&self.names, None),
+        };
+        for (p, row) in parameters.iter().zip(rows) {
+            debug_assert_eq!(names.len(), row.len(), "one derivative per column");
+            if let Some((k, &value)) = row.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                let element = format!("d({})/d({p})", names[k]);
+                return Err(Error::NonFinite { time: t, element, expression: String::new(), value });
+            }
+        }
+        let sensitivities = self.sensitivities.get_or_insert_with(|| Sensitivities {
+            parameters: parameters.to_vec(),
+            names: self.names.clone(),
+            values: vec![vec![Vec::new(); self.names.len()]; parameters.len()],
+        });
+        for (columns, row) in sensitivities.values.iter_mut().zip(rows) {
+            match keep {
+                Some(keep) => {
+                    let kept = row.iter().zip(keep).filter(|(_, &k)| k).map(|(v, _)| v);
+                    columns.iter_mut().zip(kept).for_each(|(c, &v)| c.push(v));
+                }
+                None => columns.iter_mut().zip(row).for_each(|(c, &v)| c.push(v)),
+            }
+        }
+        Ok(())
+    }
+
     /// Once every column is named (the first [`Results::reserve`] or [`Results::push`]): apply
     /// the choice of columns, find the peaks' columns, and size a streamed run's chunks.
     fn start(&mut self) {

@@ -12,6 +12,7 @@
 //! also serves as the chord-Newton matrix of the next sub-step); nothing is allocated in the time
 //! loop except the growth of the output columns, reserved up front.
 
+use super::sensitivity::Sensitivity;
 use super::setup::{fail, held, output_times, unmet_freedom};
 use super::{assemble_into, scaled_residual, scaled_residual_floor, Assembly, Run, SINGULAR_RATIO_KINEMATIC};
 use crate::constraints::{Config, ConfigBuf};
@@ -277,6 +278,13 @@ pub(crate) fn run_driven(
             ..Default::default()
         },
     };
+    let mut sensitivity = match run.sensitivities.as_slice() {
+        [] => None,
+        asked => match Sensitivity::new(model, analysis, asked) {
+            Ok(s) => Some(s),
+            Err(e) => return Err(fail(results, e)),
+        },
+    };
     let h = analysis.step;
     let times = output_times(analysis);
     results.reserve(times.len());
@@ -288,6 +296,9 @@ pub(crate) fn run_driven(
         s.check_output()?;
         extra_values(t0, &s.q, &s.qdot, &s.qddot, &mut extra)?;
         run.push(&mut results, t0, &s.q, &s.qdot, &s.qddot, &extra)?;
+        if let Some(sensitivity) = &mut sensitivity {
+            sensitivity.push(&mut results, &mut s.lu, &s.rows, t0, (&s.q, &s.qdot, &s.qddot))?;
+        }
         let mut dt = h;
         let mut q_pred = vec![0.0; n];
         for &target in &times[1..] {
@@ -355,6 +366,9 @@ pub(crate) fn run_driven(
             s.check_output()?;
             extra_values(target, &s.q, &s.qdot, &s.qddot, &mut extra)?;
             run.push(&mut results, target, &s.q, &s.qdot, &s.qddot, &extra)?;
+            if let Some(sensitivity) = &mut sensitivity {
+                sensitivity.push(&mut results, &mut s.lu, &s.rows, target, (&s.q, &s.qdot, &s.qddot))?;
+            }
         }
         Ok(())
     })();

@@ -12,6 +12,7 @@ mod kinematic;
 mod modes;
 pub mod promise;
 mod run;
+mod sensitivity;
 mod setup;
 mod statics;
 

@@ -136,6 +136,8 @@ pub(crate) struct Run<'a> {
     progress: Option<Arc<Progress>>,
     stop: StopToken,
     stream: Option<Stream<'a>>,
+    /// The parameters (indices in file order) whose derivatives the run computes.
+    pub(crate) sensitivities: Vec<usize>,
 }
 
 impl Run<'_> {
@@ -198,6 +200,10 @@ impl Model {
                 .map_err(|error| Box::new(Failure { error, results: Results::new(self, a) }))?,
             Err(error) => return Err(Box::new(Failure { error, results: Results::of_model(self) })),
         };
+        let sensitivities = match self.sensitivity_parameters(&analysis, &options.sensitivities) {
+            Ok(k) => k,
+            Err(error) => return Err(Box::new(Failure { error, results: Results::new(self, &analysis) })),
+        };
         let mut sink = match &options.sink {
             Sink::Memory => None,
             Sink::Stream(sink) => Some(sink.lock().unwrap_or_else(PoisonError::into_inner)),
@@ -206,6 +212,7 @@ impl Model {
             progress: options.progress.clone(),
             stop: options.stop.clone(),
             stream: sink.as_deref_mut().map(|s| Stream::new(s.as_mut())),
+            sensitivities,
         };
         let mut outcome = self.run_analysis(&analysis, &mut run);
         let Some(stream) = run.stream else { return outcome };
@@ -217,6 +224,33 @@ impl Model {
             (Err(error), Ok(results)) => Err(Box::new(Failure { error, results })),
             (_, outcome) => outcome,
         }
+    }
+
+    /// The indices of the parameters named `names` (file order of the names given), for the
+    /// sensitivities of `analysis`: an error at the field `sensitivities` for a name the model
+    /// does not define, or an analysis whose type has no sensitivities yet.
+    fn sensitivity_parameters(&self, analysis: &Analysis, names: &[String]) -> Result<Vec<usize>, Error> {
+        let problem = |message: String| Error::Model(vec![Problem::new("sensitivities", message)]);
+        if names.is_empty() {
+            return Ok(Vec::new());
+        }
+        if analysis.kind != AnalysisKind::Kinematic {
+            return Err(problem(format!(
+                "analysis '{}' is {}: design sensitivities are computed for kinematic analyses so far",
+                analysis.name,
+                analysis.kind.name()
+            )));
+        }
+        names
+            .iter()
+            .map(|name| {
+                self.parameters.get_index_of(name).ok_or_else(|| {
+                    let known: Vec<&str> = self.parameters.keys().map(String::as_str).collect();
+                    let known = if known.is_empty() { "none".to_string() } else { known.join(", ") };
+                    problem(format!("unknown parameter '{name}'; the model file defines: {known}"))
+                })
+            })
+            .collect()
     }
 
     /// Run `analysis` (with the run's changes applied) as `run`: dispatched by its type, its

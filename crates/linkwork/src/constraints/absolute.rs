@@ -13,7 +13,9 @@ use super::schema::JointContext;
 use super::CompiledJoint;
 use super::Frame;
 use super::PointRef;
+use super::{phi_tri_generic, separation, slot2, vector, At, GenericPhi, Pose, Source, POINT};
 use super::{Anchor, BodyIx, Config, Constraint, Pair, Separation, Shape, Sketch};
+use crate::expr::Scalar;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -35,13 +37,28 @@ pub struct Absolute {
     pair: Pair,
     point: [f64; 2],
     value: f64,
+    /// Where `value` comes from: the file (a data slot), the initial configuration, or none (a
+    /// driver's coordinate, `value` 0).
+    value_from: Source,
 }
 
 impl Absolute {
     /// `point`: the point in the body frame (ignored for [`AbsoluteKind::Angle`]); `value`: the
     /// coordinate it is held at (m or rad).
     pub fn new(kind: AbsoluteKind, body: BodyIx, point: [f64; 2], value: f64) -> Absolute {
-        Absolute { kind, pair: Pair::new(body, BodyIx::GROUND), point, value }
+        Absolute { kind, pair: Pair::new(body, BodyIx::GROUND), point, value, value_from: Source::File }
+    }
+
+    /// The coordinate itself, `value` 0 and not data: what a driver prescribes.
+    pub(crate) fn coordinate(kind: AbsoluteKind, body: BodyIx, point: [f64; 2]) -> Absolute {
+        Absolute { value_from: Source::Zero, ..Absolute::new(kind, body, point, 0.0) }
+    }
+
+    /// `(pose, point) => r_P` measured from the global origin, over any [`Scalar`].
+    #[inline]
+    fn position_of<S: Scalar>(pose: &Pose<S>, point: [S; 2]) -> [S; 2] {
+        let zero = S::constant(0.0);
+        separation(&Pose::of(BodyIx::GROUND, &[]), [zero, zero], pose, point)
     }
 
     /// `(q) => r_P` measured from the global origin.
@@ -101,6 +118,33 @@ impl Constraint for Absolute {
             None => 0.0,
         };
     }
+    /// `point` (not for the angle), and `value` when the file gives it.
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        let mut data = match self.axis() {
+            Some(_) => vector(POINT, self.point).to_vec(),
+            None => Vec::new(),
+        };
+        if self.value_from == Source::File {
+            data.push(("value", self.value));
+        }
+        data
+    }
+    phi_tri_generic!();
+}
+
+impl GenericPhi for Absolute {
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+        let at_pose = |pose: &Pose<S>| match self.axis() {
+            Some(k) => Absolute::position_of(pose, slot2(data, 0))[k],
+            None => pose.phi,
+        };
+        let value = match self.value_from {
+            Source::File => data[data.len() - 1],
+            Source::Start([start, _]) => at_pose(&Pose::held(start)),
+            Source::Zero => S::constant(0.0),
+        };
+        out[0] = at_pose(&Pose::of(self.pair.i, at.q)) - value;
+    }
 }
 
 /// `absolute_x` / `absolute_y`: a global coordinate of a body point is constant.
@@ -148,11 +192,14 @@ fn held_point(
 ) -> Option<CompiledJoint> {
     let AbsolutePoint { body, point, value } = spec;
     let (b, s) = cx.moving_point(path, body, point, "constrained")?;
-    let value = match value {
-        Some(v) => cx.finite(&format!("{path}.value"), *v)?,
-        None => Frame::of_slice(b, cx.q0()).point(s)[if kind == AbsoluteKind::X { 0 } else { 1 }],
+    let (value, value_from) = match value {
+        Some(v) => (cx.finite(&format!("{path}.value"), *v)?, Source::File),
+        None => {
+            let v = Frame::of_slice(b, cx.q0()).point(s)[if kind == AbsoluteKind::X { 0 } else { 1 }];
+            (v, Source::start(b, BodyIx::GROUND, cx.q0()))
+        }
     };
-    Some((Box::new(Absolute::new(kind, b, s, value)), None))
+    Some((Box::new(Absolute { value_from, ..Absolute::new(kind, b, s, value) }), None))
 }
 
 /// An `absolute_angle` joint at `path` compiled in `cx`.
@@ -163,24 +210,39 @@ pub(crate) fn compile_angle(
 ) -> Option<CompiledJoint> {
     let AbsoluteAngleJoint { body, value } = spec;
     let (b, _) = cx.moving_point(path, body, &PointRef::default(), "constrained")?;
-    let value = match value {
-        Some(v) => cx.finite(&format!("{path}.value"), *v)?,
-        None => b.coords(cx.q0())[2],
+    let (value, value_from) = match value {
+        Some(v) => (cx.finite(&format!("{path}.value"), *v)?, Source::File),
+        None => (b.coords(cx.q0())[2], Source::start(b, BodyIx::GROUND, cx.q0())),
     };
-    Some((Box::new(Absolute::new(AbsoluteKind::Angle, b, [0.0, 0.0], value)), None))
+    Some((Box::new(Absolute { value_from, ..Absolute::new(AbsoluteKind::Angle, b, [0.0, 0.0], value) }), None))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::check_fd_random;
     use crate::constraints::testing::OnSlice;
+    use crate::constraints::testing::{assert_data_fields, check_fd_random, check_generic_random, Lcg};
 
     #[test]
     fn derivatives_match_finite_differences() {
+        let q0 = Lcg::new(6).vec(6, -2.0, 2.0);
         for (seed, kind) in [AbsoluteKind::X, AbsoluteKind::Y, AbsoluteKind::Angle].into_iter().enumerate() {
             let c = Absolute::new(kind, BodyIx(Some(3)), [0.4, -0.7], 0.25);
             check_fd_random(&c, 2, seed as u64);
+            check_generic_random(&c, 2, seed as u64);
+            if kind == AbsoluteKind::Angle {
+                assert_data_fields::<AbsoluteAngleJoint>(&c);
+            } else {
+                assert_data_fields::<AbsolutePoint>(&c);
+            }
+            // The value from the initial configuration: the held coordinate there, not data.
+            let mut start = Absolute { value_from: Source::start(BodyIx(Some(3)), BodyIx::GROUND, &q0), ..c.clone() };
+            let mut phi = [0.0];
+            Absolute { value: 0.0, ..start.clone() }.phi_at(&q0, 0.0, &mut phi);
+            start.value = phi[0];
+            assert_eq!(start.data().len(), c.data().len() - 1);
+            check_generic_random(&start, 2, 10 + seed as u64);
+            check_generic_random(&Absolute::coordinate(kind, BodyIx(Some(3)), [0.4, -0.7]), 2, 20 + seed as u64);
         }
     }
 

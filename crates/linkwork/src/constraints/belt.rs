@@ -16,7 +16,9 @@
 //! centres are kept by other joints (usually revolute joints on the carrier).
 
 use super::schema::JointContext;
+use super::{phi_tri_generic, At, GenericPhi};
 use super::{Anchor, BodyIx, CompiledJoint, Config, Constraint};
+use crate::expr::Scalar;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -31,6 +33,10 @@ pub struct Belt {
     c0: f64,
     /// The coordinates of the bodies that move, three a body.
     columns: Vec<usize>,
+    /// `sigma`.
+    sigma: f64,
+    /// The bodies' angles in the initial configuration, which fixes `c0` (held: not data).
+    start: [f64; 3],
 }
 
 impl Belt {
@@ -41,9 +47,17 @@ impl Belt {
         let coefficients = [r_i, sigma * r_j, -(r_i + sigma * r_j)];
         let bodies = [i, j, carrier];
         let columns = bodies.iter().filter_map(|b| b.0).flat_map(|k| [k, k + 1, k + 2]).collect();
-        let mut belt = Belt { bodies, coefficients, c0: 0.0, columns };
+        let start = bodies.map(|b| b.coords(q0)[2]);
+        let mut belt = Belt { bodies, coefficients, c0: 0.0, columns, sigma, start };
         belt.c0 = belt.value(q0);
         belt
+    }
+
+    /// `r_i (phi_i - phi_c) + sigma r_j (phi_j - phi_c)` over any [`Scalar`] at the bodies'
+    /// `angles`, with the radii `data`.
+    fn value_of<S: Scalar>(&self, angles: [S; 3], data: &[S]) -> S {
+        let (r_i, r_j) = (data[0], S::constant(self.sigma) * data[1]);
+        r_i * angles[0] + r_j * angles[1] + -(r_i + r_j) * angles[2]
     }
 
     /// `r_i (phi_i - phi_c) + sigma r_j (phi_j - phi_c)` at `q`.
@@ -74,6 +88,18 @@ impl Constraint for Belt {
     }
     fn gamma(&self, _q: &Config<'_>, _qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = 0.0;
+    }
+    /// `radius_i`, `radius_j` (`c0` follows them; the initial angles that fix it are held).
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        vec![("radius_i", self.coefficients[0]), ("radius_j", self.sigma * self.coefficients[1])]
+    }
+    phi_tri_generic!();
+}
+
+impl GenericPhi for Belt {
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+        let angles = self.bodies.map(|b| b.pose(at.q)[2]);
+        out[0] = self.value_of(angles, data) - self.value_of(self.start.map(S::constant), data);
     }
 }
 
@@ -127,15 +153,24 @@ pub(crate) fn compile(spec: &BeltJoint, cx: &mut impl JointContext, path: &str) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::{check_fd_random, evaluate};
+    use crate::constraints::testing::{
+        assert_data_fields, check_fd_random, check_generic_random, check_rebuilt, evaluate, Lcg,
+    };
 
     #[test]
     fn derivatives_match_finite_differences() {
+        let q0 = Lcg::new(2).vec(9, -2.0, 2.0);
         for (seed, crossed) in [false, true].into_iter().enumerate() {
-            let moving = Belt::new(BodyIx(Some(0)), 0.2, BodyIx(Some(3)), 0.5, crossed, BodyIx(Some(6)), &[0.0; 9]);
-            check_fd_random(&moving, 3, seed as u64);
-            let fixed = Belt::new(BodyIx(Some(3)), 0.2, BodyIx(Some(0)), 0.5, crossed, BodyIx::GROUND, &[0.0; 6]);
-            check_fd_random(&fixed, 2, seed as u64);
+            let seed = seed as u64;
+            let (i, j, c) = (BodyIx(Some(0)), BodyIx(Some(3)), BodyIx(Some(6)));
+            let moving = Belt::new(i, 0.2, j, 0.5, crossed, c, &q0);
+            check_fd_random(&moving, 3, seed);
+            check_generic_random(&moving, 3, seed);
+            check_rebuilt(&moving, &|d| Belt::new(i, d[0], j, d[1], crossed, c, &q0), 3, seed);
+            assert_data_fields::<BeltJoint>(&moving);
+            let fixed = Belt::new(BodyIx(Some(3)), 0.2, BodyIx(Some(0)), 0.5, crossed, BodyIx::GROUND, &q0[..6]);
+            check_fd_random(&fixed, 2, seed);
+            check_generic_random(&fixed, 2, seed);
         }
     }
 

@@ -16,6 +16,9 @@
 //! the cam's working surface is its inward offset by the roller radius, which the row does not
 //! need. The row is undefined where `P` is at the centre (`d = 0`). Norton, Design of Machinery,
 //! chapter 8; Haug (1989) section 3.5.
+//!
+//! Design sensitivities: the cam keeps [`Constraint::phi_tri`]'s default (no data, no derivatives
+//! with respect to its numbers: `false`) in this increment.
 
 use super::schema::JointContext;
 use super::CompiledJoint;

@@ -38,6 +38,9 @@
 //! [`TIE`] of the curve's size) or not a strict minimum, the row is NaN and an analysis stops
 //! there, naming the joint and the time ([`Constraint::non_finite_cause`]).
 //! Norton, Design of Machinery, chapter 8 (roller followers, undercutting).
+//!
+//! Design sensitivities: this joint keeps [`Constraint::phi_tri`]'s default (no data, no
+//! derivatives with respect to its numbers) in this increment, as the pitch-curve cam does.
 
 use super::{Anchor, BodyIx, CamFrame, Config, Constraint};
 use crate::expr::{Dual, Expr, HyperDual, Scalar, Spline};

@@ -21,8 +21,9 @@
 use super::schema::JointContext;
 use super::PointRef;
 use super::{dot, Absolute, AbsoluteKind, Anchor, BodyIx, Config, Constraint, Pair, PointPair};
+use super::{phi_tri_generic, separation, slot2, vector, At, GenericPhi, Pose, POINT_I, POINT_J};
 use crate::element::fields;
-use crate::expr::TimeFunction;
+use crate::expr::{Scalar, TimeFunction};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -47,20 +48,60 @@ pub struct Driver {
     kind: DriverKind,
     f: TimeFunction,
     /// `g(q)`: a time-independent one-row constraint (its `nu` is zero).
-    g: Box<dyn Constraint>,
+    g: Coordinate,
+}
+
+/// The coordinate `g(q)` a [`Driver`] prescribes.
+#[derive(Debug)]
+enum Coordinate {
+    /// An angle, x or y ([`Absolute::coordinate`]).
+    Held(Absolute),
+    /// `phi_i - phi_j`.
+    Relative(RelativeAngle),
+    /// `|d|`.
+    Length(Length),
+}
+
+impl Coordinate {
+    /// The coordinate as a constraint row.
+    #[inline]
+    fn row(&self) -> &dyn Constraint {
+        match self {
+            Coordinate::Held(c) => c,
+            Coordinate::Relative(c) => c,
+            Coordinate::Length(c) => c,
+        }
+    }
+}
+
+impl GenericPhi for Coordinate {
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+        match self {
+            Coordinate::Held(c) => c.phi_generic(at, data, out),
+            Coordinate::Relative(c) => c.phi_generic(at, data, out),
+            Coordinate::Length(c) => c.phi_generic(at, data, out),
+        }
+    }
 }
 
 impl Driver {
     /// The row `g(q) - f(t)` for the coordinate `g` that `kind` names.
     pub fn new(kind: DriverKind, f: TimeFunction) -> Driver {
-        let g: Box<dyn Constraint> = match kind {
-            DriverKind::Angle { body } => Box::new(Absolute::new(AbsoluteKind::Angle, body, [0.0; 2], 0.0)),
-            DriverKind::X { body, point } => Box::new(Absolute::new(AbsoluteKind::X, body, point, 0.0)),
-            DriverKind::Y { body, point } => Box::new(Absolute::new(AbsoluteKind::Y, body, point, 0.0)),
-            DriverKind::RelativeAngle { i, j } => Box::new(RelativeAngle { pair: Pair::new(i, j) }),
-            DriverKind::Distance { i, s_p, j, s_q } => Box::new(Length(PointPair::new(i, s_p, j, s_q))),
+        let g = match kind {
+            DriverKind::Angle { body } => Coordinate::Held(Absolute::coordinate(AbsoluteKind::Angle, body, [0.0; 2])),
+            DriverKind::X { body, point } => Coordinate::Held(Absolute::coordinate(AbsoluteKind::X, body, point)),
+            DriverKind::Y { body, point } => Coordinate::Held(Absolute::coordinate(AbsoluteKind::Y, body, point)),
+            DriverKind::RelativeAngle { i, j } => Coordinate::Relative(RelativeAngle { pair: Pair::new(i, j) }),
+            DriverKind::Distance { i, s_p, j, s_q } => Coordinate::Length(Length(PointPair::new(i, s_p, j, s_q))),
         };
         Driver { kind, f, g }
+    }
+
+    /// `f(t)` over any [`Scalar`] at `at`: the one place the generic `Phi` evaluates the
+    /// prescribed function.
+    #[inline]
+    fn prescribed<S: Scalar>(&self, at: &At<'_, S>) -> S {
+        self.f.expr().eval(&[at.t])
     }
 
     /// What this driver prescribes.
@@ -82,27 +123,40 @@ impl Constraint for Driver {
         Some(&self.kind)
     }
     fn anchor(&self) -> Anchor {
-        self.g.anchor()
+        self.g.row().anchor()
     }
     fn row_names(&self) -> &[&'static str] {
-        self.g.row_names()
+        self.g.row().row_names()
     }
     fn columns(&self) -> &[usize] {
-        self.g.columns()
+        self.g.row().columns()
     }
     fn phi(&self, q: &Config<'_>, t: f64, out: &mut [f64]) {
-        self.g.phi(q, t, out);
+        self.g.row().phi(q, t, out);
         out[0] -= self.f.eval(t).0;
     }
     fn jacobian(&self, q: &Config<'_>, t: f64, out: &mut [f64]) {
-        self.g.jacobian(q, t, out);
+        self.g.row().jacobian(q, t, out);
     }
     fn nu(&self, _q: &Config<'_>, t: f64, out: &mut [f64]) {
         out[0] = self.f.eval(t).1;
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], t: f64, out: &mut [f64]) {
-        self.g.gamma(q, qdot, t, out);
+        self.g.row().gamma(q, qdot, t, out);
         out[0] += self.f.eval(t).2;
+    }
+    /// The coordinate's: `point` of an x or y driver, `point_i` and `point_j` of a distance
+    /// driver, none for an angle (the function's numbers are parameters, read from `At`).
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        self.g.row().data()
+    }
+    phi_tri_generic!();
+}
+
+impl GenericPhi for Driver {
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+        self.g.phi_generic(at, data, out);
+        out[0] = out[0] - self.prescribed(at);
     }
 }
 
@@ -130,6 +184,12 @@ impl Constraint for RelativeAngle {
     }
     fn gamma(&self, _q: &Config<'_>, _qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = 0.0;
+    }
+}
+
+impl GenericPhi for RelativeAngle {
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, _data: &[S], out: &mut [S]) {
+        out[0] = self.pair.i.pose(at.q)[2] - self.pair.j.pose(at.q)[2];
     }
 }
 
@@ -165,6 +225,18 @@ impl Constraint for Length {
         let len = dot(sep.d, sep.d).sqrt();
         let along = dot(sep.d, rate) / len;
         out[0] = -(dot(rate, rate) - along * along + dot(sep.d, free)) / len;
+    }
+    /// `point_i`, `point_j`.
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        [vector(POINT_I, self.0.s_p), vector(POINT_J, self.0.s_q)].concat()
+    }
+}
+
+impl GenericPhi for Length {
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+        let pair = &self.0.pair;
+        let d = separation(&Pose::of(pair.i, at.q), slot2(data, 0), &Pose::of(pair.j, at.q), slot2(data, 2));
+        out[0] = dot(d, d).sqrt();
     }
 }
 
@@ -269,8 +341,8 @@ pub(crate) fn compile_y(spec: &PointDriver, cx: &mut impl JointContext, path: &s
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::check_fd_random_where;
     use crate::constraints::testing::OnSlice;
+    use crate::constraints::testing::{assert_data_fields, check_fd_random_where, check_generic_random_where};
     use crate::constraints::{ConfigBuf, Separation};
 
     fn f() -> TimeFunction {
@@ -304,6 +376,20 @@ mod tests {
                     _ => true,
                 };
                 check_fd_random_where(&d, 2, (10 * seed + k) as u64, &apart);
+                check_generic_random_where(&d, 2, (10 * seed + k) as u64, &apart);
+                let names: Vec<&str> = d.data().iter().map(|(name, _)| *name).collect();
+                let want: &[&str] = match kind {
+                    DriverKind::Angle { .. } | DriverKind::RelativeAngle { .. } => &[],
+                    DriverKind::Distance { .. } => &["point_i[0]", "point_i[1]", "point_j[0]", "point_j[1]"],
+                    DriverKind::X { .. } | DriverKind::Y { .. } => &["point[0]", "point[1]"],
+                };
+                assert_eq!(names, want);
+                match kind {
+                    DriverKind::Angle { .. } => assert_data_fields::<AngleDriver>(&d),
+                    DriverKind::RelativeAngle { .. } => assert_data_fields::<RelativeAngleDriver>(&d),
+                    DriverKind::Distance { .. } => assert_data_fields::<DistanceDriver>(&d),
+                    DriverKind::X { .. } | DriverKind::Y { .. } => assert_data_fields::<PointDriver>(&d),
+                }
             }
         }
     }

@@ -19,7 +19,7 @@
 
 use super::schema::JointContext;
 use super::CompiledJoint;
-use super::{Anchor, BodyIx, Config, Constraint};
+use super::{phi_tri_generic, Anchor, At, BodyIx, Config, Constraint, GenericPhi};
 use crate::expr::{Dual, Expr, HyperDual, Scalar, MAX_SLOTS};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -162,6 +162,21 @@ impl Constraint for GeneralConstraint {
         }
         out[0] = -self.expr.eval(&z[..n]).e12;
     }
+    phi_tri_generic!();
+}
+
+/// No data: the expression's numbers are parameters, which `At` carries.
+impl GenericPhi for GeneralConstraint {
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, _data: &[S], out: &mut [S]) {
+        let mut z = [S::constant(0.0); MAX_SLOTS];
+        for (zk, v) in z.iter_mut().zip(&self.vars) {
+            *zk = match *v {
+                Var::Coord(c) => at.q[c],
+                Var::Time => at.t,
+            };
+        }
+        out[0] = self.expr.eval(&z[..self.vars.len()]);
+    }
 }
 
 /// A general constraint `expression = 0` in body coordinates (`crank.x`, `crank.y`,
@@ -182,8 +197,8 @@ pub(crate) fn compile(spec: &ExpressionJoint, cx: &mut impl JointContext, path: 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::check_fd_random;
     use crate::constraints::testing::OnSlice;
+    use crate::constraints::testing::{assert_data_fields, check_fd_random, check_generic_random};
 
     /// Parse `src` over names `<x|y|phi><body>` (body 0 or 1) and `t`, slots in order of first use.
     fn general(src: &str) -> GeneralConstraint {
@@ -210,10 +225,14 @@ mod tests {
         let c = general("x0*cos(phi1) - y1^2*sin(t*phi0) + 0.3*t^2*x1 + exp(0.1*y0*x0) - 1.5");
         assert_eq!(c.columns(), [0, 5, 4, 2, 3, 1]);
         check_fd_random(&c, 2, 1);
+        check_generic_random(&c, 2, 1);
+        assert_data_fields::<ExpressionJoint>(&c);
         let one_body = general("atan2(y1, x1) + phi1^3 - 2");
         check_fd_random(&one_body, 2, 2);
+        check_generic_random(&one_body, 2, 2);
         let no_time = general("x0^2 + y0^2 - 0.5625");
         check_fd_random(&no_time, 2, 3);
+        check_generic_random(&no_time, 2, 3);
     }
 
     /// A coordinate named in two slots: its Jacobian column is the sum of both slots' derivatives.
@@ -226,6 +245,7 @@ mod tests {
         c.jacobian_at(&[0.0, 0.0, 1.5], 0.0, &mut jac);
         assert_eq!(jac, [3.0]);
         check_fd_random(&c, 1, 4);
+        check_generic_random(&c, 1, 4);
     }
 
     /// Hand-derived: Phi = x^2 + y^2 - 0.5625 + x t at (x, y) = (0.6, 0.45), t = 0: Phi = 0,

@@ -35,6 +35,8 @@ use super::schema::JointContext;
 use super::CompiledJoint;
 use super::PointRef;
 use super::{dot, perp, Anchor, BodyIx, Config, ConfigBuf, Constraint, Pair, Separation, Shape, Sketch};
+use super::{phi_tri_generic, separation, slot2, vector, At, GenericPhi, Pose, Source, POINT_I, POINT_J};
+use crate::expr::Scalar;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -61,6 +63,8 @@ pub struct GearPair {
     /// `r_i + sigma r_j`.
     k: f64,
     c: f64,
+    /// The bodies' poses in the initial configuration, which fixes `c` (held: not data).
+    start: [[f64; 3]; 2],
 }
 
 impl GearPair {
@@ -82,9 +86,27 @@ impl GearPair {
             GearKind::External => r_j,
             GearKind::Internal => -r_j,
         };
-        let mut g = GearPair { kind, pair: Pair::new(i, j), s_i, s_j, r_i, r_j, k: r_i + r_j, c: 0.0 };
+        let start = [i.coords(q0), j.coords(q0)];
+        let mut g = GearPair { kind, pair: Pair::new(i, j), s_i, s_j, r_i, r_j, k: r_i + r_j, c: 0.0, start };
         g.c = g.unwrapped(&ConfigBuf::new(q0).view());
         g
+    }
+
+    /// `sigma`: `1` external, `-1` internal.
+    fn sigma(&self) -> f64 {
+        match self.kind {
+            GearKind::External => 1.0,
+            GearKind::Internal => -1.0,
+        }
+    }
+
+    /// `r_i phi_i + sigma r_j phi_j - k theta` in the frames `fi`, `fj` over any [`Scalar`], with
+    /// the data of [`Constraint::data`].
+    fn raw<S: Scalar>(&self, fi: &Pose<S>, fj: &Pose<S>, data: &[S]) -> S {
+        let d = separation(fi, slot2(data, 0), fj, slot2(data, 2));
+        let theta = d[1].atan2(d[0]);
+        let (r_i, r_j) = (data[4], S::constant(self.sigma()) * data[5]);
+        r_i * fi.phi + r_j * fj.phi - (r_i + r_j) * theta
     }
 
     /// External or internal.
@@ -151,6 +173,26 @@ impl Constraint for GearPair {
         let theta_free = dot(n, free) / rho - 2.0 * dot(n, rate) * dot(sep.d, rate) / (rho * rho);
         out[0] = self.k * theta_free;
     }
+    /// `point_i`, `point_j`, `radius_i`, `radius_j` (`c` follows them; the initial poses that fix
+    /// it are held).
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        let radii = [("radius_i", self.r_i), ("radius_j", self.sigma() * self.r_j)];
+        [&vector(POINT_I, self.s_i)[..], &vector(POINT_J, self.s_j), &radii].concat()
+    }
+    phi_tri_generic!();
+}
+
+impl GenericPhi for GearPair {
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+        let [hi, hj] = Source::poses(self.start);
+        let c = self.raw(&hi, &hj, data);
+        let raw = self.raw(&Pose::of(self.pair.i, at.q), &Pose::of(self.pair.j, at.q), data) - c;
+        // Reduced as `phi` reduces it; the whole periods taken off are constant where it is smooth.
+        let k = data[4] + S::constant(self.sigma()) * data[5];
+        let period = S::constant(TAU) * k.abs();
+        out[0] =
+            if period.value() > 0.0 { raw - period * S::constant((raw.value() / period.value()).round()) } else { raw };
+    }
 }
 
 /// Gear pair: pitch circles of radius `radius_i` and `radius_j` about `point_i` and `point_j`
@@ -196,7 +238,9 @@ pub(crate) fn compile(spec: &GearJoint, cx: &mut impl JointContext, path: &str) 
 mod tests {
     use super::*;
     use crate::constraints::testing::OnSlice;
-    use crate::constraints::testing::{check_fd_random_where, Lcg};
+    use crate::constraints::testing::{
+        assert_data_fields, check_fd_random_where, check_generic_random_where, check_rebuilt, Lcg,
+    };
     use crate::constraints::ConfigBuf;
 
     /// Finite differences lose their accuracy as the centres approach each other (`1 / rho`
@@ -208,6 +252,22 @@ mod tests {
             dot(d, d) > 1.0
         };
         check_fd_random_where(g, 2, seed, &apart);
+        check_generic_random_where(g, 2, seed, &apart);
+        let build =
+            |d: &[f64]| GearPair::new(g.kind, g.pair.i, [d[0], d[1]], d[4], g.pair.j, [d[2], d[3]], d[5], &q0(g));
+        check_rebuilt(g, &build, 2, seed);
+        assert_data_fields::<GearJoint>(g);
+    }
+
+    /// The initial configuration `g` was built at, from the poses it keeps.
+    fn q0(g: &GearPair) -> Vec<f64> {
+        let mut q = vec![0.0; 6];
+        for (body, pose) in [g.pair.i, g.pair.j].iter().zip(g.start) {
+            if let Some(k) = body.0 {
+                q[k..k + 3].copy_from_slice(&pose);
+            }
+        }
+        q
     }
 
     #[test]

@@ -26,8 +26,8 @@ mod rolling;
 mod schema;
 mod translational;
 
-pub(crate) use crate::element::Frame;
 pub use crate::element::{BodyIx, PointRef, Tagged, DEFAULT_TRANSITION_VELOCITY};
+pub(crate) use crate::element::{Frame, Pose};
 use crate::expr::{Scalar, Tri};
 pub use absolute::{Absolute, AbsoluteAngleJoint, AbsoluteKind, AbsolutePoint};
 pub(crate) use cam::cam_row;
@@ -163,6 +163,107 @@ pub trait Constraint: Debug + Send + Sync {
     fn phi_tri(&self, _at: &At<'_, Tri>, _data: &[Tri], _out: &mut [Tri]) -> bool {
         false
     }
+}
+
+/// An element's `Phi` written once over any [`Scalar`], with the element's data in the order of
+/// [`Constraint::data`]: `out: (rows)`. Over `f64` with `data()`'s values it is `phi` (the same
+/// arithmetic, up to the order of a few operations and the rotations computed rather than
+/// cached); over [`Tri`] it is [`Constraint::phi_tri`], which [`phi_tri_generic!`] forwards to it.
+pub(crate) trait GenericPhi {
+    /// `(at, data) => Phi`, `out: (rows)`.
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]);
+}
+
+/// [`Constraint::phi_tri`] of an element that implements [`GenericPhi`], written inside its
+/// `impl Constraint`.
+macro_rules! phi_tri_generic {
+    () => {
+        fn phi_tri(
+            &self,
+            at: &$crate::constraints::At<'_, $crate::expr::Tri>,
+            data: &[$crate::expr::Tri],
+            out: &mut [$crate::expr::Tri],
+        ) -> bool {
+            $crate::constraints::GenericPhi::phi_generic(self, at, data, out);
+            true
+        }
+    };
+}
+pub(crate) use phi_tri_generic;
+
+/// Where a constant of an element comes from (a distance's length, a line's offset, a held
+/// coordinate's value, and the constants of gears, belts and rolling joints, which only the
+/// initial configuration gives).
+///
+/// Written in the model file, it is one of the element's data (a parameter can move it). Fixed by
+/// the initial configuration, it is what the element's rows are at the bodies' initial poses
+/// `q0`: those poses are held (a derivative does not move the starting guess), and the constant
+/// follows the element's data through them (a distance's default length moves with its points).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Source {
+    /// The model file's field: a data slot named after it.
+    File,
+    /// The initial configuration: `(x, y, phi)` of the element's two bodies there (ground's is
+    /// zero).
+    Start([[f64; 3]; 2]),
+    /// No such field: zero (a pin in a slot has no offset; a driver's coordinate no value).
+    Zero,
+}
+
+impl Source {
+    /// The initial poses of bodies `i` and `j` in `q0`.
+    pub(crate) fn start(i: BodyIx, j: BodyIx, q0: &[f64]) -> Source {
+        Source::Start([i.coords(q0), j.coords(q0)])
+    }
+    /// Body i's and body j's poses there, held constant.
+    pub(crate) fn poses<S: Scalar>(start: [[f64; 3]; 2]) -> [Pose<S>; 2] {
+        start.map(Pose::held)
+    }
+}
+
+/// The data names of a vector field's two components.
+pub(crate) type Components = [&'static str; 2];
+/// `point`'s components (a single body's point: held coordinates, point drivers).
+pub(crate) const POINT: Components = ["point[0]", "point[1]"];
+/// `point_i`'s components.
+pub(crate) const POINT_I: Components = ["point_i[0]", "point_i[1]"];
+/// `point_j`'s components.
+pub(crate) const POINT_J: Components = ["point_j[0]", "point_j[1]"];
+/// `axis_i`'s components.
+pub(crate) const AXIS_I: Components = ["axis_i[0]", "axis_i[1]"];
+/// `axis_j`'s components.
+pub(crate) const AXIS_J: Components = ["axis_j[0]", "axis_j[1]"];
+
+/// The data entries of a vector `v` named `names` (see [`Constraint::data`]).
+pub(crate) fn vector(names: Components, v: [f64; 2]) -> [(&'static str, f64); 2] {
+    [(names[0], v[0]), (names[1], v[1])]
+}
+
+/// `data[k..k + 2]`: a vector among an element's data.
+#[inline]
+pub(crate) fn slot2<S: Copy>(data: &[S], k: usize) -> [S; 2] {
+    [data[k], data[k + 1]]
+}
+
+/// `(2)` `d = r_Q - r_P` over any [`Scalar`], from `P` (`s_p`, frame `fi`) to `Q` (`s_q`, frame
+/// `fj`), summed as [`Separation::of`] sums it.
+#[inline]
+pub(crate) fn separation<S: Scalar>(fi: &Pose<S>, s_p: [S; 2], fj: &Pose<S>, s_q: [S; 2]) -> [S; 2] {
+    difference(fi.o, fi.rotate(s_p), fj.o, fj.rotate(s_q))
+}
+
+/// `w . d` over any [`Scalar`]: [`Projection`]'s row with the direction `w` (body i frame) and the
+/// points given.
+#[inline]
+pub(crate) fn projection<S: Scalar>(w: [S; 2], fi: &Pose<S>, s_p: [S; 2], fj: &Pose<S>, s_q: [S; 2]) -> S {
+    dot(fi.rotate(w), separation(fi, s_p, fj, s_q))
+}
+
+/// `(o_j - o_i) + (a_q - a_p)`: a separation from the origins and the rotated offsets, the
+/// origins' difference first (see [`Separation::of`]).
+#[inline]
+fn difference<S: Scalar>(o_i: [S; 2], a_p: [S; 2], o_j: [S; 2], a_q: [S; 2]) -> [S; 2] {
+    [(o_j[0] - o_i[0]) + (a_q[0] - a_p[0]), (o_j[1] - o_i[1]) + (a_q[1] - a_p[1])]
 }
 
 /// Where an element's equations are evaluated over a number type `S` that carries derivatives
@@ -311,12 +412,13 @@ impl Frame {
 
 /// `R90 v`: `v` turned by +90 degrees.
 #[inline]
-pub(crate) fn perp(v: [f64; 2]) -> [f64; 2] {
+pub(crate) fn perp<S: Scalar>(v: [S; 2]) -> [S; 2] {
     [-v[1], v[0]]
 }
 
+/// `a . b`.
 #[inline]
-pub(crate) fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
+pub(crate) fn dot<S: Scalar>(a: [S; 2], b: [S; 2]) -> S {
     a[0] * b[0] + a[1] * b[1]
 }
 
@@ -364,7 +466,7 @@ impl Pair {
 
 /// The unit vector along `v` (callers guarantee `v != 0`).
 #[inline]
-pub(crate) fn unit(v: [f64; 2]) -> [f64; 2] {
+pub(crate) fn unit<S: Scalar>(v: [S; 2]) -> [S; 2] {
     let n = v[0].hypot(v[1]);
     [v[0] / n, v[1] / n]
 }
@@ -424,7 +526,7 @@ impl Separation {
         // The origins' difference, then the offsets': the round-off is the offsets' (metres), not
         // the positions' (far from the origin, much larger), and Newton near a singular position
         // multiplies it by |B^-1| (docs/integrators.md, `abam`).
-        let d = [(fj.x - fi.x) + (a_q[0] - a_p[0]), (fj.y - fi.y) + (a_q[1] - a_p[1])];
+        let d = difference([fi.x, fi.y], a_p, [fj.x, fj.y], a_q);
         Separation { d, a_p, a_q, phi: [fi.phi, fj.phi] }
     }
     /// `g = df/dd => (f_{q_i}, f_{q_j})`: the `1 x 3` Jacobian blocks of a scalar `f(d)`.

@@ -17,7 +17,9 @@ use super::schema::JointContext;
 use super::CompiledJoint;
 use super::Frame;
 use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Pair, Projection, Shape, Sketch};
+use super::{phi_tri_generic, projection, slot2, vector, At, GenericPhi, Pose, Source, AXIS_I, POINT_I, POINT_J};
 use crate::element::fields;
+use crate::expr::Scalar;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -26,7 +28,12 @@ use serde::{Deserialize, Serialize};
 pub struct PointOnLine {
     pair: Pair,
     line: Projection,
+    /// `v'_i` as given.
+    axis: [f64; 2],
     offset: f64,
+    /// Where `offset` comes from: the file (a data slot), the initial configuration, or none (a pin
+    /// in a slot).
+    offset_from: Source,
 }
 
 impl PointOnLine {
@@ -35,7 +42,7 @@ impl PointOnLine {
     /// on the left of `v_i`.
     pub fn new(i: BodyIx, s_p: [f64; 2], v_i: [f64; 2], j: BodyIx, s_q: [f64; 2], offset: f64) -> PointOnLine {
         let line = Projection { i, w: perp(unit(v_i)), s_p, j, s_q };
-        PointOnLine { pair: Pair::new(i, j), line, offset }
+        PointOnLine { pair: Pair::new(i, j), line, axis: v_i, offset, offset_from: Source::File }
     }
 }
 
@@ -68,6 +75,29 @@ impl Constraint for PointOnLine {
     }
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = self.line.gamma(q, qdot);
+    }
+    /// `point_i`, `point_j`, `axis_i`, and `offset` when the file gives it.
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        let l = &self.line;
+        let mut data = [vector(POINT_I, l.s_p), vector(POINT_J, l.s_q), vector(AXIS_I, self.axis)].concat();
+        if self.offset_from == Source::File {
+            data.push(("offset", self.offset));
+        }
+        data
+    }
+    phi_tri_generic!();
+}
+
+impl GenericPhi for PointOnLine {
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+        let (s_p, s_q, w) = (slot2(data, 0), slot2(data, 2), perp(unit(slot2(data, 4))));
+        let value = |[fi, fj]: [Pose<S>; 2]| projection(w, &fi, s_p, &fj, s_q);
+        let offset = match self.offset_from {
+            Source::File => data[6],
+            Source::Start(start) => value(Source::poses(start)),
+            Source::Zero => S::constant(0.0),
+        };
+        out[0] = value([Pose::of(self.pair.i, at.q), Pose::of(self.pair.j, at.q)]) - offset;
     }
 }
 
@@ -105,7 +135,9 @@ pub(crate) fn compile(spec: &PointOnLineJoint, cx: &mut impl JointContext, path:
     let ends = cx.ends(path, body_i, &pi, body_j, &pj);
     let vi = axes.and_then(|[ai]| cx.axis(&format!("{path}.axis_i"), ai));
     let (_, [(i, sp), (j, sq)], vi) = (points?, ends?, vi?);
-    Some((Box::new(PointOnLine::new(i, sp, vi, j, sq, 0.0)), None))
+    let mut c = PointOnLine::new(i, sp, vi, j, sq, 0.0);
+    c.offset_from = Source::Zero;
+    Some((Box::new(c), None))
 }
 
 /// A revolute-translational joint at `path` compiled in `cx`: its offset as given, or as the
@@ -119,31 +151,59 @@ pub(crate) fn compile_offset(
     let ends = cx.ends(path, body_i, point_i, body_j, point_j);
     let v = cx.axis(&format!("{path}.axis_i"), *axis_i);
     let ([(i, sp), (j, sq)], vi) = (ends?, v?);
-    let offset = match offset {
-        Some(o) => cx.finite(&format!("{path}.offset"), *o)?,
+    let (offset, offset_from) = match offset {
+        Some(o) => (cx.finite(&format!("{path}.offset"), *o)?, Source::File),
         None => {
             let (fi, fj) = (Frame::of_slice(i, cx.q0()), Frame::of_slice(j, cx.q0()));
             let (p, r, a) = (fi.point(sp), fj.point(sq), fi.rotate(vi));
             let n = [-a[1], a[0]];
-            ((r[0] - p[0]) * n[0] + (r[1] - p[1]) * n[1]) / a[0].hypot(a[1])
+            (((r[0] - p[0]) * n[0] + (r[1] - p[1]) * n[1]) / a[0].hypot(a[1]), Source::start(i, j, cx.q0()))
         }
     };
-    Some((Box::new(PointOnLine::new(i, sp, vi, j, sq, offset)), None))
+    let mut c = PointOnLine::new(i, sp, vi, j, sq, offset);
+    c.offset_from = offset_from;
+    Some((Box::new(c), None))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::{assert_close, check_fd_random, evaluate};
+    use crate::constraints::testing::{
+        assert_close, assert_data_fields, check_fd_random, check_generic_random, evaluate, Lcg,
+    };
 
     #[test]
     fn derivatives_match_finite_differences() {
         let c = PointOnLine::new(BodyIx(Some(0)), [0.3, -0.2], [1.0, 2.0], BodyIx(Some(3)), [-1.1, 0.4], 0.0);
         check_fd_random(&c, 2, 1);
+        check_generic_random(&c, 2, 1);
+        assert_data_fields::<RevoluteTranslationalJoint>(&c);
         let g = PointOnLine::new(BodyIx::GROUND, [0.5, -2.0], [2.0, 0.5], BodyIx(Some(3)), [0.7, 0.1], 0.3);
         check_fd_random(&g, 2, 2);
+        check_generic_random(&g, 2, 2);
         let h = PointOnLine::new(BodyIx(Some(0)), [0.5, -2.0], [0.3, -0.4], BodyIx::GROUND, [0.7, 0.1], -1.2);
         check_fd_random(&h, 2, 3);
+        check_generic_random(&h, 2, 3);
+    }
+
+    /// A pin in a slot has no offset among its data; an offset from the initial configuration is
+    /// the point's distance from the line at the held initial poses, so it follows the data.
+    #[test]
+    fn offsets_that_are_not_data() {
+        let q0 = Lcg::new(8).vec(6, -2.0, 2.0);
+        let new = |from: Source| {
+            let mut c = PointOnLine::new(BodyIx(Some(0)), [0.3, -0.2], [1.0, 2.0], BodyIx(Some(3)), [-1.1, 0.4], 0.0);
+            c.offset_from = from;
+            c
+        };
+        let slot = new(Source::Zero);
+        assert_eq!(slot.data().len(), 6);
+        assert_data_fields::<PointOnLineJoint>(&slot);
+        check_generic_random(&slot, 2, 4);
+        let mut start = new(Source::start(BodyIx(Some(0)), BodyIx(Some(3)), &q0));
+        start.offset = start.line.value(&crate::constraints::ConfigBuf::new(&q0).view());
+        assert_eq!(start.data().len(), 6);
+        check_generic_random(&start, 2, 5);
     }
 
     /// Hand-derived: a slotted crank (body i) with centre at the origin, angle 0, slot along (3, 0)

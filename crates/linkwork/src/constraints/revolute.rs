@@ -10,8 +10,10 @@
 
 use super::schema::{with_friction, JointContext};
 use super::CompiledJoint;
+use super::{phi_tri_generic, separation, slot2, vector, At, GenericPhi, Pose, POINT_I, POINT_J};
 use super::{Anchor, BodyIx, Config, Constraint, Frame, Friction, FrictionLaw, Pair, Separation, Shape, Sketch};
 use crate::element::fields;
+use crate::expr::Scalar;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -69,6 +71,20 @@ impl Constraint for Revolute {
         out[0] = ai[0] * wi * wi - aj[0] * wj * wj;
         out[1] = ai[1] * wi * wi - aj[1] * wj * wj;
     }
+    /// `point_i`, `point_j`.
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        [vector(POINT_I, self.s_p), vector(POINT_J, self.s_q)].concat()
+    }
+    phi_tri_generic!();
+}
+
+impl GenericPhi for Revolute {
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+        let (fi, fj) = (Pose::of(self.pair.i, at.q), Pose::of(self.pair.j, at.q));
+        let d = separation(&fi, slot2(data, 0), &fj, slot2(data, 2));
+        out[0] = -d[0];
+        out[1] = -d[1];
+    }
 }
 
 fields! {
@@ -114,15 +130,18 @@ pub(crate) fn compile(spec: &RevoluteJoint, cx: &mut impl JointContext, path: &s
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::check_fd_random;
     use crate::constraints::testing::OnSlice;
+    use crate::constraints::testing::{assert_data_fields, check_fd_random, check_generic_random};
 
     #[test]
     fn derivatives_match_finite_differences() {
         let j = Revolute::new(BodyIx(Some(0)), [0.3, -0.2], BodyIx(Some(3)), [-1.1, 0.4]);
         check_fd_random(&j, 2, 1);
+        check_generic_random(&j, 2, 1);
+        assert_data_fields::<RevoluteJoint>(&j);
         let g = Revolute::new(BodyIx(Some(3)), [0.75, 0.0], BodyIx::GROUND, [0.5, -2.0]);
         check_fd_random(&g, 2, 2);
+        check_generic_random(&g, 2, 2);
     }
 
     /// `Phi` far from the origin (bodies 1e4 m out) carries the round-off of the offsets, not of

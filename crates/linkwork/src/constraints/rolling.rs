@@ -36,7 +36,9 @@ use super::schema::JointContext;
 use super::CompiledJoint;
 use super::PointRef;
 use super::{perp, unit, Anchor, BodyIx, Config, ConfigBuf, Constraint, Pair, Projection, Shape, Sketch};
+use super::{phi_tri_generic, projection, slot2, vector, At, GenericPhi, Pose, Source, AXIS_J, POINT_I, POINT_J};
 use crate::element::End;
+use crate::expr::Scalar;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -81,6 +83,11 @@ pub struct Rolling<const CONTACT: bool> {
     /// `side * rho`.
     lever: f64,
     rolling: RollingRow,
+    /// `v'_L` as given.
+    axis: [f64; 2],
+    /// The line body's and the disc's poses in the initial configuration, which fixes the rolling
+    /// row's constant and the side (held: not data).
+    start: [[f64; 3]; 2],
 }
 
 /// A pinion rolling on a rack's pitch line without slip: the rolling row only.
@@ -103,6 +110,7 @@ impl<const CONTACT: bool> Rolling<CONTACT> {
         v_l: [f64; 2],
         q0: &[f64],
     ) -> Rolling<CONTACT> {
+        let start = [line_body.coords(q0), disc.coords(q0)];
         let q0 = ConfigBuf::new(q0);
         let q0 = &q0.view();
         let u = unit(v_l);
@@ -114,7 +122,7 @@ impl<const CONTACT: bool> Rolling<CONTACT> {
             c: 0.0,
         };
         rolling.c = rolling.value(q0);
-        Rolling { pair: Pair::new(disc, line_body), s_c, normal, lever: side * radius, rolling }
+        Rolling { pair: Pair::new(disc, line_body), s_c, normal, lever: side * radius, rolling, axis: v_l, start }
     }
 }
 
@@ -159,6 +167,31 @@ impl<const CONTACT: bool> Constraint for Rolling<CONTACT> {
             out[0] = self.normal.gamma(q, qdot);
         }
         out[usize::from(CONTACT)] = self.rolling.along.gamma(q, qdot);
+    }
+    /// `point_i` (the centre), `point_j` (the line's point), `radius`, `axis_j` (the rolling row's
+    /// constant follows them; the initial poses that fix it, and the side, are held).
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        let n = &self.normal;
+        let radius = [("radius", self.lever.abs())];
+        [&vector(POINT_I, n.s_q)[..], &vector(POINT_J, n.s_p), &radius, &vector(AXIS_J, self.axis)].concat()
+    }
+    phi_tri_generic!();
+}
+
+impl<const CONTACT: bool> GenericPhi for Rolling<CONTACT> {
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+        let (s_c, s_l, u) = (slot2(data, 0), slot2(data, 2), unit(slot2(data, 5)));
+        let lever = S::constant(self.lever.signum()) * data[4];
+        // (contact without the radius, rolling without its constant) in the line's and the disc's frames.
+        let rows = |[fl, fd]: [Pose<S>; 2]| {
+            let along = projection(u, &fl, s_l, &fd, s_c) + lever * (fd.phi - fl.phi);
+            (projection(perp(u), &fl, s_l, &fd, s_c), along)
+        };
+        let (contact, along) = rows([Pose::of(self.normal.i, at.q), Pose::of(self.normal.j, at.q)]);
+        if CONTACT {
+            out[0] = contact - lever;
+        }
+        out[usize::from(CONTACT)] = along - rows(Source::poses(self.start)).1;
     }
 }
 
@@ -206,7 +239,7 @@ pub(crate) fn compile_disc(spec: &RollingJoint, cx: &mut impl JointContext, path
 mod tests {
     use super::*;
     use crate::constraints::testing::OnSlice;
-    use crate::constraints::testing::{check_fd_random, Lcg};
+    use crate::constraints::testing::{assert_data_fields, check_fd_random, check_generic_random, check_rebuilt, Lcg};
 
     #[test]
     fn derivatives_match_finite_differences() {
@@ -217,8 +250,16 @@ mod tests {
             let s = 10 * seed as u64;
             let rp = RackPinion::new(p, [0.3, -0.2], 0.6, l, [-1.1, 0.4], [1.0, 2.0], &q0);
             check_fd_random(&rp, 2, s + 1);
+            check_generic_random(&rp, 2, s + 1);
+            let build = |d: &[f64]| RackPinion::new(p, [d[0], d[1]], d[4], l, [d[2], d[3]], [d[5], d[6]], &q0);
+            check_rebuilt(&rp, &build, 2, s + 1);
             let rd = RollingDisc::new(p, [0.3, -0.2], 0.6, l, [-1.1, 0.4], [-3.0, 0.5], &q0);
             check_fd_random(&rd, 2, s + 2);
+            check_generic_random(&rd, 2, s + 2);
+            let build = |d: &[f64]| RollingDisc::new(p, [d[0], d[1]], d[4], l, [d[2], d[3]], [d[5], d[6]], &q0);
+            check_rebuilt(&rd, &build, 2, s + 2);
+            assert_data_fields::<RollingJoint>(&rp);
+            assert_data_fields::<RollingJoint>(&rd);
         }
     }
 

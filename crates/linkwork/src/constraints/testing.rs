@@ -1,7 +1,10 @@
 //! Test harness shared by every joint: analytic Jacobian, `nu` and `gamma` against central finite
-//! differences of `Phi` (an independent computation from the residual alone).
+//! differences of `Phi` (an independent computation from the residual alone), and the generic `Phi`
+//! of design sensitivities against `phi`, the Jacobian, `nu`, `gamma` and finite differences in
+//! the element's data.
 
-use super::{ConfigBuf, Constraint};
+use super::{At, ConfigBuf, Constraint, GenericPhi};
+use crate::expr::{HyperDual, Scalar, Tri};
 
 /// A small deterministic generator, so that failures reproduce.
 pub struct Lcg(u64);
@@ -94,6 +97,17 @@ pub fn check_fd_random(c: &dyn Constraint, bodies: usize, seed: u64) {
 /// singularity (coincident points, coincident gear centres), whose derivatives grow without bound
 /// near it, so that the fixed absolute tolerances of [`check_fd`] do not apply there.
 pub fn check_fd_random_where(c: &dyn Constraint, bodies: usize, seed: u64, accept: &dyn Fn(&[f64]) -> bool) {
+    random_states(bodies, seed, accept, &mut |q, qdot, t| check_fd(c, q, qdot, t));
+}
+
+/// Call `check(q, qdot, t)` at 20 random states of a system with `bodies` bodies (`q` in
+/// `[-2, 2)`, `qdot` in `[-3, 3)`, `t` in `[0, 2)`) where `accept(q)` holds.
+fn random_states(
+    bodies: usize,
+    seed: u64,
+    accept: &dyn Fn(&[f64]) -> bool,
+    check: &mut dyn FnMut(&[f64], &[f64], f64),
+) {
     let mut rng = Lcg::new(seed);
     let mut checked = 0;
     while checked < 20 {
@@ -101,10 +115,172 @@ pub fn check_fd_random_where(c: &dyn Constraint, bodies: usize, seed: u64, accep
         let qdot = rng.vec(3 * bodies, -3.0, 3.0);
         let t = rng.uniform(0.0, 2.0);
         if accept(&q) {
-            check_fd(c, &q, &qdot, t);
+            check(&q, &qdot, t);
             checked += 1;
         }
     }
+}
+
+/// `phi_generic` of `c` over hyper-dual numbers at `q` and `t` seeded by `seed(k, value)` for
+/// `q[k]` and `seed(n, t)` for the time, with `data` seeded by `seed_data(k, value)`.
+fn generic_at<C: GenericPhi + Constraint>(
+    c: &C,
+    q: &[f64],
+    t: f64,
+    seed: &dyn Fn(usize, f64) -> HyperDual,
+    seed_data: &dyn Fn(usize, f64) -> HyperDual,
+) -> Vec<HyperDual> {
+    let qs: Vec<HyperDual> = q.iter().enumerate().map(|(k, &v)| seed(k, v)).collect();
+    let data: Vec<HyperDual> = c.data().iter().enumerate().map(|(k, &(_, v))| seed_data(k, v)).collect();
+    let mut out = vec![HyperDual::constant(f64::NAN); c.rows()];
+    c.phi_generic(&At { q: &qs, t: seed(q.len(), t), params: &[] }, &data, &mut out);
+    out
+}
+
+/// `phi_generic::<f64>` of `c` at `q` and `t` with the data `data`.
+fn generic_f64<C: GenericPhi + Constraint>(c: &C, q: &[f64], t: f64, data: &[f64]) -> Vec<f64> {
+    let mut out = vec![f64::NAN; c.rows()];
+    c.phi_generic(&At { q, t, params: &[] }, data, &mut out);
+    out
+}
+
+/// Check the generic `Phi` of `c` (design sensitivities, [`GenericPhi`]) at `(q, qdot, t)`. Each
+/// failure's message starts with the name of the check that failed.
+///
+/// - `phi`: over `f64` with `data()`'s values it equals `phi`, to `1e-15` relative to the size of
+///   the row's terms, taken as `(1 + m)^2` with `m` the largest input (rows are at most quadratic in
+///   lengths: `d . d - L^2`), since it is the same arithmetic up to the order of a few operations;
+///   and `phi_tri` computes it (its value part, to the same tolerance).
+/// - `jacobian`: its first-order part along each unit vector of `q` is the Jacobian's column (zero
+///   off `columns()`), `1e-13` on the same scale: two exact derivatives of one function, differing
+///   only by round-off.
+/// - `velocity`, `acceleration`: with `q` moving along `qdot` and `t` along 1 in both directions,
+///   the first-order part is `Phi_q qdot - nu` and the mixed part `-gamma` (the second derivative
+///   along the motion), `1e-12` relative to `1 + |gamma| (1 + m)` (more operations, still exact).
+/// - `data`: its first-order part along each data slot against a central difference of
+///   `phi_generic::<f64>` with the slot moved by `h = 1e-6` relative: truncation
+///   `h^2 |Phi'''| / 6 ~ 1e-12` and round-off `eps |Phi| / h ~ 1e-10 (1 + m)^2`, so `1e-8`
+///   relative to the same scale leaves a wide margin, and a wrong sign or a missing term fails.
+pub fn check_generic<C: GenericPhi + Constraint>(c: &C, q: &[f64], qdot: &[f64], t: f64) {
+    let m = c.rows();
+    let data: Vec<f64> = c.data().iter().map(|&(_, v)| v).collect();
+    let big = q.iter().chain(&data).chain([&t]).fold(0.0f64, |a, v| a.max(v.abs()));
+    let scale = (1.0 + big) * (1.0 + big);
+
+    let (mut phi, generic) = (vec![0.0; m], generic_f64(c, q, t, &data));
+    c.phi_at(q, t, &mut phi);
+    let qt: Vec<Tri> = q.iter().map(|&v| Tri::constant(v)).collect();
+    let dt: Vec<Tri> = data.iter().map(|&v| Tri::constant(v)).collect();
+    let mut tri = vec![Tri::constant(f64::NAN); m];
+    assert!(c.phi_tri(&At { q: &qt, t: Tri::constant(t), params: &[] }, &dt, &mut tri), "phi: {c:?} has no phi_tri");
+    for r in 0..m {
+        let tol = 1e-15 * scale;
+        assert!((generic[r] - phi[r]).abs() <= tol, "phi: {c:?}: row {r} generic {} vs phi {}", generic[r], phi[r]);
+        assert!((tri[r].value() - phi[r]).abs() <= tol, "phi: {c:?}: row {r} phi_tri {:?} vs phi {}", tri[r], phi[r]);
+    }
+
+    let cols = c.columns();
+    let w = cols.len();
+    let mut jac = vec![0.0; m * w];
+    c.jacobian_at(q, t, &mut jac);
+    let constant = |_: usize, v: f64| HyperDual::constant(v);
+    for col in 0..q.len() {
+        let out = generic_at(c, q, t, &|k, v| HyperDual::seed(v, if k == col { 1.0 } else { 0.0 }, 0.0), &constant);
+        let at = cols.iter().position(|&k| k == col);
+        for (r, o) in out.iter().enumerate() {
+            let want = at.map_or(0.0, |k| jac[r * w + k]);
+            assert!((o.e1 - want).abs() <= 1e-13 * scale, "jacobian: {c:?}: row {r} col {col} {} vs {want}", o.e1);
+        }
+    }
+
+    let (mut nu, mut gamma) = (vec![0.0; m], vec![0.0; m]);
+    c.nu_at(q, t, &mut nu);
+    c.gamma_at(q, qdot, t, &mut gamma);
+    let along = |k: usize, v: f64| {
+        let dir = qdot.get(k).copied().unwrap_or(1.0);
+        HyperDual::seed(v, dir, dir)
+    };
+    let out = generic_at(c, q, t, &along, &constant);
+    for r in 0..m {
+        let rate = (0..w).map(|k| jac[r * w + k] * qdot[cols[k]]).sum::<f64>() - nu[r];
+        let tol = 1e-12 * (1.0 + gamma[r].abs()) * (1.0 + big);
+        assert!((out[r].e1 - rate).abs() <= tol, "velocity: {c:?}: row {r} {} vs Phi_q qdot - nu {rate}", out[r].e1);
+        assert!(
+            (out[r].e12 + gamma[r]).abs() <= tol,
+            "acceleration: {c:?}: row {r} {} vs -gamma {}",
+            out[r].e12,
+            -gamma[r]
+        );
+    }
+
+    let names = c.data();
+    for (k, (name, v)) in names.iter().enumerate() {
+        let out = generic_at(c, q, t, &constant, &|j, x| HyperDual::seed(x, if j == k { 1.0 } else { 0.0 }, 0.0));
+        let h = 1e-6 * v.abs().max(1.0);
+        let (mut up, mut down) = (data.clone(), data.clone());
+        up[k] += h;
+        down[k] -= h;
+        let (fp, fm) = (generic_f64(c, q, t, &up), generic_f64(c, q, t, &down));
+        for r in 0..m {
+            let fd = (fp[r] - fm[r]) / (2.0 * h);
+            assert!((out[r].e1 - fd).abs() <= 1e-8 * scale, "data: {c:?}: row {r} d/d {name} {} vs fd {fd}", out[r].e1);
+        }
+    }
+}
+
+/// Check that the derivative of `c`'s generic `Phi` along each data slot is that of the element
+/// built anew with the number moved (what setting a parameter and compiling again does, constants
+/// from the initial configuration included): central differences of `phi` of `build(data +- h)`
+/// at random states (`q0` held inside `build`), with the step and tolerance of
+/// [`check_generic`]'s data check, for the same reasons.
+pub fn check_rebuilt<C: GenericPhi + Constraint>(c: &C, build: &dyn Fn(&[f64]) -> C, bodies: usize, seed: u64) {
+    let data: Vec<f64> = c.data().iter().map(|&(_, v)| v).collect();
+    random_states(bodies, seed, &|_| true, &mut |q, _, t| {
+        let big = q.iter().chain(&data).chain([&t]).fold(0.0f64, |a, v| a.max(v.abs()));
+        let constant = |_: usize, v: f64| HyperDual::constant(v);
+        for (k, (name, v)) in c.data().iter().enumerate() {
+            let out = generic_at(c, q, t, &constant, &|j, x| HyperDual::seed(x, if j == k { 1.0 } else { 0.0 }, 0.0));
+            let h = 1e-6 * v.abs().max(1.0);
+            let (mut up, mut down) = (data.clone(), data.clone());
+            up[k] += h;
+            down[k] -= h;
+            let (mut fp, mut fm) = (vec![0.0; c.rows()], vec![0.0; c.rows()]);
+            build(&up).phi_at(q, t, &mut fp);
+            build(&down).phi_at(q, t, &mut fm);
+            for r in 0..c.rows() {
+                let fd = (fp[r] - fm[r]) / (2.0 * h);
+                let tol = 1e-8 * (1.0 + big) * (1.0 + big);
+                assert!((out[r].e1 - fd).abs() <= tol, "rebuilt: {c:?}: row {r} d/d {name} {} vs fd {fd}", out[r].e1);
+            }
+        }
+    });
+}
+
+/// Each of `c`'s data names is a field of its model-file entry `T` (the name before `[`), under
+/// which the model's compiler finds the number's gradient.
+pub fn assert_data_fields<T: schemars::JsonSchema>(c: &dyn Constraint) {
+    let schema = serde_json::to_value(schemars::schema_for!(T)).expect("a schema is JSON");
+    for (name, _) in c.data() {
+        let field = name.split('[').next().unwrap_or(name);
+        let known = schema["properties"].get(field).is_some();
+        assert!(known, "{c:?}: data {name} is not a field of {}", std::any::type_name::<T>());
+    }
+}
+
+/// Run [`check_generic`] at random states of a system with `bodies` bodies.
+pub fn check_generic_random<C: GenericPhi + Constraint>(c: &C, bodies: usize, seed: u64) {
+    check_generic_random_where(c, bodies, seed, &|_| true);
+}
+
+/// As [`check_generic_random`], skipping the states where `accept(q)` is false (see
+/// [`check_fd_random_where`]).
+pub fn check_generic_random_where<C: GenericPhi + Constraint>(
+    c: &C,
+    bodies: usize,
+    seed: u64,
+    accept: &dyn Fn(&[f64]) -> bool,
+) {
+    random_states(bodies, seed, accept, &mut |q, qdot, t| check_generic(c, q, qdot, t));
 }
 
 /// `(Phi, Phi_q, gamma)` of `c` at `q`, `qdot` and `t = 0`, for a hand-derived check (`Phi`
@@ -146,5 +322,100 @@ impl<C: Constraint + ?Sized> OnSlice for C {
     }
     fn gamma_at(&self, q: &[f64], qdot: &[f64], t: f64, out: &mut [f64]) {
         self.gamma(&ConfigBuf::new(q).view(), qdot, t, out)
+    }
+}
+
+/// The generic checker fails on each kind of wrong `Phi` it is meant to catch: a revolute joint
+/// with one fault planted in its generic `Phi` at a time, each of which leaves some other check
+/// passing, fails the check that names it.
+mod planted {
+    use super::*;
+    use crate::constraints::{Anchor, BodyIx, Config, Revolute};
+
+    /// What is planted in the revolute joint's generic `Phi`.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    enum Fault {
+        /// Row 1 off by `1e-9`.
+        Value,
+        /// `1e-3 (q[0] - q0[0])` added to row 0: its value is right, its `Phi_q` is not.
+        Column,
+        /// `1e-3 (t - t0)` added to row 0: a time dependence `nu` does not have.
+        Rate,
+        /// `1e-3 (t - t0)^2` added to row 0: a second time derivative `gamma` does not have.
+        Curvature,
+        /// `point_i[0]` enters with the wrong sign (its value unchanged).
+        DataSign,
+    }
+
+    #[derive(Debug)]
+    struct Planted(Revolute, Fault);
+
+    impl Constraint for Planted {
+        fn anchor(&self) -> Anchor {
+            self.0.anchor()
+        }
+        fn row_names(&self) -> &[&'static str] {
+            self.0.row_names()
+        }
+        fn columns(&self) -> &[usize] {
+            self.0.columns()
+        }
+        fn phi(&self, q: &Config<'_>, t: f64, out: &mut [f64]) {
+            self.0.phi(q, t, out)
+        }
+        fn jacobian(&self, q: &Config<'_>, t: f64, out: &mut [f64]) {
+            self.0.jacobian(q, t, out)
+        }
+        fn gamma(&self, q: &Config<'_>, qdot: &[f64], t: f64, out: &mut [f64]) {
+            self.0.gamma(q, qdot, t, out)
+        }
+        fn data(&self) -> Vec<(&'static str, f64)> {
+            self.0.data()
+        }
+        fn phi_tri(&self, at: &At<'_, Tri>, data: &[Tri], out: &mut [Tri]) -> bool {
+            self.phi_generic(at, data, out);
+            true
+        }
+    }
+
+    impl GenericPhi for Planted {
+        fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+            let mut data = data.to_vec();
+            if self.1 == Fault::DataSign {
+                data[0] = S::constant(2.0 * data[0].value()) - data[0];
+            }
+            self.0.phi_generic(at, &data, out);
+            let moved = |x: S| x - S::constant(x.value());
+            let k = S::constant(1e-3);
+            match self.1 {
+                Fault::Value => out[1] = out[1] + S::constant(1e-9),
+                Fault::Column => out[0] = out[0] + k * moved(at.q[0]),
+                Fault::Rate => out[0] = out[0] + k * moved(at.t),
+                Fault::Curvature => out[0] = out[0] + k * moved(at.t) * moved(at.t),
+                Fault::DataSign => {}
+            }
+        }
+    }
+
+    #[test]
+    fn each_planted_fault_fails_its_check() {
+        let joint = || Revolute::new(BodyIx(Some(0)), [0.3, -0.2], BodyIx(Some(3)), [-1.1, 0.4]);
+        let (q, qdot) = (Lcg::new(3).vec(6, -2.0, 2.0), Lcg::new(4).vec(6, -3.0, 3.0));
+        // The joint itself passes.
+        check_generic(&joint(), &q, &qdot, 0.7);
+        let cases = [
+            (Fault::Value, "phi:"),
+            (Fault::Column, "jacobian:"),
+            (Fault::Rate, "velocity:"),
+            (Fault::Curvature, "acceleration:"),
+            (Fault::DataSign, "data:"),
+        ];
+        for (fault, check) in cases {
+            let planted = Planted(joint(), fault);
+            let caught = std::panic::catch_unwind(|| check_generic(&planted, &q, &qdot, 0.7));
+            let payload = caught.expect_err("a planted fault must fail the check");
+            let message = payload.downcast_ref::<String>().cloned().unwrap_or_default();
+            assert!(message.starts_with(check), "{fault:?}: expected the {check} check to fail, got {message}");
+        }
     }
 }

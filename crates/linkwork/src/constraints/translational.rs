@@ -21,7 +21,9 @@
 use super::schema::{with_friction, JointContext};
 use super::CompiledJoint;
 use super::{perp, unit, Anchor, BodyIx, Config, Constraint, Friction, FrictionLaw, Pair, Projection, Shape, Sketch};
+use super::{phi_tri_generic, projection, slot2, vector, At, GenericPhi, Pose, AXIS_I, AXIS_J, POINT_I, POINT_J};
 use crate::element::fields;
+use crate::expr::Scalar;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -31,7 +33,11 @@ use serde::{Deserialize, Serialize};
 pub struct Translational {
     pair: Pair,
     line: Projection,
+    /// `v'_i` and `v'_j` as given.
+    axes: [[f64; 2]; 2],
     c: f64,
+    /// The whole turns [`Translational::near`] added to `c` (held: not data).
+    turns: f64,
 }
 
 impl Translational {
@@ -41,7 +47,7 @@ impl Translational {
     pub fn new(i: BodyIx, s_p: [f64; 2], v_i: [f64; 2], j: BodyIx, s_q: [f64; 2], v_j: [f64; 2]) -> Translational {
         let c = v_j[1].atan2(v_j[0]) - v_i[1].atan2(v_i[0]);
         let line = Projection { i, w: perp(unit(v_i)), s_p, j, s_q };
-        Translational { pair: Pair::new(i, j), line, c }
+        Translational { pair: Pair::new(i, j), line, axes: [v_i, v_j], c, turns: 0.0 }
     }
 
     /// The joint with its angle constant `c` moved by whole turns to the nearest of `relative`
@@ -49,7 +55,9 @@ impl Translational {
     /// turn away from them is the same position, to be kept on its branch, not turned back.
     pub fn near(mut self, relative: f64) -> Translational {
         let turn = 2.0 * std::f64::consts::PI;
-        self.c += turn * ((relative - self.c) / turn).round();
+        let whole = turn * ((relative - self.c) / turn).round();
+        self.c += whole;
+        self.turns += whole;
         self
     }
 
@@ -88,6 +96,23 @@ impl Constraint for Translational {
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = self.line.gamma(q, qdot);
         out[1] = 0.0;
+    }
+    /// `point_i`, `point_j`, `axis_i`, `axis_j` (the angle constant follows the axes; its whole
+    /// turns, from the initial configuration, are held).
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        let (l, [v_i, v_j]) = (&self.line, self.axes);
+        [vector(POINT_I, l.s_p), vector(POINT_J, l.s_q), vector(AXIS_I, v_i), vector(AXIS_J, v_j)].concat()
+    }
+    phi_tri_generic!();
+}
+
+impl GenericPhi for Translational {
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+        let (v_i, v_j) = (slot2(data, 4), slot2(data, 6));
+        let (fi, fj) = (Pose::of(self.pair.i, at.q), Pose::of(self.pair.j, at.q));
+        out[0] = projection(perp(unit(v_i)), &fi, slot2(data, 0), &fj, slot2(data, 2));
+        let c = (v_j[1].atan2(v_j[0]) - v_i[1].atan2(v_i[0])) + S::constant(self.turns);
+        out[1] = fi.phi - fj.phi - c;
     }
 }
 
@@ -140,16 +165,22 @@ pub(crate) fn compile(spec: &TranslationalJoint, cx: &mut impl JointContext, pat
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::{assert_close, check_fd_random, evaluate, OnSlice};
+    use crate::constraints::testing::{
+        assert_close, assert_data_fields, check_fd_random, check_generic_random, evaluate, OnSlice,
+    };
 
     #[test]
     fn derivatives_match_finite_differences() {
         let c = Translational::new(BodyIx(Some(0)), [0.3, -0.2], [1.0, 2.0], BodyIx(Some(3)), [-1.1, 0.4], [0.0, -3.0]);
         check_fd_random(&c, 2, 1);
+        check_generic_random(&c, 2, 1);
+        assert_data_fields::<TranslationalJoint>(&c);
         let g = Translational::new(BodyIx::GROUND, [0.5, -2.0], [2.0, 0.0], BodyIx(Some(3)), [0.7, 0.1], [1.0, 1.0]);
         check_fd_random(&g, 2, 2);
+        check_generic_random(&g.near(-7.0), 2, 2);
         let h = Translational::new(BodyIx(Some(0)), [0.5, -2.0], [0.3, -0.4], BodyIx::GROUND, [0.7, 0.1], [1.0, 0.0]);
         check_fd_random(&h, 2, 3);
+        check_generic_random(&h, 2, 3);
     }
 
     /// The angle constant takes whole turns from the starting relative angle: parallel axes give

@@ -71,12 +71,7 @@ use std::sync::Arc;
 use parse::{Binary, Op, MAX_STACK};
 
 pub use parse::MAX_DEPTH;
-pub use scalar::{Dual, HyperDual, Scalar};
-
-/// The number type of design sensitivities: a value with three nilpotent directions and their
-/// mixed parts, so that an element's `Phi` gives its parameter derivatives at the position,
-/// velocity and acceleration levels. For now the two-direction [`HyperDual`].
-pub type Tri = HyperDual;
+pub use scalar::{Dual, HyperDual, Scalar, Tri};
 pub use spline::Spline;
 
 /// The most slots (distinct names of coordinates, velocities and the like) an expression over a
@@ -94,6 +89,12 @@ pub trait Names {
     /// The table named `name`, if any.
     fn table(&self, _name: &str) -> Option<Arc<Spline>> {
         None
+    }
+
+    /// Whether `name` is a variable of the caller's even where a built-in constant has that
+    /// name: a parameter called `e`, read as a variable to differentiate with respect to it.
+    fn shadows(&self, _name: &str) -> bool {
+        false
     }
 }
 
@@ -275,8 +276,13 @@ impl Expr {
                 }
                 Op::Table(i) => {
                     let a = stack[sp - 1];
-                    let (f0, f1, f2) = self.tables[i].eval(a.value());
-                    stack[sp - 1] = a.lift(f0, f1, f2);
+                    stack[sp - 1] = if S::ORDER >= 3 {
+                        let (f0, f1, f2, f3) = self.tables[i].eval3(a.value());
+                        a.lift(f0, f1, f2, f3)
+                    } else {
+                        let (f0, f1, f2) = self.tables[i].eval(a.value());
+                        a.lift(f0, f1, f2, 0.0)
+                    };
                 }
             }
         }

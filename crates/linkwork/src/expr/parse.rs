@@ -669,7 +669,8 @@ impl<'a> Parser<'a, '_> {
     /// resolved variable.
     fn name(&mut self, name: &str, start: usize) -> Result<(), ExprError> {
         // The caller's names first: a model's parameter may be called `e` (it may not be `pi`).
-        let constant = CONSTANTS.iter().find(|(n, _)| *n == name).map(|&(_, v)| v);
+        let builtin = !self.names.shadows(name);
+        let constant = CONSTANTS.iter().find(|(n, _)| builtin && *n == name).map(|&(_, v)| v);
         if let Some(v) = self.names.constant(name).or(constant) {
             self.code.push(Op::Const(v));
             return Ok(());

@@ -1,12 +1,16 @@
 //! Number types for forward-mode automatic differentiation.
 //!
-//! An [`Expr`](super::Expr) is evaluated generically over a [`Scalar`]. Three
+//! An [`Expr`](super::Expr) is evaluated generically over a [`Scalar`]. Four
 //! implementations are provided:
 //!
 //! * [`f64`]: the plain value;
 //! * [`Dual`]: value plus one directional derivative (`v + d ε`, `ε² = 0`);
 //! * [`HyperDual`]: value, two first directional derivatives and the mixed second
-//!   derivative (`v + e1 ε1 + e2 ε2 + e12 ε1ε2`, `ε1² = ε2² = 0`).
+//!   derivative (`v + e1 ε1 + e2 ε2 + e12 ε1ε2`, `ε1² = ε2² = 0`);
+//! * [`Tri`]: value, three first directional derivatives and every mixed part of them
+//!   (`e12`, `e13`, `e23`, `e123`), for design sensitivities: seeded with `ε1`, `ε2` along time
+//!   and `ε3` along a parameter, it gives the parameter derivative of a function, of its time
+//!   rate and of its second time derivative in one evaluation.
 //!
 //! Seeding the inputs of a function `f` with `x = (x0, a, b, 0)` gives a result whose
 //! `e12` component is `aᵀ H b` (`H` the Hessian of `f` at `x0`); with `a = b` this is
@@ -14,10 +18,16 @@
 //! yields `(f, f', f'')` exactly.
 //!
 //! Every elementary function is implemented once, as a default method of [`Scalar`],
-//! from its value and first two derivatives ([`Scalar::lift`] and [`Scalar::lift2`]).
-//! The value component is always computed with exactly the same floating-point
-//! operations as the plain `f64` evaluation, so `Dual` and `HyperDual` evaluations
-//! return bit-identical values.
+//! from its value and first three derivatives ([`Scalar::lift`] and [`Scalar::lift2`]): for a
+//! nilpotent increment `d` (`d⁴ = 0` in every type here), `f(v + d) = f + f' d + f'' d²/2 +
+//! f''' d³/6` exactly. The third derivatives are computed only for a type of
+//! [`ORDER`](Scalar::ORDER) 3 ([`Tri`]); the others pass 0, which they ignore, so `f64`,
+//! `Dual` and `HyperDual` do exactly the work they did before `Tri` existed. The value
+//! component is always computed with exactly the same floating-point operations as the plain
+//! `f64` evaluation, so every type's evaluation returns bit-identical values.
+//!
+//! The two-argument functions (`atan2`, `hypot`) give their third partial derivatives in closed
+//! form; `pow` with a moving exponent is `exp(b ln a)`, exact through the one-argument rules.
 
 use std::fmt::Debug;
 use std::ops::{Add, Div, Mul, Neg, Sub};
@@ -50,6 +60,12 @@ fn sign_of(v: f64) -> f64 {
     }
 }
 
+/// `asin'''(v)` from `f1 = asin'(v) = 1 / sqrt(1 - v²)`: `f1³ (1 + 3 v² f1²)`; odd in `f1`, so with
+/// `f1 = acos'(v) = -asin'(v)` it is `acos'''(v)`.
+fn asin_third(v: f64, _f0: f64, f1: f64, _f2: f64) -> f64 {
+    f1 * f1 * f1 * (1.0 + 3.0 * v * v * f1 * f1)
+}
+
 /// A number type that expressions can be evaluated over.
 ///
 /// Implementors supply the arithmetic operators, [`constant`](Scalar::constant),
@@ -60,8 +76,8 @@ pub trait Scalar:
     Copy + Debug + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
 {
     /// Highest derivative order carried by the type (0 for `f64`, 1 for [`Dual`],
-    /// 2 for [`HyperDual`]). The default methods skip computing derivative factors
-    /// that the type would discard.
+    /// 2 for [`HyperDual`], 3 for [`Tri`]). The default methods skip computing derivative
+    /// factors that the type would discard.
     const ORDER: u8;
 
     /// A constant (all derivative parts zero).
@@ -71,117 +87,159 @@ pub trait Scalar:
     fn value(self) -> f64;
 
     /// Applies a scalar function `f` to `self` by the chain rule, given
-    /// `f0 = f(v)`, `f1 = f'(v)` and `f2 = f''(v)` at `v = self.value()`.
-    fn lift(self, f0: f64, f1: f64, f2: f64) -> Self;
+    /// `f0 = f(v)`, `f1 = f'(v)`, `f2 = f''(v)` and `f3 = f'''(v)` at `v = self.value()`
+    /// (callers pass `f3 = 0` to a type of [`ORDER`](Scalar::ORDER) below 3, which ignores it).
+    fn lift(self, f0: f64, f1: f64, f2: f64, f3: f64) -> Self;
 
     /// Applies a two-argument function `f(u, w)` (with `u = self`, `w = other`) by the
-    /// chain rule, given its value `f0`, gradient `grad = [f_u, f_w]` and Hessian
-    /// entries `hess = [f_uu, f_uw, f_ww]`.
-    fn lift2(self, other: Self, f0: f64, grad: [f64; 2], hess: [f64; 3]) -> Self;
+    /// chain rule, given its value `f0`, gradient `grad = [f_u, f_w]`, Hessian
+    /// entries `hess = [f_uu, f_uw, f_ww]` and third partials `third = [f_uuu, f_uuw, f_uww,
+    /// f_www]` (zeros for a type of [`ORDER`](Scalar::ORDER) below 3, which ignores them).
+    fn lift2(self, other: Self, f0: f64, grad: [f64; 2], hess: [f64; 3], third: [f64; 4]) -> Self;
 
-    /// `f(self)` by the chain rule, with `f0 = f(v)` at `v = self.value()` and
+    /// `f(self)` by the chain rule, with `f0 = f(v)` at `v = self.value()`,
     /// `(f'(v), f''(v)) = derivatives(v, f0)`, which a type without derivatives (`ORDER` 0)
-    /// does not evaluate.
+    /// does not evaluate, and `f'''(v) = third(v, f0, f'(v), f''(v))`, which only a type of
+    /// `ORDER` 3 evaluates.
     #[inline]
-    fn apply(self, f: impl FnOnce(f64) -> f64, derivatives: impl FnOnce(f64, f64) -> (f64, f64)) -> Self {
+    fn apply(
+        self,
+        f: impl FnOnce(f64) -> f64,
+        derivatives: impl FnOnce(f64, f64) -> (f64, f64),
+        third: impl FnOnce(f64, f64, f64, f64) -> f64,
+    ) -> Self {
         let v = self.value();
         let f0 = f(v);
         if Self::ORDER == 0 {
             return Self::constant(f0);
         }
         let (f1, f2) = derivatives(v, f0);
-        self.lift(f0, f1, f2)
+        let f3 = if Self::ORDER >= 3 { third(v, f0, f1, f2) } else { 0.0 };
+        self.lift(f0, f1, f2, f3)
     }
 
     /// Sine.
     fn sin(self) -> Self {
-        self.apply(f64::sin, |v, s| (v.cos(), -s))
+        self.apply(f64::sin, |v, s| (v.cos(), -s), |_, _, c, _| -c)
     }
 
     /// Cosine.
     fn cos(self) -> Self {
-        self.apply(f64::cos, |v, c| (-v.sin(), -c))
+        self.apply(f64::cos, |v, c| (-v.sin(), -c), |_, _, minus_sin, _| -minus_sin)
     }
 
     /// Tangent.
     fn tan(self) -> Self {
-        self.apply(f64::tan, |_, t| {
-            let sec2 = 1.0 + t * t;
-            (sec2, 2.0 * t * sec2)
-        })
+        self.apply(
+            f64::tan,
+            |_, t| {
+                let sec2 = 1.0 + t * t;
+                (sec2, 2.0 * t * sec2)
+            },
+            // (2 t sec²)' = 2 sec⁴ + 4 t² sec²
+            |_, t, sec2, _| 2.0 * sec2 * (sec2 + 2.0 * t * t),
+        )
     }
 
     /// Arc sine (NaN outside `[-1, 1]`; infinite derivative at `±1`).
     fn asin(self) -> Self {
-        self.apply(f64::asin, |v, _| {
-            let f1 = 1.0 / (1.0 - v * v).sqrt();
-            (f1, v * f1 * f1 * f1)
-        })
+        self.apply(
+            f64::asin,
+            |v, _| {
+                let f1 = 1.0 / (1.0 - v * v).sqrt();
+                (f1, v * f1 * f1 * f1)
+            },
+            asin_third,
+        )
     }
 
     /// Arc cosine (NaN outside `[-1, 1]`; infinite derivative at `±1`).
     fn acos(self) -> Self {
-        self.apply(f64::acos, |v, _| {
-            let f1 = 1.0 / (1.0 - v * v).sqrt();
-            (-f1, -v * f1 * f1 * f1)
-        })
+        self.apply(
+            f64::acos,
+            |v, _| {
+                let f1 = 1.0 / (1.0 - v * v).sqrt();
+                (-f1, -v * f1 * f1 * f1)
+            },
+            // acos = pi/2 - asin, and asin_third is odd in f1.
+            asin_third,
+        )
     }
 
     /// Arc tangent.
     fn atan(self) -> Self {
-        self.apply(f64::atan, |v, _| {
-            let f1 = 1.0 / (1.0 + v * v);
-            (f1, -2.0 * v * f1 * f1)
-        })
+        self.apply(
+            f64::atan,
+            |v, _| {
+                let f1 = 1.0 / (1.0 + v * v);
+                (f1, -2.0 * v * f1 * f1)
+            },
+            // (-2 v f1²)' = -2 f1² - 4 v f1 f1' = f1² (8 v² f1 - 2)
+            |v, _, f1, _| f1 * f1 * (8.0 * v * v * f1 - 2.0),
+        )
     }
 
     /// Hyperbolic sine.
     fn sinh(self) -> Self {
-        self.apply(f64::sinh, |v, s| (v.cosh(), s))
+        self.apply(f64::sinh, |v, s| (v.cosh(), s), |_, _, c, _| c)
     }
 
     /// Hyperbolic cosine.
     fn cosh(self) -> Self {
-        self.apply(f64::cosh, |v, c| (v.sinh(), c))
+        self.apply(f64::cosh, |v, c| (v.sinh(), c), |_, _, s, _| s)
     }
 
     /// Hyperbolic tangent.
     fn tanh(self) -> Self {
-        self.apply(f64::tanh, |_, t| {
-            let sech2 = 1.0 - t * t;
-            (sech2, -2.0 * t * sech2)
-        })
+        self.apply(
+            f64::tanh,
+            |_, t| {
+                let sech2 = 1.0 - t * t;
+                (sech2, -2.0 * t * sech2)
+            },
+            // (-2 t sech²)' = -2 sech⁴ + 4 t² sech²
+            |_, t, sech2, _| sech2 * (4.0 * t * t - 2.0 * sech2),
+        )
     }
 
     /// Exponential `e^self`.
     fn exp(self) -> Self {
-        self.apply(f64::exp, |_, x| (x, x))
+        self.apply(f64::exp, |_, x| (x, x), |_, x, _, _| x)
     }
 
     /// Natural logarithm (NaN for negative values, `-inf` at 0).
     fn ln(self) -> Self {
-        self.apply(f64::ln, |v, _| {
-            let r = 1.0 / v;
-            (r, -r * r)
-        })
+        self.apply(
+            f64::ln,
+            |v, _| {
+                let r = 1.0 / v;
+                (r, -r * r)
+            },
+            |_, _, r, _| 2.0 * r * r * r,
+        )
     }
 
     /// Square root (NaN for negative values, infinite derivative at 0).
     fn sqrt(self) -> Self {
-        self.apply(f64::sqrt, |v, r| {
-            let f1 = 0.5 / r;
-            (f1, -0.5 * f1 / v)
-        })
+        self.apply(
+            f64::sqrt,
+            |v, r| {
+                let f1 = 0.5 / r;
+                (f1, -0.5 * f1 / v)
+            },
+            // (-v^(-3/2) / 4)' = (3/8) v^(-5/2) = -1.5 f'' / v
+            |v, _, _, f2| -1.5 * f2 / v,
+        )
     }
 
     /// Absolute value. The derivative is taken as `sign(v)`, i.e. 0 at `v = 0`.
     fn abs(self) -> Self {
-        self.apply(f64::abs, |v, _| (sign_of(v), 0.0))
+        self.apply(f64::abs, |v, _| (sign_of(v), 0.0), |_, _, _, _| 0.0)
     }
 
     /// Sign: `1`, `-1`, or `0` at zero (unlike [`f64::signum`]); derivative 0.
     fn sign(self) -> Self {
-        self.apply(sign_of, |_, _| (0.0, 0.0))
+        self.apply(sign_of, |_, _| (0.0, 0.0), |_, _, _, _| 0.0)
     }
 
     /// Integer power `self^n`, exact at `self = 0` for `n >= 0` (e.g. `x^2` at 0 has
@@ -197,6 +255,14 @@ pub trait Scalar:
                 let f2 = if n == 0 || n == 1 { 0.0 } else { nf * (nf - 1.0) * v.powi(n.saturating_sub(2)) };
                 (f1, f2)
             },
+            |v, _, _, _| {
+                let nf = f64::from(n);
+                if (0..=2).contains(&n) {
+                    0.0
+                } else {
+                    nf * (nf - 1.0) * (nf - 2.0) * v.powi(n.saturating_sub(3))
+                }
+            },
         )
     }
 
@@ -209,6 +275,13 @@ pub trait Scalar:
                 let f1 = if c == 0.0 { 0.0 } else { c * v.powf(c - 1.0) };
                 let f2 = if c == 0.0 || c == 1.0 { 0.0 } else { c * (c - 1.0) * v.powf(c - 2.0) };
                 (f1, f2)
+            },
+            |v, _, _, _| {
+                if c == 0.0 || c == 1.0 || c == 2.0 {
+                    0.0
+                } else {
+                    c * (c - 1.0) * (c - 2.0) * v.powf(c - 3.0)
+                }
             },
         )
     }
@@ -233,7 +306,17 @@ pub trait Scalar:
         let hyy = -2.0 * xv * yv / r4;
         let hxy = (yv * yv - xv * xv) / r4;
         let hxx = 2.0 * xv * yv / r4;
-        self.lift2(x, f0, [gy, gx], [hyy, hxy, hxx])
+        // atan2 = Im log(x + i y), so its third partials are Im(i^k 2 / z³) with k the number of
+        // y's: with p + i q = conj(z)³, f_yyy = -2p, f_yyx = -2q, f_yxx = 2p, f_xxx = 2q, over r⁶.
+        let third = if Self::ORDER >= 3 {
+            let r6 = r4 * r2;
+            let p = 2.0 * (xv * xv * xv - 3.0 * xv * yv * yv) / r6;
+            let q = 2.0 * (yv * yv * yv - 3.0 * xv * xv * yv) / r6;
+            [-p, -q, p, q]
+        } else {
+            [0.0; 4]
+        };
+        self.lift2(x, f0, [gy, gx], [hyy, hxy, hxx], third)
     }
 
     /// `sqrt(self^2 + y^2)` without overflow or underflow on the way ([`f64::hypot`]). At the
@@ -242,10 +325,22 @@ pub trait Scalar:
         let (a, b) = (self.value(), y.value());
         let r = a.hypot(b);
         if Self::ORDER == 0 || r == 0.0 {
-            return self.lift2(y, r, [0.0; 2], [0.0; 3]);
+            return self.lift2(y, r, [0.0; 2], [0.0; 3], [0.0; 4]);
         }
         let (ua, ub) = (a / r, b / r);
-        self.lift2(y, r, [ua, ub], [ub * ub / r, -ua * ub / r, ua * ua / r])
+        // The derivatives of the Hessian (b², -ab, a²) / r³ (r² = a² + b²).
+        let third = if Self::ORDER >= 3 {
+            let r2 = r * r;
+            [
+                -3.0 * ua * ub * ub / r2,
+                ub * (2.0 * ua * ua - ub * ub) / r2,
+                ua * (2.0 * ub * ub - ua * ua) / r2,
+                -3.0 * ua * ua * ub / r2,
+            ]
+        } else {
+            [0.0; 4]
+        };
+        self.lift2(y, r, [ua, ub], [ub * ub / r, -ua * ub / r, ua * ua / r], third)
     }
 
     /// The smaller argument (with its derivatives); `self` on ties. A NaN argument is
@@ -285,12 +380,12 @@ impl Scalar for f64 {
     }
 
     #[inline]
-    fn lift(self, f0: f64, _f1: f64, _f2: f64) -> Self {
+    fn lift(self, f0: f64, _f1: f64, _f2: f64, _f3: f64) -> Self {
         f0
     }
 
     #[inline]
-    fn lift2(self, _other: Self, f0: f64, _grad: [f64; 2], _hess: [f64; 3]) -> Self {
+    fn lift2(self, _other: Self, f0: f64, _grad: [f64; 2], _hess: [f64; 3], _third: [f64; 4]) -> Self {
         f0
     }
 }
@@ -373,12 +468,12 @@ impl Scalar for Dual {
     }
 
     #[inline]
-    fn lift(self, f0: f64, f1: f64, _f2: f64) -> Self {
+    fn lift(self, f0: f64, f1: f64, _f2: f64, _f3: f64) -> Self {
         Dual::new(f0, scale(f1, self.d))
     }
 
     #[inline]
-    fn lift2(self, o: Self, f0: f64, g: [f64; 2], _hess: [f64; 3]) -> Self {
+    fn lift2(self, o: Self, f0: f64, g: [f64; 2], _hess: [f64; 3], _third: [f64; 4]) -> Self {
         Dual::new(f0, scale(g[0], self.d) + scale(g[1], o.d))
     }
 }
@@ -484,12 +579,12 @@ impl Scalar for HyperDual {
     }
 
     #[inline]
-    fn lift(self, f0: f64, f1: f64, f2: f64) -> Self {
+    fn lift(self, f0: f64, f1: f64, f2: f64, _f3: f64) -> Self {
         HyperDual::new(f0, scale(f1, self.e1), scale(f1, self.e2), scale(f1, self.e12) + scale(f2, self.e1 * self.e2))
     }
 
     #[inline]
-    fn lift2(self, o: Self, f0: f64, g: [f64; 2], h: [f64; 3]) -> Self {
+    fn lift2(self, o: Self, f0: f64, g: [f64; 2], h: [f64; 3], _third: [f64; 4]) -> Self {
         let (u, w) = (self, o);
         HyperDual::new(
             f0,
@@ -501,6 +596,214 @@ impl Scalar for HyperDual {
                 + scale(h[1], u.e1 * w.e2 + w.e1 * u.e2)
                 + scale(h[2], w.e1 * w.e2),
         )
+    }
+}
+
+/// A number with three nilpotent directions and all their mixed parts:
+/// `v + e1 ε1 + e2 ε2 + e3 ε3 + e12 ε1ε2 + e13 ε1ε3 + e23 ε2ε3 + e123 ε1ε2ε3`, with
+/// `ε1² = ε2² = ε3² = 0`.
+///
+/// Seeding every input `x_i` with first-order parts `(a_i, b_i, c_i)` (and zero mixed parts)
+/// and evaluating `f` gives `e1 = ∇f·a`, `e12 = D²f[a, b]`, `e123 = D³f[a, b, c]`, and so on
+/// for every subset of the directions, all exact to rounding. Design sensitivities seed
+/// `ε1 = ε2` along time and `ε3` along one parameter ([`Tri::trajectory`]): then `e3` is the
+/// parameter derivative of `f`, `e13` that of its time rate and `e123` that of its second time
+/// derivative (`e1` and `e12` are the time rate and the second time derivative themselves).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Tri {
+    /// Value.
+    pub v: f64,
+    /// First derivative along the first direction.
+    pub e1: f64,
+    /// First derivative along the second direction.
+    pub e2: f64,
+    /// First derivative along the third direction.
+    pub e3: f64,
+    /// Mixed second derivative along the first and second directions.
+    pub e12: f64,
+    /// Mixed second derivative along the first and third directions.
+    pub e13: f64,
+    /// Mixed second derivative along the second and third directions.
+    pub e23: f64,
+    /// Mixed third derivative along all three directions.
+    pub e123: f64,
+}
+
+impl Tri {
+    /// A number from its parts, grouped by order: the value, the first-order parts
+    /// `[e1, e2, e3]`, the second-order parts `[e12, e13, e23]` and `e123`.
+    #[inline]
+    pub const fn new(v: f64, first: [f64; 3], second: [f64; 3], e123: f64) -> Self {
+        let [e1, e2, e3] = first;
+        let [e12, e13, e23] = second;
+        Tri { v, e1, e2, e3, e12, e13, e23, e123 }
+    }
+
+    /// A quantity `x(t, p)` at a time and a parameter value, seeded with `ε1 = ε2` along time
+    /// and `ε3` along the parameter: `time = [x, dx/dt, d²x/dt²]` and `parameter = [dx/dp,
+    /// d²x/dt dp, d³x/dt² dp]`. Time itself is `trajectory([t, 1, 0], [0; 3])`; a parameter
+    /// (or a number that depends on parameters only) with derivative `g` along the parameter
+    /// is `trajectory([p, 0, 0], [g, 0, 0])`.
+    #[inline]
+    pub const fn trajectory(time: [f64; 3], parameter: [f64; 3]) -> Self {
+        let [x, x_t, x_tt] = time;
+        let [x_p, x_tp, x_ttp] = parameter;
+        Tri::new(x, [x_t, x_t, x_p], [x_tt, x_tp, x_tp], x_ttp)
+    }
+
+    /// The parts in the order of [`Tri::new`], flattened: `[v, e1, e2, e3, e12, e13, e23, e123]`.
+    #[inline]
+    pub const fn parts(self) -> [f64; 8] {
+        [self.v, self.e1, self.e2, self.e3, self.e12, self.e13, self.e23, self.e123]
+    }
+
+    /// Part by part, `f` of the two numbers' parts.
+    #[inline]
+    fn zip(self, o: Tri, f: impl Fn(f64, f64) -> f64) -> Tri {
+        Tri {
+            v: f(self.v, o.v),
+            e1: f(self.e1, o.e1),
+            e2: f(self.e2, o.e2),
+            e3: f(self.e3, o.e3),
+            e12: f(self.e12, o.e12),
+            e13: f(self.e13, o.e13),
+            e23: f(self.e23, o.e23),
+            e123: f(self.e123, o.e123),
+        }
+    }
+}
+
+impl Add for Tri {
+    type Output = Tri;
+    #[inline]
+    fn add(self, o: Tri) -> Tri {
+        self.zip(o, |a, b| a + b)
+    }
+}
+
+impl Sub for Tri {
+    type Output = Tri;
+    #[inline]
+    fn sub(self, o: Tri) -> Tri {
+        self.zip(o, |a, b| a - b)
+    }
+}
+
+impl Mul for Tri {
+    type Output = Tri;
+    #[inline]
+    fn mul(self, o: Tri) -> Tri {
+        let a = self;
+        Tri {
+            v: a.v * o.v,
+            e1: a.v * o.e1 + a.e1 * o.v,
+            e2: a.v * o.e2 + a.e2 * o.v,
+            e3: a.v * o.e3 + a.e3 * o.v,
+            e12: a.v * o.e12 + a.e1 * o.e2 + a.e2 * o.e1 + a.e12 * o.v,
+            e13: a.v * o.e13 + a.e1 * o.e3 + a.e3 * o.e1 + a.e13 * o.v,
+            e23: a.v * o.e23 + a.e2 * o.e3 + a.e3 * o.e2 + a.e23 * o.v,
+            e123: a.v * o.e123
+                + a.e1 * o.e23
+                + a.e2 * o.e13
+                + a.e3 * o.e12
+                + a.e12 * o.e3
+                + a.e13 * o.e2
+                + a.e23 * o.e1
+                + a.e123 * o.v,
+        }
+    }
+}
+
+impl Div for Tri {
+    type Output = Tri;
+    #[inline]
+    fn div(self, o: Tri) -> Tri {
+        // Solve self = q * o for q part by part, lowest order first.
+        let a = self;
+        let v = a.v / o.v;
+        let e1 = (a.e1 - v * o.e1) / o.v;
+        let e2 = (a.e2 - v * o.e2) / o.v;
+        let e3 = (a.e3 - v * o.e3) / o.v;
+        let e12 = (a.e12 - v * o.e12 - e1 * o.e2 - e2 * o.e1) / o.v;
+        let e13 = (a.e13 - v * o.e13 - e1 * o.e3 - e3 * o.e1) / o.v;
+        let e23 = (a.e23 - v * o.e23 - e2 * o.e3 - e3 * o.e2) / o.v;
+        let e123 =
+            (a.e123 - v * o.e123 - e1 * o.e23 - e2 * o.e13 - e3 * o.e12 - e12 * o.e3 - e13 * o.e2 - e23 * o.e1) / o.v;
+        Tri { v, e1, e2, e3, e12, e13, e23, e123 }
+    }
+}
+
+impl Neg for Tri {
+    type Output = Tri;
+    #[inline]
+    fn neg(self) -> Tri {
+        let a = self;
+        Tri::new(-a.v, [-a.e1, -a.e2, -a.e3], [-a.e12, -a.e13, -a.e23], -a.e123)
+    }
+}
+
+impl Scalar for Tri {
+    const ORDER: u8 = 3;
+
+    #[inline]
+    fn constant(v: f64) -> Self {
+        Tri::new(v, [0.0; 3], [0.0; 3], 0.0)
+    }
+
+    #[inline]
+    fn value(self) -> f64 {
+        self.v
+    }
+
+    /// `f(v + d) = f0 + f1 d + f2 d²/2 + f3 d³/6` with `d` the nilpotent part of `self`.
+    #[inline]
+    fn lift(self, f0: f64, f1: f64, f2: f64, f3: f64) -> Self {
+        let x = self;
+        Tri {
+            v: f0,
+            e1: scale(f1, x.e1),
+            e2: scale(f1, x.e2),
+            e3: scale(f1, x.e3),
+            e12: scale(f1, x.e12) + scale(f2, x.e1 * x.e2),
+            e13: scale(f1, x.e13) + scale(f2, x.e1 * x.e3),
+            e23: scale(f1, x.e23) + scale(f2, x.e2 * x.e3),
+            e123: scale(f1, x.e123)
+                + scale(f2, x.e1 * x.e23 + x.e2 * x.e13 + x.e3 * x.e12)
+                + scale(f3, x.e1 * x.e2 * x.e3),
+        }
+    }
+
+    /// The Taylor expansion of `f(u, w)` to third order in the nilpotent parts of `u` and `w`:
+    /// each part of the result is the gradient on that part of the inputs, plus the Hessian on
+    /// each split of its directions into two, plus the third derivative on `(ε1, ε2, ε3)`. The
+    /// sums run in [`HyperDual`]'s order, so that with `ε3` unseeded the parts `v, e1, e2, e12`
+    /// are bit-identical to a `HyperDual` evaluation.
+    #[inline]
+    fn lift2(self, o: Self, f0: f64, g: [f64; 2], h: [f64; 3], t: [f64; 4]) -> Self {
+        let (u, w) = (self, o);
+        // An input's part along some directions, as the pair (u's, w's).
+        let [d1, d2, d3] = [[u.e1, w.e1], [u.e2, w.e2], [u.e3, w.e3]];
+        let [d12, d13, d23] = [[u.e12, w.e12], [u.e13, w.e13], [u.e23, w.e23]];
+        let grad = |a: [f64; 2]| scale(g[0], a[0]) + scale(g[1], a[1]);
+        // `sum` plus the Hessian on the directions of `a` and `b`.
+        let hess = |sum: f64, a: [f64; 2], b: [f64; 2]| {
+            sum + scale(h[0], a[0] * b[0]) + scale(h[1], a[0] * b[1] + a[1] * b[0]) + scale(h[2], a[1] * b[1])
+        };
+        let (a, b, c) = (d1, d2, d3);
+        let third = scale(t[0], a[0] * b[0] * c[0])
+            + scale(t[1], a[0] * b[0] * c[1] + a[0] * b[1] * c[0] + a[1] * b[0] * c[0])
+            + scale(t[2], a[0] * b[1] * c[1] + a[1] * b[0] * c[1] + a[1] * b[1] * c[0])
+            + scale(t[3], a[1] * b[1] * c[1]);
+        Tri {
+            v: f0,
+            e1: grad(d1),
+            e2: grad(d2),
+            e3: grad(d3),
+            e12: hess(grad(d12), d1, d2),
+            e13: hess(grad(d13), d1, d3),
+            e23: hess(grad(d23), d2, d3),
+            e123: hess(hess(hess(grad([u.e123, w.e123]), d1, d23), d2, d13), d3, d12) + third,
+        }
     }
 }
 

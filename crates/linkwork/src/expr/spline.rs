@@ -58,7 +58,7 @@ impl TableError {
     }
 }
 
-/// A tabulated function of one variable, with exact first and second derivatives.
+/// A tabulated function of one variable, with exact first, second and third derivatives.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Spline {
     x: Vec<f64>,
@@ -114,18 +114,28 @@ impl Spline {
     }
 
     /// `(s(x), s'(x), s''(x))`; NaN for a NaN `x`.
+    #[inline]
     pub fn eval(&self, x: f64) -> (f64, f64, f64) {
+        let (s0, s1, s2, _) = self.eval3(x);
+        (s0, s1, s2)
+    }
+
+    /// `(s(x), s'(x), s''(x), s'''(x))`: the third derivative is the piece's (6 times its cubic
+    /// coefficient; at a point between two pieces, the piece [`Spline::eval`] takes), 0 on the
+    /// straight lines outside the table; NaN for a NaN `x`.
+    #[inline]
+    pub fn eval3(&self, x: f64) -> (f64, f64, f64, f64) {
         let (first, last) = (self.x[0], self.x[self.x.len() - 1]);
         let x = if self.periodic { first + (x - first).rem_euclid(last - first) } else { x };
         if x.is_nan() {
-            return (f64::NAN, f64::NAN, f64::NAN);
+            return (f64::NAN, f64::NAN, f64::NAN, f64::NAN);
         }
         let n = self.x.len();
         if x < first {
-            return (self.y[0] + self.m[0] * (x - first), self.m[0], 0.0);
+            return (self.y[0] + self.m[0] * (x - first), self.m[0], 0.0, 0.0);
         }
         if x > last {
-            return (self.y[n - 1] + self.m[n - 1] * (x - last), self.m[n - 1], 0.0);
+            return (self.y[n - 1] + self.m[n - 1] * (x - last), self.m[n - 1], 0.0, 0.0);
         }
         // The piece whose start is the last point at or before x (the last piece at its end).
         let i = self.x.partition_point(|&xi| xi <= x).clamp(1, n - 1) - 1;
@@ -135,7 +145,7 @@ impl Spline {
         let c = (3.0 * d - 2.0 * m0 - m1) / h;
         let e = (m0 + m1 - 2.0 * d) / (h * h);
         let u = x - self.x[i];
-        (self.y[i] + u * (m0 + u * (c + u * e)), m0 + u * (2.0 * c + 3.0 * u * e), 2.0 * c + 6.0 * u * e)
+        (self.y[i] + u * (m0 + u * (c + u * e)), m0 + u * (2.0 * c + 3.0 * u * e), 2.0 * c + 6.0 * u * e, 6.0 * e)
     }
 
     /// `integral s(x) dx` from the first point to the last, exact for the piecewise cubic: the

@@ -214,13 +214,14 @@ fn dual_values_are_bit_identical_to_f64() {
 // ---------------------------------------------------------------- derivatives
 
 /// A one-variable test case: source in `x`, the points to check, and the closed-form
-/// value, first and second derivative.
+/// value, first, second and third derivative.
 struct Case {
     src: &'static str,
     points: &'static [f64],
     f: fn(f64) -> f64,
     d1: fn(f64) -> f64,
     d2: fn(f64) -> f64,
+    d3: fn(f64) -> f64,
 }
 
 /// The motion laws' cases below: `law(x, 0.2, 1, 1.2, 3)`, so `u = x - 0.2` and the rise is 2.
@@ -258,6 +259,18 @@ fn trapezoid_acceleration(u: f64) -> f64 {
     }
 }
 
+/// The modified trapezoid's jerk: the derivative of [`trapezoid_acceleration`] on each piece.
+fn trapezoid_jerk(u: f64) -> f64 {
+    let a = 8.0 * PI / (2.0 + PI);
+    match u {
+        u if u <= 0.125 => 4.0 * PI * a * (4.0 * PI * u).cos(),
+        u if u <= 0.375 => 0.0,
+        u if u <= 0.625 => -4.0 * PI * a * (4.0 * PI * (u - 0.375)).sin(),
+        u if u <= 0.875 => 0.0,
+        u => 4.0 * PI * a * (4.0 * PI * (u - 0.875)).sin(),
+    }
+}
+
 /// `int_0^u w(u, v) a(v) dv` by Simpson's rule on each smooth piece of the acceleration (10,000
 /// panels of at most `2.5e-5`: error about `1e-16`): the velocity (`w = 1`) and the rise
 /// (`w = u - v`, Cauchy's formula for the double integral), independent of the closed forms.
@@ -292,6 +305,7 @@ fn cases() -> Vec<Case> {
             f: |x| (5.0 * x * x - 4.0 * x + 1.0).sqrt(),
             d1: |x| (5.0 * x - 2.0) / (5.0 * x * x - 4.0 * x + 1.0).sqrt(),
             d2: |x| (5.0 * x * x - 4.0 * x + 1.0).powf(-1.5),
+            d3: |x| -1.5 * (10.0 * x - 4.0) * (5.0 * x * x - 4.0 * x + 1.0).powf(-2.5),
         },
         // Motion laws (closed forms of the normalized rise s(u) and its derivatives; the
         // modified trapezoid's from its acceleration's definition, integrated numerically).
@@ -303,6 +317,7 @@ fn cases() -> Vec<Case> {
             f: |x| rise(x, |u| u * u * (3.0 - 2.0 * u)),
             d1: |x| rise_rate(x, |u| 6.0 * u - 6.0 * u * u),
             d2: |x| rise_rate(x, |u| 6.0 - 12.0 * u),
+            d3: |x| rise_rate(x, |_| -12.0),
         },
         Case {
             src: "step5(x, 0.2, 1, 1.2, 3) + poly345(x, 0.2, 1, 1.2, 3)",
@@ -310,6 +325,7 @@ fn cases() -> Vec<Case> {
             f: |x| 2.0 * rise(x, |u| u.powi(3) * (10.0 - 15.0 * u + 6.0 * u * u)),
             d1: |x| 2.0 * rise_rate(x, |u| 30.0 * u * u - 60.0 * u.powi(3) + 30.0 * u.powi(4)),
             d2: |x| 2.0 * rise_rate(x, |u| 60.0 * u - 180.0 * u * u + 120.0 * u.powi(3)),
+            d3: |x| 2.0 * rise_rate(x, |u| 60.0 - 360.0 * u + 360.0 * u * u),
         },
         Case {
             src: "cycloidal(x, 0.2, 1, 1.2, 3)",
@@ -317,6 +333,7 @@ fn cases() -> Vec<Case> {
             f: |x| rise(x, |u| u - (2.0 * PI * u).sin() / (2.0 * PI)),
             d1: |x| rise_rate(x, |u| 1.0 - (2.0 * PI * u).cos()),
             d2: |x| rise_rate(x, |u| 2.0 * PI * (2.0 * PI * u).sin()),
+            d3: |x| rise_rate(x, |u| 4.0 * PI * PI * (2.0 * PI * u).cos()),
         },
         Case {
             src: "harmonic(x, 0.2, 1, 1.2, 3)",
@@ -324,6 +341,7 @@ fn cases() -> Vec<Case> {
             f: |x| rise(x, |u| (1.0 - (PI * u).cos()) / 2.0),
             d1: |x| rise_rate(x, |u| PI * (PI * u).sin() / 2.0),
             d2: |x| rise_rate(x, |u| PI * PI * (PI * u).cos() / 2.0),
+            d3: |x| rise_rate(x, |u| -PI * PI * PI * (PI * u).sin() / 2.0),
         },
         Case {
             src: "modified_trapezoid(x, 0.2, 1, 1.2, 3)",
@@ -331,6 +349,7 @@ fn cases() -> Vec<Case> {
             f: |x| rise(x, |u| trapezoid_integral(u, |u, v| u - v)),
             d1: |x| rise_rate(x, |u| trapezoid_integral(u, |_, _| 1.0)),
             d2: |x| rise_rate(x, trapezoid_acceleration),
+            d3: |x| rise_rate(x, trapezoid_jerk),
         },
         Case {
             src: "if(x >= 0.5, 3*x, x^2) + if(x < 0.5, 1, 0)",
@@ -338,22 +357,39 @@ fn cases() -> Vec<Case> {
             f: |x| if x >= 0.5 { 3.0 * x } else { x * x + 1.0 },
             d1: |x| if x >= 0.5 { 3.0 } else { 2.0 * x },
             d2: |x| if x >= 0.5 { 0.0 } else { 2.0 },
+            d3: |_| 0.0,
         },
-        Case { src: "sin(x)", points: &[-2.0, 0.0, 0.7, 3.0], f: f64::sin, d1: f64::cos, d2: |x| -x.sin() },
+        Case {
+            src: "sin(x)",
+            points: &[-2.0, 0.0, 0.7, 3.0],
+            f: f64::sin,
+            d1: f64::cos,
+            d2: |x| -x.sin(),
+            d3: |x| -x.cos(),
+        },
         Case {
             src: "sin(4*x)",
             points: &[-0.3, 0.0, 0.9],
             f: |x| (4.0 * x).sin(),
             d1: |x| 4.0 * (4.0 * x).cos(),
             d2: |x| -16.0 * (4.0 * x).sin(),
+            d3: |x| -64.0 * (4.0 * x).cos(),
         },
-        Case { src: "cos(x)", points: &[-2.0, 0.0, 0.7, 3.0], f: f64::cos, d1: |x| -x.sin(), d2: |x| -x.cos() },
+        Case {
+            src: "cos(x)",
+            points: &[-2.0, 0.0, 0.7, 3.0],
+            f: f64::cos,
+            d1: |x| -x.sin(),
+            d2: |x| -x.cos(),
+            d3: f64::sin,
+        },
         Case {
             src: "tan(x)",
             points: &[-1.0, 0.0, 0.3, 1.2],
             f: f64::tan,
             d1: |x| 1.0 / sq(x.cos()),
             d2: |x| 2.0 * x.tan() / sq(x.cos()),
+            d3: |x| 2.0 / sq(sq(x.cos())) + 4.0 * sq(x.tan()) / sq(x.cos()),
         },
         Case {
             src: "asin(x)",
@@ -361,6 +397,7 @@ fn cases() -> Vec<Case> {
             f: f64::asin,
             d1: |x| 1.0 / (1.0 - x * x).sqrt(),
             d2: |x| x / (1.0 - x * x).powf(1.5),
+            d3: |x| (1.0 + 2.0 * x * x) / (1.0 - x * x).powf(2.5),
         },
         Case {
             src: "acos(x)",
@@ -368,6 +405,7 @@ fn cases() -> Vec<Case> {
             f: f64::acos,
             d1: |x| -1.0 / (1.0 - x * x).sqrt(),
             d2: |x| -x / (1.0 - x * x).powf(1.5),
+            d3: |x| -(1.0 + 2.0 * x * x) / (1.0 - x * x).powf(2.5),
         },
         Case {
             src: "atan(x)",
@@ -375,6 +413,7 @@ fn cases() -> Vec<Case> {
             f: f64::atan,
             d1: |x| 1.0 / (1.0 + x * x),
             d2: |x| -2.0 * x / sq(1.0 + x * x),
+            d3: |x| (6.0 * x * x - 2.0) / (1.0 + x * x).powi(3),
         },
         Case {
             // d/dy atan2(y, 2) = 2/(4 + y^2)
@@ -383,6 +422,7 @@ fn cases() -> Vec<Case> {
             f: |x| x.atan2(2.0),
             d1: |x| 2.0 / (4.0 + x * x),
             d2: |x| -4.0 * x / sq(4.0 + x * x),
+            d3: |x| (12.0 * x * x - 16.0) / (4.0 + x * x).powi(3),
         },
         Case {
             // d/dx atan2(1, x) = -1/(1 + x^2), valid in every quadrant
@@ -391,27 +431,37 @@ fn cases() -> Vec<Case> {
             f: |x| 1f64.atan2(x),
             d1: |x| -1.0 / (1.0 + x * x),
             d2: |x| 2.0 * x / sq(1.0 + x * x),
+            d3: |x| (2.0 - 6.0 * x * x) / (1.0 + x * x).powi(3),
         },
-        Case { src: "sinh(x)", points: &[-2.0, 0.0, 1.5], f: f64::sinh, d1: f64::cosh, d2: f64::sinh },
-        Case { src: "cosh(x)", points: &[-2.0, 0.0, 1.5], f: f64::cosh, d1: f64::sinh, d2: f64::cosh },
+        Case { src: "sinh(x)", points: &[-2.0, 0.0, 1.5], f: f64::sinh, d1: f64::cosh, d2: f64::sinh, d3: f64::cosh },
+        Case { src: "cosh(x)", points: &[-2.0, 0.0, 1.5], f: f64::cosh, d1: f64::sinh, d2: f64::cosh, d3: f64::sinh },
         Case {
             src: "tanh(x)",
             points: &[-2.0, 0.0, 0.4, 1.5],
             f: f64::tanh,
             d1: |x| 1.0 / sq(x.cosh()),
             d2: |x| -2.0 * x.tanh() / sq(x.cosh()),
+            d3: |x| -2.0 / sq(sq(x.cosh())) + 4.0 * sq(x.tanh()) / sq(x.cosh()),
         },
-        Case { src: "exp(x)", points: &[-2.0, 0.0, 1.5], f: f64::exp, d1: f64::exp, d2: f64::exp },
-        Case { src: "log(x)", points: &[0.3, 1.0, 1.7, 5.0], f: f64::ln, d1: |x| 1.0 / x, d2: |x| -1.0 / (x * x) },
+        Case { src: "exp(x)", points: &[-2.0, 0.0, 1.5], f: f64::exp, d1: f64::exp, d2: f64::exp, d3: f64::exp },
+        Case {
+            src: "log(x)",
+            points: &[0.3, 1.0, 1.7, 5.0],
+            f: f64::ln,
+            d1: |x| 1.0 / x,
+            d2: |x| -1.0 / (x * x),
+            d3: |x| 2.0 / (x * x * x),
+        },
         Case {
             src: "sqrt(x)",
             points: &[0.3, 1.0, 4.0],
             f: f64::sqrt,
             d1: |x| 0.5 / x.sqrt(),
             d2: |x| -0.25 / (x * x.sqrt()),
+            d3: |x| 0.375 / (x * x * x.sqrt()),
         },
-        Case { src: "abs(x)", points: &[-1.3, 0.7], f: f64::abs, d1: f64::signum, d2: |_| 0.0 },
-        Case { src: "sign(x)", points: &[-1.3, 0.7], f: f64::signum, d1: |_| 0.0, d2: |_| 0.0 },
+        Case { src: "abs(x)", points: &[-1.3, 0.7], f: f64::abs, d1: f64::signum, d2: |_| 0.0, d3: |_| 0.0 },
+        Case { src: "sign(x)", points: &[-1.3, 0.7], f: f64::signum, d1: |_| 0.0, d2: |_| 0.0, d3: |_| 0.0 },
         Case {
             // selects x below 0.5, 1 - x above
             src: "min(x, 1 - x)",
@@ -419,6 +469,7 @@ fn cases() -> Vec<Case> {
             f: |x| x.min(1.0 - x),
             d1: |x| if x < 0.5 { 1.0 } else { -1.0 },
             d2: |_| 0.0,
+            d3: |_| 0.0,
         },
         Case {
             // selects x^2 outside [0, 1], x inside
@@ -427,15 +478,31 @@ fn cases() -> Vec<Case> {
             f: |x| (x * x).max(x),
             d1: |x| if x * x > x { 2.0 * x } else { 1.0 },
             d2: |x| if x * x > x { 2.0 } else { 0.0 },
+            d3: |_| 0.0,
         },
-        Case { src: "x^3", points: &[-1.5, 0.0, 0.5, 2.0], f: |x| x * x * x, d1: |x| 3.0 * x * x, d2: |x| 6.0 * x },
-        Case { src: "pow(x, 3)", points: &[-1.5, 0.0, 2.0], f: |x| x * x * x, d1: |x| 3.0 * x * x, d2: |x| 6.0 * x },
+        Case {
+            src: "x^3",
+            points: &[-1.5, 0.0, 0.5, 2.0],
+            f: |x| x * x * x,
+            d1: |x| 3.0 * x * x,
+            d2: |x| 6.0 * x,
+            d3: |_| 6.0,
+        },
+        Case {
+            src: "pow(x, 3)",
+            points: &[-1.5, 0.0, 2.0],
+            f: |x| x * x * x,
+            d1: |x| 3.0 * x * x,
+            d2: |x| 6.0 * x,
+            d3: |_| 6.0,
+        },
         Case {
             src: "x^-2",
             points: &[-1.5, 0.5, 2.0],
             f: |x| 1.0 / (x * x),
             d1: |x| -2.0 / (x * x * x),
             d2: |x| 6.0 / (x * x * x * x),
+            d3: |x| -24.0 / x.powi(5),
         },
         Case {
             src: "x^2.5",
@@ -443,6 +510,7 @@ fn cases() -> Vec<Case> {
             f: |x| x.powf(2.5),
             d1: |x| 2.5 * x.powf(1.5),
             d2: |x| 3.75 * x.sqrt(),
+            d3: |x| 1.875 / x.sqrt(),
         },
         Case {
             src: "2^x",
@@ -450,6 +518,7 @@ fn cases() -> Vec<Case> {
             f: |x| 2f64.powf(x),
             d1: |x| 2f64.powf(x) * LN_2,
             d2: |x| 2f64.powf(x) * LN_2 * LN_2,
+            d3: |x| 2f64.powf(x) * LN_2 * LN_2 * LN_2,
         },
         Case {
             // general power with non-constant base and exponent
@@ -458,6 +527,10 @@ fn cases() -> Vec<Case> {
             f: |x| x.powf(x),
             d1: |x| x.powf(x) * (x.ln() + 1.0),
             d2: |x| x.powf(x) * (sq(x.ln() + 1.0) + 1.0 / x),
+            d3: |x| {
+                let g = x.ln() + 1.0;
+                x.powf(x) * (g * g * g + 3.0 * g / x - 1.0 / (x * x))
+            },
         },
         Case {
             src: "pow(x, 1 + x)",
@@ -470,6 +543,13 @@ fn cases() -> Vec<Case> {
                 let dg = 1.0 / x - 1.0 / (x * x);
                 x.powf(1.0 + x) * (g * g + dg)
             },
+            d3: |x| {
+                // f = exp(h), h = (1 + x) ln x: f''' = f (h'^3 + 3 h' h'' + h''')
+                let g = x.ln() + (1.0 + x) / x;
+                let dg = 1.0 / x - 1.0 / (x * x);
+                let ddg = -1.0 / (x * x) + 2.0 / (x * x * x);
+                x.powf(1.0 + x) * (g * g * g + 3.0 * g * dg + ddg)
+            },
         },
         Case {
             src: "x / (1 + x^2)",
@@ -477,6 +557,7 @@ fn cases() -> Vec<Case> {
             f: |x| x / (1.0 + x * x),
             d1: |x| (1.0 - x * x) / sq(1.0 + x * x),
             d2: |x| 2.0 * x * (x * x - 3.0) / (1.0 + x * x).powi(3),
+            d3: |x| -6.0 * (x.powi(4) - 6.0 * x * x + 1.0) / (1.0 + x * x).powi(4),
         },
         Case {
             src: "exp(-x^2)*cos(3*x)",
@@ -489,6 +570,10 @@ fn cases() -> Vec<Case> {
             d2: |x| {
                 let (g, c, s) = ((-x * x).exp(), (3.0 * x).cos(), (3.0 * x).sin());
                 g * ((4.0 * x * x - 11.0) * c + 12.0 * x * s)
+            },
+            d3: |x| {
+                let (g, c, s) = ((-x * x).exp(), (3.0 * x).cos(), (3.0 * x).sin());
+                g * ((66.0 * x - 8.0 * x * x * x) * c + (45.0 - 36.0 * x * x) * s)
             },
         },
     ]
@@ -506,7 +591,9 @@ fn every_builtin_function_is_covered_by_the_derivative_cases() {
 #[test]
 fn derivatives_match_closed_forms() {
     // Tolerance 1e-12 (relative, absolute near 0): AD is exact up to rounding, and
-    // the closed forms are evaluated with a differently ordered handful of operations.
+    // the closed forms are evaluated with a differently ordered handful of operations (a few
+    // dozen roundings of 1.1e-16 each, amplified by at most the size of the terms over the
+    // result's, which the points keep below a few hundred).
     for c in cases() {
         let e = parse(c.src);
         for &x in c.points {
@@ -529,6 +616,22 @@ fn derivatives_match_closed_forms() {
             assert_close(&format!("{what}: seeded e1"), h.e1, 2.0 * d1, 1e-12);
             assert_close(&format!("{what}: seeded e2"), h.e2, -0.5 * d1, 1e-12);
             assert_close(&format!("{what}: seeded e12"), h.e12, -d2, 1e-12);
+
+            // Seeds a, b, c give every part: the first derivative times one seed, the second
+            // times two, the third times all three.
+            let (a, b, c, d3) = (2.0, -0.5, 1.5, (c.d3)(x));
+            let r = e.eval(&[Tri::new(x, [a, b, c], [0.0; 3], 0.0)]);
+            let expected = [f, a * d1, b * d1, c * d1, a * b * d2, a * c * d2, b * c * d2, a * b * c * d3];
+            for ((part, got), want) in
+                ["v", "e1", "e2", "e3", "e12", "e13", "e23", "e123"].iter().zip(r.parts()).zip(expected)
+            {
+                if want.is_finite() {
+                    assert_close(&format!("{what}: Tri {part}"), got, want, 1e-12);
+                } else {
+                    // x^2.5's third derivative at 0
+                    assert_eq!(got, want, "{what}: Tri {part}");
+                }
+            }
         }
     }
 }
@@ -1052,4 +1155,138 @@ fn spline_needs_a_known_table_by_name() {
     assert!(err("spline + 1").message.contains("function 'spline' needs its arguments"));
     // Without tables (a bare closure of names) every table is unknown.
     assert!(parse_err("spline(lift, t)").message.contains("unknown table 'lift'"));
+}
+
+// ---------------------------------------------------------------- Tri
+
+/// A two-variable case: `f(x, y)` with its closed-form mixed derivatives `f_xy`, `f_xxy`, `f_xyy`.
+struct Mixed {
+    src: &'static str,
+    points: &'static [(f64, f64)],
+    f_xy: fn(f64, f64) -> f64,
+    f_xxy: fn(f64, f64) -> f64,
+    f_xyy: fn(f64, f64) -> f64,
+}
+
+#[test]
+fn tri_mixed_parts_of_two_variable_functions_match_closed_forms() {
+    // Seeding x along (1, 0, a) and y along (0, 1, b) gives e12 = f_xy and
+    // e123 = a f_xxy + b f_xyy. Tolerance 1e-12 as in derivatives_match_closed_forms.
+    let r2 = |x: f64, y: f64| x * x + y * y;
+    let cases = [
+        Mixed {
+            // atan2 = Im log(x + i y)
+            src: "atan2(y, x)",
+            points: &[(1.0, 0.5), (-0.7, 1.3), (-2.0, -0.4), (0.3, -1.1)],
+            f_xy: |x, y| (y * y - x * x) / (x * x + y * y).powi(2),
+            f_xxy: |x, y| 2.0 * (x * x * x - 3.0 * x * y * y) / (x * x + y * y).powi(3),
+            f_xyy: |x, y| -2.0 * (y * y * y - 3.0 * x * x * y) / (x * x + y * y).powi(3),
+        },
+        Mixed {
+            src: "hypot(x, y)",
+            points: &[(1.0, 0.5), (-0.7, 1.3), (-2.0, -0.4), (0.3, -1.1)],
+            f_xy: |x, y| -x * y / (x * x + y * y).powf(1.5),
+            f_xxy: |x, y| y * (2.0 * x * x - y * y) / (x * x + y * y).powf(2.5),
+            f_xyy: |x, y| x * (2.0 * y * y - x * x) / (x * x + y * y).powf(2.5),
+        },
+        Mixed {
+            // x^y: f_xy = x^(y-1) (1 + y ln x)
+            src: "pow(x, y)",
+            points: &[(1.5, 0.5), (0.7, 2.3), (2.0, -0.4)],
+            f_xy: |x, y| x.powf(y - 1.0) * (1.0 + y * x.ln()),
+            f_xxy: |x, y| x.powf(y - 2.0) * ((y - 1.0) * (1.0 + y * x.ln()) + y),
+            f_xyy: |x, y| x.powf(y - 1.0) * x.ln() * (2.0 + y * x.ln()),
+        },
+        Mixed {
+            src: "sin(x*y)",
+            points: &[(1.5, 0.5), (-0.7, 2.3), (2.0, -0.4)],
+            f_xy: |x, y| (x * y).cos() - x * y * (x * y).sin(),
+            f_xxy: |x, y| -2.0 * y * (x * y).sin() - x * y * y * (x * y).cos(),
+            f_xyy: |x, y| -2.0 * x * (x * y).sin() - x * x * y * (x * y).cos(),
+        },
+        Mixed {
+            // x y / (x + y): f_xy = 2 x y / (x + y)^3, whose derivatives are below.
+            src: "x*y / (x + y)",
+            points: &[(1.5, 0.5), (0.7, 2.3)],
+            f_xy: |x, y| 2.0 * x * y / (x + y).powi(3),
+            f_xxy: |x, y| 2.0 * y * (y - 2.0 * x) / (x + y).powi(4),
+            f_xyy: |x, y| 2.0 * x * (x - 2.0 * y) / (x + y).powi(4),
+        },
+    ];
+    let (a, b) = (0.8, -1.3);
+    for c in cases {
+        let e = parse(c.src);
+        for &(x, y) in c.points {
+            let what = format!("{} at ({x}, {y}) (r^2 = {})", c.src, r2(x, y));
+            let r = e.eval(&[Tri::new(x, [1.0, 0.0, a], [0.0; 3], 0.0), Tri::new(y, [0.0, 1.0, b], [0.0; 3], 0.0)]);
+            assert_eq!(r.v, e.eval(&[x, y]), "{what}: value");
+            assert_close(&format!("{what}: e12"), r.e12, (c.f_xy)(x, y), 1e-12);
+            let want = a * (c.f_xxy)(x, y) + b * (c.f_xyy)(x, y);
+            assert_close(&format!("{what}: e123"), r.e123, want, 1e-12);
+        }
+    }
+}
+
+#[test]
+fn tri_without_its_third_direction_is_a_hyperdual_bit_for_bit() {
+    // The same sums in the same order: Tri's (v, e1, e2, e12) are HyperDual's exactly, and its
+    // e3, e13, e23, e123 are 0, for every function and operation.
+    let srcs = [
+        "exp(-x^2)*cos(3*y) + atan2(x, y) - log(1 + x^2)/sqrt(2 + y)",
+        "x^y + 2^x + pow(x, 2.5) + min(x, y) * max(y, tanh(x)) + abs(x - 1) * sign(y) + hypot(y, x)",
+        "asin(x/2) + acos(y/3) + atan(x) + sinh(x) / cosh(y) + tan(x) / (1 + y) + x^-3",
+        "step(x, 0, 1, y, 3) * cycloidal(y, 0, 1, 2, x) - modified_trapezoid(x*y, -1, 0, 1, 2) + if(x > y, x, y)",
+    ];
+    for src in srcs {
+        let e = parse(src);
+        for (x, y) in [(0.1, 1.35), (0.35, 0.8), (0.8, 1.9), (1.3, 0.45)] {
+            let h = e.eval(&[HyperDual::new(x, 0.7, -1.2, 0.3), HyperDual::new(y, -0.4, 0.9, 1.1)]);
+            let r = e.eval(&[
+                Tri::new(x, [0.7, -1.2, 0.0], [0.3, 0.0, 0.0], 0.0),
+                Tri::new(y, [-0.4, 0.9, 0.0], [1.1, 0.0, 0.0], 0.0),
+            ]);
+            let what = format!("{src} at ({x}, {y})");
+            assert_eq!([r.v, r.e1, r.e2, r.e12], [h.v, h.e1, h.e2, h.e12], "{what}");
+            assert_eq!([r.e3, r.e13, r.e23, r.e123], [0.0; 4], "{what}");
+        }
+    }
+}
+
+#[test]
+fn tri_trajectory_seeds_time_twice_and_the_parameter_once() {
+    let r = Tri::trajectory([1.0, 2.0, 3.0], [4.0, 5.0, 6.0]);
+    assert_eq!(r.parts(), [1.0, 2.0, 2.0, 4.0, 3.0, 5.0, 5.0, 6.0]);
+    // x(t, p) = p t^2 at t = 2, p = 3: x_t = 2 p t, x_tt = 2 p, x_p = t^2, x_tp = 2 t, x_ttp = 2.
+    let (t, p) = (Tri::trajectory([2.0, 1.0, 0.0], [0.0; 3]), Tri::trajectory([3.0, 0.0, 0.0], [1.0, 0.0, 0.0]));
+    assert_eq!(p * t * t, Tri::trajectory([12.0, 12.0, 6.0], [4.0, 4.0, 2.0]));
+}
+
+#[test]
+fn a_spline_through_a_cubic_has_the_cubics_third_derivative() {
+    // The not-a-knot spline reproduces a cubic exactly, so spline(c, x) over Tri has the
+    // cubic's derivatives: p = 2x^3 - x^2 + 3x, p''' = 12. Inside the table the third derivative
+    // is the piece's (12 to rounding); outside, on the straight continuation, 0.
+    let x: Vec<f64> = vec![-1.0, -0.3, 0.4, 1.0, 1.7, 2.5];
+    let p = |x: f64| 2.0 * x * x * x - x * x + 3.0 * x;
+    let y = x.iter().map(|&x| p(x)).collect();
+    let table = std::sync::Arc::new(Spline::new(x, y, spline::Method::NotAKnot).unwrap());
+    struct One(std::sync::Arc<Spline>);
+    impl Names for One {
+        fn constant(&self, _: &str) -> Option<f64> {
+            None
+        }
+        fn table(&self, _: &str) -> Option<std::sync::Arc<Spline>> {
+            Some(self.0.clone())
+        }
+    }
+    let e = Expr::parse_with("spline(c, x)", &One(table), &mut test_resolve).unwrap();
+    let (a, b, c) = (2.0, -0.5, 1.5);
+    for x in [-0.8, 0.1, 0.9, 2.2] {
+        let r = e.eval(&[Tri::new(x, [a, b, c], [0.0; 3], 0.0)]);
+        assert_close(&format!("value at {x}"), r.v, p(x), 1e-12);
+        assert_close(&format!("e13 at {x}"), r.e13, a * c * (12.0 * x - 2.0), 1e-11);
+        assert_close(&format!("e123 at {x}"), r.e123, a * b * c * 12.0, 1e-10);
+    }
+    let outside = e.eval(&[Tri::new(3.0, [a, b, c], [0.0; 3], 0.0)]);
+    assert_eq!((outside.e13, outside.e123), (0.0, 0.0));
 }

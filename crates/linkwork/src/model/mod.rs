@@ -4,6 +4,7 @@
 
 mod compile;
 mod drawing;
+mod measure;
 mod params;
 mod parse;
 mod placement;
@@ -313,6 +314,22 @@ pub enum MeasureKind {
         /// The load at the output.
         output: Effort,
     },
+}
+
+impl MeasureKind {
+    /// The numbers of this measure that a parameter can move, each named as its field with the
+    /// component: a point measure's `point[0]`, `point[1]`; a transmission angle's lines,
+    /// `coupler[0]` ... `rocker[1]`. The model gives each its derivatives with respect to the
+    /// parameters ([`DataGradients::measures`]).
+    pub fn data(&self) -> Vec<(&'static str, f64)> {
+        match self {
+            MeasureKind::Point { s, .. } => vec![("point[0]", s[0]), ("point[1]", s[1])],
+            MeasureKind::TransmissionAngle { coupler: (_, c), rocker: (_, r) } => {
+                vec![("coupler[0]", c[0]), ("coupler[1]", c[1]), ("rocker[0]", r[0]), ("rocker[1]", r[1])]
+            }
+            _ => Vec::new(),
+        }
+    }
 }
 
 /// A torque or force applied to the mechanism, as a mechanical advantage reads it.

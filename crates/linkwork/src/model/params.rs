@@ -7,15 +7,25 @@
 //! checks a unit's dimension against the field's ([`field`]). Expressions of time and the state
 //! (drivers, forces, measures, expression joints) keep their text and see the parameters as
 //! named numbers when they are compiled ([`crate::expr::Expr::parse_with`]).
+//!
+//! Each parameter and each field written as an expression of them also gets its derivatives
+//! with respect to every parameter ([`Gradients`]), with the expressions' dual numbers: what
+//! design sensitivities start from (docs/model-format.md, "Derivatives with respect to
+//! parameters").
 
 use super::units::{quantity, si_unit, unit_text, Dim};
 use crate::error::Problem;
-use crate::expr::Expr;
+use crate::expr::{gradient, Dual, Expr, Names};
 use serde_yaml_ng::{Mapping, Value};
+use std::collections::HashMap;
 
 /// A parameter: its name, its value in SI, the dimension of the unit it was written with
 /// (`None` for a bare number or an expression, whose dimension is not inferred), the unit the
-/// file writes it in (`mm` for `r: 100 mm`), and a warning about the value given from outside.
+/// file writes it in (`mm` for `r: 100 mm`), a warning about the value given from outside, and
+/// its derivative with respect to each parameter (file order): `--set`'s, which replaces the
+/// expression of the parameter set, so `d p_j / d p_k = [j == k] + sum_i (d f_j / d p_i) (d p_i
+/// / d p_k)` over the parameters `p_i` that `p_j`'s expression `f_j` uses (none for a number, or
+/// a value given from outside).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Parameter {
     pub name: String,
@@ -23,6 +33,81 @@ pub struct Parameter {
     pub dim: Option<Dim>,
     pub unit: Option<String>,
     pub warning: Option<String>,
+    pub gradient: Vec<f64>,
+}
+
+/// The derivatives of a model file's numbers with respect to its parameters (each vector: one
+/// entry per parameter, file order, SI per SI unit), as reading the file finds them: what the
+/// compiler builds [`super::DataGradients`] from. Empty for a file without parameters.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Gradients {
+    /// Each parameter's, with respect to each ([`Parameter::gradient`]).
+    pub params: Vec<Vec<f64>>,
+    /// Each field written as an expression of the parameters, by its path
+    /// (`bodies.crank.points.A[0]`, `joints.A.length`); a field not here (a number, or a number
+    /// with a unit) has derivatives zero.
+    pub fields: HashMap<String, Vec<f64>>,
+}
+
+impl Gradients {
+    /// How many parameters the derivatives are taken with respect to.
+    pub fn count(&self) -> usize {
+        self.params.len()
+    }
+
+    /// The derivatives of the field at `path` (zero when it is not an expression).
+    pub fn field(&self, path: &str) -> Vec<f64> {
+        self.fields.get(path).cloned().unwrap_or_else(|| vec![0.0; self.count()])
+    }
+}
+
+/// The parameters as variables of an expression (each a slot of its own), so that it can be
+/// differentiated with respect to them: a parameter called `e` is the parameter, not Euler's
+/// number, as when its value is folded in.
+struct Variables<'a>(&'a [Parameter]);
+
+impl Names for Variables<'_> {
+    fn constant(&self, _: &str) -> Option<f64> {
+        None
+    }
+
+    fn shadows(&self, name: &str) -> bool {
+        self.0.iter().any(|p| p.name == name)
+    }
+}
+
+/// The derivatives, `count` of them, of the value `text` with respect to each parameter, when it
+/// is an expression of `params`: `sum_i (d f / d p_i) (d p_i / d p_k)`, one [`Dual`] pass a
+/// parameter it names. `None` for a number or a number with a unit (derivatives zero). An
+/// expression naming more parameters than an expression has slots (64) cannot be differentiated
+/// and gets not-a-number derivatives, never zeros.
+fn derivatives(text: &str, params: &[Parameter], count: usize) -> Option<Vec<f64>> {
+    if params.is_empty() || quantity(text).is_some() {
+        return None;
+    }
+    // The parameter each slot stands for, in the order the expression names them.
+    let mut used: Vec<usize> = Vec::new();
+    let parsed = Expr::parse_with(text, &Variables(params), &mut |name| {
+        let k = params.iter().position(|p| p.name == name).ok_or_else(String::new)?;
+        Ok(used.iter().position(|&u| u == k).unwrap_or_else(|| {
+            used.push(k);
+            used.len() - 1
+        }))
+    });
+    let Ok(expr) = parsed else { return Some(vec![f64::NAN; count]) };
+    if used.is_empty() {
+        return None;
+    }
+    let x: Vec<f64> = used.iter().map(|&k| params[k].value).collect();
+    let (mut partial, mut work) = (vec![0.0; used.len()], vec![Dual::default(); used.len()]);
+    gradient(&expr, &x, &mut partial, &mut work);
+    let mut total = vec![0.0; count];
+    for (&k, df) in used.iter().zip(&partial) {
+        for (t, dp) in total.iter_mut().zip(&params[k].gradient) {
+            *t += df * dp;
+        }
+    }
+    Some(total)
 }
 
 /// Names a parameter may not take: time, and pi. Euler's number `e` may be a parameter's name
@@ -107,6 +192,13 @@ pub fn evaluate(
                 .or_else(|| params.iter().find(|p| p.name == text).and_then(|p| p.unit.clone())),
             None => None,
         };
+        // Room for every parameter the section may define; cut to those defined at the end.
+        let mut gradient = match (given, value.as_str()) {
+            (None, Some(text)) => derivatives(text, &params, names.len()),
+            _ => None,
+        }
+        .unwrap_or_else(|| vec![0.0; names.len()]);
+        gradient[params.len()] += 1.0;
         let (value, dim, warning) = match parameter(value, given, &params, name, &names, &euler) {
             Ok(v) => v,
             Err(e) => {
@@ -121,7 +213,11 @@ pub fn evaluate(
             euler_users.push(name.to_string());
         }
         let warning = warning.map(|w| format!("{path}: {w}"));
-        params.push(Parameter { name: name.to_string(), value, dim, unit, warning });
+        params.push(Parameter { name: name.to_string(), value, dim, unit, warning, gradient });
+    }
+    let count = params.len();
+    for p in &mut params {
+        p.gradient.truncate(count);
     }
     params
 }
@@ -278,73 +374,75 @@ pub fn field(section: &str, kind: Option<&str>, key: &str) -> Option<Field> {
 
 /// Replace every number written with a unit or as an expression of `params` in the numeric fields
 /// of the file's sections (`root`, the whole file) by its SI number; push a problem, with the
-/// field's path, for each that cannot be read or has the wrong dimension.
-pub fn resolve(root: &mut Mapping, params: &[Parameter], problems: &mut Vec<Problem>) {
+/// field's path, for each that cannot be read or has the wrong dimension. The derivatives of
+/// each field written as an expression of the parameters, by path ([`Gradients::fields`]).
+pub fn resolve(root: &mut Mapping, params: &[Parameter], problems: &mut Vec<Problem>) -> HashMap<String, Vec<f64>> {
+    let mut at = Resolved { params, problems, gradients: HashMap::new() };
     if let Some(g) = root.get_mut("gravity") {
-        numbers("gravity", g, Field::Dim(Dim::ACCELERATION), params, problems);
+        numbers("gravity", g, Field::Dim(Dim::ACCELERATION), &mut at);
     }
     if let Some(Value::Mapping(ground)) = root.get_mut("ground") {
-        entry("ground", "ground", None, ground, params, problems);
+        entry("ground", "ground", None, ground, &mut at);
     }
     for section in ["bodies", "joints", "drivers", "forces", "measures", "analyses"] {
         let Some(Value::Mapping(entries)) = root.get_mut(section) else { continue };
         for (name, value) in entries.iter_mut() {
             let (Some(name), Value::Mapping(map)) = (name.as_str().map(str::to_string), value) else { continue };
             let kind = map.get("type").and_then(Value::as_str).map(str::to_string);
-            entry(section, &format!("{section}.{name}"), kind.as_deref(), map, params, problems);
+            entry(section, &format!("{section}.{name}"), kind.as_deref(), map, &mut at);
         }
     }
+    at.gradients
+}
+
+/// What [`resolve`] reads the fields with, and what it finds: the parameters, the problems, and
+/// each expression's derivatives by path.
+struct Resolved<'a> {
+    params: &'a [Parameter],
+    problems: &'a mut Vec<Problem>,
+    gradients: HashMap<String, Vec<f64>>,
 }
 
 /// The numeric fields of one entry (and of its `solver:`, `points:` and `points_global:` mappings:
 /// a point's coordinates, or the `distances` of one placed by lengths).
-fn entry(
-    section: &str,
-    path: &str,
-    kind: Option<&str>,
-    map: &mut Mapping,
-    params: &[Parameter],
-    problems: &mut Vec<Problem>,
-) {
+fn entry(section: &str, path: &str, kind: Option<&str>, map: &mut Mapping, at: &mut Resolved) {
     for (key, value) in map.iter_mut() {
         let Some(key) = key.as_str() else { continue };
         let here = format!("{path}.{key}");
         match (key, value) {
-            ("solver", Value::Mapping(solver)) => entry("solver", &here, None, solver, params, problems),
-            ("friction", Value::Mapping(friction)) => entry("friction", &here, None, friction, params, problems),
+            ("solver", Value::Mapping(solver)) => entry("solver", &here, None, solver, at),
+            ("friction", Value::Mapping(friction)) => entry("friction", &here, None, friction, at),
             // A cam's profile: its period, and points given inline (lengths); `x` and `y` as text
             // are expressions of `u` or column names, read when the joint compiles.
             ("profile", Value::Mapping(profile)) => {
                 for (key, value) in profile.iter_mut() {
-                    let at = format!("{here}.{}", key.as_str().unwrap_or("?"));
+                    let path = format!("{here}.{}", key.as_str().unwrap_or("?"));
                     match (key.as_str(), &value) {
-                        (Some("period"), _) => numbers(&at, value, Field::Mixed, params, problems),
-                        (Some("x" | "y"), Value::Sequence(_)) => {
-                            numbers(&at, value, Field::Dim(Dim::LENGTH), params, problems)
-                        }
+                        (Some("period"), _) => numbers(&path, value, Field::Mixed, at),
+                        (Some("x" | "y"), Value::Sequence(_)) => numbers(&path, value, Field::Dim(Dim::LENGTH), at),
                         _ => {}
                     }
                 }
             }
             ("points" | "points_global", Value::Mapping(points)) => {
                 for (point, v) in points.iter_mut() {
-                    let at = format!("{here}.{}", point.as_str().unwrap_or("?"));
+                    let path = format!("{here}.{}", point.as_str().unwrap_or("?"));
                     match v {
                         // A point placed by lengths: its two distances.
                         Value::Mapping(by) => {
                             if let Some(d) = by.get_mut("distances") {
-                                numbers(&format!("{at}.distances"), d, Field::Dim(Dim::LENGTH), params, problems);
+                                numbers(&format!("{path}.distances"), d, Field::Dim(Dim::LENGTH), at);
                             }
                         }
                         // Where another point is (`body.B`): a name, not a number.
                         Value::String(_) => {}
-                        _ => numbers(&at, v, Field::Dim(Dim::LENGTH), params, problems),
+                        _ => numbers(&path, v, Field::Dim(Dim::LENGTH), at),
                     }
                 }
             }
             (_, value) => {
                 if let Some(f) = field(section, kind, key) {
-                    numbers(&here, value, f, params, problems);
+                    numbers(&here, value, f, at);
                 }
             }
         }
@@ -352,12 +450,13 @@ fn entry(
 }
 
 /// A numeric value, or a list of them (a point, an axis), at `path`: strings are read and
-/// replaced; numbers and anything else stay for the schema to judge.
-fn numbers(path: &str, value: &mut Value, f: Field, params: &[Parameter], problems: &mut Vec<Problem>) {
+/// replaced (an expression's derivatives kept at `path`); numbers and anything else stay for the
+/// schema to judge.
+fn numbers(path: &str, value: &mut Value, f: Field, at: &mut Resolved) {
     match value {
         Value::Sequence(items) => {
             for (k, item) in items.iter_mut().enumerate() {
-                numbers(&format!("{path}[{k}]"), item, f, params, problems);
+                numbers(&format!("{path}[{k}]"), item, f, at);
             }
         }
         Value::String(_) => {
@@ -365,7 +464,7 @@ fn numbers(path: &str, value: &mut Value, f: Field, params: &[Parameter], proble
             if matches!(path.rsplit('.').next(), Some("point" | "point_i" | "point_j" | "position")) {
                 return;
             }
-            match number(value, params, "", &[], &std::cell::Cell::new(false)) {
+            match number(value, at.params, "", &[], &std::cell::Cell::new(false)) {
                 Ok((v, dim)) => {
                     let wrong = match (f, dim) {
                         (Field::Dim(want), Some(d)) if d != want => Some(format!("is {d}, expected {want}")),
@@ -377,15 +476,19 @@ fn numbers(path: &str, value: &mut Value, f: Field, params: &[Parameter], proble
                     if let Some(w) = wrong {
                         let text = value.as_str().unwrap_or_default();
                         let unit = text.trim().trim_start_matches(|c: char| !c.is_ascii_alphabetic()).trim();
-                        problems.push(Problem::new(path, format!("'{unit}' {w}")));
+                        at.problems.push(Problem::new(path, format!("'{unit}' {w}")));
                     } else if !v.is_finite() {
-                        problems.push(Problem::new(path, format!("evaluates to {v}; expected a finite number")));
+                        at.problems.push(Problem::new(path, format!("evaluates to {v}; expected a finite number")));
                     } else {
+                        let text = value.as_str().unwrap_or_default();
+                        if let Some(d) = derivatives(text, at.params, at.params.len()) {
+                            at.gradients.insert(path.to_string(), d);
+                        }
                         *value = as_yaml(v);
                     }
                 }
                 // An empty message holds the place of a problem reported at a parameter.
-                Err(e) => problems.push(Problem::new(path, e)),
+                Err(e) => at.problems.push(Problem::new(path, e)),
             }
         }
         _ => {}
@@ -421,6 +524,26 @@ mod tests {
         assert_eq!(v, vec![0.1, 0.3, 2.0, 2.0 * 0.3 * 0.3 / 12.0, 0.2]);
         assert_eq!(p[0].dim, Some(Dim::LENGTH));
         assert_eq!(p[3].dim, None);
+    }
+
+    /// `m: rho * r`: d m / d r = rho, d m / d rho = r, d m / d m = 1 (set from outside, it
+    /// replaces its expression); a parameter after it follows it, and `e` named as a parameter
+    /// is differentiated as one. Exact: one dual-number product each.
+    #[test]
+    fn a_parameters_derivatives_follow_the_expressions_before_it() {
+        let (p, problems) = params("{rho: 7800, r: 0.1, m: rho * r, w: '2 * m', e: 3 mm, f: e^2}", &[]);
+        assert!(problems.is_empty(), "{problems:?}");
+        let g: Vec<&[f64]> = p.iter().map(|p| p.gradient.as_slice()).collect();
+        assert_eq!(g[0], [1.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        assert_eq!(g[2], [0.1, 7800.0, 1.0, 0.0, 0.0, 0.0]);
+        assert_eq!(g[3], [0.2, 15600.0, 2.0, 1.0, 0.0, 0.0]);
+        assert_eq!(g[5], [0.0, 0.0, 0.0, 0.0, 2.0 * 0.003, 1.0]);
+        // Set from outside, m has no expression: its derivative is its own.
+        let (p, _) = params("{rho: 7800, r: 0.1, m: rho * r, w: '2 * m'}", &[("m", "700")]);
+        assert_eq!(
+            (p[2].gradient.as_slice(), p[3].gradient.as_slice()),
+            (&[0.0, 0.0, 1.0, 0.0][..], &[0.0, 0.0, 2.0, 1.0][..])
+        );
     }
 
     #[test]
@@ -506,5 +629,21 @@ mod tests {
         assert_eq!(crank["inertia"].as_f64(), Some(2.0 * 0.1 * 0.1));
         assert_eq!(crank["position"][0].as_f64(), Some(0.05));
         assert_eq!(crank["points"]["A"][0].as_f64(), Some(0.1));
+    }
+
+    /// Each field written as an expression keeps its derivatives by path; numbers and numbers
+    /// with units keep none.
+    #[test]
+    fn an_expressions_derivatives_are_kept_at_its_path() {
+        let text = "{bodies: {crank: {mass: 2 kg, inertia: 'm*r^2', position: ['r/2', 0], points: {A: [r, 0]}}}}";
+        let mut root: Mapping = serde_yaml_ng::from_str(text).unwrap();
+        let (p, _) = params("{r: 100 mm, m: 2}", &[]);
+        let fields = resolve(&mut root, &p, &mut Vec::new());
+        let mut paths: Vec<&str> = fields.keys().map(String::as_str).collect();
+        paths.sort();
+        assert_eq!(paths, ["bodies.crank.inertia", "bodies.crank.points.A[0]", "bodies.crank.position[0]"]);
+        assert_eq!(fields["bodies.crank.inertia"], [2.0 * 2.0 * 0.1, 0.1 * 0.1]);
+        assert_eq!(fields["bodies.crank.position[0]"], [0.5, 0.0]);
+        assert_eq!(fields["bodies.crank.points.A[0]"], [1.0, 0.0]);
     }
 }

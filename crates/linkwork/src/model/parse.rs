@@ -186,7 +186,9 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
     };
     let mut problems = Vec::new();
     let parameters = params::evaluate(map.get("parameters"), set, &mut problems);
-    params::resolve(&mut map, &parameters, &mut problems);
+    let written = params::resolve(&mut map, &parameters, &mut problems);
+    let gradients =
+        params::Gradients { params: parameters.iter().map(|p| p.gradient.clone()).collect(), fields: written };
     let of_numbers = problems.len();
     let parameter_units = parameters.iter().filter_map(|p| Some((p.name.clone(), p.unit.clone()?))).collect();
     let warnings = parameters.iter().filter_map(|p| p.warning.clone()).collect();
@@ -251,6 +253,7 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
         branches,
         branch,
         analyses,
+        gradients,
     };
     Ok(Parsed { spec, problems, broken, parameter_units, warnings })
 }

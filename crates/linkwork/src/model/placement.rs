@@ -10,6 +10,10 @@
 //! and once: a point in a body frame needs its body's pose, a position by name the point it
 //! names, a point placed from others those points. Meeting again a point (or a pose) still being
 //! resolved is a cycle, reported once.
+//!
+//! For a file with parameters, each pose and point also gets its derivatives with respect to
+//! them, differentiated by hand alongside (a point in a body frame moves with its body's pose; a
+//! point placed by lengths by the derivative of its two distance equations).
 
 use super::compile::{it_has, unknown_body};
 use super::spec::{ByLengths, ModelSpec, PointRef, PointSpec, Side};
@@ -40,12 +44,80 @@ pub(super) struct Drawn {
     /// a body's `points_global` and each placed from others (`bodies.<body>.points.<point>`, body
     /// frame), and each of ground's placed from others (`ground.points.<point>`).
     pub placed: IndexMap<String, [f64; 2]>,
+    /// The derivatives of each point of [`Drawn::points`] with respect to the parameters, by
+    /// owner and name, in its owner's frame; empty for a file without parameters.
+    pub gradients: IndexMap<String, IndexMap<String, Grad2>>,
+    /// The derivatives of each body's initial `[x, y, phi]`, by name; empty without parameters.
+    pub pose_gradients: IndexMap<String, [Vec<f64>; 3]>,
+}
+
+/// The derivatives of a pair of numbers (a point, a direction) with respect to each parameter.
+pub(super) type Grad2 = [Vec<f64>; 2];
+
+/// The derivatives `(d x, d y)` along each of `count` parameters, `along(k)` the `k`-th.
+fn each(count: usize, along: impl Fn(usize) -> [f64; 2]) -> Grad2 {
+    let (x, y) = (0..count).map(along).map(|[x, y]| (x, y)).unzip();
+    [x, y]
+}
+
+/// The derivatives of `A^T w` (a global vector `w` seen in the frame `f`) from those of `w`
+/// (`dw`) and of the frame's angle (`dphi`): `A^T (dw - dphi R90 w)`, since `d(A^T)/dphi =
+/// -A^T R90`.
+pub(super) fn unrotate_gradient(f: &Frame, dphi: &[f64], w: [f64; 2], dw: &Grad2) -> Grad2 {
+    each(dphi.len(), |k| f.unrotate([dw[0][k] + dphi[k] * w[1], dw[1][k] - dphi[k] * w[0]]))
+}
+
+/// The derivatives of `A^T (g - r)` (a global point `g` in the frame `f`, whose pose has the
+/// derivatives `df`) from those of `g` (`dg`).
+pub(super) fn local_gradient(f: &Frame, df: &[Vec<f64>; 3], g: [f64; 2], dg: &Grad2) -> Grad2 {
+    let dw = each(df[2].len(), |k| [dg[0][k] - df[0][k], dg[1][k] - df[1][k]]);
+    unrotate_gradient(f, &df[2], [g[0] - f.x, g[1] - f.y], &dw)
+}
+
+/// The derivatives of `r + A s` (a point `s` of the frame `f`, whose pose has the derivatives
+/// `df`) from those of `s` (`ds`): `dr + A ds + dphi R90 A s`.
+fn global_gradient(f: &Frame, df: &[Vec<f64>; 3], s: [f64; 2], ds: &Grad2) -> Grad2 {
+    let a = f.rotate(s);
+    each(df[2].len(), |k| {
+        let d = f.rotate([ds[0][k], ds[1][k]]);
+        [df[0][k] + d[0] - df[2][k] * a[1], df[1][k] + d[1] + df[2][k] * a[0]]
+    })
+}
+
+/// The derivatives of the corner `p` of [`triangle`] from those of `b`, `c` and the distances
+/// `d` and `e`: `|p - b| = d` and `|p - c| = e` differentiated, `(p - b) . (dp - db) = d dd`
+/// and `(p - c) . (dp - dc) = e de`, solved for `dp` (not finite for a flat triangle, whose
+/// corner moves infinitely fast).
+fn triangle_gradient(
+    p: [f64; 2],
+    [b, c]: [[f64; 2]; 2],
+    [d, e]: [f64; 2],
+    [db, dc]: [&Grad2; 2],
+    [dd, de]: [&[f64]; 2],
+) -> Grad2 {
+    let (m, n) = ([p[0] - b[0], p[1] - b[1]], [p[0] - c[0], p[1] - c[1]]);
+    let det = m[0] * n[1] - m[1] * n[0];
+    each(dd.len(), |k| {
+        let u = d * dd[k] + m[0] * db[0][k] + m[1] * db[1][k];
+        let v = e * de[k] + n[0] * dc[0][k] + n[1] * dc[1][k];
+        [(u * n[1] - m[1] * v) / det, (m[0] * v - u * n[0]) / det]
+    })
 }
 
 /// Resolve the poses and named points of `spec`; `broken` names the entries that could not be
 /// read (`bodies.<name>`), whose points are taken as unknown without a problem.
 pub(super) fn drawn(spec: &ModelSpec, broken: &[String], problems: &mut Vec<Problem>) -> Drawn {
-    let mut r = Resolver { spec, broken, problems, points: HashMap::new(), poses: HashMap::new(), trail: Vec::new() };
+    let mut r = Resolver {
+        spec,
+        broken,
+        problems,
+        points: HashMap::new(),
+        poses: HashMap::new(),
+        trail: Vec::new(),
+        point_gradients: HashMap::new(),
+        pose_gradients: HashMap::new(),
+    };
+    let differentiate = spec.gradients.count() > 0;
     let mut out = Drawn::default();
     let mut ground = IndexMap::new();
     for (p, v) in spec.ground.iter().flat_map(|g| &g.points) {
@@ -54,12 +126,20 @@ pub(super) fn drawn(spec: &ModelSpec, broken: &[String], problems: &mut Vec<Prob
             out.placed.insert(format!("ground.points.{p}"), at);
         }
         ground.insert(p.clone(), at.unwrap_or_default());
+        if differentiate {
+            let g = r.gradient("ground", p);
+            out.gradients.entry("ground".to_string()).or_default().insert(p.clone(), g);
+        }
     }
     out.points.insert("ground".to_string(), ground);
     // A body called `ground` is refused by its name; its points would shadow ground's.
     for (name, b) in spec.bodies.iter().filter(|(name, _)| *name != "ground") {
         let frame = r.pose(name);
         out.poses.insert(name.clone(), frame.map_or([0.0; 3], |f| [f.x, f.y, f.phi]));
+        let pose_gradient = r.pose_gradients.get(name.as_str()).cloned();
+        if let (true, Some(g)) = (differentiate, &pose_gradient) {
+            out.pose_gradients.insert(name.clone(), g.clone());
+        }
         let mut points = IndexMap::new();
         let all = b.points.iter().map(|p| (p, false)).chain(b.points_global.iter().map(|p| (p, true)));
         for ((p, v), global) in all {
@@ -82,6 +162,15 @@ pub(super) fn drawn(spec: &ModelSpec, broken: &[String], problems: &mut Vec<Prob
                 }
             };
             points.insert(p.clone(), local.unwrap_or_default());
+            if differentiate {
+                let g = match (v, global, frame, at, &pose_gradient) {
+                    (PointSpec::Coords(_), false, ..) => r.written(&format!("bodies.{name}.points.{p}")),
+                    (_, _, Some(f), Some(at), Some(df)) => local_gradient(&f, df, at, &r.gradient(name, p)),
+                    // Not placed: its problem is reported, and the model is not built.
+                    _ => r.gradient(name, p),
+                };
+                out.gradients.entry(name.clone()).or_default().insert(p.clone(), g);
+            }
         }
         out.points.insert(name.clone(), points);
     }
@@ -177,6 +266,11 @@ struct Resolver<'s, 'p> {
     poses: HashMap<&'s str, Mark<Frame>>,
     /// The nodes being resolved, the innermost last: from where a node is met again, a cycle.
     trail: Vec<Node<'s>>,
+    /// The derivatives of each point's global position resolved, by owner and name (none
+    /// without parameters).
+    point_gradients: HashMap<(&'s str, &'s str), Grad2>,
+    /// The derivatives of each body's `[x, y, phi]` at the start, by name.
+    pose_gradients: HashMap<&'s str, [Vec<f64>; 3]>,
 }
 
 impl<'s> Resolver<'s, '_> {
@@ -223,7 +317,54 @@ impl<'s> Resolver<'s, '_> {
         };
         self.trail.pop();
         self.points.insert((owner, name), Mark::Done(v));
+        if let (Some(v), Some((given, path)), true) = (v, self.given(owner, name), self.spec.gradients.count() > 0) {
+            let g = self.differentiate(owner, given, &path, v);
+            self.point_gradients.insert((owner, name), g);
+        }
         v
+    }
+
+    /// The derivatives of the coordinates `[x, y]` written at `path` (zero for numbers).
+    fn written(&self, path: &str) -> Grad2 {
+        [0, 1].map(|k| self.spec.gradients.field(&format!("{path}[{k}]")))
+    }
+
+    /// The derivatives of point `name` of `owner`'s global position; not a number for a point
+    /// that could not be placed (whose problem is reported), never zero.
+    fn gradient(&self, owner: &str, name: &str) -> Grad2 {
+        self.point_gradients.get(&(owner, name)).cloned().unwrap_or_else(|| self.unknown())
+    }
+
+    /// The derivatives of what could not be placed: not a number.
+    fn unknown(&self) -> Grad2 {
+        [0, 1].map(|_| vec![f64::NAN; self.spec.gradients.count()])
+    }
+
+    /// The derivatives of the global position `v` of a point of `owner` `given` at `path`, from
+    /// those of what it is placed from (resolved before it).
+    fn differentiate(&mut self, owner: &'s str, given: Given<'s>, path: &str, v: [f64; 2]) -> Grad2 {
+        match given {
+            Given::Global(_) => self.written(path),
+            Given::Local(s) => match (self.pose(owner), self.pose_gradients.get(owner)) {
+                (Some(f), Some(df)) => global_gradient(&f, df, s, &self.written(path)),
+                _ => self.unknown(),
+            },
+            Given::At(text) => match self.reference(owner, text, path) {
+                Some((o, p)) => self.gradient(o, p),
+                None => self.unknown(),
+            },
+            Given::Lengths(by) => {
+                let mut ends = [([0.0; 2], self.unknown()), ([0.0; 2], self.unknown())];
+                for (k, end) in ends.iter_mut().enumerate() {
+                    if let Some((o, p)) = self.reference(owner, &by.from[k], &format!("{path}.from[{k}]")) {
+                        *end = (self.global(o, p).unwrap_or_default(), self.gradient(o, p));
+                    }
+                }
+                let [(b, db), (c, dc)] = ends;
+                let [dd, de] = [0, 1].map(|k| self.spec.gradients.field(&format!("{path}.distances[{k}]")));
+                triangle_gradient(v, [b, c], by.distances, [&db, &dc], [&dd, &de])
+            }
+        }
     }
 
     /// Body `body`'s frame at the start.
@@ -255,6 +396,14 @@ impl<'s> Resolver<'s, '_> {
         let v = position.zip(angle).map(|([x, y], phi)| Frame::at([x, y, phi]));
         self.trail.pop();
         self.poses.insert(body, Mark::Done(v));
+        if v.is_some() && self.spec.gradients.count() > 0 {
+            let [dx, dy] = match &b.position {
+                PointRef::Coords(_) => self.written(&format!("bodies.{body}.position")),
+                PointRef::Name(n) => self.gradient(body, n),
+            };
+            let dphi = self.spec.gradients.field(&format!("bodies.{body}.angle"));
+            self.pose_gradients.insert(body, [dx, dy, dphi]);
+        }
         v
     }
 

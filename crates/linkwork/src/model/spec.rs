@@ -31,6 +31,12 @@ pub struct ModelSpec {
     /// and expressions of time and the state may use them. After reading: the SI values.
     #[serde(default)]
     pub parameters: IndexMap<String, f64>,
+    /// The derivatives of the parameters and of the fields written as expressions of them with
+    /// respect to each parameter, found when the file is read (empty for a spec built otherwise,
+    /// whose numbers then have no derivatives); not a field of model files.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub(crate) gradients: super::params::Gradients,
     /// The units results are shown in (the command line's output, the report, `Results.plot`),
     /// by quantity: `{length: mm, angle: deg, force: N, torque: N m}`; the quantities are
     /// `length`, `angle`, `time`, `velocity`, `angular_velocity`, `acceleration`,

@@ -11,8 +11,9 @@ impl Cx<'_> {
             self.problem("bodies", "at least one moving body is required");
         }
         let spec = self.spec;
-        let Drawn { poses, points, placed } = drawn(spec, self.broken, &mut self.problems);
+        let Drawn { poses, points, placed, gradients, pose_gradients } = drawn(spec, self.broken, &mut self.problems);
         self.placed.extend(placed);
+        (self.point_gradients, self.pose_gradients) = (gradients, pose_gradients);
         let bodies = spec
             .bodies
             .iter()

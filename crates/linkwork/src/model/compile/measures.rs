@@ -67,6 +67,8 @@ impl Cx<'_> {
                     );
                     return None;
                 }
+                self.hand_line((path, "coupler"), (joint, &b), (coupler_joint, &c), coupler);
+                self.hand_line((path, "rocker"), (joint, &b), (rocker_joint, &r), rocker);
                 Some(MeasureKind::TransmissionAngle { coupler, rocker })
             }
             MeasureSpec::Standard(StandardMeasure::VelocityRatio(VelocityRatioMeasure { input, output })) => {

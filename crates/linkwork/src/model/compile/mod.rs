@@ -3,16 +3,18 @@
 //! [`Context`], the joints' and drivers' [`JointContext`] (each compiles itself in its
 //! `constraints` module) and the force elements' [`ForceContext`] (each in its `forces` module);
 //! its other pieces are the sections' own: [`bodies`], [`expressions`], [`measures`],
-//! [`analyses`].
+//! [`analyses`], and [`gradients`], the derivatives of the model's numbers with respect to its
+//! parameters.
 
 mod analyses;
 mod bodies;
 mod expressions;
+mod gradients;
 mod measures;
 
 pub(crate) use analyses::{revise, time_round_off};
 
-use super::placement::{drawn, Drawn};
+use super::placement::{drawn, Drawn, Grad2};
 use super::spec::*;
 use super::structure::Dyad;
 use super::{
@@ -20,12 +22,13 @@ use super::{
     SolverSettings, ENERGY_COLUMNS, INVERSE_COLUMNS, REACTION_QUANTITIES,
 };
 use crate::constraints::{cam_row, GeneralConstraint, JointContext, Shape, Sketch, Var};
-use crate::element::{finite, positive, BodyIx, Context, Frame};
+use crate::element::{finite, positive, BodyIx, Context, Frame, Placed};
 use crate::error::Problem;
 use crate::expr::functional::{Functional, TIME};
 use crate::expr::{Expr, Names, Spline, TimeFunction};
 use crate::forces::{ForceContext, StateExpr, StateVar};
 use indexmap::IndexMap;
+use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -39,6 +42,16 @@ pub fn compile(spec: &ModelSpec) -> Result<Model, Vec<Problem>> {
 /// that were not: they are taken as existing, so that only their own problems are reported. A
 /// table's `file:` is relative to `folder`.
 pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Result<Model, Vec<Problem>> {
+    compiled(spec, broken, folder).0
+}
+
+/// Each number handed to an element, with its derivatives with respect to the parameters, by
+/// path ([`Cx::handed`]).
+type Handed = HashMap<String, (f64, Vec<f64>)>;
+
+/// As [`compile_partial`], with every number handed to an element and its derivatives
+/// ([`Handed`]), which the tests of the derivatives check one by one.
+fn compiled(spec: &ModelSpec, broken: &[String], folder: &Path) -> (Result<Model, Vec<Problem>>, Handed) {
     let mut cx = Cx {
         spec,
         points: IndexMap::new(),
@@ -48,6 +61,9 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
         q0: Vec::new(),
         broken,
         folder,
+        handed: HashMap::new(),
+        point_gradients: IndexMap::new(),
+        pose_gradients: IndexMap::new(),
     };
     // A table that cannot be built (or read) stands in as zero, so that an expression using it
     // reports only its own problems; the model is refused for the table's.
@@ -102,7 +118,8 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
     }
     let analyses = cx.analyses();
     let branches = cx.branches(&joints, &bodies);
-    if cx.problems.is_empty() {
+    let gradients = cx.gradients(&bodies, &joints, &drivers, &measures);
+    let model = if cx.problems.is_empty() {
         let name = spec.name.clone().unwrap_or_else(|| "model".into());
         Ok(Model {
             name,
@@ -134,11 +151,12 @@ pub fn compile_partial(spec: &ModelSpec, broken: &[String], folder: &Path) -> Re
             placed: cx.placed,
             branches,
             branch_mode: spec.branch.unwrap_or_default(),
-            gradients: super::DataGradients::default(),
+            gradients,
         })
     } else {
         Err(cx.problems)
-    }
+    };
+    (model, cx.handed)
 }
 
 /// The compiler of one model file: the file, what has been resolved of it so far (the bodies'
@@ -161,6 +179,14 @@ struct Cx<'s> {
     broken: &'s [String],
     /// The folder a table's or a profile's `file:` is relative to.
     folder: &'s Path,
+    /// Each number handed to an element ([`Context::hand`]) or placed for one, with its
+    /// derivatives with respect to the parameters, by path (`joints.A.point_i[0]`); empty for a
+    /// file without parameters.
+    handed: Handed,
+    /// The derivatives of each owner's named points, in its frame ([`Drawn::gradients`]).
+    point_gradients: IndexMap<String, IndexMap<String, Grad2>>,
+    /// The derivatives of each body's initial pose ([`Drawn::pose_gradients`]).
+    pose_gradients: IndexMap<String, [Vec<f64>; 3]>,
 }
 
 /// What a model's expressions name besides the state: its parameters and tables.
@@ -266,7 +292,11 @@ impl Context for Cx<'_> {
             PointRef::Coords(v) => self.vec2(path, *v),
             PointRef::Name(n) => {
                 match self.points.get(body).map(|ps| (ps.get(n), ps)) {
-                    Some((Some(v), _)) => Some(*v),
+                    Some((Some(v), _)) => {
+                        let v = *v;
+                        self.hand_point(path, (body, n), v);
+                        Some(v)
+                    }
                     Some((None, ps)) => {
                         let known: Vec<&str> = ps.keys().map(String::as_str).collect();
                         let list = it_has(&known, "no named points");
@@ -297,8 +327,15 @@ impl Context for Cx<'_> {
         (self.q0.len() >= 3 * k + 3).then(|| Frame::of_slice(BodyIx(Some(3 * k)), &self.q0))
     }
 
-    fn place(&mut self, path: String, value: [f64; 2]) {
+    fn place(&mut self, path: String, value: [f64; 2], from: Placed<'_>) {
+        self.differentiate_placed(&path, value, from);
         self.placed.insert(path, value);
+    }
+
+    fn hand(&mut self, path: &str, v: f64) {
+        if self.spec.gradients.count() > 0 && !self.handed.contains_key(path) {
+            self.handed.insert(path.to_string(), (v, self.spec.gradients.field(path)));
+        }
     }
 
     /// An expression at `path` of the curve parameter `var` (slot 0; `what` it is), parameters
