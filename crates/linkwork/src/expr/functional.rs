@@ -546,7 +546,7 @@ impl Aggregate {
 /// value: the derivative of a `max`, `min` or `peak` is the argument's at that row.
 fn reached<S: Sample>(f: &[S], best: f64) -> S {
     // `lift` keeps the fold's own `best` (its sign of a zero) and the row's derivative.
-    f.iter().find(|v| v.value() == best).map_or(S::constant(best), |v| v.lift(best, 1.0, 0.0))
+    f.iter().find(|v| v.value() == best).map_or(S::constant(best), |v| v.lift(best, 1.0, 0.0, 0.0))
 }
 
 /// The integral of the spline through `(time, f)`: of the values, and of the derivatives (the
