@@ -85,8 +85,8 @@ def test_derivatives_match_differences_of_whole_runs(
 def test_the_stroke_has_its_closed_form_derivatives(results: linkwork.Results) -> None:
     """The stroke of a centred slider-crank is 2 r: the rows at crank angles 0 and pi (t = 0 and
     0.5 s are rows) give d/dr = 2 and d/dL = 0, to round-off (1e-12)."""
-    assert abs(results.sensitivity("stroke", "r") - 2.0) < 1e-12
-    assert abs(results.sensitivity("stroke", "L")) < 1e-12
+    assert abs(float(results.sensitivity("stroke", "r")) - 2.0) < 1e-12
+    assert abs(float(results.sensitivity("stroke", "L"))) < 1e-12
     # `late` reads r itself: d/dr is the slider's derivative at 0.3021 s (between rows) less 1.
     assert results.summary.sensitivities is not None
     assert set(results.summary.sensitivities) == {"stroke", "speed_rms", "late"}
@@ -158,7 +158,7 @@ def test_python_errors(model: linkwork.Model, results: linkwork.Results) -> None
         model.run("kinematics", sensitivities=["radius"])
     assert unknown.value.problems[0][0] == "sensitivities" and "radius" in unknown.value.problems[0][1]
     with pytest.raises(linkwork.ModelError, match="list of parameter names"):
-        model.run("kinematics", sensitivities="r")  # type: ignore[arg-type]
+        model.run("kinematics", sensitivities="r")  # a str is a sequence of names to a type checker
     with pytest.raises(ValueError, match="no sensitivities"):
         model.run("kinematics").sensitivity("slider.x", "r")
     with pytest.raises(KeyError, match="speed"):
