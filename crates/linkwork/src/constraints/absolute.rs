@@ -120,14 +120,11 @@ impl Constraint for Absolute {
     }
     /// `point` (not for the angle), and `value` when the file gives it.
     fn data(&self) -> Vec<(&'static str, f64)> {
-        let mut data = match self.axis() {
+        let point = match self.axis() {
             Some(_) => vector(POINT, self.point).to_vec(),
             None => Vec::new(),
         };
-        if self.value_from == Source::File {
-            data.push(("value", self.value));
-        }
-        data
+        self.value_from.data(point, "value", self.value)
     }
     phi_tri_generic!();
 }
@@ -138,11 +135,7 @@ impl GenericPhi for Absolute {
             Some(k) => Absolute::position_of(pose, slot2(data, 0))[k],
             None => pose.phi,
         };
-        let value = match self.value_from {
-            Source::File => data[data.len() - 1],
-            Source::Start([start, _]) => at_pose(&Pose::held(start)),
-            Source::Zero => S::constant(0.0),
-        };
+        let value = self.value_from.value(data, |[start, _]| at_pose(&start));
         out[0] = at_pose(&Pose::of(self.pair.i, at.q)) - value;
     }
 }

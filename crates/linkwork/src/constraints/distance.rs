@@ -69,11 +69,8 @@ impl Constraint for Distance {
     }
     /// `point_i`, `point_j`, and `length` when the file gives it.
     fn data(&self) -> Vec<(&'static str, f64)> {
-        let mut data = [vector(POINT_I, self.points.s_p), vector(POINT_J, self.points.s_q)].concat();
-        if self.length_from == Source::File {
-            data.push(("length", self.length));
-        }
-        data
+        let points = [vector(POINT_I, self.points.s_p), vector(POINT_J, self.points.s_q)].concat();
+        self.length_from.data(points, "length", self.length)
     }
     phi_tri_generic!();
 }
@@ -83,15 +80,10 @@ impl GenericPhi for Distance {
         let pair = &self.points.pair;
         let (s_p, s_q) = (slot2(data, 0), slot2(data, 2));
         let d = separation(&Pose::of(pair.i, at.q), s_p, &Pose::of(pair.j, at.q), s_q);
-        let length = match self.length_from {
-            Source::Start(start) => {
-                let [fi, fj] = Source::poses(start);
-                let d0 = separation(&fi, s_p, &fj, s_q);
-                d0[0].hypot(d0[1])
-            }
-            Source::File => data[4],
-            Source::Zero => S::constant(0.0),
-        };
+        let length = self.length_from.value(data, |[fi, fj]| {
+            let d0 = separation(&fi, s_p, &fj, s_q);
+            d0[0].hypot(d0[1])
+        });
         out[0] = dot(d, d) - length * length;
     }
 }

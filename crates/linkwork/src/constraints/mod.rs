@@ -219,6 +219,27 @@ impl Source {
     pub(crate) fn poses<S: Scalar>(start: [[f64; 3]; 2]) -> [Pose<S>; 2] {
         start.map(Pose::held)
     }
+    /// An element's `data` with its constant `(name, value)` last when the file gives it.
+    pub(crate) fn data(
+        self,
+        mut data: Vec<(&'static str, f64)>,
+        name: &'static str,
+        value: f64,
+    ) -> Vec<(&'static str, f64)> {
+        if self == Source::File {
+            data.push((name, value));
+        }
+        data
+    }
+    /// The constant over any [`Scalar`]: the last of `data` from the file, `at_start` of the held
+    /// initial poses (body i's, body j's) from the initial configuration, or zero.
+    pub(crate) fn value<S: Scalar>(self, data: &[S], at_start: impl FnOnce([Pose<S>; 2]) -> S) -> S {
+        match self {
+            Source::File => data[data.len() - 1],
+            Source::Start(start) => at_start(Source::poses(start)),
+            Source::Zero => S::constant(0.0),
+        }
+    }
 }
 
 /// The data names of a vector field's two components.

@@ -79,11 +79,8 @@ impl Constraint for PointOnLine {
     /// `point_i`, `point_j`, `axis_i`, and `offset` when the file gives it.
     fn data(&self) -> Vec<(&'static str, f64)> {
         let l = &self.line;
-        let mut data = [vector(POINT_I, l.s_p), vector(POINT_J, l.s_q), vector(AXIS_I, self.axis)].concat();
-        if self.offset_from == Source::File {
-            data.push(("offset", self.offset));
-        }
-        data
+        let data = [vector(POINT_I, l.s_p), vector(POINT_J, l.s_q), vector(AXIS_I, self.axis)].concat();
+        self.offset_from.data(data, "offset", self.offset)
     }
     phi_tri_generic!();
 }
@@ -92,11 +89,7 @@ impl GenericPhi for PointOnLine {
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
         let (s_p, s_q, w) = (slot2(data, 0), slot2(data, 2), perp(unit(slot2(data, 4))));
         let value = |[fi, fj]: [Pose<S>; 2]| projection(w, &fi, s_p, &fj, s_q);
-        let offset = match self.offset_from {
-            Source::File => data[6],
-            Source::Start(start) => value(Source::poses(start)),
-            Source::Zero => S::constant(0.0),
-        };
+        let offset = self.offset_from.value(data, value);
         out[0] = value([Pose::of(self.pair.i, at.q), Pose::of(self.pair.j, at.q)]) - offset;
     }
 }

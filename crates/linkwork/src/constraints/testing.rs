@@ -97,7 +97,7 @@ pub fn check_fd_random(c: &dyn Constraint, bodies: usize, seed: u64) {
 /// singularity (coincident points, coincident gear centres), whose derivatives grow without bound
 /// near it, so that the fixed absolute tolerances of [`check_fd`] do not apply there.
 pub fn check_fd_random_where(c: &dyn Constraint, bodies: usize, seed: u64, accept: &dyn Fn(&[f64]) -> bool) {
-    random_states(bodies, seed, accept, &mut |q, qdot, t| check_fd(c, q, qdot, t));
+    random_states(bodies, seed, accept, |q, qdot, t| check_fd(c, q, qdot, t));
 }
 
 /// Call `check(q, qdot, t)` at 20 random states of a system with `bodies` bodies (`q` in
@@ -106,7 +106,7 @@ fn random_states(
     bodies: usize,
     seed: u64,
     accept: &dyn Fn(&[f64]) -> bool,
-    check: &mut dyn FnMut(&[f64], &[f64], f64),
+    mut check: impl FnMut(&[f64], &[f64], f64),
 ) {
     let mut rng = Lcg::new(seed);
     let mut checked = 0;
@@ -235,7 +235,7 @@ pub fn check_generic<C: GenericPhi + Constraint>(c: &C, q: &[f64], qdot: &[f64],
 /// [`check_generic`]'s data check, for the same reasons.
 pub fn check_rebuilt<C: GenericPhi + Constraint>(c: &C, build: &dyn Fn(&[f64]) -> C, bodies: usize, seed: u64) {
     let data: Vec<f64> = c.data().iter().map(|&(_, v)| v).collect();
-    random_states(bodies, seed, &|_| true, &mut |q, _, t| {
+    random_states(bodies, seed, &|_| true, |q, _, t| {
         let big = q.iter().chain(&data).chain([&t]).fold(0.0f64, |a, v| a.max(v.abs()));
         let constant = |_: usize, v: f64| HyperDual::constant(v);
         for (k, (name, v)) in c.data().iter().enumerate() {
@@ -280,7 +280,7 @@ pub fn check_generic_random_where<C: GenericPhi + Constraint>(
     seed: u64,
     accept: &dyn Fn(&[f64]) -> bool,
 ) {
-    random_states(bodies, seed, accept, &mut |q, qdot, t| check_generic(c, q, qdot, t));
+    random_states(bodies, seed, accept, |q, qdot, t| check_generic(c, q, qdot, t));
 }
 
 /// `(Phi, Phi_q, gamma)` of `c` at `q`, `qdot` and `t = 0`, for a hand-derived check (`Phi`
