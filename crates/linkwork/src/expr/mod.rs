@@ -11,6 +11,22 @@
 //! columns (`integral(pump_power) / integral(motor_power)`): a model's summaries and a sweep's
 //! outputs.
 //!
+//! # Parameters
+//!
+//! A model's parameters appear in expressions as named numbers ([`Names`]): [`Expr::eval`] runs
+//! a program in which each is folded like a number written out, exactly as fast as if it had
+//! been. When the caller also says which parameter a name is ([`Names::parameter`], its index
+//! in the model's parameter list), the expression keeps a second, *side* program in which each
+//! parameter is an input instead, never folded with other numbers: [`Expr::eval_params`] runs
+//! it with the parameters' values given over any [`Scalar`], so that seeding them gives the
+//! exact derivatives of the expression with respect to the parameters (with [`Tri`], seeded
+//! along time and one parameter, also those of its time derivatives). Its value is the folded
+//! program's to the bit. An exponent that a parameter moves (`x^n`, `n` a parameter) keeps the
+//! folded program's power rule at the parameter's value and has derivatives along the
+//! parameter where the base is positive (elsewhere, with the exponent seeded, the result is
+//! NaN: the derivative does not exist). An expression that names no parameter has no side
+//! program; [`Expr::eval_params`] then runs [`Expr::eval`]'s.
+//!
 //! # Language
 //!
 //! * Numbers: `2`, `0.5`, `.5`, `1e-3`, `6.1506`.
@@ -81,10 +97,18 @@ pub const MAX_SLOTS: usize = 64;
 
 /// What a model names besides an expression's variables: values folded as numbers (its
 /// parameters) and tables for `spline(name, x)`. A closure `Fn(&str) -> Option<f64>` names
-/// values and no tables.
+/// values, no parameters and no tables.
 pub trait Names {
     /// The value named `name`, if any.
     fn constant(&self, name: &str) -> Option<f64>;
+
+    /// The index of the parameter named `name` (in the model's parameter list, file order), if
+    /// the value [`Names::constant`] gives for `name` is a parameter's: an expression then reads
+    /// it from the parameters [`Expr::eval_params`] is given. Asked only of names that
+    /// [`Names::constant`] gives a value.
+    fn parameter(&self, _name: &str) -> Option<usize> {
+        None
+    }
 
     /// The table named `name`, if any.
     fn table(&self, _name: &str) -> Option<Arc<Spline>> {
@@ -171,6 +195,9 @@ pub struct Expr {
     max_stack: usize,
     /// The tables of `spline(name, x)`, shared with the model.
     tables: Vec<Arc<Spline>>,
+    /// The program with the parameters as inputs and the parameters it reads (see the module's
+    /// Parameters), when the source names any.
+    side: Option<Box<parse::Side>>,
 }
 
 impl Expr {
@@ -193,8 +220,11 @@ impl Expr {
 
     /// As [`Expr::parse`], with named values and tables: a name for which `names` gives a value
     /// (a model's parameter) is that number, folded as if written out; it hides a variable of
-    /// the same name, and the built-in `pi` and `e` hide it. `spline(name, x)` is the table
-    /// `names` gives for `name` at `x`, with its exact derivatives ([`Spline::eval`]).
+    /// the same name, and the built-in `pi` and `e` hide it. A value that `names` says is a
+    /// parameter ([`Names::parameter`]) is also kept as an input of [`Expr::eval_params`].
+    /// `spline(name, x)` is the table `names` gives for `name` at `x`, with its exact
+    /// derivatives ([`Spline::eval`]). `resolve` is called again for each name when the source
+    /// names a parameter (the side program is compiled separately).
     ///
     /// # Errors
     ///
@@ -205,7 +235,20 @@ impl Expr {
         resolve: &mut dyn FnMut(&str) -> Result<usize, String>,
     ) -> Result<Expr, ExprError> {
         let c = parse::compile(src, names, resolve)?;
-        Ok(Expr { source: src.to_string(), code: c.code, slots: c.slots, max_stack: c.max_stack, tables: c.tables })
+        Ok(Expr {
+            source: src.to_string(),
+            code: c.program.code,
+            slots: c.slots,
+            max_stack: c.program.max_stack,
+            tables: c.tables,
+            side: c.side,
+        })
+    }
+
+    /// The parameters the expression names (their indices, [`Names::parameter`]), sorted, each
+    /// once: those [`Expr::eval_params`] reads.
+    pub fn parameters(&self) -> &[usize] {
+        self.side.as_ref().map_or(&[], |s| &s.parameters)
     }
 
     /// The source text the expression was parsed from.
@@ -239,22 +282,44 @@ impl Expr {
     ///
     /// If `vars.len()` is not greater than the largest slot used.
     pub fn eval<S: Scalar>(&self, vars: &[S]) -> S {
-        // Pick the smallest stack that fits, so small expressions do not pay for
-        // initialising a large array.
-        match self.max_stack {
-            0..=8 => self.run::<S, 8>(vars),
-            9..=32 => self.run::<S, 32>(vars),
-            33..=128 => self.run::<S, 128>(vars),
-            _ => self.run::<S, MAX_STACK>(vars),
+        self.exec(&self.code, self.max_stack, vars, &[])
+    }
+
+    /// Evaluates the expression with slot values `vars` (as [`Expr::eval`]) and the model's
+    /// parameters `params` (indexed as [`Names::parameter`] numbers them): each parameter the
+    /// source names is read from `params` instead of folded, so that derivative parts seeded on
+    /// the parameters carry through exactly. With `params` at the values the expression was
+    /// parsed with, the value is [`Expr::eval`]'s to the bit. Does not allocate.
+    ///
+    /// # Panics
+    ///
+    /// If `vars` is not longer than the largest slot used, or `params` not longer than the
+    /// largest of [`Expr::parameters`].
+    pub fn eval_params<S: Scalar>(&self, vars: &[S], params: &[S]) -> S {
+        match &self.side {
+            Some(side) => self.exec(&side.program.code, side.program.max_stack, vars, params),
+            None => self.eval(vars),
         }
     }
 
-    /// The bytecode interpreter; `N >= self.max_stack` (checked at compile time of the
-    /// expression), so the stack indexing cannot go out of bounds.
-    fn run<S: Scalar, const N: usize>(&self, vars: &[S]) -> S {
+    /// Runs `code`, which needs a stack of `max_stack`, on the smallest stack that fits, so
+    /// small expressions do not pay for initialising a large array.
+    #[inline]
+    fn exec<S: Scalar>(&self, code: &[Op], max_stack: usize, vars: &[S], params: &[S]) -> S {
+        match max_stack {
+            0..=8 => self.run::<S, 8>(code, vars, params),
+            9..=32 => self.run::<S, 32>(code, vars, params),
+            33..=128 => self.run::<S, 128>(code, vars, params),
+            _ => self.run::<S, MAX_STACK>(code, vars, params),
+        }
+    }
+
+    /// The bytecode interpreter; `N` is at least the program's stack depth (checked at compile
+    /// time of the expression), so the stack indexing cannot go out of bounds.
+    fn run<S: Scalar, const N: usize>(&self, code: &[Op], vars: &[S], params: &[S]) -> S {
         let mut stack = [S::constant(0.0); N];
         let mut sp = 0usize;
-        for op in &self.code {
+        for op in code {
             match *op {
                 Op::Const(c) => {
                     stack[sp] = S::constant(c);
@@ -262,6 +327,10 @@ impl Expr {
                 }
                 Op::Var(slot) => {
                     stack[sp] = vars[slot];
+                    sp += 1;
+                }
+                Op::Param(i) => {
+                    stack[sp] = params[i];
                     sp += 1;
                 }
                 Op::Unary(u) => stack[sp - 1] = u.apply(stack[sp - 1]),
@@ -345,6 +414,19 @@ impl TimeFunction {
     /// `f(t)` alone (plain `f64` evaluation).
     pub fn value(&self, t: f64) -> f64 {
         self.expr.eval(&[t])
+    }
+
+    /// `f` at time `t` with the model's parameters `params` read as inputs
+    /// ([`Expr::eval_params`]): seeded with [`Tri::trajectory`] (time along `ε1` and `ε2`, the
+    /// parameters along `ε3`), the result holds `f`, `f'`, `f''` and their parameter
+    /// derivatives.
+    ///
+    /// # Panics
+    ///
+    /// If `params` is not longer than the largest of the expression's
+    /// [`parameters`](Expr::parameters).
+    pub fn eval_params<S: Scalar>(&self, t: S, params: &[S]) -> S {
+        self.expr.eval_params(&[t], params)
     }
 
     /// The underlying expression (`t` is slot 0).

@@ -7,6 +7,15 @@
 //! compiled to [`Unary::Powi`] (integer exponent) or [`Unary::Powf`], never to
 //! `exp(b ln a)`.
 //!
+//! A source that names a parameter ([`Names::parameter`]) is compiled twice: once with the
+//! parameter's value folded like a number (the program [`super::Expr::eval`] runs), and once
+//! more, in the *side* mode, with each parameter an input ([`Op::Param`]) that nothing folds
+//! (the program [`super::Expr::eval_params`] runs). Both run the same floating-point operations
+//! on the values, folded early or not, so the side program's value is the folded one's to the
+//! bit. A power whose exponent has no variables but a parameter compiles, in the side mode, to
+//! [`Binary::PowParam`]: the folded program's power rule at the exponent's value, times the
+//! exponent's motion.
+//!
 //! Grammar (lowest precedence first), parsed by operator precedence with an explicit
 //! stack rather than by recursion:
 //!
@@ -38,6 +47,33 @@ pub(crate) const MAX_STACK: usize = 1024;
 
 /// Integer exponents up to this magnitude compile to [`Unary::Powi`].
 const MAX_POWI: f64 = 1024.0;
+
+/// The power rule of a constant exponent `c`: none for `c = 1` (`a^1 = a`), [`Unary::Powi`] for
+/// an integer up to [`MAX_POWI`], else [`Unary::Powf`].
+fn constant_power(c: f64) -> Option<Unary> {
+    if c == 1.0 {
+        None
+    } else if c.fract() == 0.0 && c.abs() <= MAX_POWI {
+        // exact conversion: |c| <= 1024 is an integer
+        Some(Unary::Powi(c as i32))
+    } else {
+        Some(Unary::Powf(c))
+    }
+}
+
+/// `a^b` for an exponent `b` that depends on parameters only ([`Binary::PowParam`]): at `b`'s
+/// value `c`, the rule a folded exponent gets ([`constant_power`]), so the value is the folded
+/// program's; where `b` moves, times `a^(b - c) = exp((b - c) ln a)`, whose value is 1 and whose
+/// derivatives are exact (defined for `a > 0`).
+fn pow_param<S: Scalar>(a: S, b: S) -> S {
+    let c = S::constant(b.value());
+    let at_c = constant_power(b.value()).map_or(a, |u| u.apply(a));
+    if b == c {
+        at_c
+    } else {
+        at_c * ((b - c) * a.ln()).exp()
+    }
+}
 
 /// One-argument operations.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -95,6 +131,8 @@ pub(crate) enum Binary {
     Div,
     /// General power `a^b = exp(b ln a)` (only emitted for non-constant exponents).
     Pow,
+    /// A power whose exponent depends on parameters only (side programs only, [`pow_param`]).
+    PowParam,
     Atan2,
     Hypot,
     Min,
@@ -117,6 +155,7 @@ impl Binary {
             Binary::Mul => a * b,
             Binary::Div => a / b,
             Binary::Pow => a.pow(b),
+            Binary::PowParam => pow_param(a, b),
             Binary::Atan2 => a.atan2(b),
             Binary::Hypot => a.hypot(b),
             Binary::Min => a.min(b),
@@ -176,6 +215,8 @@ pub(crate) enum Op {
     Const(f64),
     /// Push the value of a variable slot.
     Var(usize),
+    /// Push the model's parameter of this index (side programs only).
+    Param(usize),
     /// Replace the top of the stack by a function of it.
     Unary(Unary),
     /// Pop `b`, pop `a`, push `a op b`.
@@ -232,33 +273,71 @@ fn is_function(name: &str) -> bool {
     name == SPLINE || function(name).is_some()
 }
 
+/// A bytecode program and the deepest stack it needs.
+#[derive(Debug, Clone)]
+pub(crate) struct Program {
+    pub code: Vec<Op>,
+    pub max_stack: usize,
+}
+
+/// The program with parameters as inputs, and the parameters it reads (sorted, each once).
+#[derive(Debug, Clone)]
+pub(crate) struct Side {
+    pub program: Program,
+    pub parameters: Vec<usize>,
+}
+
 /// The result of compiling a source string.
 #[derive(Debug, Clone)]
 pub(crate) struct Compiled {
-    pub code: Vec<Op>,
+    /// The program with parameters folded as numbers.
+    pub program: Program,
     pub slots: Vec<usize>,
-    pub max_stack: usize,
     /// The tables `Op::Table` indexes.
     pub tables: Vec<Arc<Spline>>,
+    /// The side program, when the source names a parameter (boxed: most expressions have none).
+    pub side: Option<Box<Side>>,
 }
 
 /// Parses and compiles `src`: a name is a built-in constant, else a named value of `names`
 /// (folded like a number), else a variable resolved with `resolve`; `spline(name, x)` names a
-/// table of `names`.
+/// table of `names`. When a named value is a parameter ([`Names::parameter`]), `src` is compiled
+/// a second time with the parameters as inputs (the side program).
 pub(crate) fn compile(
     src: &str,
     names: &dyn Names,
     resolve: &mut dyn FnMut(&str) -> Result<usize, String>,
 ) -> Result<Compiled, ExprError> {
+    let (mut compiled, mut parameters) = compile_mode(src, names, resolve, false)?;
+    if !parameters.is_empty() {
+        parameters.sort_unstable();
+        parameters.dedup();
+        let program = compile_mode(src, names, resolve, true)?.0.program;
+        compiled.side = Some(Box::new(Side { program, parameters }));
+    }
+    Ok(compiled)
+}
+
+/// One compilation of `src` (parameters as inputs when `side`), without a side program, and
+/// the parameters it folded (in order of use).
+fn compile_mode(
+    src: &str,
+    names: &dyn Names,
+    resolve: &mut dyn FnMut(&str) -> Result<usize, String>,
+    side: bool,
+) -> Result<(Compiled, Vec<usize>), ExprError> {
     let mut p = Parser {
         lex: Lexer { src, pos: 0 },
         peeked: None,
         stack: Vec::new(),
         depth: 0,
         code: Vec::new(),
+        free: Vec::new(),
         names,
         tables: Vec::new(),
         resolve,
+        side,
+        parameters: Vec::new(),
     };
     p.parse()?;
 
@@ -268,7 +347,7 @@ pub(crate) fn compile(
     let mut slots = Vec::new();
     for op in &code {
         match *op {
-            Op::Const(_) => depth += 1,
+            Op::Const(_) | Op::Param(_) => depth += 1,
             Op::Var(s) => {
                 depth += 1;
                 slots.push(s);
@@ -285,7 +364,7 @@ pub(crate) fn compile(
     }
     slots.sort_unstable();
     slots.dedup();
-    Ok(Compiled { code, slots, max_stack, tables: p.tables })
+    Ok((Compiled { program: Program { code, max_stack }, slots, tables: p.tables, side: None }, p.parameters))
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -520,11 +599,19 @@ struct Parser<'a, 'r> {
     /// Number of frames on `stack` for which [`Frame::nests`] holds.
     depth: usize,
     code: Vec<Op>,
+    /// For each operand `code` computes, in order: whether it reads no variable (only numbers
+    /// and parameters). A power's exponent that reads none but a parameter gets
+    /// [`Binary::PowParam`] in the side mode.
+    free: Vec<bool>,
     /// Named values and tables given by the caller (a model's parameters and tables).
     names: &'r dyn Names,
     /// The tables used, in order of first use.
     tables: Vec<Arc<Spline>>,
     resolve: &'r mut dyn FnMut(&str) -> Result<usize, String>,
+    /// Whether parameters are inputs ([`Op::Param`]) rather than folded numbers.
+    side: bool,
+    /// The parameters folded as numbers, in order of use (not in the side mode).
+    parameters: Vec<usize>,
 }
 
 impl<'a> Parser<'a, '_> {
@@ -624,6 +711,7 @@ impl<'a> Parser<'a, '_> {
         match t.tok {
             Tok::Num(v) => {
                 self.code.push(Op::Const(v));
+                self.free.push(true);
                 Ok(true)
             }
             Tok::Name(name) => {
@@ -672,7 +760,14 @@ impl<'a> Parser<'a, '_> {
         let builtin = !self.names.shadows(name);
         let constant = CONSTANTS.iter().find(|(n, _)| builtin && *n == name).map(|&(_, v)| v);
         if let Some(v) = self.names.constant(name).or(constant) {
-            self.code.push(Op::Const(v));
+            match self.names.parameter(name) {
+                Some(i) if self.side => self.code.push(Op::Param(i)),
+                parameter => {
+                    self.code.push(Op::Const(v));
+                    self.parameters.extend(parameter);
+                }
+            }
+            self.free.push(true);
             return Ok(());
         }
         if is_function(name) {
@@ -681,6 +776,7 @@ impl<'a> Parser<'a, '_> {
         match (self.resolve)(name) {
             Ok(slot) => {
                 self.code.push(Op::Var(slot));
+                self.free.push(false);
                 Ok(())
             }
             Err(hint) => {
@@ -803,7 +899,7 @@ impl<'a> Parser<'a, '_> {
                 Some(Op::Const(a)) => *a = self.tables[i].eval(*a).0,
                 _ => self.code.push(Op::Table(i)),
             },
-            Op::Const(_) | Op::Var(_) => unreachable!("FUNCTIONS holds only operations"),
+            Op::Const(_) | Op::Var(_) | Op::Param(_) => unreachable!("FUNCTIONS holds only operations"),
         }
         Ok(())
     }
@@ -821,6 +917,9 @@ impl<'a> Parser<'a, '_> {
     /// last `arity` instructions are then the arguments, as in [`Self::emit_binary`]).
     fn emit_nary(&mut self, op: Nary) {
         let arity = op.arity();
+        let operands = self.free.len() - arity;
+        let free = self.free.drain(operands..).all(|f| f);
+        self.free.push(free);
         let n = self.code.len();
         if n >= arity {
             let args: Vec<f64> = self.code[n - arity..]
@@ -844,17 +943,20 @@ impl<'a> Parser<'a, '_> {
     /// takes no inputs), and then the instruction before it ends the left operand.
     fn emit_binary(&mut self, b: Binary) {
         let n = self.code.len();
+        let exponent_free = self.free.pop().unwrap_or(false);
+        let base_free = self.free.pop().unwrap_or(false);
+        self.free.push(base_free && exponent_free);
         if b == Binary::Pow {
             if let Some(&Op::Const(c)) = self.code.last() {
                 self.code.pop();
-                if c == 1.0 {
-                    // a^1 = a: nothing to do
-                } else if c.fract() == 0.0 && c.abs() <= MAX_POWI {
-                    // exact conversion: |c| <= 1024 is an integer
-                    self.emit_unary(Unary::Powi(c as i32));
-                } else {
-                    self.emit_unary(Unary::Powf(c));
+                if let Some(u) = constant_power(c) {
+                    self.emit_unary(u);
                 }
+                return;
+            }
+            // Only in the side mode: elsewhere an exponent without variables is a number here.
+            if exponent_free {
+                self.code.push(Op::Binary(Binary::PowParam));
                 return;
             }
         }

@@ -68,12 +68,20 @@ fn asin_third(v: f64, _f0: f64, f1: f64, _f2: f64) -> f64 {
 
 /// A number type that expressions can be evaluated over.
 ///
-/// Implementors supply the arithmetic operators, [`constant`](Scalar::constant),
+/// Implementors supply the arithmetic operators, the comparison of every part (`==`: equal
+/// values and derivative parts), [`constant`](Scalar::constant),
 /// [`value`](Scalar::value) and the two chain-rule primitives
 /// [`lift`](Scalar::lift) / [`lift2`](Scalar::lift2); every elementary function has a
 /// default implementation in terms of those.
 pub trait Scalar:
-    Copy + Debug + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
+    Copy
+    + Debug
+    + PartialEq
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
 {
     /// Highest derivative order carried by the type (0 for `f64`, 1 for [`Dual`],
     /// 2 for [`HyperDual`], 3 for [`Tri`]). The default methods skip computing derivative

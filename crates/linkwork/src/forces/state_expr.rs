@@ -57,20 +57,45 @@ impl StateExpr {
         })
     }
 
+    /// The model's parameters it names (their indices, [`Expr::parameters`]).
+    pub fn parameters(&self) -> &[usize] {
+        self.expr.parameters()
+    }
+
     /// Value from global `q`, `qdot`, `qddot` and the reactions row `reactions` (the last two
     /// may be empty when no slot needs them; an entry that is not there reads as NaN).
     pub fn eval_global(&self, q: &[f64], qdot: &[f64], qddot: &[f64], reactions: &[f64], t: f64) -> f64 {
-        let mut z = [0.0; MAX_SLOTS];
+        let z = self.slots(q, qdot, qddot, reactions, t);
+        self.expr.eval(&z[..self.vars.len()])
+    }
+
+    /// As [`StateExpr::eval_global`] over any [`Scalar`], with the model's parameters `params`
+    /// (file order) read as inputs ([`Expr::eval_params`]): seeded along a parameter (and along
+    /// time, [`crate::expr::Tri`]), it gives the expression's exact derivatives.
+    ///
+    /// # Panics
+    ///
+    /// If `params` is not longer than the largest of [`StateExpr::parameters`].
+    pub fn eval_params<S: Scalar>(&self, q: &[S], qdot: &[S], qddot: &[S], reactions: &[S], t: S, params: &[S]) -> S {
+        let z = self.slots(q, qdot, qddot, reactions, t);
+        self.expr.eval_params(&z[..self.vars.len()], params)
+    }
+
+    /// The value of each slot, from global `q`, `qdot`, `qddot`, the reactions row and `t` (an
+    /// entry of the reactions row that is not there reads as NaN).
+    #[inline]
+    fn slots<S: Scalar>(&self, q: &[S], qdot: &[S], qddot: &[S], reactions: &[S], t: S) -> [S; MAX_SLOTS] {
+        let mut z = [S::constant(0.0); MAX_SLOTS];
         for (zk, v) in z.iter_mut().zip(&self.vars) {
             *zk = match *v {
                 StateVar::Position(c) => q[c],
                 StateVar::Velocity(c) => qdot[c],
                 StateVar::Acceleration(c) => qddot[c],
-                StateVar::Reaction(k) => reactions.get(k).copied().unwrap_or(f64::NAN),
+                StateVar::Reaction(k) => reactions.get(k).copied().unwrap_or(S::constant(f64::NAN)),
                 StateVar::Time => t,
             };
         }
-        self.expr.eval(&z[..self.vars.len()])
+        z
     }
 }
 

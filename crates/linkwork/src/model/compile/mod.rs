@@ -200,6 +200,11 @@ impl Names for ModelNames<'_> {
         self.parameters.get(name).copied()
     }
 
+    /// Every named value is a parameter: its index in file order ([`Model::parameters`]).
+    fn parameter(&self, name: &str) -> Option<usize> {
+        self.parameters.get_index_of(name)
+    }
+
     fn table(&self, name: &str) -> Option<Arc<Spline>> {
         self.tables.get(name).cloned()
     }
