@@ -18,7 +18,7 @@ __all__ = [
     'ENGINE_COLUMNS', 'ERROR_ATTRIBUTES', 'EquilibriumError', 'FileError', 'IntegrationError',
     'InternalError', 'LinkworkError', 'ModelError', 'NonFiniteError', 'OutOfMemoryError', 'PyModel',
     'PyResults', 'SingularError', 'SolverError', '__version__', '_panic_for_tests', 'quantity',
-    'schema', 'si_unit', 'si_units', 'unit',
+    'schema', 'sensitivity_name', 'si_unit', 'si_units', 'unit',
 ]
 # end generated: names
 
@@ -78,6 +78,7 @@ class PyModel:
         step: float | None = None,
         progress: Callable[[float, float, float, int], object] | None = None,
         stream: str | _Sink | None = None,
+        sensitivities: list[str] = ...,
     ) -> PyResults: ...
 
 class _Sink(Protocol):
@@ -102,9 +103,12 @@ class PyResults:
     def ok(self) -> bool: ...
     @property
     def streamed(self) -> bool: ...
+    @property
+    def sensitivities(self) -> tuple[list[str], list[str], npt.NDArray[np.float64]] | None: ...
     def write(self, directory: str) -> None: ...
 
 def schema() -> str: ...
+def sensitivity_name(column: str, parameter: str) -> str: ...
 def quantity(text: str) -> tuple[float, str] | None: ...
 def unit(text: str) -> float: ...
 AGGREGATIONS: list[str]

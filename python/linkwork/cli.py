@@ -8,6 +8,9 @@
                                                        change the analysis for this run
         [--stream [csv|parquet]]                       write the rows as they are computed
         [--units si|display]                           results.csv in SI (default) or the display units
+        [--sensitivities NAME,NAME... | all]           also sensitivities.csv: the derivatives of every
+                                                       column (and in summary.json of every summary)
+                                                       with respect to those parameters (kinematic)
     linkwork report DIR                                rebuild DIR/report.html from the files of a run
     linkwork sweep MODEL --output NAME=EXPR ...         an analysis over many parameter values, reduced to
         (--grid NAME=START:STOP:COUNT ... |             outputs: DIR/sweep.parquet, one row a variant
@@ -199,6 +202,14 @@ def _parser() -> argparse.ArgumentParser:
         "in memory (for long runs of large models; the report reads the file back)",
     )
     _add_units(run, "results.csv (not with --stream, whose rows are written SI as they are computed)")
+    run.add_argument(
+        "--sensitivities",
+        type=_sensitivities,
+        metavar="NAME,NAME...|all",
+        help="also write sensitivities.csv (sensitivities.parquet with --stream parquet): time, then "
+        "d(<column>)/d(<parameter>) for these parameters (all: every one), SI per SI; summary.json gets the "
+        "summaries' derivatives under sensitivities (kinematic analyses)",
+    )
     run.add_argument("--no-report", action="store_true", help="do not write report.html")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     run.set_defaults(command=_run)
@@ -309,6 +320,17 @@ def _setting(text: str) -> tuple[str, str]:
     return name.strip(), value.strip()
 
 
+def _sensitivities(text: str) -> list[str] | bool:
+    """A ``--sensitivities`` option: ``all`` (every parameter), or parameter names separated
+    by commas (the engine checks them)."""
+    if text.strip() == "all":
+        return True
+    names = [name.strip() for name in text.split(",")]
+    if not all(names):
+        raise argparse.ArgumentTypeError(f"expected NAME,NAME... (parameters of the model) or all, got '{text}'")
+    return names
+
+
 def _load(path: str, given: list[tuple[str, str]]) -> Model:
     """The model at ``path`` with the values ``given`` over its parameters, each of them printed
     (the header of a run or a sweep) with its unit, and any warning about them."""
@@ -363,7 +385,14 @@ def _run_into(args: argparse.Namespace, model: Model, out: Path, staging: Path |
             # On a terminal only: a bar in a log file is noise.
             progress=sys.stderr.isatty() and not args.quiet,
             stream=stream,
+            sensitivities=args.sensitivities,
         )
+    except ModelError as error:
+        # The engine names the field of Model.run; here it is this option.
+        problems: list[tuple[str, str]] = getattr(error, "problems", [])
+        if problems and all(path == "sensitivities" for path, _ in problems):
+            raise OptionError("--sensitivities", "; ".join(message for _, message in problems)) from None
+        raise
     except KeyboardInterrupt as interrupt:
         partial = getattr(interrupt, "results", None)
         if not isinstance(partial, Results):
@@ -385,6 +414,8 @@ def _run_into(args: argparse.Namespace, model: Model, out: Path, staging: Path |
     results.write(out, report=not args.no_report, units=args.units)
     _print_summary(results, args.units)
     files = [stream.name if stream is not None else "results.csv", "summary.json", *(["modes.csv"] if results.modes else []), "model.yaml"]
+    if results.summary.sensitivities is not None:
+        files.insert(1, f"sensitivities{stream.suffix if stream is not None else '.csv'}")
     files += [] if args.no_report else ["report.html"]
     print(f"wrote {_folder(out)}{', '.join(files[:-1])} and {files[-1]}")
     return EXIT_OK

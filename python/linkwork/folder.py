@@ -39,7 +39,10 @@ else:
     import fcntl
 
 RUN_FILES = frozenset(
-    {"results.csv", "results.parquet", "summary.json", "modes.csv", "model.yaml", "report.html"}
+    {
+        "results.csv", "results.parquet", "summary.json", "modes.csv", "model.yaml", "report.html",
+        "sensitivities.csv", "sensitivities.parquet",
+    }
 )
 """What ``linkwork run`` (``Results.write``) writes at the top of its folder (tables the model
 names are added by path)."""

@@ -8,7 +8,7 @@ import sys
 import time
 import warnings
 from pathlib import Path
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from tqdm import tqdm
@@ -194,6 +194,7 @@ class Model:
         step: float | None = None,
         progress: bool | Callable[[float, float, float, int], object] = False,
         stream: str | os.PathLike[str] | None = None,
+        sensitivities: Sequence[str] | bool | None = None,
     ) -> Results:
         """Run the analysis called ``analysis`` (default: the first one in the file).
 
@@ -211,6 +212,13 @@ class Model:
         run; the file is that of ``results.csv`` (CSV) or the same columns (Parquet, needs
         pyarrow). The results returned then hold no row (:attr:`Results.streamed_to`). After a
         failure the file has every row up to it.
+
+        ``sensitivities``: the parameters (names of the file's ``parameters:``) to differentiate
+        every column, summary and peak with respect to, or ``True`` for every parameter (file
+        order): exact derivatives at the same output times, SI per SI unit of the parameter
+        (:attr:`Results.sensitivities`, :meth:`Results.sensitivity`; docs/sensitivities.md).
+        Kinematic analyses have them; a name that is no parameter, or another analysis, raises
+        :class:`ModelError` at ``sensitivities``.
 
         On a solver failure the exception (:class:`SolverError`, :class:`AssemblyError`) has
         ``results``: the :class:`Results` computed before the failure. Ctrl-C stops the run at
@@ -238,10 +246,11 @@ class Model:
             except ValueError as error:
                 raise model_error("stream", str(error)) from None
         streamed_to = Path(stream) if stream is not None else None
+        parameters = self._sensitivities(sensitivities)
         bar = ProgressBar() if progress is True else None
         report = bar.update if bar is not None else progress if callable(progress) else None
         try:
-            native = self._native.run(analysis, integrator, rtol, atol, t_end, step, report, sink)
+            native = self._native.run(analysis, integrator, rtol, atol, t_end, step, report, sink, parameters)
             return Results(native, self, streamed_to)
         except (SolverError, AssemblyError, KeyboardInterrupt) as error:
             partial = getattr(error, "results", None)
@@ -251,6 +260,19 @@ class Model:
         finally:
             if bar is not None:
                 bar.close()
+
+    def _sensitivities(self, asked: Sequence[str] | bool | None) -> list[str]:
+        """The parameters ``Model.run(sensitivities=asked)`` asks for: ``True`` every one, in file
+        order; ``None`` or ``False`` none; else the names given (the engine checks them)."""
+        if asked is None or asked is False:
+            return []
+        if asked is True:
+            return list(self.parameters)
+        if not isinstance(asked, (list, tuple)) or not all(isinstance(name, str) for name in asked):
+            raise model_error(
+                "sensitivities", f"expected a list of parameter names or True, found {asked!r} ({type(asked).__name__})"
+            )
+        return list(asked)
 
     def __reduce__(self) -> tuple[Callable[[str, list[tuple[str, str]], str | None, str], Model], tuple[object, ...]]:
         """Pickled as its file's text, the parameter values given over it and the folder its

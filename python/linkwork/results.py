@@ -156,20 +156,70 @@ class Results:
     def to_pandas(self) -> pandas.DataFrame:
         """A DataFrame indexed by ``time``, one column per quantity (needs pandas:
         ``pip install linkwork[pandas]``). ``.reset_index()`` gives the layout of ``results.csv``."""
-        try:
-            import pandas as pd
-        except ImportError as error:
-            raise ImportError("to_pandas() needs pandas: pip install 'linkwork[pandas]'") from error
+        pd = _pandas("to_pandas()")
         index = pd.Index(self._time.copy(), name="time")
-        return pd.DataFrame(self._values.copy(), index=index, columns=list(self._columns))
+        table: pandas.DataFrame = pd.DataFrame(self._values.copy(), index=index, columns=list(self._columns))
+        return table
+
+    @property
+    def sensitivities(self) -> pandas.DataFrame | None:
+        """The derivatives of the columns with respect to the parameters the run was asked for
+        (``Model.run(..., sensitivities=...)``), as ``sensitivities.csv`` holds them: ``time``,
+        then ``d(<column>)/d(<parameter>)`` for each parameter in the order asked and each column
+        that has derivatives in the order of :attr:`columns`, at the output times (fixed: a
+        derivative is taken on the same times), SI per SI unit of the parameter (needs pandas).
+        ``None`` when the run asked for none. :meth:`sensitivity` gives one, in display units
+        too, and the summaries'."""
+        native = self._native.sensitivities
+        if native is None:
+            return None
+        pd = _pandas("sensitivities")
+        parameters, names, values = native
+        time = self._time if self.streamed_to is None else stream.read(self.streamed_to)[0]
+        frame: dict[str, np.ndarray] = {"time": time[: values.shape[2]]}
+        for p, parameter in enumerate(parameters):
+            for c, name in enumerate(names):
+                frame[_linkwork.sensitivity_name(name, parameter)] = values[p, c]
+        table: pandas.DataFrame = pd.DataFrame(frame)
+        return table
+
+    def sensitivity(self, name: str, parameter: str, units: str = "si") -> np.ndarray | float:
+        """The derivative of ``name`` with respect to ``parameter`` (one the run was asked for):
+        an array (one value per output time) for a column, a float for a summary or a peak
+        (``summary.json``'s ``sensitivities``). ``units="si"``: SI per SI unit of the parameter;
+        ``"display"``: in the column's display unit per the parameter's (the model's
+        ``display:`` section; a parameter written in ``mm``, a length, is per mm), a quantity
+        of no known unit (a summary, an expression measure, a parameter written as a bare number)
+        staying SI. A run that asked for no sensitivities raises ``ValueError``; a name or
+        parameter without a derivative ``KeyError``, naming those that have one."""
+        display = system(units)
+        native = self._native.sensitivities
+        if native is None:
+            raise ValueError("the run asked for no sensitivities: Model.run(..., sensitivities=['r', ...] or True)")
+        parameters, names, values = native
+        if parameter not in parameters:
+            raise KeyError(_unknown("parameter the run was asked for", parameter, parameters))
+        by_name: dict[str, dict[str, float]] = self.summary.sensitivities or {}
+        value: np.ndarray | float
+        if name in names:
+            value = values[parameters.index(parameter), names.index(name)]
+        elif parameter in by_name.get(name, {}):
+            value = float(by_name[name][parameter])
+        else:
+            raise KeyError(_unknown(f"derivative with respect to {parameter!r} of", name, [*names, *by_name]))
+        if not display:
+            return value
+        shown = Units.of(self.model, [name]).shown(name, value) / Units.of_parameters(self.model, [parameter]).shown(parameter, 1.0)
+        return shown if isinstance(value, np.ndarray) else float(shown)
 
     def write(self, out_dir: str | os.PathLike[str], report: bool = True, units: str = "si") -> None:
-        """Write ``results.csv``, ``summary.json`` (and ``modes.csv`` for a modes analysis) and
-        ``model.yaml`` (the model file as run) into ``out_dir`` (created if missing), in the
-        engine's format, and ``report.html`` unless ``report`` is false: the same files as
-        ``linkwork run``. The rows of a streamed run are its file, copied there as
-        ``results.csv`` or ``results.parquet`` unless it is already that file; its report reads
-        them back.
+        """Write ``results.csv``, ``summary.json`` (and ``modes.csv`` for a modes analysis,
+        ``sensitivities.csv`` for a run with :attr:`sensitivities`) and ``model.yaml`` (the model
+        file as run) into ``out_dir`` (created if missing), in the engine's format, and
+        ``report.html`` unless ``report`` is false: the same files as ``linkwork run``. The rows
+        of a streamed run are its file, copied there as ``results.csv`` or ``results.parquet``
+        unless it is already that file (its sensitivities, if any, go beside it in the same
+        format); its report reads them back.
 
         The folder is written whole (:mod:`linkwork.folder`): the files go into a staging
         folder beside ``out_dir``, which then replaces ``out_dir`` in one step, so that
@@ -196,6 +246,7 @@ class Results:
                 table = out / f"results{self.streamed_to.suffix}"
                 if not table.exists() or not table.samefile(self.streamed_to):
                     shutil.copyfile(self.streamed_to, table)
+                self._write_streamed_sensitivities(out / f"sensitivities{self.streamed_to.suffix}")
             elif display:
                 folder.write_text(out / "results.csv", self._csv(table_units))
             # The engine's summary.json, with the units of the table beside it.
@@ -209,6 +260,18 @@ class Results:
             # Last: a report only beside the files it shows.
             if report:
                 page.write(out / "report.html", self._run())
+
+    def _write_streamed_sensitivities(self, path: Path) -> None:
+        """Write the sensitivities of a streamed run, if it has any, at ``path``: CSV (each
+        number in the shortest form that reads back to the same double, as the engine writes
+        them) or Parquet, as its rows were streamed."""
+        frame = self.sensitivities
+        if frame is None:
+            return
+        if path.suffix == ".parquet":
+            frame.to_parquet(path, index=False)
+        else:
+            folder.write_text(path, frame.to_csv(index=False, lineterminator="\n"))
 
     def _csv(self, units: Units) -> str:
         """The text of ``results.csv`` with every column in ``units``: the engine's layout, each
@@ -312,6 +375,15 @@ class Results:
             f"<linkwork.Results {summary.analysis or ''!r} ({summary.status}): {len(self)} points, {span}, "
             f"{len(self._columns)} columns>"
         )
+
+
+def _pandas(what: str) -> Any:
+    """The pandas module, which ``what`` needs; an ``ImportError`` saying how to install it."""
+    try:
+        import pandas as pd
+    except ImportError as error:
+        raise ImportError(f"{what} needs pandas: pip install 'linkwork[pandas]'") from error
+    return pd
 
 
 def _unknown(what: str, name: str, known: Sequence[str], where: str = "") -> str:

@@ -101,6 +101,10 @@ class Summary(dict[str, Any]):
     summaries: _Key[dict[str, float] | None] = _Key()
     """The model's summaries (its ``summaries:``, whole-run quantities) by name: in a run that ended
     well and whose output spans time, when the model has any (see :attr:`Results.summaries`)."""
+    sensitivities: _Key[dict[str, dict[str, float]] | None] = _Key()
+    """The derivatives of the summaries and peaks with respect to the parameters the run was asked
+    for (``Model.run(..., sensitivities=...)``): name, then parameter, then the derivative, SI per
+    SI unit of the parameter (see :meth:`Results.sensitivity`)."""
     unit_system: _Key[str | None] = _Key()
     """The units ``results.csv`` is written in: ``"si"``, or ``"display"`` (the model's
     ``display:`` section, ``Results.write(units="display")``); ``"si"`` in

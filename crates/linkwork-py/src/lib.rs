@@ -12,8 +12,8 @@ use linkwork::analysis::check;
 use linkwork::progress::{Progress, StopToken};
 use linkwork::results::stream::RowSink;
 use linkwork::{Error, Results, RunOptions, Sink};
-use numpy::ndarray::{Array2, ShapeBuilder};
-use numpy::{PyArray1, PyArray2};
+use numpy::ndarray::{Array2, Array3, ShapeBuilder};
+use numpy::{PyArray1, PyArray2, PyArray3};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 use std::sync::mpsc::RecvTimeoutError;
@@ -274,7 +274,7 @@ impl PyModel {
     /// `stream`: the rows go, as they are computed, to the CSV file at this path (a `str`), or
     /// to an object with `begin(names)`, `write(time, values)`, `finish()` and `path` (the
     /// Python package's Parquet writer); the results returned then hold no row.
-    #[pyo3(signature = (analysis, integrator=None, rtol=None, atol=None, t_end=None, step=None, progress=None, stream=None))]
+    #[pyo3(signature = (analysis, integrator=None, rtol=None, atol=None, t_end=None, step=None, progress=None, stream=None, sensitivities=Vec::new()))]
     #[allow(clippy::too_many_arguments)]
     fn run(
         &self,
@@ -287,6 +287,7 @@ impl PyModel {
         step: Option<f64>,
         progress: Option<Py<PyAny>>,
         stream: Option<Bound<'_, PyAny>>,
+        sensitivities: Vec<String>,
     ) -> PyResult<PyResults> {
         use linkwork::analysis::dynamic::IntegratorKind;
         let sink = match stream {
@@ -314,7 +315,8 @@ impl PyModel {
         };
         let overrides = linkwork::Overrides { integrator, rtol, atol, t_end, step };
         let watch = Progress::new();
-        let options = RunOptions { overrides, progress: Some(Arc::clone(&watch)), stop: StopToken::new(), sink, sensitivities: Vec::new() };
+        let options =
+            RunOptions { overrides, progress: Some(Arc::clone(&watch)), stop: StopToken::new(), sink, sensitivities };
         let (outcome, stopped_by) = watched(
             py,
             &options.stop,
@@ -428,6 +430,25 @@ impl PyResults {
         json::to_py(py, &self.results.summary_json(self.error.as_ref()))
     }
 
+    /// The derivatives of the columns with respect to the parameters the run was asked for:
+    /// `(parameters, names, values)`, `values` (parameters x names x rows, the rows that have
+    /// derivatives), SI per SI unit of the parameter; `None` when it was asked for none.
+    #[getter]
+    #[allow(clippy::type_complexity)]
+    fn sensitivities<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Option<(Vec<String>, Vec<String>, Bound<'py, PyArray3<f64>>)>> {
+        let Some(s) = &self.results.sensitivities else { return Ok(None) };
+        // The rows every derivative has (a failed run's may stop a row short of its results').
+        let columns = s.columns();
+        let rows = columns.iter().map(|c| c.len()).min().unwrap_or(0);
+        let flat: Vec<f64> = columns.iter().flat_map(|c| c[..rows].iter().copied()).collect();
+        let values = Array3::from_shape_vec((s.parameters.len(), s.names.len(), rows), flat)
+            .map_err(|e| errors::internal(&format!("sensitivities of unequal length: {e}")))?;
+        Ok(Some((s.parameters.clone(), s.names.clone(), PyArray3::from_owned_array(py, values))))
+    }
+
     /// True when the analysis ran to its end time.
     #[getter]
     fn ok(&self) -> bool {
@@ -438,6 +459,13 @@ impl PyResults {
     fn write(&self, py: Python<'_>, directory: PathBuf) -> PyResult<()> {
         py.detach(|| guard(|| self.results.write(&directory, self.error.as_ref())))?.map_err(|e| to_pyerr(py, e, None))
     }
+}
+
+/// The name of the derivative of `column` with respect to `parameter` (`d(<column>)/d(<parameter>)`),
+/// as `sensitivities.csv` writes it.
+#[pyfunction]
+fn sensitivity_name(column: &str, parameter: &str) -> String {
+    linkwork::Sensitivities::column_name(column, parameter)
 }
 
 /// The JSON Schema of model files, as JSON text.
@@ -494,6 +522,7 @@ fn _linkwork(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyModel>()?;
     m.add_class::<PyResults>()?;
     m.add_function(wrap_pyfunction!(schema, m)?)?;
+    m.add_function(wrap_pyfunction!(sensitivity_name, m)?)?;
     m.add_function(wrap_pyfunction!(quantity, m)?)?;
     m.add_function(wrap_pyfunction!(unit, m)?)?;
     m.add_function(wrap_pyfunction!(si_units, m)?)?;

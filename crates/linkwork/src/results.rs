@@ -18,6 +18,7 @@ pub use summary::{
 
 use crate::error::{Error, Problem};
 use crate::expr::functional::{EvalError, Functional, TIME};
+use crate::expr::{Dual, Scalar};
 use crate::model::spec::{BranchMode, OutputsSpec};
 use crate::model::structure::BranchWatch;
 use crate::model::{Analysis, Model};
@@ -85,6 +86,25 @@ pub struct Sensitivities {
     pub names: Vec<String>,
     /// (parameters x names x rows) `d column / d parameter`, SI per SI unit of the parameter.
     pub values: Vec<Vec<Vec<f64>>>,
+}
+
+impl Sensitivities {
+    /// The name of the derivative of `column` with respect to `parameter`, in
+    /// `sensitivities.csv` and in Python: `d(<column>)/d(<parameter>)`.
+    pub fn column_name(column: &str, parameter: &str) -> String {
+        format!("d({column})/d({parameter})")
+    }
+
+    /// Every derivative's name ([`Sensitivities::column_name`]), parameter by parameter and each
+    /// parameter's columns in their order: the header of `sensitivities.csv` after `time`.
+    pub fn header(&self) -> Vec<String> {
+        self.parameters.iter().flat_map(|p| self.names.iter().map(move |c| Sensitivities::column_name(c, p))).collect()
+    }
+
+    /// Every derivative's rows, in the order of [`Sensitivities::header`].
+    pub fn columns(&self) -> Vec<&[f64]> {
+        self.values.iter().flatten().map(Vec::as_slice).collect()
+    }
 }
 
 /// The rows of a streamed run ([`stream`]): those its sink has, and how many are held before the
@@ -161,8 +181,9 @@ enum Summaries {
     #[default]
     None,
     /// The summaries of an analysis over `[t_start, t_end]`, to be checked once every column is
-    /// named.
-    Pending { span: [f64; 2], functionals: IndexMap<String, Functional> },
+    /// named; `gradients`: each parameter's derivative with respect to each (the model's
+    /// [`crate::model::DataGradients::params`]), for the summaries' derivatives.
+    Pending { span: [f64; 2], functionals: IndexMap<String, Functional>, gradients: Vec<Vec<f64>> },
     /// Checked: the summaries, and a copy of each column they read that the results do not
     /// keep (every one of a streamed run, `time` included; those `outputs` leaves out), with its
     /// position in the row pushed (`None`: the time).
@@ -170,6 +191,7 @@ enum Summaries {
         span: [f64; 2],
         functionals: IndexMap<String, Functional>,
         copies: Vec<(String, Option<usize>, Vec<f64>)>,
+        gradients: Vec<Vec<f64>>,
     },
     /// One reads a column that does not exist, or an `at` time outside the span: the error the
     /// first push returns.
@@ -212,7 +234,8 @@ impl Results {
         }
         if analysis.t_end > analysis.t_start && !model.summaries.is_empty() {
             let span = [analysis.t_start, analysis.t_end];
-            results.summaries = Summaries::Pending { span, functionals: model.summaries.clone() };
+            let gradients = model.gradients.params.clone();
+            results.summaries = Summaries::Pending { span, functionals: model.summaries.clone(), gradients };
         }
         results.summary.analysis = Some(AnalysisHeader {
             analysis: analysis.name.clone(),
@@ -476,7 +499,7 @@ impl Results {
     /// column one reads that does not exist, or an `at` time outside the span, is a problem at
     /// `summaries.<name>` that the first push returns.
     fn read_summaries(&mut self) {
-        let Summaries::Pending { span, functionals } = std::mem::take(&mut self.summaries) else { return };
+        let Summaries::Pending { span, functionals, gradients } = std::mem::take(&mut self.summaries) else { return };
         let (names, keep) = match &self.selection {
             Selection::Applied { names, keep } => (names, Some(keep)),
             _ => (&self.names, None),
@@ -514,36 +537,103 @@ impl Results {
                 (!kept).then(|| (c.to_string(), at, Vec::new()))
             })
             .collect();
-        self.summaries = Summaries::Reading { span, functionals, copies };
+        self.summaries = Summaries::Reading { span, functionals, copies, gradients };
     }
 
     /// Evaluate the model's summaries over the rows of a run that ended well, into the summary
     /// (`summaries`, by name); nothing when there are none to evaluate. A value that is not a
     /// finite number (an argument's at a row, or the whole expression's: a division by zero) is
     /// an [`Error::NonFinite`] at `summaries.<name>`, at the row's time or the end of the run,
-    /// and no summary is written.
+    /// and no summary is written. A run with [`Results::sensitivities`] also writes the
+    /// summaries' and the peaks' derivatives ([`Summary::sensitivities`]).
     pub(crate) fn summarise(&mut self) -> Result<(), Error> {
-        let Summaries::Reading { span, functionals, copies } = std::mem::take(&mut self.summaries) else {
-            return Ok(());
-        };
-        let copy = |name: &str| copies.iter().find(|(n, _, _)| n == name).map(|(_, _, v)| v.as_slice());
-        let time = copy(TIME).unwrap_or(&self.time);
-        let column = |name: &str| copy(name).or_else(|| self.column(name));
-        let values = functionals
-            .iter()
-            .map(|(name, f)| {
-                let element = format!("summaries.{name}");
-                let value = f.eval(time, &column).map_err(|e| match e {
-                    EvalError::NonFinite { value, what, time: at } => {
-                        Error::NonFinite { time: at.unwrap_or(span[1]), element, expression: what, value }
-                    }
-                    EvalError::Missing(message) => Error::Model(vec![Problem::new(element, message)]),
-                })?;
-                Ok((name.clone(), value))
-            })
-            .collect::<Result<IndexMap<String, f64>, Error>>()?;
-        self.summary.summaries = Some(values);
+        let summaries = std::mem::take(&mut self.summaries);
+        let mut derivatives = IndexMap::new();
+        if let Summaries::Reading { span, functionals, copies, gradients } = &summaries {
+            let copy = |name: &str| copies.iter().find(|(n, _, _)| n == name).map(|(_, _, v)| v.as_slice());
+            let time = copy(TIME).unwrap_or(&self.time);
+            let column = |name: &str| copy(name).or_else(|| self.column(name));
+            let values = functionals
+                .iter()
+                .map(|(name, f)| {
+                    let element = format!("summaries.{name}");
+                    let value = f.eval(time, &column).map_err(|e| match e {
+                        EvalError::NonFinite { value, what, time: at } => {
+                            Error::NonFinite { time: at.unwrap_or(span[1]), element, expression: what, value }
+                        }
+                        EvalError::Missing(message) => Error::Model(vec![Problem::new(element, message)]),
+                    })?;
+                    Ok((name.clone(), value))
+                })
+                .collect::<Result<IndexMap<String, f64>, Error>>()?;
+            if let Some(s) = &self.sensitivities {
+                for (name, f) in functionals {
+                    let by_parameter = self.by_parameter(s, |derivative, p| {
+                        // Each named value's derivative: the parameters' gradients (NaN, and so
+                        // left out, where the model has none).
+                        let value = |n: &str| {
+                            let k = self.summary.parameters.get_index_of(n);
+                            k.and_then(|k| gradients.get(k)?.get(p).copied()).unwrap_or(f64::NAN)
+                        };
+                        f.derivative(time, &column, derivative, &value).ok()
+                    });
+                    derivatives.insert(name.clone(), by_parameter);
+                }
+            }
+            self.summary.summaries = Some(values);
+        }
+        if let Some(s) = &self.sensitivities {
+            if let (Peaks::Watching(watching), Some(reactions)) = (&self.peaks, &self.summary.reactions) {
+                let names = match &self.selection {
+                    Selection::Applied { names, .. } => names,
+                    _ => &self.names,
+                };
+                for (key, positions, _) in watching {
+                    let components: Vec<&str> =
+                        positions.iter().filter(|&&k| k != usize::MAX).map(|&k| names[k].as_str()).collect();
+                    let row =
+                        reactions.peaks.get(key).and_then(|peak| self.time.iter().position(|&t| Some(t) == peak.time));
+                    let by_parameter = self.by_parameter(s, |derivative, _| {
+                        let row = row?;
+                        let mut parts =
+                            components.iter().map(|c| Some(Dual::new(self.column(c)?[row], derivative(c)?[row])));
+                        let first = parts.next()??;
+                        match parts.next() {
+                            Some(second) => Some(first.hypot(second?).d),
+                            None => Some(first.abs().d),
+                        }
+                    });
+                    derivatives.insert(key.clone(), by_parameter);
+                }
+            }
+        }
+        if self.sensitivities.is_some() {
+            derivatives.retain(|_, by_parameter| !by_parameter.is_empty());
+            self.summary.sensitivities = Some(derivatives);
+        }
         Ok(())
+    }
+
+    /// A quantity's derivative with respect to each parameter of `s` that `derivative` gives as
+    /// a finite number, by the parameter's name; `derivative` is called with the columns'
+    /// derivatives along the parameter (by column name) and the parameter's index among the
+    /// model's parameters (file order).
+    fn by_parameter<'s>(
+        &self,
+        s: &'s Sensitivities,
+        derivative: impl Fn(&dyn Fn(&str) -> Option<&'s [f64]>, usize) -> Option<f64>,
+    ) -> IndexMap<String, f64> {
+        let column: std::collections::HashMap<&str, usize> =
+            s.names.iter().enumerate().map(|(k, n)| (n.as_str(), k)).collect();
+        s.parameters
+            .iter()
+            .zip(&s.values)
+            .filter_map(|(name, values)| {
+                let p = self.summary.parameters.get_index_of(name)?;
+                let d = derivative(&|c: &str| column.get(c).map(|&k| values[k].as_slice()), p)?;
+                d.is_finite().then(|| (name.clone(), d))
+            })
+            .collect()
     }
 
     /// Find the columns of the peaks to watch among those kept: each joint's `fx, fy, torque`
@@ -771,20 +861,45 @@ impl Results {
         .map(Some)
     }
 
-    /// Write `results.csv` and `summary.json` into `dir` (created if missing), and `modes.csv`
-    /// for a modes analysis. Every file is written in full under a temporary name first, and
-    /// only then are they renamed over the old ones: a run that dies or fails to write leaves
-    /// the previous files, never a truncated one.
+    /// Write `sensitivities.csv` at `path` when the run has [`Results::sensitivities`] and
+    /// holds its rows: a header (`time`, then [`Sensitivities::header`]), then one line per
+    /// output time that has derivatives, numbers as in `results.csv`. Nothing otherwise (a streamed run's rows are
+    /// in its file: its caller writes them beside it). Written whole, then renamed into place,
+    /// as [`Results::write`] does.
+    pub fn write_sensitivities_csv(&self, path: &Path) -> Result<(), Error> {
+        self.stage_sensitivities_csv(path)?.map_or(Ok(()), Staged::commit)
+    }
+
+    fn stage_sensitivities_csv(&self, path: &Path) -> Result<Option<Staged>, Error> {
+        let Some(s) = self.sensitivities.as_ref().filter(|_| !self.is_streamed()) else { return Ok(None) };
+        let columns = s.columns();
+        // The rows that have derivatives: every row of a run that ended well; a failed run's
+        // derivatives may stop short of its last row.
+        let rows = columns.iter().map(|c| c.len()).fold(self.time.len(), usize::min);
+        Staged::write(path, |w| {
+            stream::write_header(w, &s.header())?;
+            stream::write_rows(w, &self.time[..rows], &columns)
+        })
+        .map(Some)
+    }
+
+    /// Write `results.csv` and `summary.json` into `dir` (created if missing), `modes.csv`
+    /// for a modes analysis and `sensitivities.csv` for a run with sensitivities. Every file is
+    /// written in full under a temporary name first, and only then are they renamed over the
+    /// old ones: a run that dies or fails to write leaves the previous files, never a truncated
+    /// one.
     pub fn write(&self, dir: &Path, error: Option<&Error>) -> Result<(), Error> {
         let io = |e: std::io::Error| Error::Io { path: dir.display().to_string(), message: e.to_string() };
         std::fs::create_dir_all(dir).map_err(io)?;
         // A streamed run's rows are in the file it streamed to.
         let csv = if self.is_streamed() { None } else { Some(self.stage_csv(&dir.join("results.csv"))?) };
         let modes = self.stage_modes_csv(&dir.join("modes.csv"))?;
+        let sensitivities = self.stage_sensitivities_csv(&dir.join("sensitivities.csv"))?;
         let text = serde_json::to_string_pretty(&self.summary_json(error)).unwrap_or_default();
         let summary = Staged::write(&dir.join("summary.json"), |w| writeln!(w, "{text}"))?;
         csv.map_or(Ok(()), Staged::commit)?;
         modes.map_or(Ok(()), Staged::commit)?;
+        sensitivities.map_or(Ok(()), Staged::commit)?;
         summary.commit()
     }
 }
@@ -836,6 +951,132 @@ mod tests {
         r.time = vec![0.0, 1.0];
         r.columns = vec![vec![value, value]];
         r
+    }
+
+    /// A one-body model whose parameter `p` (and `T = 3 p`) the synthetic rows of
+    /// [`synthetic`] depend on, with summaries of every shape: a largest row less a parameter,
+    /// an integral over a parameter, a value between rows at a parameter's time.
+    const SYNTHETIC: &str = "parameters: {p: 0.7, T: 3 * p}
+bodies:
+  wheel: {mass: 1, inertia: 0.1, position: [0, 0], points: {O: [0, 0]}}
+joints:
+  O: {type: revolute, body_i: wheel, point_i: O, body_j: ground, point_j: [0, 0]}
+drivers:
+  motor: {type: angle, body: wheel, function: \"p*t\"}
+measures:
+  s: \"sin(3*t)\"
+summaries:
+  top: \"max(wheel.x) - p\"
+  energy: \"integral(wheel.omega^2) / T\"
+  late: \"at(T / 3, s * wheel.y)\"
+  span: \"final(time) - initial(time)\"
+analyses:
+  kinematics: {type: kinematic, t_end: 2, step: 0.05}
+";
+
+    /// The results of `SYNTHETIC` with the parameters `set`, its rows made up as smooth functions
+    /// of `p` and `t` (`x = sin(p t) + p t^2`, `y = exp(-p t)`, `omega = p`; the reactions
+    /// `fx = p cos(p t)`, `fy = p^2 t`, `torque = p sin(2 t)`, the effort `p (t - 1)`, the
+    /// measure `s = sin(3 t)`), with their exact derivatives along `p` and `T` as its
+    /// sensitivities, and summarised.
+    fn synthetic(set: &[(&str, f64)]) -> Results {
+        let set: Vec<(String, String)> = set.iter().map(|(n, v)| (n.to_string(), format!("{v:?}"))).collect();
+        let mut model = Model::from_yaml_with(SYNTHETIC, &set).unwrap();
+        // d(p, T) / d(p, T): T follows p (3), unless T is given (then only itself moves).
+        let given_t = set.iter().any(|(n, _)| n == "T");
+        model.gradients.params = vec![vec![1.0, 0.0], vec![if given_t { 0.0 } else { 3.0 }, 1.0]];
+        let p = model.parameters["p"];
+        let analysis = model.analysis("kinematics").unwrap().clone();
+        let mut r = Results::new(&model, &analysis);
+        r.add_columns(["O.fx", "O.fy", "O.torque", "motor.effort", "s"].map(String::from));
+        let names = ["wheel.x", "wheel.y", "wheel.omega", "O.fx", "O.fy", "O.torque", "motor.effort", "s"];
+        let mut dp = vec![Vec::new(); names.len()];
+        for k in 0..=40 {
+            let t = 0.05 * f64::from(k);
+            let q = [(p * t).sin() + p * t * t, (-p * t).exp(), p * t];
+            let extra = [p * (p * t).cos(), p * p * t, p * (2.0 * t).sin(), p * (t - 1.0), (3.0 * t).sin()];
+            r.push(t, &q, &[0.0, 0.0, p], &[0.0; 3], &extra).unwrap();
+            let d = [
+                t * (p * t).cos() + t * t,
+                -t * (-p * t).exp(),
+                1.0,
+                (p * t).cos() - p * t * (p * t).sin(),
+                2.0 * p * t,
+                (2.0 * t).sin(),
+                t - 1.0,
+                0.0,
+            ];
+            dp.iter_mut().zip(d).for_each(|(c, v)| c.push(v));
+        }
+        let zeros = vec![vec![0.0; dp[0].len()]; names.len()];
+        r.sensitivities = Some(Sensitivities {
+            parameters: vec!["p".into(), "T".into()],
+            names: names.map(String::from).to_vec(),
+            values: vec![dp, zeros],
+        });
+        r.insert_reaction_summary(&model);
+        r.summarise().unwrap();
+        r
+    }
+
+    /// Each summary's and peak's derivative with respect to `p` and to `T` against central
+    /// differences of the whole summarised results with the parameter set at `-+ h` (`T` given
+    /// replaces its expression; `p` given moves `T` with it), on the same rows. Step `h = 1e-5`:
+    /// the differences' error `h^2 f''' / 6 ~ 1e-10` (third derivatives of order 1-10) plus
+    /// round-off `1e-16 |f| / h ~ 1e-11`; tolerance 1e-8 relative (absolute below 1). Every
+    /// largest row stays where it is within `-+ h`. `span` reads only the (fixed) time: 0.
+    #[test]
+    fn summary_sensitivities_match_central_differences_of_the_summaries() {
+        let r = synthetic(&[]);
+        let derivatives = r.summary.sensitivities.as_ref().expect("sensitivities");
+        let h = 1e-5;
+        let mut compared = 0;
+        for (parameter, value) in [("p", 0.7), ("T", 2.1)] {
+            let (up, down) = (synthetic(&[(parameter, value + h)]), synthetic(&[(parameter, value - h)]));
+            let quantities = |r: &Results| -> Vec<(String, f64)> {
+                let peaks = r.summary.reactions.as_ref().unwrap().peaks.iter().map(|(k, p)| (k.clone(), p.max_abs));
+                r.summary.summaries.clone().unwrap().into_iter().chain(peaks).collect()
+            };
+            for ((name, a), (_, b)) in quantities(&up).into_iter().zip(quantities(&down)) {
+                let differences = (a - b) / (2.0 * h);
+                let exact = derivatives[&name][parameter];
+                let error = (exact - differences).abs() / exact.abs().max(1.0);
+                assert!(error < 1e-8, "d {name} / d {parameter}: {exact} against {differences}");
+                compared += 1;
+            }
+        }
+        // 4 summaries and 3 peaks (O.force, O.torque, motor.effort), for each parameter.
+        assert_eq!(compared, 14);
+        assert_eq!(derivatives.len(), 7);
+        let span = &derivatives["span"];
+        assert_eq!((span["p"], span["T"]), (0.0, 0.0));
+    }
+
+    /// `sensitivities.csv`: `time`, then each derivative by parameter then column, every row,
+    /// numbers as in `results.csv`; absent without sensitivities.
+    #[test]
+    fn sensitivities_are_written_beside_the_results() {
+        let dir = std::env::temp_dir().join(format!("linkwork-sensitivities-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let r = synthetic(&[]);
+        r.write(&dir, None).unwrap();
+        let text = std::fs::read_to_string(dir.join("sensitivities.csv")).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        assert_eq!(header.len(), 1 + 2 * 8);
+        assert_eq!(&header[..3], ["time", "d(wheel.x)/d(p)", "d(wheel.y)/d(p)"]);
+        assert_eq!(header[9], "d(wheel.x)/d(T)");
+        let second: Vec<f64> = lines.nth(1).unwrap().split(',').map(|v| v.parse().unwrap()).collect();
+        let s = r.sensitivities.as_ref().unwrap();
+        assert_eq!((second[0], second[1], second[9]), (r.time[1], s.values[0][0][1], s.values[1][0][1]));
+        assert_eq!(text.lines().count(), 1 + r.len());
+        let summary = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+        assert!(summary.contains("\"sensitivities\""));
+        std::fs::remove_dir_all(&dir).unwrap();
+        results(1.0).write(&dir, None).unwrap();
+        assert!(!dir.join("sensitivities.csv").exists());
+        assert!(!std::fs::read_to_string(dir.join("summary.json")).unwrap().contains("sensitivities"));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     /// The estimate is the rows' bytes against half the memory available: 10 million points of

@@ -74,11 +74,11 @@ pub(crate) fn write_header(w: &mut impl Write, names: &[String]) -> std::io::Res
 }
 
 /// The lines of `results.csv` for rows of `time` and `columns`.
-pub(crate) fn write_rows(w: &mut impl Write, time: &[f64], columns: &[Vec<f64>]) -> std::io::Result<()> {
+pub(crate) fn write_rows(w: &mut impl Write, time: &[f64], columns: &[impl AsRef<[f64]>]) -> std::io::Result<()> {
     for (r, t) in time.iter().enumerate() {
         write!(w, "{t:?}")?;
         for c in columns {
-            write!(w, ",{:?}", c[r])?;
+            write!(w, ",{:?}", c.as_ref()[r])?;
         }
         writeln!(w)?;
     }

@@ -18,6 +18,7 @@
 //! | `about`, `modes` | modes | the state linearised about; the modes ([`Mode`]) |
 //! | `reaction_bodies`, `peaks` | inverse, static, dynamic | each joint's first body; the largest reactions and efforts ([`Peak`]) |
 //! | `summaries` | every analysis whose output spans time (not modes, nor static at one time), when the model has summaries and the run ended well | each summary's value by name (`model.yaml`'s `summaries:`, [`crate::expr::functional`]) |
+//! | `sensitivities` | a run asked for sensitivities that ended well | each summary's and peak's derivative with respect to each parameter asked for ([`Summary::sensitivities`]) |
 //!
 //! An analysis that fails writes what it found before the failure, but no `summaries`: a
 //! whole-run quantity over part of the run would be another quantity under the same name.
@@ -103,6 +104,15 @@ pub struct Summary {
     /// whose output spans time (`None` otherwise, or when the model has none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub summaries: Option<IndexMap<String, f64>>,
+    /// The derivatives of the summaries and the peaks with respect to the parameters a run was
+    /// asked for ([`crate::Results::sensitivities`]): summary or peak name, then parameter, then
+    /// the derivative, SI per SI unit of the parameter. Each summary and peak whose columns all
+    /// have derivatives, with each parameter along which its derivative is a finite number (a
+    /// column's largest value at a row has the derivative of that row, the first of those that
+    /// reach it: [`crate::expr::functional`]). `None` when no sensitivities were asked for, or the
+    /// run did not end well.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sensitivities: Option<IndexMap<String, IndexMap<String, f64>>>,
 }
 
 /// The analysis a summary is of.
