@@ -34,7 +34,8 @@ fn sensitivities(c: &mut Criterion) {
     let names: Vec<String> = model.parameters.keys().cloned().collect();
     let mut group = c.benchmark_group("quick_return_a_sensitivities");
     for p in [0, 1, 4, 16] {
-        let options = RunOptions { sensitivities: names.iter().cycle().take(p).cloned().collect(), ..Default::default() };
+        let options =
+            RunOptions { sensitivities: names.iter().cycle().take(p).cloned().collect(), ..Default::default() };
         group.bench_function(format!("kinematics_2s_P{p}"), |b| {
             b.iter(|| black_box(&model).run("kinematics", &options).map(|r| r.len()).ok())
         });

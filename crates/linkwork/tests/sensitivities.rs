@@ -23,7 +23,9 @@ fn run_with(model: &Model, analysis: &str, parameters: &[String]) -> Result<Resu
 /// The columns of a plain run of `analysis` with parameter `name` set to `value` (SI).
 fn run_at(model: &Model, analysis: &str, name: &str, value: f64) -> Results {
     let set = model.with_parameters(&[(name.to_string(), format!("{value:e}"))]).expect("the model with the value set");
-    tight(set).run(analysis, &RunOptions::default()).unwrap_or_else(|f| panic!("{analysis} with {name} = {value}: {}", f.error))
+    tight(set)
+        .run(analysis, &RunOptions::default())
+        .unwrap_or_else(|f| panic!("{analysis} with {name} = {value}: {}", f.error))
 }
 
 /// The central difference of every column with respect to parameter `name` by Richardson's
@@ -35,7 +37,8 @@ fn run_at(model: &Model, analysis: &str, name: &str, value: f64) -> Results {
 fn finite_differences(model: &Model, analysis: &str, name: &str, times: &[f64]) -> Vec<Vec<Option<f64>>> {
     let value = model.parameters[name];
     let h = step(model, name);
-    let runs: Vec<Results> = [-h, h, -h / 2.0, h / 2.0].iter().map(|d| run_at(model, analysis, name, value + d)).collect();
+    let runs: Vec<Results> =
+        [-h, h, -h / 2.0, h / 2.0].iter().map(|d| run_at(model, analysis, name, value + d)).collect();
     let columns = runs[0].names.len();
     (0..columns)
         .map(|c| {
@@ -99,7 +102,9 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
             }
             let results = match run_with(&model, name, &parameters) {
                 Ok(r) => r,
-                Err(Error::Model(problems)) if NOT_YET.iter().any(|(f, p)| *f == file && problems[0].path.starts_with(p)) => {
+                Err(Error::Model(problems))
+                    if NOT_YET.iter().any(|(f, p)| *f == file && problems[0].path.starts_with(p)) =>
+                {
                     refused.push(file.clone());
                     continue;
                 }
@@ -135,7 +140,9 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
     assert!(failures.is_empty(), "{} disagreements:\n{}", failures.len(), failures.join("\n"));
     // The list of what is not differentiated yet stays true: each example on it is refused.
     assert_eq!(refused, NOT_YET.iter().map(|(f, _)| f.to_string()).collect::<Vec<_>>());
-    for expected in ["slider_crank_param.yaml kinematics", "quick_return_a.yaml kinematics", "sixbar_leg.yaml kinematics"] {
+    for expected in
+        ["slider_crank_param.yaml kinematics", "quick_return_a.yaml kinematics", "sixbar_leg.yaml kinematics"]
+    {
         assert!(checked.iter().any(|c| c == expected), "{expected} was checked; checked: {checked:?}");
     }
 }
@@ -230,7 +237,11 @@ fn unknown_parameters_and_other_analyses_are_refused() {
         panic!("an unknown parameter is refused")
     };
     assert_eq!(problems[0].path, "sensitivities");
-    assert!(problems[0].message.contains("unknown parameter 'R'") && problems[0].message.contains("r, L"), "{}", problems[0].message);
+    assert!(
+        problems[0].message.contains("unknown parameter 'R'") && problems[0].message.contains("r, L"),
+        "{}",
+        problems[0].message
+    );
     let Err(Error::Model(problems)) = run_with(&model, "inverse", &["r".to_string()]) else {
         panic!("an inverse analysis is refused for now")
     };

@@ -203,7 +203,8 @@ impl<'m> Sensitivity<'m> {
         for e in &self.elements {
             let data: Vec<Dual> = e.data.iter().map(|&v| Dual::constant(v)).collect();
             if !e.constraint.phi_dual(&at, &data, &mut out[e.row..]) {
-                let (section, what) = if e.constraint.driven().is_some() { ("drivers", "driver") } else { ("joints", "joint") };
+                let (section, what) =
+                    if e.constraint.driven().is_some() { ("drivers", "driver") } else { ("joints", "joint") };
                 return unsupported(format!("{section}.{}", e.name), &format!("the {} {what}", e.kind));
             }
         }
@@ -256,7 +257,13 @@ impl<'m> Sensitivity<'m> {
         let along = |x: &[f64], d: &[f64]| -> Vec<Dual> { x.iter().zip(d).map(|(&v, &e)| Dual::new(v, e)).collect() };
         let (q, qdot, qddot) = (along(q, dq), along(qdot, dv), along(qddot, da));
         let b = &mut self.position;
-        for (x, g) in b.params.iter_mut().zip(&self.model.gradients.params).zip(self.model.parameters.values()).map(|((x, g), v)| (x, Dual::new(*v, g[p]))) {
+        for (x, g) in b
+            .params
+            .iter_mut()
+            .zip(&self.model.gradients.params)
+            .zip(self.model.parameters.values())
+            .map(|((x, g), v)| (x, Dual::new(*v, g[p])))
+        {
             *x = g;
         }
         for (m, grads) in self.model.measures.iter().zip(&self.model.gradients.measures) {

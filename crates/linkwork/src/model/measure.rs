@@ -9,7 +9,15 @@ impl Measure {
     /// of [`MeasureKind::data`] and the model's parameters `params` (file order): each may carry
     /// derivatives. `None` for a kind that has no derivatives yet (a cam's pressure angle, a
     /// mechanical advantage, an expression that reads reactions).
-    pub fn value_generic<S: Scalar>(&self, q: &[S], qdot: &[S], qddot: &[S], t: S, data: &[S], params: &[S]) -> Option<S> {
+    pub fn value_generic<S: Scalar>(
+        &self,
+        q: &[S],
+        qdot: &[S],
+        qddot: &[S],
+        t: S,
+        data: &[S],
+        params: &[S],
+    ) -> Option<S> {
         match &self.kind {
             MeasureKind::Expression(e) => {
                 if e.reactions().next().is_some() {
