@@ -26,18 +26,7 @@ impl Measure {
                 Some(e.eval_params(q, qdot, qddot, &[], t, params))
             }
             MeasureKind::Point { body: b, component, .. } => {
-                use spec::PointComponent as C;
-                let (sn, c) = (q[b + 2].sin(), q[b + 2].cos());
-                let a = [c * data[0] - sn * data[1], sn * data[0] + c * data[1]];
-                let (w, al) = (qdot[b + 2], qddot[b + 2]);
-                Some(match component {
-                    C::X => q[*b] + a[0],
-                    C::Y => q[b + 1] + a[1],
-                    C::Vx => qdot[*b] - w * a[1],
-                    C::Vy => qdot[b + 1] + w * a[0],
-                    C::Ax => qddot[*b] - al * a[1] - w * w * a[0],
-                    C::Ay => qddot[b + 1] + al * a[0] - w * w * a[1],
-                })
+                Some(point_component(q, qdot, qddot, *b, [data[0], data[1]], *component))
             }
             MeasureKind::TransmissionAngle { coupler: (c, _), rocker: (r, _) } => {
                 let turn = |body: crate::constraints::BodyIx, v: [S; 2]| match body.0 {
@@ -49,8 +38,7 @@ impl Measure {
                 };
                 let u = turn(*c, [data[0], data[1]]);
                 let v = turn(*r, [data[2], data[3]]);
-                let gamma = (u[0] * v[1] - u[1] * v[0]).abs().atan2(u[0] * v[0] + u[1] * v[1]);
-                Some(gamma.min(S::constant(std::f64::consts::PI) - gamma))
+                Some(acute_angle(u, v))
             }
             MeasureKind::VelocityRatio { input, output } => Some(if qdot[*input].value() == 0.0 {
                 qddot[*output] / qddot[*input]
@@ -60,4 +48,36 @@ impl Measure {
             MeasureKind::PressureAngle(_) | MeasureKind::MechanicalAdvantage { .. } => None,
         }
     }
+}
+
+/// The `component` of the point `s` (body frame) of the body whose `x` is `q[b]`, global frame:
+/// a point measure's value.
+pub(super) fn point_component<S: Scalar>(
+    q: &[S],
+    qdot: &[S],
+    qddot: &[S],
+    b: usize,
+    s: [S; 2],
+    component: spec::PointComponent,
+) -> S {
+    use spec::PointComponent as C;
+    let (sn, c) = (q[b + 2].sin(), q[b + 2].cos());
+    let a = [c * s[0] - sn * s[1], sn * s[0] + c * s[1]];
+    let (w, al) = (qdot[b + 2], qddot[b + 2]);
+    match component {
+        C::X => q[b] + a[0],
+        C::Y => q[b + 1] + a[1],
+        C::Vx => qdot[b] - w * a[1],
+        C::Vy => qdot[b + 1] + w * a[0],
+        C::Ax => qddot[b] - al * a[1] - w * w * a[0],
+        C::Ay => qddot[b + 1] + al * a[0] - w * w * a[1],
+    }
+}
+
+/// The acute angle between the lines along `u` and `v` (global frame): the angle in `[0, pi]`
+/// from both its sine and cosine (accurate near 0 and pi, where acos of the cosine is not),
+/// folded to the acute one. A transmission angle's value.
+pub(super) fn acute_angle<S: Scalar>(u: [S; 2], v: [S; 2]) -> S {
+    let gamma = (u[0] * v[1] - u[1] * v[0]).abs().atan2(u[0] * v[0] + u[1] * v[1]);
+    gamma.min(S::constant(std::f64::consts::PI) - gamma)
 }

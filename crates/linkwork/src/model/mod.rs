@@ -382,25 +382,11 @@ impl Measure {
         match &self.kind {
             MeasureKind::Expression(e) => e.eval_global(q, qdot, qddot, reactions, t),
             MeasureKind::Point { body: b, s, component } => {
-                use spec::PointComponent as C;
-                let (sn, c) = q[b + 2].sin_cos();
-                let a = [c * s[0] - sn * s[1], sn * s[0] + c * s[1]];
-                let (w, al) = (qdot[b + 2], qddot[b + 2]);
-                match component {
-                    C::X => q[*b] + a[0],
-                    C::Y => q[b + 1] + a[1],
-                    C::Vx => qdot[*b] - w * a[1],
-                    C::Vy => qdot[b + 1] + w * a[0],
-                    C::Ax => qddot[*b] - al * a[1] - w * w * a[0],
-                    C::Ay => qddot[b + 1] + al * a[0] - w * w * a[1],
-                }
+                measure::point_component(q, qdot, qddot, *b, *s, *component)
             }
             MeasureKind::TransmissionAngle { coupler: (c, u), rocker: (r, v) } => {
                 let (u, v) = (Frame::of_slice(*c, q).rotate(*u), Frame::of_slice(*r, q).rotate(*v));
-                // The angle between the lines, in [0, pi], from both its sine and cosine (accurate
-                // near 0 and pi, where acos of the cosine is not), folded to the acute one.
-                let gamma = (u[0] * v[1] - u[1] * v[0]).abs().atan2(u[0] * v[0] + u[1] * v[1]);
-                gamma.min(std::f64::consts::PI - gamma)
+                measure::acute_angle(u, v)
             }
             MeasureKind::VelocityRatio { input, output } => {
                 // omega_out = G(q) omega_in, so alpha_out = G alpha_in + G' omega_in^2: where the
