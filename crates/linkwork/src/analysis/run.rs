@@ -236,7 +236,7 @@ impl Model {
         }
         if analysis.kind != AnalysisKind::Kinematic {
             return Err(problem(format!(
-                "analysis '{}' is {}: design sensitivities are computed for kinematic analyses so far",
+                "analysis '{}' has type {}: design sensitivities are computed for kinematic analyses so far",
                 analysis.name,
                 analysis.kind.name()
             )));

@@ -139,6 +139,8 @@ pub(crate) struct Sensitivity<'m> {
     asked: Vec<usize>,
     names: Vec<String>,
     elements: Vec<Seeded<'m>>,
+    /// Each measure's numbers ([`crate::model::MeasureKind::data`]), read once.
+    measure_data: Vec<Vec<f64>>,
     position: Buffers<Dual>,
     velocity: Buffers<HyperDual>,
     acceleration: Buffers<Tri>,
@@ -178,6 +180,7 @@ impl<'m> Sensitivity<'m> {
             asked: asked.to_vec(),
             names: names.collect(),
             elements,
+            measure_data: model.measures.iter().map(|m| m.kind.data().iter().map(|&(_, v)| v).collect()).collect(),
             position: Buffers::new(n, count, row),
             velocity: Buffers::new(n, count, row),
             acceleration: Buffers::new(n, count, row),
@@ -257,18 +260,11 @@ impl<'m> Sensitivity<'m> {
         let along = |x: &[f64], d: &[f64]| -> Vec<Dual> { x.iter().zip(d).map(|(&v, &e)| Dual::new(v, e)).collect() };
         let (q, qdot, qddot) = (along(q, dq), along(qdot, dv), along(qddot, da));
         let b = &mut self.position;
-        for (x, g) in b
-            .params
-            .iter_mut()
-            .zip(&self.model.gradients.params)
-            .zip(self.model.parameters.values())
-            .map(|((x, g), v)| (x, Dual::new(*v, g[p])))
-        {
-            *x = g;
-        }
-        for (m, grads) in self.model.measures.iter().zip(&self.model.gradients.measures) {
+        seed_parameters(&mut b.params, self.model, p);
+        let measures = self.model.measures.iter().zip(&self.measure_data).zip(&self.model.gradients.measures);
+        for ((m, data), grads) in measures {
             b.data.clear();
-            b.data.extend(m.kind.data().iter().zip(grads).map(|(&(_, v), g)| Dual::new(v, g[p])));
+            b.data.extend(data.iter().zip(grads).map(|(&v, g)| Dual::new(v, g[p])));
             let value = m.value_generic(&q, &qdot, &qddot, Dual::constant(t), &b.data, &b.params);
             row.push(value.map_or(f64::NAN, |v| v.d));
         }
@@ -294,9 +290,7 @@ fn level<S: Level>(
     for (i, x) in b.q.iter_mut().enumerate() {
         *x = S::coordinate([q[i], qdot[i], qddot[i]], [dq[0][i], dq[1][i], dq[2][i]]);
     }
-    for ((x, g), &v) in b.params.iter_mut().zip(&model.gradients.params).zip(model.parameters.values()) {
-        *x = S::fixed(v, g[p]);
-    }
+    seed_parameters(&mut b.params, model, p);
     let at = At { q: &b.q, t: S::time(t), params: &b.params };
     for e in elements {
         b.data.clear();
@@ -306,5 +300,13 @@ fn level<S: Level>(
     }
     for (r, &row) in rhs.iter_mut().zip(rows) {
         *r = -b.full[row].part();
+    }
+}
+
+/// The model's parameters over `S`, each along its derivative with respect to parameter `p`
+/// (the `--set` chain rule, [`crate::model::DataGradients::params`]).
+fn seed_parameters<S: Level>(params: &mut [S], model: &Model, p: usize) {
+    for ((x, g), &v) in params.iter_mut().zip(&model.gradients.params).zip(model.parameters.values()) {
+        *x = S::fixed(v, g[p]);
     }
 }
