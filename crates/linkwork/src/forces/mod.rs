@@ -24,7 +24,7 @@ pub use schema::Quantity;
 pub use spring::{RotationalSpringDamper, RotationalSpringDamperSpec, SpringDamper, SpringDamperSpec};
 pub use state_expr::{Load, StateExpr, StateVar};
 
-use crate::expr::{Dual, Scalar};
+use crate::expr::{Dual, HyperDual, Scalar};
 use std::fmt::Debug;
 
 /// A force law written once over any [`Scalar`]; [`Force`] follows from it.
@@ -55,6 +55,19 @@ pub trait ForceLaw: Debug + Send + Sync {
     fn applied(&self) -> bool {
         false
     }
+    /// The numbers of the force a parameter can move, named after their model-file fields
+    /// (`stiffness`, `point_i[0]`, ...), in the order [`ForceLaw::load_data`] reads them. None
+    /// by default.
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        Vec::new()
+    }
+    /// `Q_e` as [`ForceLaw::load`], with the force's numbers `data` ([`ForceLaw::data`] order)
+    /// and the model's parameters `params` as inputs too, for design sensitivities
+    /// (docs/sensitivities.md). `false`, and `out` untouched, when the force has no derivatives
+    /// with respect to its data yet (the default).
+    fn load_data<S: Scalar>(&self, _x: &[S], _v: &[S], _t: f64, _data: &[S], _params: &[S], _out: &mut [S]) -> bool {
+        false
+    }
 }
 
 /// An applied force or force element, object-safe (see [`ForceLaw`]).
@@ -77,6 +90,22 @@ pub trait Force: Debug + Send + Sync {
     fn conservative(&self) -> bool;
     /// Whether it is a load applied as such to one body ([`ForceLaw::applied`]).
     fn applied(&self) -> bool;
+    /// The numbers a parameter can move ([`ForceLaw::data`]).
+    fn data(&self) -> Vec<(&'static str, f64)>;
+    /// [`ForceLaw::load_data`] over dual numbers: first derivatives along one direction of the
+    /// coordinates, the data and the parameters.
+    fn load_data_dual(&self, x: &[Dual], v: &[Dual], t: f64, data: &[Dual], params: &[Dual], out: &mut [Dual]) -> bool;
+    /// [`ForceLaw::load_data`] over hyper-dual numbers: second derivatives, mixed in two
+    /// directions (the stiffness's derivative along a parameter).
+    fn load_data_hyper(
+        &self,
+        x: &[HyperDual],
+        v: &[HyperDual],
+        t: f64,
+        data: &[HyperDual],
+        params: &[HyperDual],
+        out: &mut [HyperDual],
+    ) -> bool;
 }
 
 impl<T: ForceLaw> Force for T {
@@ -106,6 +135,23 @@ impl<T: ForceLaw> Force for T {
     }
     fn applied(&self) -> bool {
         ForceLaw::applied(self)
+    }
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        ForceLaw::data(self)
+    }
+    fn load_data_dual(&self, x: &[Dual], v: &[Dual], t: f64, data: &[Dual], params: &[Dual], out: &mut [Dual]) -> bool {
+        ForceLaw::load_data(self, x, v, t, data, params, out)
+    }
+    fn load_data_hyper(
+        &self,
+        x: &[HyperDual],
+        v: &[HyperDual],
+        t: f64,
+        data: &[HyperDual],
+        params: &[HyperDual],
+        out: &mut [HyperDual],
+    ) -> bool {
+        ForceLaw::load_data(self, x, v, t, data, params, out)
     }
 }
 

@@ -86,6 +86,9 @@ pub struct DataGradients {
     pub measures: Vec<Vec<Vec<f64>>>,
     /// Gravity's two components.
     pub gravity: [Vec<f64>; 2],
+    /// Each force ([`Model::forces`] order), each of its numbers ([`crate::forces::Force::data`]
+    /// order).
+    pub forces: Vec<Vec<Vec<f64>>>,
 }
 
 /// A named joint or driver and its constraint rows.

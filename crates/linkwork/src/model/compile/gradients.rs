@@ -93,6 +93,7 @@ impl Cx<'_> {
         bodies: &[Body],
         joints: &[Element],
         drivers: &[Element],
+        forces: &[ForceElement],
         measures: &[Measure],
     ) -> DataGradients {
         if self.count() == 0 {
@@ -107,6 +108,10 @@ impl Cx<'_> {
         let drivers = drivers
             .iter()
             .map(|e| self.data(&format!("drivers.{}", e.name), &e.constraint.data(), spec.drivers.get(&e.name)))
+            .collect();
+        let forces = forces
+            .iter()
+            .map(|f| self.data(&format!("forces.{}", f.name), &f.force.data(), spec.forces.get(&f.name)))
             .collect();
         // Every number of a measure is written or read from a joint's, none taken from the
         // initial configuration.
@@ -133,6 +138,7 @@ impl Cx<'_> {
             points,
             measures,
             gravity: [0, 1].map(|k| g.field(&format!("gravity[{k}]"))),
+            forces,
         }
     }
 

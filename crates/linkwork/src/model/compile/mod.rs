@@ -118,7 +118,7 @@ fn compiled(spec: &ModelSpec, broken: &[String], folder: &Path) -> (Result<Model
     }
     let analyses = cx.analyses();
     let branches = cx.branches(&joints, &bodies);
-    let gradients = cx.gradients(&bodies, &joints, &drivers, &measures);
+    let gradients = cx.gradients(&bodies, &joints, &drivers, &forces, &measures);
     let model = if cx.problems.is_empty() {
         let name = spec.name.clone().unwrap_or_else(|| "model".into());
         Ok(Model {
