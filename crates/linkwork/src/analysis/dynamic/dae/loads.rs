@@ -3,6 +3,7 @@
 //! and drivers.
 
 use super::{gather, Dae};
+use crate::expr::Dual;
 use crate::forces::{derivatives, potential_rate, DualWork};
 use faer::MatMut;
 
@@ -93,6 +94,64 @@ impl Dae<'_> {
         let (dx, dv) = (&mut self.work.fdx[..w * w], &mut self.work.fdv[..w * w]);
         derivatives(f, &self.work.fx[..w], &self.work.fv[..w], t, dx, dv, &mut self.work.dual);
         w
+    }
+
+    /// `dQ/dp`, the derivative of [`Dae::load`] with respect to parameter `p` (file order),
+    /// added to `out: (n)`: with the coordinates and velocities moving along `dq` and `dv` (their
+    /// derivatives with respect to `p`), gravity's through each body's mass and gravity itself,
+    /// each active force's through its coordinates, its numbers ([`crate::forces::Force::data`],
+    /// along their gradients) and the parameters its expressions read; one dual pass per force,
+    /// exact. `Err` names the first force that has no derivatives with respect to its numbers
+    /// yet (docs/sensitivities.md).
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_load_along(
+        &self,
+        q: &[f64],
+        qdot: &[f64],
+        t: f64,
+        dq: &[f64],
+        dv: &[f64],
+        p: usize,
+        out: &mut [f64],
+    ) -> Result<(), String> {
+        let (model, s) = (self.model, self.external_scale);
+        let grads = &model.gradients;
+        for ((o, b), g) in out.chunks_exact_mut(3).zip(&model.bodies).zip(&grads.bodies) {
+            for k in 0..2 {
+                o[k] += s * (g[0][p] * model.gravity[k] + b.mass * grads.gravity[k][p]);
+            }
+        }
+        let params: Vec<Dual> =
+            model.parameters.values().zip(&grads.params).map(|(&v, g)| Dual::new(v, g[p])).collect();
+        for (f, &applied) in self.forces.iter().zip(&self.applied) {
+            let k = model.forces.iter().position(|e| std::ptr::eq(e, *f)).expect("an active force is the model's");
+            let data: Vec<Dual> =
+                f.force.data().iter().zip(&grads.forces[k]).map(|(&(_, v), g)| Dual::new(v, g[p])).collect();
+            let cols = f.force.columns();
+            let x: Vec<Dual> = cols.iter().map(|&c| Dual::new(q[c], dq[c])).collect();
+            let v: Vec<Dual> = cols.iter().map(|&c| Dual::new(qdot[c], dv[c])).collect();
+            let mut load = vec![Dual::new(0.0, 0.0); cols.len()];
+            if !f.force.load_data_dual(&x, &v, t, &data, &params, &mut load) {
+                return Err(f.name.clone());
+            }
+            let scale = if applied { s } else { 1.0 };
+            for (&c, l) in cols.iter().zip(&load) {
+                out[c] += scale * l.d;
+            }
+        }
+        Ok(())
+    }
+
+    /// `dM/dp a`, the derivative of the mass matrix with respect to parameter `p` (file order)
+    /// times `a: (n)`, added to `out: (n)`: each body's mass and moment of inertia along their
+    /// gradients.
+    pub fn add_mass_along(&self, p: usize, a: &[f64], out: &mut [f64]) {
+        let bodies = &self.model.gradients.bodies;
+        for ((o, a), g) in out.chunks_exact_mut(3).zip(a.chunks_exact(3)).zip(bodies) {
+            o[0] += g[0][p] * a[0];
+            o[1] += g[0][p] * a[1];
+            o[2] += g[1][p] * a[2];
+        }
     }
 
     /// Whether a contact is active.
