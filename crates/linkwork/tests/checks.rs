@@ -103,6 +103,26 @@ fn an_analysis_that_cannot_assemble_is_reported_in_its_entry() {
     assert_eq!(report.coordinate_names[..3], ["crank.x", "crank.y", "crank.phi"]);
 }
 
+/// A guessed velocity near the largest double overflows `Phi_q qdot`: the least-change solve
+/// then leaves NaN velocities, which passed the tolerance test (`max` skips NaN) with a velocity
+/// residual of 0 (found by the fuzzer). Each assembly fails instead, naming the overflow.
+#[test]
+fn velocities_out_of_range_fail_the_assembly() {
+    let text = patch(
+        &example_text("slider_crank.yaml"),
+        "angle: 0.0, points: {O",
+        "angle: 0.0, velocity: [1.7e308, -1.7e308], omega: 1.7e308, points: {O",
+    );
+    let model = Model::from_yaml(&text).unwrap();
+    let error = match check(&model) {
+        Ok(report) => report.analyses["kinematics"].error.clone().expect("the kinematics cannot assemble"),
+        Err(e) => e.to_string(),
+    };
+    assert!(error.contains("the velocities are out of range"), "{error}");
+    let failure = model.run("kinematics", &Default::default()).expect_err("no assembly");
+    assert!(failure.error.to_string().contains("the velocities are out of range"), "{}", failure.error);
+}
+
 /// Assembly is the least change: a body held on the unit circle by a general constraint, guessed
 /// at (1.5, 1.5), lands on the nearest point (1/sqrt 2, 1/sqrt 2) with its angle untouched; its
 /// guessed velocity (2, 0) loses exactly its radial component, giving (1, -1); with `x` given

@@ -169,16 +169,27 @@ fn assemble_tracking(
     for (k, &c) in free_v.iter().enumerate() {
         qdot[c] += dv[k];
     }
-    let vres: Vec<f64> = jac.times(&qdot).iter().zip(&nu).map(|(jv, nu)| jv - nu).collect();
+    // Velocities so large that `Phi_q qdot` overflows (a guess near 1.8e308 m/s) leave an
+    // infinity or a NaN, which the tolerance test would pass (`max` skips NaN): such a row's
+    // residual is infinite, and the run fails on it.
+    let in_range = qdot.iter().all(|v| v.is_finite());
+    let vres: Vec<f64> = jac
+        .times(&qdot)
+        .iter()
+        .zip(&nu)
+        .map(|(jv, nu)| if (jv - nu).is_finite() && in_range { jv - nu } else { f64::INFINITY })
+        .collect();
     let velocity_residual = maxabs(&vres);
-    let scale = 1.0 + maxabs(&qdot);
+    let scale = if in_range { 1.0 + maxabs(&qdot) } else { 1.0 };
     if velocity_residual > VELOCITY_TOLERANCE * scale {
         let (row, res) = sys.worst_row(&vres);
         let rows: Vec<String> = (0..m)
             .filter(|&i| vres[i].abs() > VELOCITY_TOLERANCE * scale)
             .map(|i| sys.row_name(i).to_string())
             .collect();
-        let cause = if free_v.len() < n {
+        let cause = if velocity_residual.is_infinite() {
+            "the velocities are out of range (a double holds up to 1.8e308): the guessed or given ones overflow"
+        } else if free_v.len() < n {
             "the given velocities conflict with the joints and drivers"
         } else {
             "the joints and drivers ask for velocities that cannot all hold (two drivers of one motion, or a driver of a motion the joints lock)"
