@@ -17,15 +17,20 @@
 //! need. The row is undefined where `P` is at the centre (`d = 0`). Norton, Design of Machinery,
 //! chapter 8; Haug (1989) section 3.5.
 //!
-//! Design sensitivities: the cam keeps [`Constraint::phi_tri`]'s default (no data, no derivatives
-//! with respect to its numbers: `false`) in this increment.
+//! Design sensitivities: the pitch-curve cam's numbers are its two points, and `R` reads the
+//! parameters as inputs ([`Expr::eval_params`]); its pressure angle's slope `R'(psi)` at a `psi`
+//! that carries derivatives is one evaluation over a number type with one more direction
+//! ([`Nestable`]). The working-surface cam ([`CamProfile`]) keeps [`Constraint::phi_tri`]'s
+//! default (no derivatives with respect to its numbers) in this increment.
 
 use super::schema::JointContext;
 use super::CompiledJoint;
 use super::PointRef;
+use super::{phi_tri_generic, slot2, vector, At, GenericPhi, POINT_I, POINT_J};
 use super::{Anchor, BodyIx, CamProfile, Config, Constraint};
 use super::{Curve, CurveError};
-use crate::expr::{Dual, Expr, HyperDual, Scalar};
+use crate::element::Pose;
+use crate::expr::{Dual, Expr, HyperDual, Nestable, Scalar};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -61,6 +66,22 @@ impl CamFrame {
         let gy = yj + sn * k(self.sj[0]) + cj * k(self.sj[1]) - yi;
         let (ci, si) = (pi.cos(), pi.sin());
         [ci * gx + si * gy - k(self.si[0]), ci * gy - si * gx - k(self.si[1])]
+    }
+
+    /// `d` over any [`Scalar`] from all coordinates `q` and the two points `si`, `sj` (the cam's
+    /// numbers, [`Cam::data`]'s order): [`CamFrame::offset`]'s arithmetic.
+    #[inline]
+    fn offset_generic<S: Scalar>(&self, q: &[S], si: [S; 2], sj: [S; 2]) -> [S; 2] {
+        let (fi, fj) = (Pose::of(self.i, q), Pose::of(self.j, q));
+        let a = fj.rotate(sj);
+        let (gx, gy) = (fj.o[0] + a[0] - fi.o[0], fj.o[1] + a[1] - fi.o[1]);
+        let (ci, si_) = (fi.phi.cos(), fi.phi.sin());
+        [ci * gx + si_ * gy - si[0], ci * gy - si_ * gx - si[1]]
+    }
+
+    /// `point_i` and `point_j`.
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        [vector(POINT_I, self.si), vector(POINT_J, self.sj)].concat()
     }
 
     /// The columns of the two bodies' coordinates.
@@ -135,6 +156,26 @@ impl Cam {
         let sense = if p.psi_rate > 0.0 { 1.0 } else { -1.0 };
         (sense * p.slope).atan2(p.radius)
     }
+
+    /// [`Cam::pressure_angle`] over a number type that carries derivatives, with the cam's
+    /// numbers `data` ([`Constraint::data`]) and the parameters `params`; the sense `sigma` is
+    /// that of the values.
+    fn pressure_angle_generic<S: Nestable>(&self, q: &[S], qdot: &[S], data: &[S], params: &[S]) -> S {
+        let values = |x: &[S]| x.iter().map(|v| v.value()).collect::<Vec<f64>>();
+        let sense = if self.pitch_point(&values(q), &values(qdot)).psi_rate > 0.0 { 1.0 } else { -1.0 };
+        let [dx, dy] = self.at.offset_generic(q, slot2(data, 0), slot2(data, 2));
+        let psi = dy.atan2(dx);
+        let up: Vec<S::Up> = params.iter().map(|p| p.seed(0.0)).collect();
+        let slope = S::slope(self.radius.eval_params(&[psi.seed(1.0)], &up));
+        (S::constant(sense) * slope).atan2(self.radius.eval_params(&[psi], params))
+    }
+}
+
+impl GenericPhi for Cam {
+    fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+        let [dx, dy] = self.at.offset_generic(at.q, slot2(data, 0), slot2(data, 2));
+        out[0] = dx.hypot(dy) - self.radius.eval_params(&[dy.atan2(dx)], at.params);
+    }
 }
 
 /// A cam joint's row: on a pitch curve ([`Cam`]) or on a working surface ([`CamProfile`]).
@@ -153,6 +194,24 @@ impl CamRow {
         match self {
             CamRow::Pitch(c) => c.pressure_angle(q, qdot),
             CamRow::Surface(c) => c.pressure_angle(q, qdot),
+        }
+    }
+
+    /// The pressure angle over a number type that carries derivatives, with the cam's numbers
+    /// `data` ([`Constraint::data`]) and the parameters `params`; `None` on a working surface,
+    /// which has no derivatives yet.
+    pub fn pressure_angle_generic<S: Nestable>(&self, q: &[S], qdot: &[S], data: &[S], params: &[S]) -> Option<S> {
+        match self {
+            CamRow::Pitch(c) => Some(c.pressure_angle_generic(q, qdot, data, params)),
+            CamRow::Surface(_) => None,
+        }
+    }
+
+    /// The cam's numbers a parameter can move ([`Constraint::data`]).
+    pub fn data(&self) -> Vec<(&'static str, f64)> {
+        match self {
+            CamRow::Pitch(c) => c.data(),
+            CamRow::Surface(c) => c.data(),
         }
     }
 
@@ -186,6 +245,11 @@ impl Constraint for Cam {
     fn gamma(&self, q: &Config<'_>, qdot: &[f64], _t: f64, out: &mut [f64]) {
         out[0] = -self.residual(q, &|c, v| HyperDual::seed(v, qdot[c], qdot[c])).e12;
     }
+    /// `point_i` and `point_j`.
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        self.at.data()
+    }
+    phi_tri_generic!();
 }
 
 /// Cam and roller (or knife-edge) follower, the cam given by one of: its pitch curve `radius`
@@ -384,7 +448,7 @@ fn profile_curve(cx: &mut impl JointContext, path: &str, p: &CamProfileSpec) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::{check_fd_random, OnSlice};
+    use crate::constraints::testing::{assert_data_fields, check_fd_random, check_generic_random, OnSlice};
 
     fn radius(src: &str) -> Expr {
         Expr::parse(src, &mut |n| if n == "psi" { Ok(0) } else { Err(format!("unknown {n}")) }).unwrap()
@@ -396,9 +460,12 @@ mod tests {
         let cam = Cam::try_new(BodyIx(Some(0)), [0.1, -0.2], BodyIx(Some(3)), [0.3, 0.1], r.clone()).unwrap();
         assert_eq!(cam.columns(), [0, 1, 2, 3, 4, 5]);
         check_fd_random(&cam, 2, 11);
+        check_generic_random(&cam, 2, 13);
+        assert_data_fields::<CamJoint>(&cam);
         let grounded = Cam::try_new(BodyIx::GROUND, [0.0, 0.0], BodyIx(Some(0)), [0.2, 0.0], r).unwrap();
         assert_eq!(grounded.columns(), [0, 1, 2]);
         check_fd_random(&grounded, 1, 12);
+        check_generic_random(&grounded, 1, 14);
     }
 
     /// A circle of radius 2 about the cam's centre: the row is the distance's, `|d| - 2`; at

@@ -815,6 +815,60 @@ impl Scalar for Tri {
     }
 }
 
+/// A number type one order below [`Tri`], which can carry one more direction: the derivative of a
+/// function with respect to its own argument at an argument that already carries derivatives
+/// (a cam's slope `R'(psi)` where `psi` moves with the coordinates and the parameters), exactly.
+/// The value is raised to [`Nestable::Up`] with the new direction seeded ([`Nestable::seed`]),
+/// the function evaluated there, and its part along the new direction read back as a number of
+/// this type ([`Nestable::slope`]): `f'(x)` with every derivative `x` carries. `Tri` has no room
+/// for a fourth direction and is not nestable: code written over this trait cannot run over it.
+pub trait Nestable: Scalar {
+    /// The type with one more direction.
+    type Up: Scalar;
+    /// `self` moving along the new direction at rate `rate`.
+    fn seed(self, rate: f64) -> Self::Up;
+    /// The part of `u` along the new direction, with every derivative of it along the old ones.
+    fn slope(u: Self::Up) -> Self;
+}
+
+impl Nestable for f64 {
+    type Up = Dual;
+    #[inline]
+    fn seed(self, rate: f64) -> Dual {
+        Dual::new(self, rate)
+    }
+    #[inline]
+    fn slope(u: Dual) -> f64 {
+        u.d
+    }
+}
+
+/// The old direction is `e2`, the new one `e1`.
+impl Nestable for Dual {
+    type Up = HyperDual;
+    #[inline]
+    fn seed(self, rate: f64) -> HyperDual {
+        HyperDual::new(self.v, rate, self.d, 0.0)
+    }
+    #[inline]
+    fn slope(u: HyperDual) -> Dual {
+        Dual::new(u.e1, u.e12)
+    }
+}
+
+/// The old directions are `e1` and `e2`, the new one `e3`.
+impl Nestable for HyperDual {
+    type Up = Tri;
+    #[inline]
+    fn seed(self, rate: f64) -> Tri {
+        Tri::new(self.v, [self.e1, self.e2, rate], [self.e12, 0.0, 0.0], 0.0)
+    }
+    #[inline]
+    fn slope(u: Tri) -> HyperDual {
+        HyperDual::new(u.e3, u.e13, u.e23, u.e123)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -912,5 +966,31 @@ mod tests {
         assert_eq!(a.max(b), b);
         assert_eq!(Scalar::min(1.0, f64::NAN), 1.0);
         assert_eq!(Scalar::max(f64::NAN, 1.0), 1.0);
+    }
+
+    /// `slope` of a function evaluated at a seeded argument is its derivative at the argument,
+    /// with the argument's own derivatives: `f = sin(x^2)` at `x` moving along one or two
+    /// directions, against the chain rule by hand (`f' = 2 x cos(x^2)`, `f'' = 2 cos(x^2) - 4 x^2
+    /// sin(x^2)`, `f''' = -12 x sin(x^2) - 8 x^3 cos(x^2)`), to 1e-14 (round-off of a few
+    /// operations).
+    #[test]
+    fn nested_slopes_carry_the_arguments_derivatives() {
+        use super::Nestable;
+        let x: f64 = 0.7;
+        let (c, s) = ((x * x).cos(), (x * x).sin());
+        let (f1, f2, f3) = (2.0 * x * c, 2.0 * c - 4.0 * x * x * s, -12.0 * x * s - 8.0 * x * x * x * c);
+        let close = |a: f64, b: f64| assert!((a - b).abs() <= 1e-14 * (1.0 + b.abs()), "{a} vs {b}");
+        let u = x.seed(1.0);
+        close(f64::slope((u * u).sin()), f1);
+        let u = Dual::new(x, 0.3).seed(1.0);
+        let d = Dual::slope((u * u).sin());
+        close(d.v, f1);
+        close(d.d, f2 * 0.3);
+        let u = HyperDual::new(x, 0.3, -0.5, 0.2).seed(1.0);
+        let h = HyperDual::slope((u * u).sin());
+        close(h.v, f1);
+        close(h.e1, f2 * 0.3);
+        close(h.e2, f2 * -0.5);
+        close(h.e12, f3 * 0.3 * -0.5 + f2 * 0.2);
     }
 }

@@ -2,14 +2,15 @@
 //! differentiate (docs/sensitivities.md). [`Measure::value`] is the plain evaluation.
 
 use super::{spec, Measure, MeasureKind};
-use crate::expr::Scalar;
+use crate::expr::{Nestable, Scalar};
 
 impl Measure {
     /// The value at `(q, qdot, qddot, t)` over `S`, with the measure's numbers `data` in the order
     /// of [`MeasureKind::data`] and the model's parameters `params` (file order): each may carry
-    /// derivatives. `None` for a kind that has no derivatives yet (a cam's pressure angle, a
-    /// mechanical advantage, an expression that reads reactions).
-    pub fn value_generic<S: Scalar>(
+    /// derivatives. `None` for a kind that has no derivatives yet (the pressure angle of a cam
+    /// given by its working surface, a mechanical advantage, an expression that reads
+    /// reactions).
+    pub fn value_generic<S: Nestable>(
         &self,
         q: &[S],
         qdot: &[S],
@@ -45,7 +46,8 @@ impl Measure {
             } else {
                 qdot[*output] / qdot[*input]
             }),
-            MeasureKind::PressureAngle(_) | MeasureKind::MechanicalAdvantage { .. } => None,
+            MeasureKind::PressureAngle(cam) => cam.pressure_angle_generic(q, qdot, data, params),
+            MeasureKind::MechanicalAdvantage { .. } => None,
         }
     }
 }

@@ -330,6 +330,7 @@ impl MeasureKind {
             MeasureKind::TransmissionAngle { coupler: (_, c), rocker: (_, r) } => {
                 vec![("coupler[0]", c[0]), ("coupler[1]", c[1]), ("rocker[0]", r[0]), ("rocker[1]", r[1])]
             }
+            MeasureKind::PressureAngle(cam) => cam.data(),
             _ => Vec::new(),
         }
     }

@@ -85,7 +85,7 @@ impl Cx<'_> {
                 Some(MeasureKind::MechanicalAdvantage { input: i?, output: o? })
             }
             MeasureSpec::Standard(StandardMeasure::PressureAngle(PressureAngleMeasure { joint })) => {
-                let path = format!("{path}.joint");
+                let (measure, path) = (path, format!("{path}.joint"));
                 let cam = match self.spec.joints.get(joint) {
                     // A cam joint that did not compile has its own problem.
                     Some(JointSpec::Cam(cam)) if joints.iter().any(|j| j.name == *joint) => cam,
@@ -105,7 +105,18 @@ impl Cx<'_> {
                         return None;
                     }
                 };
-                cam_row(cam, self, &format!("joints.{joint}")).map(MeasureKind::PressureAngle)
+                let row = cam_row(cam, self, &format!("joints.{joint}"))?;
+                // The measure's numbers are the joint's, and so are their derivatives: each as
+                // handed to the joint, or zero for a number the file does not write (a default
+                // centre; the joint's own data are checked to be handed when it writes them).
+                if self.spec.gradients.count() > 0 {
+                    for (field, v) in row.data() {
+                        let handed = self.handed.get(&format!("joints.{joint}.{field}")).cloned();
+                        let given = handed.unwrap_or_else(|| (v, vec![0.0; self.spec.gradients.count()]));
+                        self.handed.insert(format!("{measure}.{field}"), given);
+                    }
+                }
+                Some(MeasureKind::PressureAngle(row))
             }
         }
     }
