@@ -289,6 +289,14 @@ pub fn assert_fields<T: schemars::JsonSchema>(data: &[(&'static str, f64)], owne
     }
 }
 
+/// That `run`, a checker run on an element with `fault` planted, fails with a message that starts
+/// with `check`, the name of the check that must catch it.
+pub fn assert_fails(fault: &dyn std::fmt::Debug, check: &str, run: impl FnOnce() + std::panic::UnwindSafe) {
+    let payload = std::panic::catch_unwind(run).expect_err("a planted fault must fail the check");
+    let message = payload.downcast_ref::<String>().cloned().unwrap_or_default();
+    assert!(message.starts_with(check), "{fault:?}: expected the {check} check to fail, got {message}");
+}
+
 /// Run [`check_generic`] at random states of a system with `bodies` bodies.
 pub fn check_generic_random<C: GenericPhi + Constraint>(c: &C, bodies: usize, seed: u64) {
     check_generic_random_where(c, bodies, seed, &|_| true);
@@ -434,10 +442,7 @@ mod planted {
         ];
         for (fault, check) in cases {
             let planted = Planted(joint(), fault);
-            let caught = std::panic::catch_unwind(|| check_generic(&planted, &q, &qdot, 0.7));
-            let payload = caught.expect_err("a planted fault must fail the check");
-            let message = payload.downcast_ref::<String>().cloned().unwrap_or_default();
-            assert!(message.starts_with(check), "{fault:?}: expected the {check} check to fail, got {message}");
+            assert_fails(&fault, check, || check_generic(&planted, &q, &qdot, 0.7));
         }
     }
 }

@@ -696,16 +696,22 @@ mod tests {
         assert_eq!(out, [0.0; 3]);
     }
 
-    /// Shapes large enough that the random states of the harness overlap (asserted), so the
-    /// derivatives checked are those of a contact that acts.
-    #[test]
-    fn derivatives_match_finite_differences() {
+    /// Two circles, a circle on a polyline and a circle on a polyline of ground, with shapes
+    /// large enough that the random states of the harnesses overlap, so that the derivatives
+    /// checked are those of a contact that acts; the last with the friction `grounded`.
+    fn acting(grounded: (f64, f64)) -> [Contact; 3] {
         let law = (50.0, 1.5, 0.3);
         let circles =
             Contact::new(Some(0), [0.2, 0.1], 3.0, Some(3), Shape::Circle([-0.3, 0.4], 2.5), law, (0.4, 0.7), 1e-3);
         let chain = Shape::Polyline(vec![[-3.0, -0.5], [0.0, 0.5], [3.0, 0.0]]);
         let poly = Contact::new(Some(3), [0.1, -0.2], 5.0, Some(0), chain.clone(), law, (0.4, 0.7), 1e-3);
-        let grounded = Contact::new(Some(0), [0.1, -0.2], 5.0, None, chain, law, (0.4, 0.7), 1e-3);
+        [circles, poly, Contact::new(Some(0), [0.1, -0.2], 5.0, None, chain, law, grounded, 1e-3)]
+    }
+
+    /// The pairs of [`acting`], which overlap (asserted).
+    #[test]
+    fn derivatives_match_finite_differences() {
+        let [circles, poly, grounded] = acting((0.4, 0.7));
         for (c, seed) in [(&circles, 41), (&poly, 42), (&grounded, 43)] {
             let x = [0.3, -0.2, 0.4, -0.5, 0.6, 1.1];
             assert!(c.state(&x[..c.columns.len()], &[0.0; 6][..c.columns.len()]).normal > 0.0);
@@ -713,18 +719,13 @@ mod tests {
         }
     }
 
-    /// The load over the data (design sensitivities): each pair of shapes of
-    /// `derivatives_match_finite_differences`, and one without friction (its derivative with
-    /// respect to `mu` is taken all the same).
+    /// The load over the data (design sensitivities): each pair of shapes of [`acting`], the one
+    /// on ground without friction (its derivative with respect to `mu` is taken all the same)
+    /// and named as a segment of `shape_i`.
     #[test]
     fn load_over_data() {
-        let law = (50.0, 1.5, 0.3);
-        let circles =
-            Contact::new(Some(0), [0.2, 0.1], 3.0, Some(3), Shape::Circle([-0.3, 0.4], 2.5), law, (0.4, 0.7), 1e-3);
-        let chain = Shape::Polyline(vec![[-3.0, -0.5], [0.0, 0.5], [3.0, 0.0]]);
-        let poly = Contact::new(Some(3), [0.1, -0.2], 5.0, Some(0), chain.clone(), law, (0.4, 0.7), 1e-3);
-        let grounded = Contact::new(Some(0), [0.1, -0.2], 5.0, None, chain, law, (0.0, 0.7), 1e-3)
-            .with_fields("shape_j.circle", "shape_i.segment");
+        let [circles, poly, grounded] = acting((0.0, 0.7));
+        let grounded = grounded.with_fields("shape_j.circle", "shape_i.segment");
         let names = |c: &Contact| ForceLaw::data(c).iter().map(|d| d.0).collect::<Vec<_>>();
         let tail = ["stiffness", "exponent", "damping", "friction.mu", "friction.transition_velocity"];
         let circle = ["shape_i.circle.centre[0]", "shape_i.circle.centre[1]", "shape_i.circle.radius"];
