@@ -193,6 +193,60 @@ fn norm_of(
     super::wrms(terms, 2 * n, rtol, atol)
 }
 
+/// The corrector's update from its solved systems `(r, r2)` (`r2` the projection's, SI2 only):
+/// the multipliers `(lambda, mu)` corrected in place (`mu` in SI2 only), the corrections of the
+/// positions and velocities into `(dq, dv)` (in index 3 the velocity follows the positions,
+/// `dv = c dq`; in SI2 `dq = (dv - w) / c` with `w` the projection's).
+fn corrections(
+    si2: bool,
+    c: f64,
+    (r, r2): (&[f64], &[f64]),
+    (lambda, mu): (&mut [f64], &mut [f64]),
+    (dq, dv): (&mut [f64], &mut [f64]),
+) {
+    let n = dq.len();
+    if si2 {
+        for (mu, y) in mu.iter_mut().zip(&r2[n..]) {
+            *mu -= y;
+        }
+        for (l, d) in lambda.iter_mut().zip(&r[n..]) {
+            *l += c * d;
+        }
+        for i in 0..n {
+            dq[i] = (r[i] - r2[i]) / c;
+            dv[i] = r[i];
+        }
+    } else {
+        for (l, d) in lambda.iter_mut().zip(&r[n..]) {
+            *l += d;
+        }
+        for i in 0..n {
+            dq[i] = r[i] / (c * c);
+            dv[i] = r[i] / c;
+        }
+    }
+}
+
+/// Newton's contraction after iteration `it` (from 0) whose correction has the norm `d`, the
+/// last one's `previous`: updates `ss = rate / (1 - rate)` and returns whether it has stalled
+/// (contracting slower than 0.9, or out of iterations). The contraction of the last iteration
+/// (Hairer and Wanner's RADAU5). DASSL's mean contraction since the first correction,
+/// `(d / d_0)^(1 / it)`, was tried: a slow first contraction then fails steps that converge (SI2
+/// BDF5 at h = 0.05 s in order_tests.rs), which shrinks the step by 4.
+fn contraction(it: usize, d: f64, previous: f64, ss: &mut f64) -> bool {
+    let mut stalled = it + 1 == MAX_NEWTON;
+    if it > 0 {
+        let rate = d / previous;
+        if rate > 0.9 {
+            stalled = true;
+            *ss = f64::INFINITY;
+        } else {
+            *ss = rate / (1.0 - rate);
+        }
+    }
+    stalled
+}
+
 /// A history of the integrator, newest first: the times and the positions and velocities there
 /// (the state's, or one parameter's sensitivities).
 struct History<'h> {
@@ -409,27 +463,10 @@ impl Bdf<'_, '_> {
             // The corrections of positions and velocities (in index 3 the velocity follows the
             // positions, `dv = c dq`).
             if self.si2 {
-                // mu from the projection, then dq = (dv - w) / c.
                 self.dae.solve_mass(&mut self.r2);
-                for (mu, y) in self.mu1.iter_mut().zip(&self.r2[n..]) {
-                    *mu -= y;
-                }
-                for (l, d) in self.lam1.iter_mut().zip(&self.r[n..]) {
-                    *l += c * d;
-                }
-                for i in 0..n {
-                    self.dq[i] = (self.r[i] - self.r2[i]) / c;
-                    self.dv[i] = self.r[i];
-                }
-            } else {
-                for (l, d) in self.lam1.iter_mut().zip(&self.r[n..]) {
-                    *l += d;
-                }
-                for i in 0..n {
-                    self.dq[i] = self.r[i] / (c * c);
-                    self.dv[i] = self.r[i] / c;
-                }
             }
+            let solved = (&self.r[..], &self.r2[..]);
+            corrections(self.si2, c, solved, (&mut self.lam1, &mut self.mu1), (&mut self.dq, &mut self.dv));
             let d = self.norm(|i| self.dq[i], |i| self.dv[i], vscale);
             // Round-off: the corrections against round-off at the scale of the state (the largest
             // position, the largest velocity).
@@ -445,20 +482,7 @@ impl Bdf<'_, '_> {
                     self.v1[i] += self.dv[i];
                 }
             }
-            let mut stalled = it + 1 == MAX_NEWTON;
-            if it > 0 {
-                // The contraction of the last iteration (Hairer and Wanner's RADAU5). DASSL's mean
-                // contraction since the first correction, (d / d_0)^(1 / it), was tried: a slow
-                // first contraction then fails steps that converge (SI2 BDF5 at h = 0.05 s in
-                // order_tests.rs), which shrinks the step by 4.
-                let rate = d / previous;
-                if rate > 0.9 {
-                    stalled = true;
-                    ss = f64::INFINITY;
-                } else {
-                    ss = rate / (1.0 - rate);
-                }
-            }
+            let stalled = contraction(it, d, previous, &mut ss);
             // A Newton that no longer contracts, or has run out of iterations, has converged when
             // its corrections are round-off at the state's scale, or (index 3, a fresh matrix)
             // when the iterate it started this iteration from satisfies the constraints to
@@ -574,6 +598,10 @@ impl Bdf<'_, '_> {
         let n = self.n;
         self.dae.positions(&self.q1, t1);
         let mut previous = f64::INFINITY;
+        // No rate is known before the second iteration, as for the state's Newton. (Starting
+        // from the rate the state's Newton measured with the same matrix, as IDA does, passed
+        // the first correction more often but left the sensitivities' error estimates noisier:
+        // the quick-return then took 671 steps instead of 564, and was no faster.)
         let mut ss = 1e3;
         for it in 0..MAX_NEWTON {
             let now = &mut tr.now;
@@ -587,24 +615,25 @@ impl Bdf<'_, '_> {
             }
             // The derivative of the corrector's residuals (see `newton`).
             let (r1, r2) = self.r.split_at_mut(n);
-            eq.dynamics_along(self.dae, j, t1, (&self.q1, &self.v1, &self.a1), &self.lam1, now, r1);
+            let (p1, p2) = self.r2.split_at_mut(n);
+            p1.fill(0.0);
+            let projection = if self.si2 { Some((&self.mu1[..], &mut *p1)) } else { None };
+            let state = (&self.q1[..], &self.v1[..], &self.a1[..]);
+            eq.dynamics_along(self.dae, j, t1, state, &self.lam1, now, r1, projection);
             self.work.fill(0.0);
             self.dae.add_jt(&now.lambda, &mut self.work);
             for i in 0..n {
                 r1[i] -= self.work[i];
             }
-            eq.constraints_along(j, t1, &self.q1, &now.q, &mut self.rows);
+            eq.constraints_along(j, t1, &self.q1, &now.q, None, &mut self.rows);
             if self.si2 {
-                eq.velocities_along(j, t1, &self.q1, &self.v1, &now.q, &now.v, r2);
+                eq.constraints_along(j, t1, &self.q1, &now.q, Some((&self.v1, &now.v)), r2);
                 r2.iter_mut().for_each(|r| *r = -*r);
-                let (p1, p2) = self.r2.split_at_mut(n);
-                // d/dp [M (c q + b_q - v) + Phi_q^T mu].
+                // d/dp [M (c q + b_q - v) + Phi_q^T mu] (`p1` holds `(d/dp Phi_q)^T mu`).
                 for i in 0..n {
                     self.work[i] = c * self.q1[i] + self.bq[i] - self.v1[i];
                 }
-                p1.fill(0.0);
                 self.dae.add_mass_along(eq.parameter(j), &self.work, p1);
-                eq.jacobian_along(j, t1, &self.q1, &now.q, &self.mu1, p1);
                 self.work.fill(0.0);
                 self.dae.add_jt(&tr.mu, &mut self.work);
                 for i in 0..n {
@@ -627,25 +656,9 @@ impl Bdf<'_, '_> {
             self.dae.solve(&mut self.r);
             if self.si2 {
                 self.dae.solve_mass(&mut self.r2);
-                for (mu, y) in tr.mu.iter_mut().zip(&self.r2[n..]) {
-                    *mu -= y;
-                }
-                for (l, d) in now.lambda.iter_mut().zip(&self.r[n..]) {
-                    *l += c * d;
-                }
-                for i in 0..n {
-                    self.dq[i] = (self.r[i] - self.r2[i]) / c;
-                    self.dv[i] = self.r[i];
-                }
-            } else {
-                for (l, d) in now.lambda.iter_mut().zip(&self.r[n..]) {
-                    *l += d;
-                }
-                for i in 0..n {
-                    self.dq[i] = self.r[i] / (c * c);
-                    self.dv[i] = self.r[i] / c;
-                }
             }
+            let solved = (&self.r[..], &self.r2[..]);
+            corrections(self.si2, c, solved, (&mut now.lambda, &mut tr.mu), (&mut self.dq, &mut self.dv));
             let d = norm_of(&now.q, &now.v, |i| self.dq[i], |i| self.dv[i], vscale, self.rtol, tr.atol);
             let scale = now.q.iter().fold(0.0f64, |a, x| a.max(x.abs()));
             let noise = super::roundoff_ratio(&self.dq, &now.q, scale);
@@ -655,16 +668,7 @@ impl Bdf<'_, '_> {
                     now.v[i] += self.dv[i];
                 }
             }
-            let mut stalled = it + 1 == MAX_NEWTON;
-            if it > 0 {
-                let rate = d / previous;
-                if rate > 0.9 {
-                    stalled = true;
-                    ss = f64::INFINITY;
-                } else {
-                    ss = rate / (1.0 - rate);
-                }
-            }
+            let stalled = contraction(it, d, previous, &mut ss);
             previous = d;
             if ss * d <= NEWTON_TOL || d <= 1e-3 * NEWTON_TOL || (stalled && noise <= 1.0) {
                 for i in 0..n {

@@ -245,7 +245,7 @@ impl<'m> DynamicSensitivity<'m> {
         rhs.fill(0.0);
         let (r1, r2) = rhs.split_at_mut(n);
         track.a.fill(0.0);
-        self.dynamics_along(dae, k, t, (q, qdot, qddot), lambda, track, r1);
+        self.dynamics_along(dae, k, t, (q, qdot, qddot), lambda, track, r1, None);
         let p = self.base.asked[k];
         let Sensitivity { model, elements, acceleration, dq, .. } = &mut self.base;
         dq[0].copy_from_slice(&track.q);
@@ -275,6 +275,9 @@ impl<'m> DynamicSensitivity<'m> {
     /// `out (n) = d/dp (Q - M qddot - Phi_q^T lambda)` without the term `-Phi_q^T s_lambda`, for
     /// parameter `k` (asked order) at `(t, q, qdot, qddot)` with the multipliers `lambda`, the
     /// state moving along `track` (`q`, `v`, `a`): `dQ - M s_a - M_p qddot - (d/dp Phi_q)^T lambda`.
+    /// With `projection = (mu, extra)`, also `extra (n) += (d/dp Phi_q)^T mu`, in the same
+    /// evaluations (the projection of the stabilised index-2 formulation).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn dynamics_along(
         &mut self,
         dae: &Dae<'_>,
@@ -284,6 +287,7 @@ impl<'m> DynamicSensitivity<'m> {
         lambda: &[f64],
         track: &Track,
         out: &mut [f64],
+        projection: Option<(&[f64], &mut [f64])>,
     ) {
         let p = self.base.asked[k];
         out.fill(0.0);
@@ -292,57 +296,37 @@ impl<'m> DynamicSensitivity<'m> {
         self.work.fill(0.0);
         dae.add_mass_along(p, qddot, &mut self.work);
         let b = &self.base;
-        add_jacobian_transpose_along(
-            &mut self.jacobian,
-            &b.elements,
-            b.model,
-            p,
-            t,
-            q,
-            &track.q,
-            lambda,
-            &mut self.work,
-        );
+        let mut pairs: Vec<(&[f64], &mut [f64])> = vec![(lambda, &mut self.work)];
+        pairs.extend(projection);
+        add_jacobian_transpose_along(&mut self.jacobian, &b.elements, b.model, p, t, q, &track.q, &mut pairs);
         for i in 0..out.len() {
             out[i] -= dae.mass[i] * track.a[i] + self.work[i];
         }
     }
 
-    /// `out (n) += (d/dp Phi_q)^T w` at `(t, q)`, the positions moving along `dq`, for parameter
-    /// `k` (asked order).
-    pub(crate) fn jacobian_along(&mut self, k: usize, t: f64, q: &[f64], dq: &[f64], w: &[f64], out: &mut [f64]) {
-        let (b, p) = (&self.base, self.base.asked[k]);
-        add_jacobian_transpose_along(&mut self.jacobian, &b.elements, b.model, p, t, q, dq, w, out);
-    }
-
     /// `out (m) = Phi_q dq + Phi_p` at `(t, q)` for parameter `k` (asked order): the derivative
-    /// of the constraints along the parameter, the positions moving along `dq`.
-    pub(crate) fn constraints_along(&mut self, k: usize, t: f64, q: &[f64], dq: &[f64], out: &mut [f64]) {
-        let p = self.base.asked[k];
-        let Sensitivity { model, elements, position, dq: seed, .. } = &mut self.base;
-        seed[0].copy_from_slice(dq);
-        level::<Dual>(position, elements, model, p, t, (q, q, q), seed, &self.all, out);
-        out.iter_mut().for_each(|x| *x = -*x);
-    }
-
-    /// `out (m) = d/dp (Phi_q qdot - nu)` at `(t, q, qdot)` for parameter `k` (asked order), the
-    /// positions and velocities moving along `dq` and `dv`.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn velocities_along(
+    /// of the constraints along the parameter, the positions moving along `dq`; with
+    /// `velocities = (qdot, dv)`, that of the velocity equations, `d/dp (Phi_q qdot - nu)`, the
+    /// velocities moving along `dv`.
+    pub(crate) fn constraints_along(
         &mut self,
         k: usize,
         t: f64,
         q: &[f64],
-        qdot: &[f64],
         dq: &[f64],
-        dv: &[f64],
+        velocities: Option<(&[f64], &[f64])>,
         out: &mut [f64],
     ) {
         let p = self.base.asked[k];
-        let Sensitivity { model, elements, velocity, dq: seed, .. } = &mut self.base;
+        let Sensitivity { model, elements, position, velocity, dq: seed, .. } = &mut self.base;
         seed[0].copy_from_slice(dq);
-        seed[1].copy_from_slice(dv);
-        level::<HyperDual>(velocity, elements, model, p, t, (q, qdot, q), seed, &self.all, out);
+        match velocities {
+            None => level::<Dual>(position, elements, model, p, t, (q, q, q), seed, &self.all, out),
+            Some((qdot, dv)) => {
+                seed[1].copy_from_slice(dv);
+                level::<HyperDual>(velocity, elements, model, p, t, (q, qdot, q), seed, &self.all, out);
+            }
+        }
         out.iter_mut().for_each(|x| *x = -*x);
     }
 

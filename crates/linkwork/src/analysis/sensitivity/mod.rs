@@ -314,11 +314,12 @@ fn seed_parameters<S: Level>(params: &mut [S], model: &Model, p: usize) {
     }
 }
 
-/// `out (n) += (d/dp Phi_q)^T w` at `(t, q)` for the rows' weights `w (m)`: the derivative of the
-/// Jacobian along parameter `p` (the coordinates moving along `dq`, each element's numbers and the
-/// parameters along their gradients) times `w`. Each element's rows over [`HyperDual`] numbers,
-/// the first direction along one of its columns, the second along the parameter: the mixed part
-/// of row `r` is `d/dp Phi_q[r, column]`. One evaluation per column of each element, exact.
+/// `out (n) += (d/dp Phi_q)^T w` at `(t, q)` for each pair `(w, out)` of `pairs` (rows'
+/// weights `w (m)`): the derivative of the Jacobian along parameter `p` (the coordinates moving
+/// along `dq`, each element's numbers and the parameters along their gradients) times `w`. Each
+/// element's rows over [`HyperDual`] numbers, the first direction along one of its columns, the
+/// second along the parameter: the mixed part of row `r` is `d/dp Phi_q[r, column]`. One
+/// evaluation per column of each element for every pair, exact.
 #[allow(clippy::too_many_arguments)]
 fn add_jacobian_transpose_along(
     b: &mut Buffers<HyperDual>,
@@ -328,8 +329,7 @@ fn add_jacobian_transpose_along(
     t: f64,
     q: &[f64],
     dq: &[f64],
-    w: &[f64],
-    out: &mut [f64],
+    pairs: &mut [(&[f64], &mut [f64])],
 ) {
     for ((x, &v), &d) in b.q.iter_mut().zip(q).zip(dq) {
         *x = HyperDual::new(v, 0.0, d, 0.0);
@@ -346,7 +346,9 @@ fn add_jacobian_transpose_along(
             let supported = e.constraint.phi_hyper(&at, &b.data, &mut b.full[e.row..]);
             debug_assert!(supported, "{} was checked to have derivatives", e.name);
             b.q[column].e1 = 0.0;
-            out[column] += rows.clone().map(|r| w[r] * b.full[r].e12).sum::<f64>();
+            for (w, out) in pairs.iter_mut() {
+                out[column] += rows.clone().map(|r| w[r] * b.full[r].e12).sum::<f64>();
+            }
         }
     }
 }
