@@ -299,8 +299,8 @@ impl<'m> DynamicSensitivity<'m> {
         let mut pairs: Vec<(&[f64], &mut [f64])> = vec![(lambda, &mut self.work)];
         pairs.extend(projection);
         add_jacobian_transpose_along(&mut self.jacobian, &b.elements, b.model, p, t, q, &track.q, &mut pairs);
-        for i in 0..out.len() {
-            out[i] -= dae.mass[i] * track.a[i] + self.work[i];
+        for (i, o) in out.iter_mut().enumerate() {
+            *o -= dae.mass[i] * track.a[i] + self.work[i];
         }
     }
 
