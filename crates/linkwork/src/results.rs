@@ -451,30 +451,45 @@ impl Results {
     /// choice of columns: each body's quantities, then the extra columns). The first call names
     /// [`Results::sensitivities`]; a derivative that is not finite is an error at `t`.
     pub(crate) fn push_sensitivities(&mut self, t: f64, parameters: &[String], rows: &[Vec<f64>]) -> Result<(), Error> {
+        self.push_sensitivities_of(t, parameters, None, rows)
+    }
+
+    /// [`Results::push_sensitivities`] for an analysis some of whose columns have no derivatives:
+    /// `differentiated` (in the row's layout, `None` for every column) tells which do; the others
+    /// are not written (their entries of `rows` are not read) and [`Sensitivities::names`] leaves
+    /// them out.
+    pub(crate) fn push_sensitivities_of(
+        &mut self,
+        t: f64,
+        parameters: &[String],
+        differentiated: Option<&[bool]>,
+        rows: &[Vec<f64>],
+    ) -> Result<(), Error> {
         let (names, keep) = match &self.selection {
             Selection::Applied { names, keep } => (names, Some(keep)),
             _ => (&self.names, None),
         };
+        let has = |k: usize| differentiated.is_none_or(|d| d[k]);
+        let wanted = |k: usize| keep.is_none_or(|keep| keep[k]) && has(k);
         for (p, row) in parameters.iter().zip(rows) {
             debug_assert_eq!(names.len(), row.len(), "one derivative per column");
-            if let Some((k, &value)) = row.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            if let Some((k, &value)) = row.iter().enumerate().find(|&(k, v)| has(k) && !v.is_finite()) {
                 let element = format!("d({})/d({p})", names[k]);
                 return Err(Error::NonFinite { time: t, element, expression: String::new(), value });
             }
         }
-        let sensitivities = self.sensitivities.get_or_insert_with(|| Sensitivities {
-            parameters: parameters.to_vec(),
-            names: self.names.clone(),
-            values: vec![vec![Vec::new(); self.names.len()]; parameters.len()],
+        let sensitivities = self.sensitivities.get_or_insert_with(|| {
+            let names: Vec<String> =
+                names.iter().enumerate().filter(|&(k, _)| wanted(k)).map(|(_, n)| n.clone()).collect();
+            Sensitivities {
+                parameters: parameters.to_vec(),
+                values: vec![vec![Vec::new(); names.len()]; parameters.len()],
+                names,
+            }
         });
         for (columns, row) in sensitivities.values.iter_mut().zip(rows) {
-            match keep {
-                Some(keep) => {
-                    let kept = row.iter().zip(keep).filter(|(_, &k)| k).map(|(v, _)| v);
-                    columns.iter_mut().zip(kept).for_each(|(c, &v)| c.push(v));
-                }
-                None => columns.iter_mut().zip(row).for_each(|(c, &v)| c.push(v)),
-            }
+            let kept = row.iter().enumerate().filter(|&(k, _)| wanted(k)).map(|(_, v)| v);
+            columns.iter_mut().zip(kept).for_each(|(c, &v)| c.push(v));
         }
         Ok(())
     }

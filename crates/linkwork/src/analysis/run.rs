@@ -234,12 +234,27 @@ impl Model {
         if names.is_empty() {
             return Ok(Vec::new());
         }
-        if analysis.kind != AnalysisKind::Kinematic {
-            return Err(problem(format!(
-                "analysis '{}' has type {}: design sensitivities are computed for kinematic analyses so far",
-                analysis.name,
-                analysis.kind.name()
-            )));
+        match analysis.kind {
+            AnalysisKind::Kinematic => {}
+            // The dynamic sensitivities are integrated with the state by the BDF integrator
+            // (analysis/sensitivity/dynamic.rs); the others have none yet.
+            AnalysisKind::Dynamic if analysis.integrator.kind == IntegratorKind::Bdf => {}
+            AnalysisKind::Dynamic => {
+                return Err(Error::Model(vec![Problem::new(
+                    format!("analyses.{}.integrator", analysis.name),
+                    format!(
+                        "integrator {} has no design sensitivities (asked for with `sensitivities`): use bdf",
+                        analysis.integrator.kind.name()
+                    ),
+                )]))
+            }
+            _ => {
+                return Err(problem(format!(
+                    "analysis '{}' has type {}: design sensitivities are computed for kinematic and dynamic analyses so far",
+                    analysis.name,
+                    analysis.kind.name()
+                )))
+            }
         }
         names
             .iter()

@@ -38,6 +38,7 @@ pub use output::{factor_error, Output, CONTACT_QUANTITIES, ENERGY_COLUMNS};
 use super::promise;
 use super::setup::{fail, held};
 use super::{assemble_into, Run};
+use crate::analysis::sensitivity::DynamicSensitivity;
 use crate::constraints::ConfigBuf;
 use crate::error::{Error, RowName};
 use crate::model::{Analysis, IntegratorSettings, Model};
@@ -360,6 +361,13 @@ pub(crate) fn run_dynamic(model: &Model, analysis: &Analysis, run: &mut Run<'_>)
         Err(e) => return Err(fail(Results::new(model, analysis), factor_error(e, analysis.t_start))),
     };
     let m = dae.m;
+    let mut sensitivity = match run.sensitivities.as_slice() {
+        [] => None,
+        asked => match DynamicSensitivity::new(model, analysis, asked, &dae) {
+            Ok(s) => Some(s),
+            Err(e) => return Err(fail(Results::new(model, analysis), e)),
+        },
+    };
     let mut out = Output::new(model, analysis, n, m, run);
     let t0 = analysis.t_start;
     // Assembly holds what the user marked as given.
@@ -391,9 +399,20 @@ pub(crate) fn run_dynamic(model: &Model, analysis: &Analysis, run: &mut Run<'_>)
         lambda: sol[n..].to_vec(),
     };
     out.start_work(&mut dae, t0, &start.q, &start.qdot, &start.lambda);
-    let (mut stats, outcome) = match out.push(&mut dae, t0, &start.q, &start.qdot) {
+    let pushed = out.push(&mut dae, t0, &start.q, &start.qdot).and_then(|()| match &mut sensitivity {
+        None => Ok(None),
+        Some(eq) => {
+            let sol = out.solution().to_vec();
+            let tracks = eq.start(&mut dae, t0, &start.q, &start.qdot, &sol, &independent, &given)?;
+            eq.push(&mut out.results, &dae, t0, &start.q, &start.qdot, &sol, &tracks)?;
+            Ok(Some((eq, tracks)))
+        }
+    });
+    let (mut stats, outcome) = match pushed {
         Err(e) => (DynamicStats::default(), Err(e)),
-        Ok(()) => match settings.kind {
+        // Sensitivities are integrated by bdf (analysis/run.rs refuses the others).
+        Ok(Some((eq, tracks))) => bdf::run_sensitive(&mut dae, &mut out, &settings, start, eq, tracks),
+        Ok(None) => match settings.kind {
             IntegratorKind::Hht => hht::run(&mut dae, &mut out, &settings, start),
             IntegratorKind::Bdf => bdf::run(&mut dae, &mut out, &settings, start),
             IntegratorKind::Abam => abam::run(&mut dae, &mut out, &settings, start),

@@ -144,6 +144,11 @@ impl<'r, 'a> Output<'r, 'a> {
         written
     }
 
+    /// `[qddot; lambda]` of the last output time written ([`Output::push`]).
+    pub fn solution(&self) -> &[f64] {
+        &self.sol
+    }
+
     /// Write the next output time `t` from the state `(q, qdot)` and its `sol = [qddot; lambda]`
     /// (`n + m`), which the integrator solved at `(q, qdot, t)` with [`Dae::positions`] there.
     pub fn push_solved(

@@ -28,6 +28,9 @@ use crate::linalg::SparseLu;
 use crate::model::{Analysis, Model};
 use crate::results::Results;
 
+mod dynamic;
+pub(crate) use dynamic::{DynamicSensitivity, Track};
+
 /// The numbers of one level of the sensitivity equations: how a coordinate, the time and a
 /// number that depends on the parameters only are seeded, the element's rows over them, and
 /// the part of a row that is the level's right-hand side.
@@ -308,5 +311,44 @@ fn level<S: Level>(
 fn seed_parameters<S: Level>(params: &mut [S], model: &Model, p: usize) {
     for ((x, g), &v) in params.iter_mut().zip(&model.gradients.params).zip(model.parameters.values()) {
         *x = S::fixed(v, g[p]);
+    }
+}
+
+/// `out (n) += (d/dp Phi_q)^T w` at `(t, q)` for each pair `(w, out)` of `pairs` (rows'
+/// weights `w (m)`): the derivative of the Jacobian along parameter `p` (the coordinates moving
+/// along `dq`, each element's numbers and the parameters along their gradients) times `w`. Each
+/// element's rows over [`HyperDual`] numbers, the first direction along one of its columns, the
+/// second along the parameter: the mixed part of row `r` is `d/dp Phi_q[r, column]`. One
+/// evaluation per column of each element for every pair, exact.
+#[allow(clippy::too_many_arguments)]
+fn add_jacobian_transpose_along(
+    b: &mut Buffers<HyperDual>,
+    elements: &[Seeded<'_>],
+    model: &Model,
+    p: usize,
+    t: f64,
+    q: &[f64],
+    dq: &[f64],
+    pairs: &mut [(&[f64], &mut [f64])],
+) {
+    for ((x, &v), &d) in b.q.iter_mut().zip(q).zip(dq) {
+        *x = HyperDual::new(v, 0.0, d, 0.0);
+    }
+    seed_parameters(&mut b.params, model, p);
+    let time = HyperDual::new(t, 0.0, 0.0, 0.0);
+    for e in elements {
+        b.data.clear();
+        b.data.extend(e.data.iter().zip(e.grads).map(|(&v, g)| HyperDual::fixed(v, g[p])));
+        let rows = e.row..e.row + e.constraint.rows();
+        for &column in e.constraint.columns() {
+            b.q[column].e1 = 1.0;
+            let at = At { q: &b.q, t: time, params: &b.params };
+            let supported = e.constraint.phi_hyper(&at, &b.data, &mut b.full[e.row..]);
+            debug_assert!(supported, "{} was checked to have derivatives", e.name);
+            b.q[column].e1 = 0.0;
+            for (w, out) in pairs.iter_mut() {
+                out[column] += rows.clone().map(|r| w[r] * b.full[r].e12).sum::<f64>();
+            }
+        }
     }
 }
