@@ -136,6 +136,13 @@ def test_a_sweeps_gradients_match_central_differences_across_its_points() -> Non
     assert table.attrs["units"]["d(swing)/d(L)"] == "SI"
 
 
+def test_an_output_that_is_no_expression_nor_summary_is_refused_before_any_run() -> None:
+    with pytest.raises(linkwork.ModelError) as error:
+        linkwork.sweep(MODEL, "kinematics", {"r": [0.1]}, {"x": "strok"})
+    [(path, message)] = error.value.problems
+    assert path == "outputs.x" and "nor a summary of the model (its summaries: stroke)" in message
+
+
 def test_sweep_gradients_on_the_command_line(linkwork: RunLinkwork, tmp_path: Path) -> None:
     pd = pytest.importorskip("pandas")
     out = linkwork("sweep", MODEL, "--grid", "r=0.1:0.12:2", "--output", f"stroke={STROKE}", "--gradients", "--out", "s")

@@ -155,7 +155,7 @@ def tolerance(
 
     Raises ``ModelError`` when no parameter has a tolerance, for an output named as a parameter
     or ``status``, and for an analysis without sensitivities; ``SolverError`` when the nominal
-    run fails; ``ValueError`` for ``samples`` below 0 or a ``confidence`` outside (0, 1).
+    run fails, or fewer than 2 Monte Carlo samples run well; ``ValueError`` for ``samples`` below 0 or a ``confidence`` outside (0, 1).
     """
     if not isinstance(model, Model):
         model = Model.load(model)
@@ -214,8 +214,8 @@ def _monte_carlo(table: Any, name: str, z: float) -> MonteCarlo:
     x = table.loc[ok, name].to_numpy(dtype=float)
     n = len(x)
     if n < 2:
-        nan = float("nan")
-        return MonteCarlo(n, int((~ok).sum()), nan, (nan, nan), nan, (nan, nan), nan, nan)
+        first = next((status for status in table[STATUS] if status != "ok"), "none ran")
+        raise SolverError(f"{n} of {len(table)} Monte Carlo samples ran well, fewer than the 2 a spread needs; the first failure: {first}")
     mean, s = float(x.mean()), float(x.std(ddof=1))
     half = z * s / math.sqrt(n)
     m4 = float(((x - mean) ** 4).mean())
@@ -272,7 +272,7 @@ def write(result: ToleranceAnalysis, out: str | os.PathLike[str]) -> list[str]:
 
 
 def _write_into(result: ToleranceAnalysis, out: Path) -> None:
-    write_text(out / "tolerance.json", json.dumps(result.to_dict(), indent=2, allow_nan=True) + "\n")
+    write_text(out / "tolerance.json", json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n")
     figures = []
     for name, o in result.outputs.items():
         drawn = None if result.samples is None else result.samples.loc[result.samples[STATUS] == "ok", name].to_numpy(dtype=float)

@@ -128,6 +128,20 @@ pub fn sweep_with_gradients(
     progress: &Progress,
     stop: &StopToken,
 ) -> Result<Vec<Row>, Error> {
+    // An output named as a summary the model does not have: refused before anything runs.
+    for o in outputs {
+        if let Of::Summary(name) = &o.of {
+            if !model.summaries.contains_key(name) {
+                let known: Vec<&str> = model.summaries.keys().map(String::as_str).collect();
+                let known = if known.is_empty() { "none".to_string() } else { known.join(", ") };
+                let message = format!(
+                    "'{name}' is neither an expression of aggregations of result columns nor a summary of the model \
+                     (its summaries: {known})"
+                );
+                return Err(Error::Model(vec![Problem::new(format!("outputs.{}", o.name), message)]));
+            }
+        }
+    }
     let t_start = model.analysis(analysis)?.t_start;
     // The file's text parsed once; each variant reads its parameters from the document.
     let document = model.document()?;

@@ -185,7 +185,8 @@ fn a_stopped_sweep_ends_its_variants_as_interrupted() {
 /// With gradients: each row's outputs, then each output's derivative with respect to each
 /// parameter asked, output by output; the stroke (an expression, and the model's summary by
 /// name) has `d/dr = 2` and `d/dL = 0` exactly (closed form `2 r`; 1e-9: the run's convergence),
-/// and an output that is neither an expression nor a summary is a model error at its path.
+/// and an output that is neither an expression nor a summary is a model error at its path
+/// before anything runs.
 #[test]
 fn a_sweep_with_gradients_gives_each_outputs_derivatives() {
     let wrt = ["r".to_string(), "L".to_string()];
@@ -203,10 +204,13 @@ fn a_sweep_with_gradients_gives_each_outputs_derivatives() {
         }
     }
     let unknown = outputs(&[("x", "nothing")]);
-    let rows = sweep(&model(), "kinematics", &radii(&[0.1]), &unknown, &wrt, None, &Progress::new(), &StopToken::new())
-        .unwrap();
-    match &rows[0] {
-        Err(Error::Model(problems)) => assert!(problems[0].path == "outputs.x", "{problems:?}"),
+    match sweep(&model(), "kinematics", &radii(&[0.1]), &unknown, &wrt, None, &Progress::new(), &StopToken::new()) {
+        Err(Error::Model(problems)) => {
+            assert!(
+                problems[0].path == "outputs.x" && problems[0].message.contains("summaries: stroke"),
+                "{problems:?}"
+            )
+        }
         other => panic!("{other:?}"),
     }
 }
