@@ -310,6 +310,41 @@ def test_the_report_draws_the_named_paths_and_plots_against_the_crank_angle(tmp_
         page.close()
 
 
+def test_the_report_draws_the_sensitivity_panel_scaled_by_tolerance_or_size(linkwork: RunLinkwork, tmp_path: Path, browser: Any) -> None:
+    """`linkwork run --sensitivities all` on the slider-crank: the stroke (2 r) has one bar a
+    parameter, largest first; r's is 2 times its tolerance (0.1 mm), L's 0 times its (the stroke
+    does not depend on L), the speed's 0 times its value."""
+    out = linkwork("run", EXAMPLES / "slider_crank_param.yaml", "--sensitivities", "all", "--out", "s")
+    assert out.code == 0, out.output
+    page, _, errors = open_report(browser, tmp_path / "s" / "report.html")
+    try:
+        assert errors == []
+        bars = page.evaluate("() => document.getElementById('sensitivity0').data[0]")
+        assert bars["y"][0].startswith("r (× tolerance 0.0001)") and bars["x"][0] == pytest.approx(2e-4, rel=1e-9)
+        assert [abs(v) for v in bars["x"]] == sorted((abs(v) for v in bars["x"]), reverse=True)
+        assert any(label.startswith("speed (× value") for label in bars["y"])
+    finally:
+        page.close()
+    # Without sensitivities there is no panel.
+    assert linkwork("run", EXAMPLES / "slider_crank_param.yaml", "--out", "n").code == 0
+    assert 'id="sensitivity0"' not in (tmp_path / "n" / "report.html").read_text()
+
+
+def test_the_tolerance_report_draws_the_histogram_and_the_shares(linkwork: RunLinkwork, tmp_path: Path, browser: Any) -> None:
+    out = linkwork("tolerance", EXAMPLES / "slider_crank_param.yaml", "--output", "stroke=stroke", "--samples", "200",
+                   "--seed", "1", "--out", "t")
+    assert out.code == 0, out.output
+    page, requests, errors = open_report(browser, tmp_path / "t" / "report.html")
+    try:
+        assert errors == [] and all(r.startswith("file:") for r in requests)
+        histogram = page.evaluate("() => document.getElementById('figure0').data.map(t => [t.type, (t.x || []).length])")
+        assert histogram == [["histogram", 200], ["scatter", 200]]
+        shares = page.evaluate("() => document.getElementById('figure1').data[0]")
+        assert shares["x"][0] == "r" and shares["y"][0] == pytest.approx(100.0, rel=1e-9)
+    finally:
+        page.close()
+
+
 def test_the_report_leaves_out_zero_torques_and_names_constant_columns(tmp_path: Path, browser: Any) -> None:
     results = linkwork.load(EXAMPLES / "fourbar_measures.yaml").run()
     assert np.all(results["O2.torque"] == 0.0), "a pin's reaction torque, the case left out"

@@ -145,9 +145,9 @@ def test_the_report_tables_say_their_units() -> None:
 
 
 def test_e_may_name_a_parameter_unless_the_file_uses_eulers_number() -> None:
-    text = patch(TEXT, "  r: 100 mm\n", "  e: 100 mm\n  r: e\n")
+    text = patch(TEXT, "  r: 100 mm ± 0.1 mm\n", "  e: 100 mm\n  r: e\n")
     assert linkwork.from_yaml(text).parameters["r"] == pytest.approx(0.1, rel=1e-15)
-    text = patch(TEXT, "  r: 100 mm\n", "  k: 2*e\n  e: 100 mm\n  r: e\n")
+    text = patch(TEXT, "  r: 100 mm ± 0.1 mm\n", "  k: 2*e\n  e: 100 mm\n  r: e\n")
     with pytest.raises(linkwork.ModelError) as error:
         linkwork.from_yaml(text)
     [(path, message)] = [p for p in error.value.problems if p[0] == "parameters.e"]

@@ -29,6 +29,7 @@ from .model import Model
 from .results import Results
 from .summary import Summary
 from .sweep import sweep
+from .tolerance import tolerance
 
 __version__: str = _linkwork.__version__
 
@@ -49,6 +50,7 @@ __all__ = [
     "load",
     "schema",
     "sweep",
+    "tolerance",
 ]
 __all__ += errors.__all__
 

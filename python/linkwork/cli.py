@@ -15,7 +15,10 @@
     linkwork sweep MODEL --output NAME=EXPR ...         an analysis over many parameter values, reduced to
         (--grid NAME=START:STOP:COUNT ... |             outputs: DIR/sweep.parquet, one row a variant
          --sample N --range NAME=LOW:HIGH ... [--seed S])
-        [--workers K | --dask ADDRESS] [--set NAME=VALUE] [--units si|display]
+        [--workers K | --dask ADDRESS] [--set NAME=VALUE] [--units si|display] [--gradients]
+    linkwork tolerance MODEL --output NAME=EXPR ...     the spread of outputs over the parameters' tolerances:
+        [--analysis NAME] [--samples N] [--seed S]      linear (gradients) beside Monte Carlo, printed and in
+        [--workers K | --dask ADDRESS] [--out DIR]      DIR/tolerance.json and DIR/report.html
     linkwork check MODEL [--json]                      degrees of freedom, redundant rows, assembly
     linkwork schema                                    the JSON Schema of model files
 
@@ -57,6 +60,7 @@ from .report import from_folder
 from .results import Results
 from .summary import Summary, branch_lines
 from .sweep import STATUS, check_count, grid_values, name_problem, range_values, sweep, workers_to_use
+from .tolerance import SAMPLES, table_lines, tolerance
 from .units import SYSTEMS, Units
 
 EXIT_OK = 0
@@ -263,8 +267,43 @@ def _parser() -> argparse.ArgumentParser:
     )
     _add_set(sweep)
     _add_units(sweep, "the parameters' columns of sweep.parquet (its outputs stay SI)")
+    sweep.add_argument(
+        "--gradients",
+        action="store_true",
+        help="also each output's derivative with respect to every parameter of the model at each variant, "
+        "columns d(<output>)/d(<parameter>), SI per SI (analyses with sensitivities)",
+    )
     sweep.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     sweep.set_defaults(command=_sweep)
+
+    tol = commands.add_parser(
+        "tolerance",
+        help="the spread of outputs over the parameters' tolerances, linear and Monte Carlo",
+        description="For each --output of an analysis of MODEL, over the parameters the model file gives a "
+        "tolerance (r: 150 mm ± 0.1 mm): its nominal value, its gradient, its linear worst case and root sum "
+        "of squares, each parameter's share, and a Monte Carlo check (--samples variants drawn from the "
+        "parameters' distributions on the sweep engine) with its confidence intervals. Printed, and written "
+        "to DIR/tolerance.json and DIR/report.html.",
+    )
+    tol.add_argument("model", metavar="MODEL", help="model file (YAML)")
+    tol.add_argument("--analysis", "-a", metavar="NAME", help="analysis to run (default: the first in the file)")
+    _repeatable(
+        tol, "--output", _output, "NAME=EXPR",
+        "an output: a summary of the model by name (stroke=stroke) or an expression of aggregations of result "
+        "columns as --output of sweep; repeatable",
+        required=True,
+    )
+    tol.add_argument(
+        "--samples", type=int, default=SAMPLES, metavar="N",
+        help=f"Monte Carlo samples (default {SAMPLES:,}; 0: the linear analysis alone)",
+    )
+    tol.add_argument("--seed", type=int, metavar="S", help="seed of the samples (default: a fresh one, printed)")
+    tol.add_argument("--out", "-o", metavar="DIR", type=Path, help="output folder (default: out/<model file stem>_tolerance/)")
+    tol.add_argument("--workers", "-j", type=int, metavar="K", help="threads (default: every core)")
+    tol.add_argument("--dask", metavar="ADDRESS", help="run the samples on the Dask cluster whose scheduler is at ADDRESS")
+    _add_set(tol)
+    tol.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    tol.set_defaults(command=_tolerance)
 
     check = commands.add_parser(
         "check",
@@ -648,7 +687,7 @@ def _sweep_into(args: argparse.Namespace, model: Model, analysis: str, out: Path
                 model, analysis, dict(args.grid) if args.grid else None, dict(args.output),
                 sample=args.sample, ranges=dict(args.range) if args.range else None, seed=args.seed,
                 workers=workers, client=client, progress=sys.stderr.isatty() and not args.quiet,
-                units=args.units,
+                units=args.units, gradients=args.gradients,
             )
         for warning in dict.fromkeys(str(w.message) for w in caught):
             _err(f"warning: {warning}")
@@ -691,6 +730,40 @@ def _dask_client(address: str) -> Any:
         raise model_error("--dask", f"no Dask scheduler answered at {address}: {error}") from None
     except ValueError as error:  # not an address: "missing port number", "unknown address scheme"
         raise OptionError("--dask", f"expected the scheduler's address, such as tcp://host:8786: {error}") from None
+
+
+# --- tolerance -----------------------------------------------------------------------------------
+
+
+def _tolerance(args: argparse.Namespace) -> int:
+    names = [name for name, _ in args.output]
+    twice = next((name for k, name in enumerate(names) if name in names[:k]), None)
+    if twice is not None:
+        raise OptionError("--output", f"'{twice}' is given twice; give each name once")
+    if args.samples < 0:
+        raise OptionError("--samples", f"expected a count of at least 0, got {args.samples}")
+    try:
+        workers = workers_to_use(args.workers, "--workers")
+    except ValueError as error:
+        raise OptionError(*str(error).split(": ", 1)) from None
+    model = _load(args.model, args.set)
+    analysis = args.analysis if args.analysis is not None else model.analyses[0]
+    out: Path = args.out if args.out is not None else Path("out") / (Path(args.model).stem + "_tolerance")
+    claimed = folder.claim(out, folder.TOLERANCE_FILES)
+    client = _dask_client(args.dask) if args.dask is not None else None
+    try:
+        result = tolerance(
+            model, analysis, dict(args.output), samples=args.samples, seed=args.seed, workers=workers, client=client,
+            progress=sys.stderr.isatty() and not args.quiet,
+        )
+        written = result.write(out)
+    finally:
+        if client is not None:
+            client.close()
+        claimed.release()
+    print("\n".join(table_lines(result)))
+    print(f"wrote {_folder(out)}{' and '.join(written)}")
+    return EXIT_OK
 
 
 # --- check ---------------------------------------------------------------------------------------

@@ -67,6 +67,9 @@ class Run:
     title: str = ""
     #: The units the report shows (the model's ``display:`` section), for its axes and tables.
     units: Units = field(default_factory=Units.si)
+    #: The tolerance of each parameter that has one, SI (``Model.tolerances``): what the
+    #: sensitivity panel scales a derivative by.
+    tolerances: Mapping[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         # An analysis that keeps only some columns (`outputs:`) draws the bodies whose
@@ -793,6 +796,61 @@ def plots(run: Run, against: tuple[str, np.ndarray] | None = None) -> list[dict[
     # Measures come after every column the engine names itself.
     engine = bodies | set(ENGINE_COLUMNS) | used
     add([c for c in cols if c not in engine], "measures", "")
+    return out
+
+
+# --- sensitivities -------------------------------------------------------------------------------
+
+
+def sensitivity_figures(run: Run) -> list[dict[str, Any]]:
+    """The sensitivity panel of a run asked for sensitivities: for each summary (and peak) with
+    derivatives, a bar a parameter of its derivative times the parameter's tolerance when it
+    has one, else times its size (its value's magnitude; 1 SI unit for a parameter of value 0):
+    what the summary changes by when the parameter moves by that much, to first order. Largest
+    magnitude first, horizontal bars read top down."""
+    by_summary = run.summary.sensitivities or {}
+    values = run.summary.parameters or {}
+    out = []
+    for name, by_parameter in by_summary.items():
+        scaled = []
+        for parameter, derivative in by_parameter.items():
+            if parameter in run.tolerances:
+                scale, by = run.tolerances[parameter], "tolerance"
+            else:
+                scale = abs(values.get(parameter, 0.0)) or 1.0
+                by = "value" if values.get(parameter) else "1 SI unit"
+            scaled.append((f"{parameter} (× {by} {scale:.4g})", derivative * scale))
+        scaled.sort(key=lambda item: -abs(item[1]))
+        bar = {"type": "bar", "orientation": "h", "y": [label for label, _ in scaled], "x": _num([v for _, v in scaled]),
+               "name": name}
+        layout = _plot_layout(f"{name} (its derivative times each parameter's tolerance or size)", f"change of {name} (SI)", "")
+        layout["yaxis"]["autorange"] = "reversed"
+        layout["height"] = max(200, 90 + 28 * len(scaled))
+        out.append({"data": [bar], "layout": layout})
+    return out
+
+
+def tolerance_figures(
+    name: str, nominal: float, rss: float, shares: Mapping[str, float], samples: np.ndarray | None
+) -> list[dict[str, Any]]:
+    """The figures of an output's tolerance analysis: the histogram of its Monte Carlo samples
+    (as a density) under the normal density of the linear analysis (mean ``nominal``, standard
+    deviation ``rss``), when there are samples; and each parameter's share of the linear
+    variance, largest first."""
+    out = []
+    if samples is not None and len(samples):
+        hist = {"type": "histogram", "x": _num(samples), "histnorm": "probability density", "name": "Monte Carlo",
+                "opacity": 0.6}
+        low, high = float(np.min(samples)), float(np.max(samples))
+        if rss > 0:
+            low, high = min(low, nominal - 4 * rss), max(high, nominal + 4 * rss)
+        x = np.linspace(low, high, 200)
+        density = np.exp(-0.5 * ((x - nominal) / rss) ** 2) / (rss * math.sqrt(2 * math.pi)) if rss > 0 else np.zeros_like(x)
+        line = {"type": "scatter", "mode": "lines", "x": _num(x), "y": _num(density), "name": "linear (normal, RSS)"}
+        out.append({"data": [hist, line], "layout": _plot_layout(f"{name} (Monte Carlo samples and the linear spread)", f"{name} (SI)", "density")})
+    ranked = sorted(shares.items(), key=lambda item: -item[1])
+    bar = {"type": "bar", "x": [p for p, _ in ranked], "y": _num([100 * v for _, v in ranked]), "name": "share"}
+    out.append({"data": [bar], "layout": _plot_layout(f"{name}: each parameter's share of the variance (linear)", "", "%")})
     return out
 
 

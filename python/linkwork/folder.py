@@ -50,6 +50,9 @@ names are added by path)."""
 SWEEP_FILES = frozenset({"sweep.parquet"})
 """What ``linkwork sweep`` writes into its folder."""
 
+TOLERANCE_FILES = frozenset({"tolerance.json", "report.html"})
+"""What ``linkwork tolerance`` writes into its folder."""
+
 _MARK = ".linkwork"
 """What the names of the files beside an output folder carry, after its own name."""
 

@@ -7,6 +7,7 @@ import os
 import sys
 import time
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
@@ -45,6 +46,19 @@ class ProgressBar:
     def close(self) -> None:
         if self._bar is not None:
             self._bar.close()
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """A parameter's tolerance (docs/model-format.md, "Tolerances")."""
+
+    value: float
+    """The largest deviation from the parameter's value, SI."""
+    distribution: str
+    """``"normal"`` (the tolerance is three standard deviations) or ``"uniform"`` (over plus or
+    minus the tolerance)."""
+    sigma: float
+    """The standard deviation, SI: ``value / 3`` (normal) or ``value / sqrt(3)`` (uniform)."""
 
 
 def _parameter_texts(values: Mapping[str, float | str]) -> list[tuple[str, str]]:
@@ -112,6 +126,13 @@ class Model:
         """The parameters' values used, SI, in file order (``parameters:`` with any values
         given over them)."""
         return dict(self._native.parameters)
+
+    @property
+    def tolerances(self) -> dict[str, Tolerance]:
+        """The tolerance of each parameter the file gives one (``r: 150 mm ± 0.1 mm``), SI, in
+        file order; parameters without one are not listed. A value given over the file's keeps
+        the file's tolerance."""
+        return {name: Tolerance(value, distribution, sigma) for name, value, distribution, sigma in self._native.tolerances}
 
     @property
     def source(self) -> str:

@@ -20,7 +20,9 @@ from typing import Any
 import numpy as np
 
 from .folder import write_text
-from .figures import Run, _frame_rows, _num, _text, driver_coordinate, mechanism_figure, mode_figures, paths_figure, plots
+from .figures import (
+    Run, _frame_rows, _num, _text, driver_coordinate, mechanism_figure, mode_figures, paths_figure, plots, sensitivity_figures,
+)
 from .summary import Summary, branch_words
 from .units import UNKNOWN, Units
 
@@ -103,21 +105,31 @@ text-align: left; vertical-align: top; } th { font-weight: 600; white-space: now
 # Every plot gets a vertical line at the animation's time (or at the driver's coordinate then, when
 # the plots are drawn against it), the paths panel a marker at each point's place; clicking a
 # plot moves the animation.
-_SCRIPT = """
+_UNPACK = """
 // plotly's source and the figures are stored gzipped (base64): the page is a third of its size.
 const unpack = id => {
   const bytes = Uint8Array.from(atob(document.getElementById(id).textContent), c => c.charCodeAt(0));
   return new Response(new Blob([bytes]).stream().pipeThrough(new DecompressionStream('gzip'))).text();
 };
-unpack('plotly').then(source => {
+const figuresRead = unpack('plotly').then(source => {
   const library = document.createElement('script');
   library.textContent = source;
   document.head.appendChild(library);
   return unpack('figures');
-}).then(text => {
-  const figures = JSON.parse(text);
-  const draw = (id, fig) => Plotly.newPlot(id, fig.data, fig.layout, {responsive: true, displaylogo: false})
-      .then(() => fig.frames ? Plotly.addFrames(id, fig.frames) : null);
+}).then(text => JSON.parse(text));
+const draw = (id, fig) => Plotly.newPlot(id, fig.data, fig.layout, {responsive: true, displaylogo: false})
+    .then(() => fig.frames ? Plotly.addFrames(id, fig.frames) : null);
+"""
+
+FIGURES_SCRIPT = _UNPACK + """
+figuresRead.then(figures => Promise.all(figures.map((fig, k) => draw('figure' + k, fig))))
+  .then(() => { document.body.dataset.ready = 'true'; }).catch(error => console.error(error));
+"""
+"""The script of a page of figures alone (:func:`document` with a list of figures, each drawn into
+the element ``figure<k>``)."""
+
+_SCRIPT = _UNPACK + """
+figuresRead.then(figures => {
   const mech = figures.mechanism;
   const times = mech ? mech.times : [];
   const timeUnit = mech ? mech.time_unit : 's';
@@ -149,6 +161,7 @@ unpack('plotly').then(source => {
   if (figures.paths) jobs.push(draw('paths', figures.paths));
   figures.plots.forEach((fig, k) => jobs.push(draw(plotIds[k], fig)));
   figures.modes.forEach((fig, k) => jobs.push(draw('mode' + k, fig)));
+  figures.sensitivities.forEach((fig, k) => jobs.push(draw('sensitivity' + k, fig)));
   Promise.all(jobs).then(() => {
     if (!mech || times.length === 0) { document.body.dataset.ready = 'true'; return; }
     const div = document.getElementById('mechanism');
@@ -183,7 +196,9 @@ def page(run: Run, plotly_js: str) -> str:
     if mech is not None and coordinate is not None:
         # Where the time line goes on plots drawn against the driver's coordinate, frame by frame.
         mech["against"] = _num(coordinate[1][_frame_rows(len(run.time))])
-    figures = {"mechanism": mech, "paths": paths, "plots": plot_list, "modes": [fig for _, fig in modes]}
+    sensitivities = sensitivity_figures(run)
+    figures = {"mechanism": mech, "paths": paths, "plots": plot_list, "modes": [fig for _, fig in modes],
+               "sensitivities": sensitivities}
     title = run.title or f"{s.model}: {s.analysis or ''}"
     body = [f"<h1>{html.escape(title)}</h1>",
             f"<div>{html.escape(s.type or 'no')} analysis, status {html.escape(s.status or 'ok')}</div>",
@@ -206,7 +221,19 @@ def page(run: Run, plotly_js: str) -> str:
                         f'time</label> <label><input type="radio" name="against" value="driver"> {html.escape(against)}'
                         "</label></p>")
         body.append('<div class="plots">' + "".join(f'<div id="plot{k}"></div>' for k in range(len(plot_list))) + "</div>")
+    if sensitivities:
+        body.append('<h2 id="sensitivity-panel">Sensitivities</h2><p>Each summary\'s derivative with respect to each '
+                    "parameter, times the parameter's tolerance where the model gives one, else its size: the change "
+                    "of the summary, to first order, when the parameter moves by that much.</p>")
+        body.append('<div class="plots">' + "".join(f'<div id="sensitivity{k}"></div>' for k in range(len(sensitivities))) + "</div>")
     body += ["<h2>Summary</h2>", summary_html(s, run.units)]
+    return document(title, body, figures, plotly_js, _SCRIPT)
+
+
+def document(title: str, body: Sequence[str], figures: Any, plotly_js: str, script: str) -> str:
+    """A self-contained page: ``body`` (HTML parts) under ``title``, with plotly (``plotly_js``,
+    packed) and ``figures`` (any JSON) embedded gzipped, and ``script`` (which starts from
+    :data:`_UNPACK`'s ``figuresRead``) to draw them."""
     # `</` cannot appear inside a script element: escape it in the JSON.
     data = json.dumps(figures, separators=(",", ":"), allow_nan=False)
     return (
@@ -215,7 +242,7 @@ def page(run: Run, plotly_js: str) -> str:
         + "\n".join(body)
         + f'\n<script type="application/gzip" id="plotly">{plotly_js}</script>'
         + f'\n<script type="application/gzip" id="figures">{_packed(data)}</script>'
-        + f"\n<script>{_SCRIPT}</script>\n</body></html>\n"
+        + f"\n<script>{script}</script>\n</body></html>\n"
     )
 
 

@@ -50,4 +50,5 @@ def from_folder(folder: Any) -> Run:
         columns = converted
     # The parameters the run used (SI, given over the file's by --set or with_parameters).
     model = Model.load(folder / "model.yaml", summary.get("parameters") or None)
-    return Run(model.drawing(), time, columns, Summary(summary), units=Units.of(model, columns))
+    tolerances = {name: t.value for name, t in model.tolerances.items()}
+    return Run(model.drawing(), time, columns, Summary(summary), units=Units.of(model, columns), tolerances=tolerances)

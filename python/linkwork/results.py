@@ -297,11 +297,12 @@ class Results:
 
     def _run(self) -> Run:
         units = Units.of(self.model, self._columns)
+        tolerances = {name: t.value for name, t in self.model.tolerances.items()}
         if self.streamed_to is not None:
             time, columns = stream.read(self.streamed_to)
-            return Run(self.model.drawing(), time, columns, self.summary, units=units)
+            return Run(self.model.drawing(), time, columns, self.summary, units=units, tolerances=tolerances)
         columns = {name: self._values[:, k] for k, name in enumerate(self._columns)}
-        return Run(self.model.drawing(), self._time, columns, self.summary, units=units)
+        return Run(self.model.drawing(), self._time, columns, self.summary, units=units, tolerances=tolerances)
 
     def path(self, body: str, point: str | None = None) -> tuple[np.ndarray, np.ndarray]:
         """``(x, y)``, global frame, m, of a point of a moving body at every output time:

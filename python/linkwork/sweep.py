@@ -94,6 +94,8 @@ def sweep(
     client: Any = None,
     progress: bool | Callable[[int, int], object] = False,
     units: str = "si",
+    gradients: bool | Sequence[str] = False,
+    points: Mapping[str, Sequence[float | str]] | None = None,
 ) -> pandas.DataFrame:
     """Run ``analysis`` of ``model`` for many values of its parameters and reduce each run to
     ``outputs`` (a name to an expression).
@@ -102,7 +104,9 @@ def sweep(
     its values: numbers in SI, or strings with units), in the order of ``itertools.product``, or
     ``sample`` points of a Latin hypercube over ``ranges`` (a name to ``(low, high)``, numbers in
     SI or both strings with units, ``("12 mm", "18 mm")``) drawn with ``seed`` (a fresh one when
-    ``None``; the table's ``attrs["seed"]`` says which).
+    ``None``; the table's ``attrs["seed"]`` says which), or given ``points`` (a name to its
+    values, all of one length: the k-th variant takes the k-th value of each; what
+    :func:`linkwork.tolerance` draws).
 
     They run on ``workers`` threads of this machine (default: every core), or, given a Dask
     ``client`` (``distributed.Client``), in chunks on its workers. ``progress=True`` shows a
@@ -120,6 +124,12 @@ def sweep(
     ``table``: every row, those not finished with a ``KeyboardInterrupt: ...`` status. An
     exception raised by ``progress`` stops it the same way and is raised with ``table``.
 
+    ``gradients=True`` (every parameter of the model) or a list of parameters adds, after the
+    outputs, each output's derivative with respect to each of them at every variant, a column
+    ``d(<output>)/d(<parameter>)`` (SI per SI unit of the parameter): each run is asked for its
+    sensitivities and the output differentiated as a summary is (docs/sensitivities.md,
+    "Sweeps with gradients"). An output may also be a model's summary by name (``stroke``).
+
     Refused before any variant is made: more than :data:`MAX_VARIANTS` variants, or ``workers``
     below 1 (``ValueError``); an output named ``status`` or as a parameter of the model
     (``ModelError`` at ``outputs.<name>``). More ``workers`` than cores use the cores, with a
@@ -133,8 +143,8 @@ def sweep(
     if not isinstance(model, Model):
         model = Model.load(model)
     attrs: dict[str, object] = {}
-    if grid is not None and (sample is not None or ranges is not None):
-        raise ValueError("give either grid, or sample with ranges, not both")
+    if sum((grid is not None, sample is not None or ranges is not None, points is not None)) > 1:
+        raise ValueError("give either grid, or sample with ranges, or points, not more than one")
     output_list = list((outputs or {}).items())
     for name, _ in output_list:
         problem = name_problem(name, model.parameters)
@@ -153,11 +163,18 @@ def sweep(
         # Drawn in the unit the range is written in, and given in it, so the engine checks it.
         texts = {n: [v if intervals[n][2] is None else f"{v!r} {intervals[n][2]}" for v in vs] for n, vs in columns.items()}
         combinations = list(zip(*texts.values())) if names else [() for _ in range(sample)]
+    elif points is not None:
+        names = list(points)
+        if len({len(values) for values in points.values()}) > 1:
+            raise ValueError("points: every parameter needs as many values as the others")
+        check_count(len(next(iter(points.values()), ())), "points")
+        combinations = list(zip(*points.values()))
     else:
-        raise ValueError("give grid (values of each parameter), or sample (a count) with ranges")
+        raise ValueError("give grid (values of each parameter), sample (a count) with ranges, or points")
     variants = [_parameter_texts(dict(zip(names, values))) for values in combinations]
     # The analysis and the outputs checked here, before any variant runs (ModelError).
     model._native.sweep(analysis, [], output_list, 1)
+    wrt = gradient_parameters(model, analysis, gradients)
 
     bar = _VariantBar(len(variants)) if progress is True else None
     report = bar.update if bar is not None else progress if callable(progress) else None
@@ -172,14 +189,15 @@ def sweep(
     si = {(name, v): _si(model, name, v) for k, name in enumerate(names) for v in {c[k] for c in combinations}}
     shown = Units.of_parameters(model, names, display=display)
     attrs["unit_system"] = units
-    attrs["units"] = shown.column_units(names) | dict.fromkeys(dict(output_list), UNKNOWN)
+    derivative_names = [_linkwork.sensitivity_name(o, p) for o, _ in output_list for p in wrt]
+    attrs["units"] = shown.column_units(names) | dict.fromkeys([*dict(output_list), *derivative_names], UNKNOWN)
 
     def table(rows: list[Row]) -> pandas.DataFrame:
         data: dict[str, object] = {}
         for k, name in enumerate(names):
             data[name] = shown.shown(name, [si[name, values[k]] for values in combinations])
         data[STATUS] = [status for status, _ in rows]
-        for j, (name, _) in enumerate(output_list):
+        for j, name in enumerate([*dict(output_list), *derivative_names]):
             data[name] = pd.array([None if values is None else values[j] for _, values in rows], dtype="Float64")
         frame = pd.DataFrame(data)
         frame.attrs.update(attrs)
@@ -189,9 +207,9 @@ def sweep(
         if client is None:
             total = len(variants)
             native = None if report is None else (lambda finished: report(finished, total))
-            rows = model._native.sweep(analysis, variants, output_list, workers, native)
+            rows = model._native.sweep(analysis, variants, output_list, workers, native, wrt)
         else:
-            rows = _on_cluster(client, model, analysis, variants, output_list, report)
+            rows = _on_cluster(client, model, analysis, variants, output_list, report, wrt)
     except BaseException as stopped:  # Ctrl-C, or an exception from `progress`
         partial = getattr(stopped, "rows", None)
         if isinstance(partial, list):
@@ -210,6 +228,7 @@ def _on_cluster(
     variants: list[list[tuple[str, str]]],
     outputs: list[tuple[str, str]],
     report: Callable[[int, int], object] | None,
+    gradients: list[str],
 ) -> list[Row]:
     """The rows of ``variants`` run in chunks on the Dask ``client``'s workers, in order."""
     from distributed import as_completed
@@ -219,7 +238,9 @@ def _on_cluster(
     starts = range(0, len(variants), size)
     # The model goes to each worker once (pickled as its text, compiled there).
     [remote] = client.scatter([model], broadcast=True)
-    futures = {client.submit(_chunk, remote, analysis, variants[s : s + size], outputs, pure=False): s for s in starts}
+    futures = {
+        client.submit(_chunk, remote, analysis, variants[s : s + size], outputs, gradients, pure=False): s for s in starts
+    }
     rows: list[Row | None] = [None] * len(variants)
     finished = 0
     try:
@@ -237,10 +258,26 @@ def _on_cluster(
     return [row for row in rows if row is not None]
 
 
-def _chunk(model: Model, analysis: str, variants: list[list[tuple[str, str]]], outputs: list[tuple[str, str]]) -> list[Row]:
+def _chunk(
+    model: Model, analysis: str, variants: list[list[tuple[str, str]]], outputs: list[tuple[str, str]], gradients: list[str]
+) -> list[Row]:
     """One chunk of a sweep on a Dask worker: its variants on one thread (the worker's other
     threads run other chunks)."""
-    return model._native.sweep(analysis, variants, outputs, 1)
+    return model._native.sweep(analysis, variants, outputs, 1, None, gradients)
+
+
+def gradient_parameters(model: Model, analysis: str, gradients: bool | Sequence[str]) -> list[str]:
+    """The parameters a sweep's outputs are differentiated with respect to: none (``False``),
+    every one of the model (``True``), or those named. Checked by one nominal run with those
+    sensitivities, before any variant runs: a name the model does not define, or an analysis
+    whose type has no sensitivities, is the ``ModelError`` of that run."""
+    if gradients is False:
+        return []
+    wrt = list(model.parameters) if gradients is True else list(gradients)
+    if not wrt:
+        raise model_error("gradients", "the model has no parameters to differentiate with respect to")
+    model.run(analysis, sensitivities=wrt)
+    return wrt
 
 
 class _VariantBar:

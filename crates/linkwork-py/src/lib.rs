@@ -102,7 +102,10 @@ impl PyModel {
     /// Watched as [`PyModel::run`]: `progress(finished)` is called with the variants finished;
     /// Ctrl-C (or an exception from `progress`) ends the variants not finished as interrupted
     /// and raises, with the rows as the attribute `rows`.
-    #[pyo3(signature = (analysis, variants, outputs, workers=None, progress=None))]
+    ///
+    /// With `gradients` (names of parameters) each row's values are followed by each output's
+    /// derivatives with respect to them, output by output (`linkwork::sweep::sweep_with_gradients`).
+    #[pyo3(signature = (analysis, variants, outputs, workers=None, progress=None, gradients=Vec::new()))]
     #[allow(clippy::too_many_arguments)]
     fn sweep(
         &self,
@@ -112,6 +115,7 @@ impl PyModel {
         outputs: Vec<(String, String)>,
         workers: Option<usize>,
         progress: Option<Py<PyAny>>,
+        gradients: Vec<String>,
     ) -> PyResult<Vec<(String, Option<Vec<f64>>)>> {
         let parsed: Vec<linkwork::sweep::Output> = outputs
             .iter()
@@ -126,7 +130,10 @@ impl PyModel {
         let (outcome, stopped_by) = watched(
             py,
             &stop,
-            || linkwork::sweep::sweep(&self.model, analysis, &variants, &parsed, workers, &watch, &stop),
+            || {
+                let sweep = linkwork::sweep::sweep_with_gradients;
+                sweep(&self.model, analysis, &variants, &parsed, &gradients, workers, &watch, &stop)
+            },
             |py| match &progress {
                 Some(f) => f.call1(py, (watch.finished(),)).map(drop),
                 None => Ok(()),
@@ -172,6 +179,13 @@ impl PyModel {
     #[getter]
     fn parameter_units(&self) -> Vec<(String, String)> {
         self.model.parameter_units.iter().map(|(n, u)| (n.clone(), u.clone())).collect()
+    }
+
+    /// The tolerance of each parameter the file gives one, in file order: `(name, tolerance
+    /// (SI), distribution ("normal" or "uniform"), standard deviation (SI))`.
+    #[getter]
+    fn tolerances(&self) -> Vec<(String, f64, &'static str, f64)> {
+        self.model.tolerances.iter().map(|(n, t)| (n.clone(), t.value, t.distribution.name(), t.sigma())).collect()
     }
 
     /// Warnings about the parameter values given from outside, each `parameters.<name>: ...`.

@@ -4,7 +4,12 @@
 //! An output is a [`Functional`] of the run's result columns (the aggregations and their
 //! quadrature are described there): `max(slider.x) - min(slider.x)`, `peak(motor.effort)`,
 //! `mean(motor.effort * crank.omega)`, `at(0.5, crank.phi)`. Outputs name no parameters (the
-//! variants change them); a model's `summaries:` are functionals of the same kind, which may.
+//! variants change them); a model's `summaries:` are functionals of the same kind, which may,
+//! and an output may be one of them by name (`stroke`).
+//!
+//! With gradients ([`sweep_with_gradients`]) each run is asked for the sensitivities of its
+//! columns, and each output's derivative with respect to each parameter follows from them as a
+//! summary's does ([`Output::gradient`]).
 //!
 //! The sweep sits above `results`: it runs analyses ([`Model::run`]) on models made with
 //! [`Model::with_parameters`] and reads their [`Results`]; nothing below imports it.
@@ -16,29 +21,74 @@ use crate::progress::{Progress, StopToken};
 use crate::{Model, Results, RunOptions};
 use rayon::prelude::*;
 
-/// An output of a sweep: a name and a functional of result columns.
+/// An output of a sweep: a name and what it reads of a run.
 #[derive(Debug, Clone)]
 pub struct Output {
     /// The output's name (a column of the sweep's table).
     pub name: String,
-    /// Its expression.
-    pub functional: Functional,
+    /// Its expression, or the model's summary it is.
+    pub of: Of,
+}
+
+/// What an output reads of a run.
+#[derive(Debug, Clone)]
+pub enum Of {
+    /// A functional of the result columns (boxed: it is large beside a name).
+    Functional(Box<Functional>),
+    /// The model's summary of this name (`summaries:`), as the run's summary has it.
+    Summary(String),
 }
 
 impl Output {
     /// Read `source`, checking its shape (aggregations, their arguments, the expression around
-    /// them); the column names are checked against each run's results. `Err` says what is
+    /// them); the column names are checked against each run's results. A bare name that is no
+    /// functional is a summary's, checked against each run's summaries. `Err` says what is
     /// wrong, for the output `name`.
     pub fn parse(name: &str, source: &str) -> Result<Output, String> {
         let no_names = |_: &str| None;
-        let functional = Functional::parse(source, &no_names)?;
-        Ok(Output { name: name.to_string(), functional })
+        let of = match Functional::parse(source, &no_names) {
+            Ok(functional) => Of::Functional(Box::new(functional)),
+            Err(_) if crate::model::is_identifier(source.trim()) => Of::Summary(source.trim().to_string()),
+            Err(e) => return Err(e),
+        };
+        Ok(Output { name: name.to_string(), of })
     }
 
-    /// The output's value for one run's results. `Err` names an unknown column or a value that is
-    /// not a finite number.
+    /// The output's value for one run's results. `Err` names an unknown column or summary, or a
+    /// value that is not a finite number.
     pub fn evaluate(&self, results: &Results) -> Result<f64, String> {
-        self.functional.eval(&results.time, &|name| results.column(name)).map_err(|e| e.to_string())
+        match &self.of {
+            Of::Functional(f) => f.eval(&results.time, &|name| results.column(name)).map_err(|e| e.to_string()),
+            Of::Summary(name) => results.summary.summaries.as_ref().and_then(|s| s.get(name).copied()).ok_or_else(|| {
+                format!("'{name}' is neither an expression of aggregations of result columns nor a summary of the model")
+            }),
+        }
+    }
+
+    /// The output's derivative with respect to each parameter of the run's sensitivities
+    /// ([`Results::sensitivities`], in their order): a functional's from its columns'
+    /// derivatives ([`Functional::derivative`]: the rules at a largest row are the summaries'),
+    /// a summary's as the run's summary has it. `Err` names what has no derivative (a column
+    /// without derivatives, a run asked for none).
+    pub fn gradient(&self, results: &Results) -> Result<Vec<f64>, String> {
+        let s = results.sensitivities.as_ref().ok_or("the run has no sensitivities")?;
+        let missing = |p: &str| format!("no derivative of output {} with respect to {p}", self.name);
+        s.parameters
+            .iter()
+            .zip(&s.values)
+            .map(|(p, values)| match &self.of {
+                Of::Functional(f) => {
+                    let derivative = |c: &str| s.names.iter().position(|n| n == c).map(|k| values[k].as_slice());
+                    // Outputs name no parameters: no named value has a derivative.
+                    f.derivative(&results.time, &|c| results.column(c), &derivative, &|_| f64::NAN)
+                        .map_err(|e| format!("{}: {e}", missing(p)))
+                }
+                Of::Summary(name) => {
+                    let d = results.summary.sensitivities.as_ref().and_then(|d| d.get(name)?.get(p).copied());
+                    d.ok_or_else(|| missing(p))
+                }
+            })
+            .collect()
     }
 }
 
@@ -61,6 +111,37 @@ pub fn sweep(
     progress: &Progress,
     stop: &StopToken,
 ) -> Result<Vec<Row>, Error> {
+    sweep_with_gradients(model, analysis, variants, outputs, &[], workers, progress, stop)
+}
+
+/// As [`sweep`], each row's outputs followed by their derivatives with respect to each of
+/// `gradients` (names of the model's parameters), output by output ([`Output::gradient`]; each
+/// run asked for those sensitivities). With `gradients` empty it is [`sweep`].
+#[allow(clippy::too_many_arguments)]
+pub fn sweep_with_gradients(
+    model: &Model,
+    analysis: &str,
+    variants: &[Vec<(String, String)>],
+    outputs: &[Output],
+    gradients: &[String],
+    workers: Option<usize>,
+    progress: &Progress,
+    stop: &StopToken,
+) -> Result<Vec<Row>, Error> {
+    // An output named as a summary the model does not have: refused before anything runs.
+    for o in outputs {
+        if let Of::Summary(name) = &o.of {
+            if !model.summaries.contains_key(name) {
+                let known: Vec<&str> = model.summaries.keys().map(String::as_str).collect();
+                let known = if known.is_empty() { "none".to_string() } else { known.join(", ") };
+                let message = format!(
+                    "'{name}' is neither an expression of aggregations of result columns nor a summary of the model \
+                     (its summaries: {known})"
+                );
+                return Err(Error::Model(vec![Problem::new(format!("outputs.{}", o.name), message)]));
+            }
+        }
+    }
     let t_start = model.analysis(analysis)?.t_start;
     // The file's text parsed once; each variant reads its parameters from the document.
     let document = model.document()?;
@@ -89,7 +170,7 @@ pub fn sweep(
                     })
                     .collect();
             }
-            let options = RunOptions { stop: stop.clone(), ..RunOptions::default() };
+            let options = RunOptions { stop: stop.clone(), sensitivities: gradients.to_vec(), ..RunOptions::default() };
             let results = variant.run(analysis, &options).map_err(|f| f.error)?;
             if let Some(expected) = &nominal_changes {
                 let changes = &results.summary.branch_changes;
@@ -108,12 +189,14 @@ pub fn sweep(
                     });
                 }
             }
-            outputs
-                .iter()
-                .map(|o| {
-                    o.evaluate(&results).map_err(|e| Error::Model(vec![Problem::new(format!("outputs.{}", o.name), e)]))
-                })
-                .collect()
+            let at = |o: &Output, e: String| Error::Model(vec![Problem::new(format!("outputs.{}", o.name), e)]);
+            let mut row = outputs.iter().map(|o| o.evaluate(&results).map_err(|e| at(o, e))).collect::<Row>()?;
+            if !gradients.is_empty() {
+                for o in outputs {
+                    row.extend(o.gradient(&results).map_err(|e| at(o, e))?);
+                }
+            }
+            Ok(row)
         };
         let row = run();
         progress.finish_part();

@@ -181,3 +181,36 @@ fn a_stopped_sweep_ends_its_variants_as_interrupted() {
     assert!(rows.iter().all(|r| matches!(r, Err(Error::Interrupted { .. }))), "{rows:?}");
     assert_eq!(stopped.finished(), 3);
 }
+
+/// With gradients: each row's outputs, then each output's derivative with respect to each
+/// parameter asked, output by output; the stroke (an expression, and the model's summary by
+/// name) has `d/dr = 2` and `d/dL = 0` exactly (closed form `2 r`; 1e-9: the run's convergence),
+/// and an output that is neither an expression nor a summary is a model error at its path
+/// before anything runs.
+#[test]
+fn a_sweep_with_gradients_gives_each_outputs_derivatives() {
+    let wrt = ["r".to_string(), "L".to_string()];
+    let list = outputs(&[("stroke", "max(slider.x) - min(slider.x)"), ("summary", "stroke")]);
+    let sweep = linkwork::sweep::sweep_with_gradients;
+    let rows =
+        sweep(&model(), "kinematics", &radii(&[0.08, 0.12]), &list, &wrt, None, &Progress::new(), &StopToken::new())
+            .unwrap();
+    for (r, row) in [0.08, 0.12].iter().zip(&rows) {
+        let row = row.as_ref().unwrap();
+        assert_eq!(row.len(), 2 + 2 * 2);
+        assert!((row[0] - 2.0 * r).abs() < 1e-9 && (row[1] - 2.0 * r).abs() < 1e-9, "{row:?}");
+        for d in [&row[2..4], &row[4..6]] {
+            assert!((d[0] - 2.0).abs() < 1e-9 && d[1].abs() < 1e-9, "{row:?}");
+        }
+    }
+    let unknown = outputs(&[("x", "nothing")]);
+    match sweep(&model(), "kinematics", &radii(&[0.1]), &unknown, &wrt, None, &Progress::new(), &StopToken::new()) {
+        Err(Error::Model(problems)) => {
+            assert!(
+                problems[0].path == "outputs.x" && problems[0].message.contains("summaries: stroke"),
+                "{problems:?}"
+            )
+        }
+        other => panic!("{other:?}"),
+    }
+}

@@ -15,8 +15,9 @@ mod tables;
 pub mod units;
 
 pub use compile::{compile, compile_partial};
-pub(crate) use compile::{revise, time_round_off};
+pub(crate) use compile::{is_identifier, revise, time_round_off};
 pub use drawing::{BodyDrawing, Drawing, DriverDrawing, ElementDrawing, JointDrawing, PathPoint};
+pub use params::{Distribution, Tolerance};
 pub use parse::{parse_partial, parse_partial_with, parse_spec, Parsed};
 pub use settings::{IntegratorSettings, SolverSettings, MAX_STEPS};
 
@@ -490,6 +491,9 @@ pub struct Model {
     /// The unit the file writes each parameter in, for those it writes with one (`r: mm` for
     /// `r: 100 mm`): what a value given from outside is shown in.
     pub parameter_units: IndexMap<String, String>,
+    /// The tolerance of each parameter the file gives one (`r: 150 mm ± 0.1 mm`), in file
+    /// order; a value given from outside keeps the file's tolerance.
+    pub tolerances: IndexMap<String, Tolerance>,
     /// The units results are shown in (the file's `display:` section; SI without one).
     pub display: units::Display,
     /// Warnings about the parameter values given from outside ([`Model::set`]): a bare number
@@ -586,8 +590,10 @@ impl Model {
         let parsed = parse::parse_document_with(document, set).map_err(Error::Model)?;
         match compile_partial(&parsed.spec, &parsed.broken, &folder) {
             Ok(model) if parsed.problems.is_empty() => {
-                let (parameter_units, warnings) = (parsed.parameter_units, parsed.warnings);
-                Ok(Model { source: text.to_string(), set: set.to_vec(), folder, parameter_units, warnings, ..model })
+                let (parameter_units, warnings, tolerances) =
+                    (parsed.parameter_units, parsed.warnings, parsed.tolerances);
+                let source = text.to_string();
+                Ok(Model { source, set: set.to_vec(), folder, parameter_units, warnings, tolerances, ..model })
             }
             Ok(_) => Err(Error::Model(parsed.problems)),
             // A problem the reading already reported is not reported again by the compilation

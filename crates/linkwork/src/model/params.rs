@@ -34,6 +34,90 @@ pub struct Parameter {
     pub unit: Option<String>,
     pub warning: Option<String>,
     pub gradient: Vec<f64>,
+    /// Its tolerance, when the file gives one (`r: 150 mm ± 0.1 mm`); a value given from
+    /// outside keeps the file's tolerance.
+    pub tolerance: Option<Tolerance>,
+}
+
+/// How a toleranced parameter is spread about its value: tolerance analysis draws from it and
+/// takes its standard deviation (docs/model-format.md, "Tolerances").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Distribution {
+    /// Normal, the tolerance three standard deviations: the usual reading of a process
+    /// tolerance (99.73% of the parts inside it).
+    #[default]
+    Normal,
+    /// Uniform over the value plus or minus the tolerance (every part inside it).
+    Uniform,
+}
+
+impl Distribution {
+    /// Its name as a model file writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Distribution::Normal => "normal",
+            Distribution::Uniform => "uniform",
+        }
+    }
+}
+
+/// A parameter's tolerance: the largest deviation from its value (SI, non-negative) and how the
+/// deviations are spread.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tolerance {
+    /// The tolerance `t`, SI: the value lies in `value ± t`.
+    pub value: f64,
+    /// How deviations are spread over it.
+    pub distribution: Distribution,
+}
+
+impl Tolerance {
+    /// The standard deviation of the parameter: `t / 3` for a normal spread (the tolerance is
+    /// three standard deviations), `t / sqrt(3)` for a uniform one over `± t`.
+    pub fn sigma(&self) -> f64 {
+        match self.distribution {
+            Distribution::Normal => self.value / 3.0,
+            Distribution::Uniform => self.value / 3f64.sqrt(),
+        }
+    }
+}
+
+/// The JSON Schema of a parameter as a model file writes it (`ModelSpec::parameters`, whose Rust
+/// type holds the SI values read): a value, or a mapping of a value with its tolerance; the short
+/// form `150 mm ± 0.1 mm` is a string, a value to the schema. Its numbers are written `number`:
+/// [`crate::Model::json_schema`] widens every number to a string too, as everywhere.
+pub(crate) fn written_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+    schemars::json_schema!({
+        "type": "object",
+        "additionalProperties": {
+            "anyOf": [
+                {
+                    "description": "A number (SI), a number with a unit, an expression of the parameters before it, \
+                        or any of these followed by ± (or +-) and a tolerance: `150 mm ± 0.1 mm`.",
+                    "type": "number"
+                },
+                {
+                    "description": "A value with its tolerance.",
+                    "type": "object",
+                    "additionalProperties": false,
+                    "required": ["value", "tolerance"],
+                    "properties": {
+                        "value": {"description": "The value, as a parameter is written.", "type": "number"},
+                        "tolerance": {
+                            "description": "The largest deviation from the value, non-negative, in the value's \
+                                dimension (with a unit when the value has one).",
+                            "type": "number"
+                        },
+                        "distribution": {
+                            "description": "How deviations are spread: normal (default; the tolerance is three \
+                                standard deviations) or uniform (over plus or minus the tolerance).",
+                            "enum": ["normal", "uniform"]
+                        }
+                    }
+                }
+            ]
+        }
+    })
 }
 
 /// The derivatives of a model file's numbers with respect to its parameters (each vector: one
@@ -184,6 +268,19 @@ pub fn evaluate(
         }
         let given = overrides.iter().rev().find(|(n, _)| n == name).map(|(_, text)| text.as_str());
         let euler = std::cell::Cell::new(false);
+        let Some((value, tolerance)) = toleranced(value, &path, problems) else {
+            params.push(Parameter {
+                name: name.to_string(),
+                value: f64::NAN,
+                dim: None,
+                unit: None,
+                warning: None,
+                gradient: vec![0.0; names.len()],
+                tolerance: None,
+            });
+            continue;
+        };
+        let value = &value;
         // The unit the file writes the value in: its own (`100 mm`), or that of the one
         // parameter it names (`L2: L`).
         let unit = match value.as_str().map(str::trim) {
@@ -213,13 +310,104 @@ pub fn evaluate(
             euler_users.push(name.to_string());
         }
         let warning = warning.map(|w| format!("{path}: {w}"));
-        params.push(Parameter { name: name.to_string(), value, dim, unit, warning, gradient });
+        let tolerance = tolerance.and_then(|(text, distribution)| {
+            let read = number(&text, &params, name, &names, &std::cell::Cell::new(false))
+                .and_then(|(t, d)| tolerance_value(t, d, dim, &text, unit.as_deref()));
+            read.map(|value| Tolerance { value, distribution })
+                .map_err(|e| problems.push(Problem::new(format!("{path}.tolerance"), e)))
+                .ok()
+        });
+        params.push(Parameter { name: name.to_string(), value, dim, unit, warning, gradient, tolerance });
     }
     let count = params.len();
     for p in &mut params {
         p.gradient.truncate(count);
     }
     params
+}
+
+/// A parameter's entry split into its value and, when it has one, its tolerance as written and
+/// its distribution: a mapping `{value, tolerance, distribution}`, or a string with `±` (or
+/// `+-`) between the value and the tolerance. `None`, with the problem pushed at its path, for a
+/// mapping that is not of that shape.
+fn toleranced(
+    value: &Value,
+    path: &str,
+    problems: &mut Vec<Problem>,
+) -> Option<(Value, Option<(Value, Distribution)>)> {
+    match value {
+        Value::String(text) => {
+            let split = text.split_once('±').or_else(|| text.split_once("+-"));
+            Some(match split {
+                Some((v, t)) => (
+                    Value::String(v.trim().to_string()),
+                    Some((Value::String(t.trim().to_string()), Distribution::Normal)),
+                ),
+                None => (value.clone(), None),
+            })
+        }
+        Value::Mapping(map) => {
+            let mut bad = false;
+            for key in map.keys() {
+                if !matches!(key.as_str(), Some("value" | "tolerance" | "distribution")) {
+                    let key = key.as_str().map_or_else(|| format!("{key:?}"), str::to_string);
+                    problems.push(Problem::new(
+                        format!("{path}.{key}"),
+                        "unknown field; a parameter's mapping has value, tolerance and distribution",
+                    ));
+                    bad = true;
+                }
+            }
+            let distribution = match map.get("distribution").map(|d| d.as_str()) {
+                None => Distribution::Normal,
+                Some(Some("normal")) => Distribution::Normal,
+                Some(Some("uniform")) => Distribution::Uniform,
+                Some(_) => {
+                    problems.push(Problem::new(format!("{path}.distribution"), "expected normal or uniform"));
+                    bad = true;
+                    Distribution::Normal
+                }
+            };
+            let (Some(v), Some(t)) = (map.get("value"), map.get("tolerance")) else {
+                problems.push(Problem::new(path, "a parameter written as a mapping needs value and tolerance"));
+                return None;
+            };
+            (!bad).then(|| (v.clone(), Some((t.clone(), distribution))))
+        }
+        _ => Some((value.clone(), None)),
+    }
+}
+
+/// A tolerance `t` read with dimension `dim` (`None`: a bare number or an expression) for a
+/// parameter of dimension `of`, written `text`, whose value the file writes in `unit`: SI,
+/// finite and non-negative, in the parameter's dimension; a bare number for a parameter written
+/// with a unit is refused (SI or the value's unit? it must say).
+fn tolerance_value(t: f64, dim: Option<Dim>, of: Option<Dim>, text: &Value, unit: Option<&str>) -> Result<f64, String> {
+    let bare = matches!(text, Value::Number(_)) || text.as_str().is_some_and(|s| s.trim().parse::<f64>().is_ok());
+    if let (Some(d), Some(f)) = (dim, of) {
+        if d != f {
+            return Err(format!("is {d}, expected {f} (the parameter's dimension)"));
+        }
+    }
+    if let (true, Some(unit)) = (bare, unit.filter(|_| of.is_some())) {
+        return Err(format!(
+            "write the tolerance with its unit (as the value, in {unit}, say '{} {unit}')",
+            text_of(text)
+        ));
+    }
+    if !t.is_finite() || t < 0.0 {
+        return Err(format!("{t}: expected a non-negative tolerance in the parameter's unit"));
+    }
+    Ok(t)
+}
+
+/// A YAML scalar's text (a number or a string) for a message.
+fn text_of(value: &Value) -> String {
+    match value {
+        Value::String(s) => s.trim().to_string(),
+        Value::Number(n) => n.to_string(),
+        other => format!("{other:?}"),
+    }
 }
 
 /// One parameter's value and dimension: the file's `value`, or `given` from outside over it (a
@@ -645,5 +833,52 @@ mod tests {
         assert_eq!(fields["bodies.crank.inertia"], [2.0 * 2.0 * 0.1, 0.1 * 0.1]);
         assert_eq!(fields["bodies.crank.position[0]"], [0.5, 0.0]);
         assert_eq!(fields["bodies.crank.points.A[0]"], [1.0, 0.0]);
+    }
+
+    /// Both forms give the tolerance in SI with its distribution; the value reads as the plain
+    /// parameter does, to the bit; a value given from outside keeps the file's tolerance.
+    #[test]
+    fn a_tolerance_is_read_in_both_forms_and_kept_by_a_value_given() {
+        let text = "{r: 150 mm ± 0.1 mm, L: '300 mm +- 0.2 mm', w: {value: 2 rad/s, tolerance: 0.3 rad/s, distribution: uniform}, k: 2*r}";
+        let (p, problems) = params(text, &[]);
+        assert!(problems.is_empty(), "{problems:?}");
+        let (plain, _) = params("{r: 150 mm, L: 300 mm, w: 2 rad/s, k: 2*r}", &[]);
+        for (a, b) in p.iter().zip(&plain) {
+            assert_eq!((a.value.to_bits(), &a.unit, &a.gradient), (b.value.to_bits(), &b.unit, &b.gradient));
+        }
+        let t: Vec<Option<Tolerance>> = p.iter().map(|p| p.tolerance).collect();
+        assert_eq!(t[0], Some(Tolerance { value: 0.1e-3, distribution: Distribution::Normal }));
+        assert_eq!(t[1].map(|t| t.value), Some(0.2e-3));
+        assert_eq!(t[2], Some(Tolerance { value: 0.3, distribution: Distribution::Uniform }));
+        assert_eq!(t[3], None);
+        // sigma: t / 3 for a normal spread, t / sqrt(3) for a uniform one.
+        assert_eq!(t[0].unwrap().sigma(), 0.1e-3 / 3.0);
+        assert_eq!(t[2].unwrap().sigma(), 0.3 / 3f64.sqrt());
+        let (p, problems) = params(text, &[("r", "160 mm")]);
+        assert!(problems.is_empty(), "{problems:?}");
+        assert!((p[0].value - 0.16).abs() < 1e-16 && p[0].tolerance == t[0], "{:?}", p[0]);
+    }
+
+    #[test]
+    fn a_bad_tolerance_is_refused_at_its_path() {
+        for (text, path, says) in [
+            ("{r: 150 mm ± 0.1 kg}", "parameters.r.tolerance", "is a mass, expected a length"),
+            ("{r: 150 mm ± -0.1 mm}", "parameters.r.tolerance", "non-negative"),
+            ("{r: 150 mm ± 0.1}", "parameters.r.tolerance", "with its unit"),
+            (
+                "{r: {value: 150 mm, tolerance: 0.1 mm, distribution: flat}}",
+                "parameters.r.distribution",
+                "normal or uniform",
+            ),
+            ("{r: {value: 150 mm, tol: 0.1 mm}}", "parameters.r.tol", "unknown field"),
+            ("{r: {value: 150 mm}}", "parameters.r", "needs value and tolerance"),
+            ("{r: 150 mm ± x}", "parameters.r.tolerance", "unknown name 'x'"),
+        ] {
+            let (_, problems) = params(text, &[]);
+            assert!(problems.iter().any(|p| p.path == path && p.message.contains(says)), "{text}: {problems:?}");
+        }
+        // A bare tolerance of a bare (SI) value is SI.
+        let (p, problems) = params("{L: 0.3 ± 0.001}", &[]);
+        assert!(problems.is_empty() && p[0].tolerance.map(|t| t.value) == Some(0.001), "{problems:?}");
     }
 }

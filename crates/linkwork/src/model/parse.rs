@@ -58,6 +58,8 @@ pub struct Parsed {
     pub parameter_units: IndexMap<String, String>,
     /// Warnings about the values given from outside, each `parameters.<name>: ...`.
     pub warnings: Vec<String>,
+    /// The tolerance of each parameter the file gives one, in file order.
+    pub tolerances: IndexMap<String, params::Tolerance>,
 }
 
 /// Parse a model file's text. `Err` lists every problem found.
@@ -192,6 +194,7 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
     let of_numbers = problems.len();
     let parameter_units = parameters.iter().filter_map(|p| Some((p.name.clone(), p.unit.clone()?))).collect();
     let warnings = parameters.iter().filter_map(|p| p.warning.clone()).collect();
+    let tolerances = parameters.iter().filter_map(|p| Some((p.name.clone(), p.tolerance?))).collect();
     let parameters = parameters.into_iter().map(|p| (p.name, p.value)).collect();
     let sections = fields::<ModelSpec>();
     for key in map.keys() {
@@ -255,7 +258,7 @@ pub(crate) fn parse_document_with(root: Value, set: &[(String, String)]) -> Resu
         analyses,
         gradients,
     };
-    Ok(Parsed { spec, problems, broken, parameter_units, warnings })
+    Ok(Parsed { spec, problems, broken, parameter_units, warnings, tolerances })
 }
 
 /// A duplicate key's own line: the YAML parser's message (`<path>: duplicate entry with key "a"

@@ -28,8 +28,11 @@ pub struct ModelSpec {
     pub name: Option<String>,
     /// Named values, in order: a number (SI), a number with a unit (`"140 mm"`), or an expression
     /// of the parameters before it. Every numeric field may be written as an expression of them,
-    /// and expressions of time and the state may use them. After reading: the SI values.
+    /// and expressions of time and the state may use them. A parameter may carry a tolerance:
+    /// `{value: 150 mm, tolerance: 0.1 mm, distribution: normal}` or `150 mm ± 0.1 mm`. After
+    /// reading: the SI values.
     #[serde(default)]
+    #[schemars(schema_with = "super::params::written_schema")]
     pub parameters: IndexMap<String, f64>,
     /// The derivatives of the parameters and of the fields written as expressions of them with
     /// respect to each parameter, found when the file is read (empty for a spec built otherwise,

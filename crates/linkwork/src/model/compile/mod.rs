@@ -145,6 +145,7 @@ fn compiled(spec: &ModelSpec, broken: &[String], folder: &Path) -> (Result<Model
                 .collect(),
             parameters: spec.parameters.clone(),
             parameter_units: IndexMap::new(),
+            tolerances: IndexMap::new(),
             display: super::units::Display::read(&spec.display).unwrap_or_default(),
             warnings: Vec::new(),
             set: Vec::new(),
@@ -225,7 +226,7 @@ pub(super) fn unknown_body(name: &str, known: &[&str]) -> String {
 }
 
 /// Names become CSV column prefixes and expression variables (`crank.phi`): identifiers only.
-fn is_identifier(s: &str) -> bool {
+pub(crate) fn is_identifier(s: &str) -> bool {
     let mut chars = s.chars();
     matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
         && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
