@@ -5,7 +5,7 @@
 
 use super::{dynamic, run_inverse, run_kinematic, run_modes, run_static, tolerance_warnings};
 use crate::error::{Error, Problem};
-use crate::model::spec::{AnalysisKind, AnalysisSpec, IntegratorKind, SolverSpec};
+use crate::model::spec::{AnalysisKind, AnalysisSpec, IntegratorKind, LinearisePoint, SolverSpec};
 use crate::model::{revise, Analysis, Model};
 use crate::progress::{Progress, StopToken};
 use crate::results::stream::{CsvSink, RowSink, Stream};
@@ -234,11 +234,17 @@ impl Model {
         if names.is_empty() {
             return Ok(Vec::new());
         }
-        if analysis.kind != AnalysisKind::Kinematic {
+        if !matches!(analysis.kind, AnalysisKind::Kinematic | AnalysisKind::Static | AnalysisKind::Modes) {
             return Err(problem(format!(
-                "analysis '{}' has type {}: design sensitivities are computed for kinematic analyses so far",
+                "analysis '{}' has type {}: design sensitivities are computed for kinematic, static and modes analyses so far",
                 analysis.name,
                 analysis.kind.name()
+            )));
+        }
+        if analysis.kind == AnalysisKind::Modes && analysis.about != LinearisePoint::Equilibrium {
+            return Err(problem(format!(
+                "analysis '{}' linearises about the initial state: design sensitivities of modes are computed about an equilibrium (`about: equilibrium`) so far",
+                analysis.name
             )));
         }
         names

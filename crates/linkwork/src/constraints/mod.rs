@@ -413,18 +413,28 @@ pub fn reaction<S: Scalar>(
     let Anchor { i, j, point } = anchor;
     match i.0 {
         Some(_) => {
-            let [fx, fy, m] = generalised(i);
-            // Moment about P = moment about the centre of mass - (A s'_P) x f.
             let a = Frame::of(i, q).rotate(point);
-            ([fx, fy], m - (S::constant(a[0]) * fy - S::constant(a[1]) * fx))
+            reaction_about(true, generalised(i), a.map(S::constant))
         }
         None => {
-            // On ground: the opposite of the reaction on body j, its moment taken about P.
-            let [fx, fy, m] = generalised(j);
             let rj = j.coords(q);
             let d = [rj[0] - point[0], rj[1] - point[1]];
-            ([-fx, -fy], -(m + S::constant(d[0]) * fy - S::constant(d[1]) * fx))
+            reaction_about(false, generalised(j), d.map(S::constant))
         }
+    }
+}
+
+/// The reaction force and moment of [`reaction`] from the generalised reaction `g` on one body
+/// and the lever: with body i `moving`, `g = g_i` and the lever `A_i s'_P` (the moment about P is
+/// the moment about the centre of mass less `(A_i s'_P) x f`); with body i ground, `g = g_j` and
+/// the lever `r_j - P` (the opposite of the reaction on body j, its moment taken about P).
+/// Generic over [`Scalar`] so that a design sensitivity differentiates it along a parameter.
+pub(crate) fn reaction_about<S: Scalar>(moving: bool, g: [S; 3], lever: [S; 2]) -> ([S; 2], S) {
+    let [fx, fy, m] = g;
+    if moving {
+        ([fx, fy], m - (lever[0] * fy - lever[1] * fx))
+    } else {
+        ([-fx, -fy], -(m + lever[0] * fy - lever[1] * fx))
     }
 }
 

@@ -28,6 +28,20 @@ use crate::linalg::SparseLu;
 use crate::model::{Analysis, Model};
 use crate::results::Results;
 
+mod modes;
+mod statics;
+
+pub(crate) use modes::mode_derivatives;
+pub(crate) use statics::EquilibriumSensitivity;
+
+/// The model error of an element at `path` (`what` it is) that has no design sensitivities yet.
+fn unsupported(path: String, what: &str) -> Error {
+    Error::Model(vec![Problem::new(
+        path,
+        format!("{what} has no design sensitivities yet (asked for with `sensitivities`)"),
+    )])
+}
+
 /// The numbers of one level of the sensitivity equations: how a coordinate, the time and a
 /// number that depends on the parameters only are seeded, the element's rows over them, and
 /// the part of a row that is the level's right-hand side.
@@ -194,12 +208,7 @@ impl<'m> Sensitivity<'m> {
 
     /// An error naming the first element or measure that has no derivatives yet.
     fn supported(&self) -> Result<(), Error> {
-        let unsupported = |path: String, what: &str| {
-            Err(Error::Model(vec![Problem::new(
-                path,
-                format!("{what} has no design sensitivities yet (asked for with `sensitivities`)"),
-            )]))
-        };
+        let unsupported = |path: String, what: &str| Err(unsupported(path, what));
         let b = &self.position;
         let at = At { q: &b.q, t: Dual::constant(0.0), params: &b.params };
         let mut out = b.full.clone();

@@ -3,8 +3,8 @@
 //! and drivers.
 
 use super::{gather, Dae};
-use crate::expr::Dual;
-use crate::forces::{derivatives, potential_rate, DualWork};
+use crate::expr::{Dual, HyperDual, Scalar};
+use crate::forces::{derivatives, potential_rate, DualWork, Force};
 use faer::MatMut;
 
 /// Scratch of one force's evaluation: its positions and velocities on its (at most `w`)
@@ -39,6 +39,47 @@ impl ForceWork {
         gather(x, cols, &mut self.fx[..w]);
         gather(v, cols, &mut self.fv[..w]);
         w
+    }
+}
+
+/// The numbers a force's load is differentiated along a parameter in: a number that depends on
+/// the parameters only, along the parameter's direction, and the force's load over them.
+trait Along: Scalar {
+    /// `v` with derivative `g` along the parameter.
+    fn along(v: f64, g: f64) -> Self;
+    /// The load of `f` over these numbers ([`Force::load_data_dual`] and its kin).
+    fn load(f: &dyn Force, x: (&[Self], &[Self], f64), data: &[Self], params: &[Self], out: &mut [Self]) -> bool;
+}
+
+/// First derivatives along the parameter alone.
+impl Along for Dual {
+    fn along(v: f64, g: f64) -> Dual {
+        Dual::new(v, g)
+    }
+    fn load(
+        f: &dyn Force,
+        (x, v, t): (&[Dual], &[Dual], f64),
+        data: &[Dual],
+        params: &[Dual],
+        out: &mut [Dual],
+    ) -> bool {
+        f.load_data_dual(x, v, t, data, params, out)
+    }
+}
+
+/// A direction of the coordinates first, the parameter's second.
+impl Along for HyperDual {
+    fn along(v: f64, g: f64) -> HyperDual {
+        HyperDual::new(v, 0.0, g, 0.0)
+    }
+    fn load(
+        f: &dyn Force,
+        (x, v, t): (&[HyperDual], &[HyperDual], f64),
+        data: &[HyperDual],
+        params: &[HyperDual],
+        out: &mut [HyperDual],
+    ) -> bool {
+        f.load_data_hyper(x, v, t, data, params, out)
     }
 }
 
@@ -121,22 +162,62 @@ impl Dae<'_> {
                 o[k] += s * (g[0][p] * model.gravity[k] + b.mass * grads.gravity[k][p]);
             }
         }
-        let params: Vec<Dual> =
-            model.parameters.values().zip(&grads.params).map(|(&v, g)| Dual::new(v, g[p])).collect();
+        let x = |c: usize| Dual::new(q[c], dq[c]);
+        let v = |c: usize| Dual::new(qdot[c], dv[c]);
+        self.add_forces_along(t, p, x, v, |c, l: Dual| out[c] += l.d)
+    }
+
+    /// `d/dp (Q_q a + Q_qdot b)`: the derivative with respect to parameter `p` (file order) of
+    /// the loads' derivative along the direction `(a, b)` of the coordinates and velocities,
+    /// added to `out: (n)`, with the coordinates and velocities moving along `dq` and `dv` (their
+    /// derivatives with respect to `p`): the stiffness's and damping's derivatives along a
+    /// parameter that a sensitivity of modes needs. Gravity depends on neither; each active
+    /// force gives it from one hyper-dual pass (the first direction `(a, b)`, the second the
+    /// parameter's), exact. `Err` names the first force without derivatives with respect to its
+    /// numbers, as [`Dae::add_load_along`].
+    pub fn add_load_jacobians_along(
+        &self,
+        (q, qdot, t): (&[f64], &[f64], f64),
+        (a, b): (&[f64], &[f64]),
+        dq: &[f64],
+        dv: &[f64],
+        p: usize,
+        out: &mut [f64],
+    ) -> Result<(), String> {
+        let x = |c: usize| HyperDual::new(q[c], a[c], dq[c], 0.0);
+        let v = |c: usize| HyperDual::new(qdot[c], b[c], dv[c], 0.0);
+        self.add_forces_along(t, p, x, v, |c, l: HyperDual| out[c] += l.e12)
+    }
+
+    /// Every active force's load over the numbers `S` ([`Along`]) at the coordinates `x(column)`
+    /// and velocities `v(column)`, its numbers and the parameters along their derivatives with
+    /// respect to parameter `p`, each entry scaled as in [`Dae::load`] and given to
+    /// `add(column, load)`. `Err` names the first force without derivatives.
+    fn add_forces_along<S: Along>(
+        &self,
+        t: f64,
+        p: usize,
+        x: impl Fn(usize) -> S,
+        v: impl Fn(usize) -> S,
+        mut add: impl FnMut(usize, S),
+    ) -> Result<(), String> {
+        let (model, s) = (self.model, self.external_scale);
+        let grads = &model.gradients;
+        let params: Vec<S> = model.parameters.values().zip(&grads.params).map(|(&v, g)| S::along(v, g[p])).collect();
         for (f, &applied) in self.forces.iter().zip(&self.applied) {
             let k = model.forces.iter().position(|e| std::ptr::eq(e, *f)).expect("an active force is the model's");
-            let data: Vec<Dual> =
-                f.force.data().iter().zip(&grads.forces[k]).map(|(&(_, v), g)| Dual::new(v, g[p])).collect();
+            let data: Vec<S> =
+                f.force.data().iter().zip(&grads.forces[k]).map(|(&(_, v), g)| S::along(v, g[p])).collect();
             let cols = f.force.columns();
-            let x: Vec<Dual> = cols.iter().map(|&c| Dual::new(q[c], dq[c])).collect();
-            let v: Vec<Dual> = cols.iter().map(|&c| Dual::new(qdot[c], dv[c])).collect();
-            let mut load = vec![Dual::new(0.0, 0.0); cols.len()];
-            if !f.force.load_data_dual(&x, &v, t, &data, &params, &mut load) {
+            let x: Vec<S> = cols.iter().map(|&c| x(c)).collect();
+            let v: Vec<S> = cols.iter().map(|&c| v(c)).collect();
+            let mut load = vec![S::constant(0.0); cols.len()];
+            if !S::load(f.force.as_ref(), (&x, &v, t), &data, &params, &mut load) {
                 return Err(f.name.clone());
             }
-            let scale = if applied { s } else { 1.0 };
-            for (&c, l) in cols.iter().zip(&load) {
-                out[c] += scale * l.d;
+            let scale = S::constant(if applied { s } else { 1.0 });
+            for (&c, &l) in cols.iter().zip(&load) {
+                add(c, scale * l);
             }
         }
         Ok(())

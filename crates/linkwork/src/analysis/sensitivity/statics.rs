@@ -1,0 +1,275 @@
+//! Design sensitivities of a static equilibrium (and of the one a modes analysis is about):
+//! docs/sensitivities.md, "Static equilibrium".
+//!
+//! At an equilibrium `(q, lambda)` of `R(q, lambda; p) = [Q(q; p) - Phi_q^T lambda; Phi(q; p)]
+//! = 0`, the derivative with respect to a parameter `p` solves the Newton matrix's system at
+//! convergence (the tangent stiffness `K = -d(Q - Phi_q^T lambda)/dq` of the static solver):
+//!
+//! ```text
+//! [ -K     -Phi_q^T ] [ q_p      ]     [ Q_p - (Phi_q^T lambda)_p ]
+//! [ Phi_q   0       ] [ lambda_p ] = - [ Phi_p                    ]
+//! ```
+//!
+//! with the partial derivatives at fixed `q` and `lambda`: `Q_p` from
+//! [`Dae::add_load_along`] (gravity through the masses and gravity, each force through its
+//! numbers and the parameters), `Phi_p` the position level of a kinematic sensitivity (the
+//! [`Dual`] part along the parameter), and `(Phi_q^T lambda)_p` the mixed part of `lambda^T Phi`
+//! over [`HyperDual`] numbers seeded with a unit coordinate in one direction and the parameter
+//! in the other, one evaluation of an element per column it touches. The reactions follow from
+//! the same evaluations with the coordinates moving along `q_p` and the multipliers along
+//! `lambda_p`.
+
+use super::{level, seed_parameters, unsupported, Buffers, Level, Seeded, Sensitivity};
+use crate::analysis::dynamic::Dae;
+use crate::analysis::statics::newton_matrix;
+use crate::constraints::{reaction_about, At, BodyIx};
+use crate::element::Pose;
+use crate::error::Error;
+use crate::expr::{Dual, HyperDual, Scalar};
+use crate::linalg::dense::min_norm_solve_columns;
+use crate::model::{Analysis, Model};
+use crate::results::Results;
+use faer::{Mat, MatRef};
+
+/// The sensitivities of the equilibria of an analysis: its elements and parameters
+/// ([`Sensitivity`]) and, at the last equilibrium solved for ([`EquilibriumSensitivity::solve`]),
+/// each parameter's `q_p` and `lambda_p`.
+pub(crate) struct EquilibriumSensitivity<'m> {
+    pub(super) base: Sensitivity<'m>,
+    /// (parameters asked) `q_p`, `(n)` each.
+    pub(super) dq: Vec<Vec<f64>>,
+    /// (parameters asked) `lambda_p`, `(m)` each.
+    pub(super) dlambda: Vec<Vec<f64>>,
+}
+
+impl<'m> EquilibriumSensitivity<'m> {
+    /// The sensitivities of the equilibria of `analysis` of `model` (equations `dae`) with
+    /// respect to the parameters `asked` (indices, file order), checked at the guess `(q, t)`:
+    /// an element, measure or force with no derivatives yet, or a joint with friction, is an
+    /// error naming it.
+    pub(crate) fn new(
+        model: &'m Model,
+        analysis: &Analysis,
+        asked: &[usize],
+        dae: &Dae<'m>,
+        q: &[f64],
+        t: f64,
+    ) -> Result<EquilibriumSensitivity<'m>, Error> {
+        let base = Sensitivity::new(model, analysis, asked)?;
+        if let Some(j) = model.joints.iter().find(|j| j.friction.is_some()) {
+            return Err(unsupported(format!("joints.{}", j.name), "a joint with friction"));
+        }
+        let zero = vec![0.0; q.len()];
+        let mut load = zero.clone();
+        if let Some(&p) = asked.first() {
+            dae.add_load_along(q, &zero, t, &zero, &zero, p, &mut load)
+                .map_err(|name| unsupported_force(model, &name))?;
+        }
+        Ok(EquilibriumSensitivity { base, dq: Vec::new(), dlambda: Vec::new() })
+    }
+
+    /// `q_p` and `lambda_p` of every parameter asked at the equilibrium `(q, lambda)` at `t`,
+    /// with `k` the tangent stiffness there (`Statics::tangent`) and `jac = Phi_q`: one
+    /// minimum-norm solve (SVD) of the Newton matrix for all the parameters, as the static
+    /// solver's Newton step (redundant rows and their multipliers as it treats them).
+    pub(crate) fn solve(
+        &mut self,
+        dae: &Dae<'_>,
+        (k, jac): (MatRef<'_, f64>, MatRef<'_, f64>),
+        q: &[f64],
+        lambda: &[f64],
+        t: f64,
+    ) -> Result<(), Error> {
+        let (m, n) = (jac.nrows(), jac.ncols());
+        let mut big = Mat::zeros(n + m, n + m);
+        newton_matrix(k, jac, big.as_mut());
+        let b = &mut self.base;
+        let (zero, all) = (vec![0.0; n], (0..m).collect::<Vec<usize>>());
+        b.dq.iter_mut().for_each(|d| d.fill(0.0));
+        let mut rhs = Mat::zeros(n + m, b.asked.len());
+        let (mut force, mut phi) = (vec![0.0; n], vec![0.0; m]);
+        for (j, &p) in b.asked.iter().enumerate() {
+            force.fill(0.0);
+            dae.add_load_along(q, &zero, t, &zero, &zero, p, &mut force)
+                .map_err(|name| unsupported_force(b.model, &name))?;
+            by_column(&mut b.velocity, &b.elements, b.model, p, t, (q, &zero), |_, e, c, rows| {
+                let mixed: f64 = rows.iter().zip(&lambda[e.row..]).map(|(r, l)| r.e12 * l).sum();
+                force[e.constraint.columns()[c]] -= mixed;
+            });
+            // `level` gives `-Phi_p` (the coordinates' derivatives zero).
+            level(&mut b.position, &b.elements, b.model, p, t, (q, &zero, &zero), &b.dq, &all, &mut phi);
+            (0..n).for_each(|i| rhs[(i, j)] = -force[i]);
+            (0..m).for_each(|r| rhs[(n + r, j)] = phi[r]);
+        }
+        let x = min_norm_solve_columns(big.as_ref(), rhs.as_ref()).ok_or_else(|| Error::Singular {
+            time: t,
+            rows: vec![],
+            detail:
+                "the SVD of the equilibrium's Newton matrix failed (a non-finite entry) in its design sensitivities"
+                    .into(),
+        })?;
+        let count = b.asked.len();
+        self.dq = (0..count).map(|j| (0..n).map(|i| x[(i, j)]).collect()).collect();
+        self.dlambda = (0..count).map(|j| (0..m).map(|r| x[(n + r, j)]).collect()).collect();
+        Ok(())
+    }
+
+    /// The derivatives of the row just pushed at the equilibrium `(q, lambda)` at `t` (after
+    /// [`EquilibriumSensitivity::solve`] there), pushed into `results`: each body's columns
+    /// (the velocities and accelerations zero), then with `reactions` (a static analysis) each
+    /// joint's reaction, each driver's effort and the potential energy, then the measures.
+    pub(crate) fn push(
+        &mut self,
+        results: &mut Results,
+        dae: &Dae<'_>,
+        (q, lambda, t): (&[f64], &[f64], f64),
+        reactions: bool,
+    ) -> Result<(), Error> {
+        let n = q.len();
+        let zero = vec![0.0; n];
+        for j in 0..self.base.asked.len() {
+            let p = self.base.asked[j];
+            self.base.dq[0].copy_from_slice(&self.dq[j]);
+            self.base.dq[1].fill(0.0);
+            self.base.dq[2].fill(0.0);
+            let mut row = self.base.columns(p, t, (q, &zero, &zero));
+            if reactions {
+                let mut extra = self.reactions(q, lambda, t, j);
+                extra.push(self.potential_energy(dae, q, j)?);
+                row.splice(3 * n..3 * n, extra);
+            }
+            self.base.rows[j] = row;
+        }
+        results.push_sensitivities(t, &self.base.names, &self.base.rows)
+    }
+
+    /// The derivatives along the `j`-th parameter asked of each joint's reaction `(fx, fy,
+    /// torque)` and each driver's effort ([`Dae::reactions`]) at `(q, lambda)`: the generalised
+    /// reaction `-Phi_q^T lambda` on each column of a joint differentiated along `q_p`, `lambda_p`
+    /// and the joint's numbers (one hyper-dual evaluation per column), the lever of its moment
+    /// along the body's turn and its anchor point's gradient.
+    fn reactions(&mut self, q: &[f64], lambda: &[f64], t: f64, j: usize) -> Vec<f64> {
+        let b = &mut self.base;
+        let p = b.asked[j];
+        let (dq, dl) = (&self.dq[j], &self.dlambda[j]);
+        let joints = b.model.joints.len();
+        let mut g: Vec<Vec<Dual>> = vec![Vec::new(); joints];
+        by_column(&mut b.velocity, &b.elements[..joints], b.model, p, t, (q, dq), |k, e, _, rows| {
+            let (l, d) = (&lambda[e.row..], &dl[e.row..]);
+            let value: f64 = rows.iter().zip(l).map(|(r, l)| r.e1 * l).sum();
+            let derivative: f64 = rows.iter().zip(l).zip(d).map(|((r, l), d)| r.e12 * l + r.e1 * d).sum();
+            g[k].push(Dual::new(-value, -derivative));
+        });
+        let qd: Vec<Dual> = q.iter().zip(dq).map(|(&v, &d)| Dual::new(v, d)).collect();
+        let mut out = Vec::with_capacity(3 * joints + b.elements.len() - joints);
+        for (e, g) in b.elements.iter().zip(&g) {
+            let anchor = e.constraint.anchor();
+            let columns = e.constraint.columns();
+            let on = |body: BodyIx| -> [Dual; 3] {
+                let at = |k: usize| body.0.and_then(|o| columns.iter().position(|&c| c == o + k));
+                [0, 1, 2].map(|k| at(k).map_or(Dual::constant(0.0), |c| g[c]))
+            };
+            let point = anchor_point(e, anchor.point, p);
+            let (f, m) = if anchor.i.0.is_some() {
+                reaction_about(true, on(anchor.i), Pose::of(anchor.i, &qd).rotate(point))
+            } else {
+                let o = Pose::of(anchor.j, &qd).o;
+                reaction_about(false, on(anchor.j), [o[0] - point[0], o[1] - point[1]])
+            };
+            out.extend([f[0].d, f[1].d, m.d]);
+        }
+        out.extend(b.elements[joints..].iter().map(|e| -dl[e.row]));
+        out
+    }
+
+    /// The derivative along the `j`-th parameter asked of the potential energy
+    /// ([`Dae::potential_energy`]) at `q`: gravity's through the masses, gravity and `q_p`, each
+    /// active force's through its coordinates and (`potential_data`) its numbers. A force whose
+    /// numbers the parameter moves and whose potential has no derivatives with respect to them
+    /// yet is an error naming it.
+    fn potential_energy(&self, dae: &Dae<'_>, q: &[f64], j: usize) -> Result<f64, Error> {
+        let model = self.base.model;
+        let (p, dq) = (self.base.asked[j], &self.dq[j]);
+        let grads = &model.gradients;
+        let mut d = 0.0;
+        for (k, (body, g)) in model.bodies.iter().zip(&grads.bodies).enumerate() {
+            for c in 0..2 {
+                let weight = body.mass * model.gravity[c];
+                let along = g[0][p] * model.gravity[c] + body.mass * grads.gravity[c][p];
+                d -= along * q[3 * k + c] + weight * dq[3 * k + c];
+            }
+        }
+        let params: Vec<Dual> =
+            model.parameters.values().zip(&grads.params).map(|(&v, g)| Dual::new(v, g[p])).collect();
+        for f in &dae.forces {
+            let k = model.forces.iter().position(|e| std::ptr::eq(e, *f)).expect("an active force is the model's");
+            let data: Vec<Dual> =
+                f.force.data().iter().zip(&grads.forces[k]).map(|(&(_, v), g)| Dual::new(v, g[p])).collect();
+            let x: Vec<Dual> = f.force.columns().iter().map(|&c| Dual::new(q[c], dq[c])).collect();
+            d += match f.force.potential_data_dual(&x, &data, &params) {
+                Some(v) => v.d,
+                None if data.iter().all(|v| v.d == 0.0) => f.force.potential_dual(&x).d,
+                None => {
+                    let what = format!("the potential energy of the {} force", f.kind);
+                    return Err(unsupported(format!("forces.{}", f.name), &what));
+                }
+            };
+        }
+        Ok(d)
+    }
+}
+
+/// The model error of the force `name` that has no derivatives with respect to its numbers yet.
+pub(super) fn unsupported_force(model: &Model, name: &str) -> Error {
+    let kind = model.forces.iter().find(|f| f.name == name).map_or("", |f| f.kind);
+    unsupported(format!("forces.{name}"), &format!("the {kind} force"))
+}
+
+/// The anchor point `point` of element `e`'s reaction moment with its derivative along
+/// parameter `p`: that of the element's own point it is (`point_i`, or `point` of a one-body
+/// element), none when it is no number of the element (a point it takes from elsewhere, held).
+fn anchor_point(e: &Seeded<'_>, point: [f64; 2], p: usize) -> [Dual; 2] {
+    let data = e.constraint.data();
+    let slot = |name: &str| data.iter().position(|&(n, _)| n == name);
+    let pairs = [("point_i[0]", "point_i[1]"), ("point[0]", "point[1]")];
+    let found = pairs.iter().find_map(|&(x, y)| {
+        let (x, y) = (slot(x)?, slot(y)?);
+        (data[x].1 == point[0] && data[y].1 == point[1]).then_some((x, y))
+    });
+    match found {
+        Some((x, y)) => [Dual::new(point[0], e.grads[x][p]), Dual::new(point[1], e.grads[y][p])],
+        None => point.map(Dual::constant),
+    }
+}
+
+/// Each of `elements`' rows over hyper-dual numbers, once per column the element touches: the
+/// first direction the unit coordinate of that column, the second parameter `p`'s (the
+/// coordinates along `dq`, the element's numbers and the parameters along their gradients), at
+/// the fixed time `t`; `f(element index, element, local column, rows)`.
+fn by_column(
+    b: &mut Buffers<HyperDual>,
+    elements: &[Seeded<'_>],
+    model: &Model,
+    p: usize,
+    t: f64,
+    (q, dq): (&[f64], &[f64]),
+    mut f: impl FnMut(usize, &Seeded<'_>, usize, &[HyperDual]),
+) {
+    for (x, (&v, &d)) in b.q.iter_mut().zip(q.iter().zip(dq)) {
+        *x = HyperDual::new(v, 0.0, d, 0.0);
+    }
+    seed_parameters(&mut b.params, model, p);
+    for (k, e) in elements.iter().enumerate() {
+        b.data.clear();
+        b.data.extend(e.data.iter().zip(e.grads).map(|(&v, g)| HyperDual::fixed(v, g[p])));
+        let rows = e.constraint.rows();
+        for (c, &column) in e.constraint.columns().iter().enumerate() {
+            b.q[column].e1 = 1.0;
+            let at = At { q: &b.q, t: HyperDual::constant(t), params: &b.params };
+            let supported = e.constraint.phi_hyper(&at, &b.data, &mut b.full[e.row..]);
+            debug_assert!(supported, "{} was checked to have derivatives", e.name);
+            b.q[column].e1 = 0.0;
+            f(k, e, c, &b.full[e.row..e.row + rows]);
+        }
+    }
+}
