@@ -28,55 +28,138 @@ fn run_at(model: &Model, analysis: &str, name: &str, value: f64) -> Results {
         .unwrap_or_else(|f| panic!("{analysis} with {name} = {value}: {}", f.error))
 }
 
-/// The central difference of every column with respect to parameter `name` by Richardson's
-/// extrapolation of the steps `h` and `h/2`: `(4 D(h/2) - D(h)) / 3`, whose truncation error is
-/// of order `h^4`. `h` is 3e-4 of the parameter's size ([`step`]): the runs converge their
-/// positions to round-off ([`tight`]), so a difference quotient is good to about `eps / h` of
-/// the run's size (the floor below), and the truncation is about `(3e-4)^4`. Only the
-/// output times that every run shares are kept (a parameter that sets `t_end` moves the last).
-fn finite_differences(model: &Model, analysis: &str, name: &str, times: &[f64]) -> Vec<Vec<Option<f64>>> {
+/// The central difference with respect to parameter `name` of each number `read` takes from a
+/// whole run of `analysis`, by Richardson's extrapolation of the steps `h` and `h/2`:
+/// `(4 D(h/2) - D(h)) / 3`, whose truncation error is of order `h^4`. `h` is 3e-4 of the
+/// parameter's size ([`step`]): the runs converge their positions to round-off ([`tight`]), so
+/// a difference quotient is good to about `eps / h` of the run's size (the floor below), and
+/// the truncation is about `(3e-4)^4`. A number that some run lacks (`None`) has none.
+fn differences(
+    model: &Model,
+    analysis: &str,
+    name: &str,
+    read: impl Fn(&Results) -> Vec<Option<f64>>,
+) -> Vec<Option<f64>> {
     let value = model.parameters[name];
-    let h = step(model, name);
-    let runs: Vec<Results> =
-        [-h, h, -h / 2.0, h / 2.0].iter().map(|d| run_at(model, analysis, name, value + d)).collect();
-    let columns = runs[0].names.len();
-    (0..columns)
-        .map(|c| {
-            times
-                .iter()
-                .map(|&t| {
-                    let at = |r: &Results| r.time.iter().position(|&x| x == t).map(|k| r.columns[c][k]);
-                    let [a, b, c2, d] = [&runs[0], &runs[1], &runs[2], &runs[3]].map(at);
-                    let (a, b, c2, d) = (a?, b?, c2?, d?);
-                    let wide = (b - a) / (2.0 * h);
-                    let narrow = (d - c2) / h;
-                    Some((4.0 * narrow - wide) / 3.0)
-                })
-                .collect()
+    let h = step(model, analysis, name);
+    let runs: Vec<Vec<Option<f64>>> =
+        [-h, h, -h / 2.0, h / 2.0].iter().map(|d| read(&run_at(model, analysis, name, value + d))).collect();
+    (0..runs[0].len())
+        .map(|k| {
+            let [a, b, c, d] = [0, 1, 2, 3].map(|r| runs[r].get(k).copied().flatten());
+            let (a, b, c, d) = (a?, b?, c?, d?);
+            Some((4.0 * (d - c) / h - (b - a) / (2.0 * h)) / 3.0)
         })
         .collect()
 }
 
-/// The step of the finite differences in parameter `name`: 3e-4 of its value (of 1e-3 for a
-/// parameter that is zero). At 1e-3 the six-bar's accelerations near its start, whose higher
-/// derivatives are large, kept a truncation error of 1.3e-7 after the extrapolation.
-fn step(model: &Model, name: &str) -> f64 {
-    3e-4 * model.parameters[name].abs().max(1e-3)
+/// [`differences`] of every column at each of `times` (only the output times that every run
+/// shares: a parameter that sets `t_end` moves the last), column by column.
+fn finite_differences(model: &Model, analysis: &str, name: &str, times: &[f64]) -> Vec<Vec<Option<f64>>> {
+    let read = |r: &Results| -> Vec<Option<f64>> {
+        let at = |c: usize, t: f64| r.time.iter().position(|&x| x == t).map(|k| r.columns[c][k]);
+        (0..r.names.len()).flat_map(|c| times.iter().map(move |&t| at(c, t))).collect()
+    };
+    let flat = differences(model, analysis, name, read);
+    flat.chunks(times.len().max(1)).map(<[Option<f64>]>::to_vec).collect()
 }
 
-/// The examples with parameters whose kinematic analyses have no sensitivities yet, each with
-/// the element the run names: the cam joints (this increment differentiates the geometric
-/// joints and the drivers).
+/// The step of the finite differences of `analysis` in parameter `name`: 3e-4 of its value (of
+/// 1e-3 for a parameter that is zero). At 1e-3 the six-bar's accelerations near its start, whose
+/// higher derivatives are large, kept a truncation error of 1.3e-7 after the extrapolation.
+/// A modes analysis takes ten times that: its frequencies carry the rounding of the geometric
+/// stiffness's central difference (about 1e-11 of the frequency, `analysis::statics`), which a
+/// difference quotient divides by the step. Measured on the four-bar hanging under gravity
+/// (below): with steps of 3e-4 the extrapolated differences of its frequency scatter by 3e-7
+/// about the exact derivative, with 3e-3 and 1e-2 they agree with it to 2e-8.
+fn step(model: &Model, analysis: &str, name: &str) -> f64 {
+    let modes = model.analyses[analysis].kind == AnalysisKind::Modes;
+    (if modes { 3e-3 } else { 3e-4 }) * model.parameters[name].abs().max(1e-3)
+}
+
+/// The examples with parameters whose analyses have no sensitivities yet, each with the
+/// element the run names: the cam joints (this increment differentiates the geometric joints
+/// and the drivers).
 const NOT_YET: &[(&str, &str)] = &[("cam_profile.yaml", "joints."), ("cam_roller.yaml", "joints.")];
 
-/// Every kinematic analysis of every example with parameters: the derivative of every column
-/// with respect to every parameter agrees with the finite differences of whole runs to 1e-7 of
-/// the column's largest derivative: what the issue asks, and 100 times the differences' own
-/// truncation and convergence error above. Where the derivative is zero (a parameter that does
-/// not move the column) the differences are round-off: a run whose largest value is `|c|` (the
-/// quick-return's accelerations, 60 m/s^2) computes each column to about `eps |c|`, so a
-/// difference quotient to about `eps |c| / h`; the floor is 100 times that, or 1e-10, whichever
-/// is larger (2e-9 for the quick-return's step of 6e-4 m).
+/// The analysis types whose sensitivities are checked against finite differences.
+const DIFFERENTIATED: [AnalysisKind; 3] = [AnalysisKind::Kinematic, AnalysisKind::Static, AnalysisKind::Modes];
+
+/// A quantity of a mode, where it has one.
+type Quantity = fn(&linkwork::results::Mode) -> Option<f64>;
+
+/// Check the sensitivities of `analysis` of `model` (from `file`) with respect to every
+/// parameter against the finite differences of whole runs, each disagreement into `failures`:
+/// every column, and a modes analysis's frequencies, damped frequencies and growth rates
+/// (`modes.<k>.<quantity>` of the summary, the modes in the order the analysis sorts them).
+/// Each to 1e-7 of the quantity's largest derivative: what the issue asks, and 100 times the
+/// differences' own truncation and convergence error. Where the derivative is zero (a
+/// parameter that does not move the quantity) the differences are round-off: a run whose
+/// largest value is `|c|` (the quick-return's accelerations, 60 m/s^2) computes each column to
+/// about `eps |c|`, so a difference quotient to about `eps |c| / h`; the floor is 100 times
+/// that, or 1e-10, whichever is larger (2e-9 for the quick-return's step of 6e-4 m).
+fn check(model: &Model, file: &str, name: &str, results: &Results, failures: &mut Vec<String>) {
+    let parameters: Vec<String> = model.parameters.keys().cloned().collect();
+    let sens = results.sensitivities.as_ref().expect("the sensitivities asked for");
+    // The run's size: its largest value (every column is computed with the others).
+    let size = results.columns.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert_eq!(sens.names, results.names, "{file}: every column has its derivatives");
+    let compare =
+        |failures: &mut Vec<String>, what: &dyn Fn(usize) -> String, exact: &[f64], fd: &[Option<f64>], floor: f64| {
+            let scale = fd.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+            for (row, (&exact, approx)) in exact.iter().zip(fd).enumerate() {
+                let Some(approx) = approx else { continue };
+                if (exact - approx).abs() > 1e-7 * scale + floor {
+                    failures.push(format!("{file} {name}: {}: {exact:e}, differences {approx:e}", what(row)));
+                    break;
+                }
+            }
+        };
+    for (k, p) in parameters.iter().enumerate() {
+        let floor = (100.0 * f64::EPSILON * size / step(model, name, p)).max(1e-10);
+        let fd = finite_differences(model, name, p, &results.time);
+        for (c, column) in sens.values[k].iter().enumerate() {
+            let what = |row: usize| format!("d({})/d({p}) at t = {}", results.names[c], results.time[row]);
+            compare(failures, &what, column, &fd[c], floor);
+        }
+        let Some(modes) = &results.summary.modes else { continue };
+        let derivatives = results.summary.sensitivities.as_ref().expect("the summary's sensitivities");
+        let quantities: [(&str, Quantity); 3] = [
+            ("frequency", |m| m.frequency),
+            ("damped_frequency", |m| Some(m.damped_frequency)),
+            ("growth_rate", |m| m.growth_rate),
+        ];
+        for (quantity, get) in quantities {
+            let read = |r: &Results| r.summary.modes.iter().flatten().map(get).collect::<Vec<_>>();
+            let fd = differences(model, name, p, read);
+            for (number, mode) in modes.iter().enumerate() {
+                let key = format!("modes.{}.{quantity}", number + 1);
+                let exact = derivatives.get(&key).and_then(|d| d.get(p.as_str()));
+                match (exact, fd.get(number).copied().flatten(), get(mode)) {
+                    (Some(&exact), approx, _) => {
+                        let what = |_| format!("d({key})/d({p})");
+                        let value = get(mode).unwrap_or(0.0).abs();
+                        compare(
+                            failures,
+                            &what,
+                            &[exact],
+                            &[approx],
+                            (100.0 * f64::EPSILON * value / step(model, name, p)).max(1e-10),
+                        );
+                    }
+                    (None, _, Some(_)) if mode.kind != linkwork::results::ModeKind::Neutral => {
+                        failures.push(format!("{file} {name}: no derivative {key}/d({p})"));
+                    }
+                    _ => {}
+                }
+            }
+        }
+    }
+}
+
+/// Every kinematic, static and modes analysis of every example with parameters: the derivative
+/// of every column (and mode) with respect to every parameter agrees with the finite
+/// differences of whole runs ([`check`]).
 #[test]
 fn every_example_agrees_with_finite_differences_of_whole_runs() {
     let dir = format!("{}/../../examples", env!("CARGO_MANIFEST_DIR"));
@@ -97,7 +180,7 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
         }
         let parameters: Vec<String> = model.parameters.keys().cloned().collect();
         for (name, analysis) in &model.analyses {
-            if analysis.kind != AnalysisKind::Kinematic {
+            if !DIFFERENTIATED.contains(&analysis.kind) {
                 continue;
             }
             let results = match run_with(&model, name, &parameters) {
@@ -113,27 +196,7 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
                     continue;
                 }
             };
-            let sens = results.sensitivities.as_ref().expect("the sensitivities asked for");
-            // The run's size: its largest value (every column is computed with the others).
-            let size = results.columns.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-            assert_eq!(sens.names, results.names, "{file}: every column has its derivatives");
-            for (k, p) in parameters.iter().enumerate() {
-                let fd = finite_differences(&model, name, p, &results.time);
-                for (c, column) in sens.values[k].iter().enumerate() {
-                    let scale = fd[c].iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-                    let floor = (100.0 * f64::EPSILON * size / step(&model, p)).max(1e-10);
-                    for (row, (&exact, approx)) in column.iter().zip(&fd[c]).enumerate() {
-                        let Some(approx) = approx else { continue };
-                        if (exact - approx).abs() > 1e-7 * scale + floor {
-                            failures.push(format!(
-                                "{file} {name}: d({})/d({p}) at t = {}: {exact:e}, differences {approx:e}",
-                                results.names[c], results.time[row]
-                            ));
-                            break;
-                        }
-                    }
-                }
-            }
+            check(&model, &file, name, &results, &mut failures);
             checked.push(format!("{file} {name}"));
         }
     }
@@ -145,6 +208,41 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
     {
         assert!(checked.iter().any(|c| c == expected), "{expected} was checked; checked: {checked:?}");
     }
+}
+
+/// A four-bar hanging under gravity alone (the hanging four-bar example without its spring and
+/// load), its lengths, masses and a pivot as parameters: its rest and its modes agree with the
+/// finite differences of whole runs ([`check`]): the reactions' levers, the anchor points'
+/// gradients, the geometric stiffness's derivative and the masses' all enter.
+#[test]
+fn a_four_bar_hanging_under_gravity_agrees_with_finite_differences() {
+    let text = "
+name: hanging four-bar under gravity
+parameters: {a: 0.5, b: 1.0, c: 0.7, d: 1.0, m_coupler: 3.0, j_rocker: 0.08}
+gravity: [0, -9.81]
+bodies:
+  crank: {mass: 2.0, inertia: 0.04, position: [0.0052, -0.25], angle: -1.55, points: {O: [-a/2, 0], A: [a/2, 0]}}
+  coupler: {mass: m_coupler, inertia: 0.1, position: [0.5, -0.6], angle: 0.2, points: {A: [-b/2, 0], B: [b/2, 0]}}
+  rocker: {mass: 2.5, inertia: j_rocker, position: [1.0, -0.35], angle: -1.58, points: {C: [-c/2, 0], B: [c/2, 0]}}
+ground:
+  points: {O: [0, 0], C: [d, 0]}
+joints:
+  O: {type: revolute, body_i: crank, point_i: O, body_j: ground, point_j: O}
+  A: {type: revolute, body_i: crank, point_i: A, body_j: coupler, point_j: A}
+  B: {type: revolute, body_i: coupler, point_i: B, body_j: rocker, point_j: B}
+  C: {type: revolute, body_i: ground, point_i: C, body_j: rocker, point_j: C}
+analyses:
+  rest: {type: static}
+  vibration: {type: modes}
+";
+    let model = tight(Model::from_yaml(text).expect("the four-bar"));
+    let parameters: Vec<String> = model.parameters.keys().cloned().collect();
+    let mut failures = Vec::new();
+    for name in ["rest", "vibration"] {
+        let results = run_with(&model, name, &parameters).expect("the run");
+        check(&model, "hanging four-bar", name, &results, &mut failures);
+    }
+    assert!(failures.is_empty(), "{} disagreements:\n{}", failures.len(), failures.join("\n"));
 }
 
 /// The centred slider-crank `x = r cos(theta) + sqrt(L^2 - r^2 sin^2(theta))`, `theta = speed t`:
