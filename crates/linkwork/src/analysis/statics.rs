@@ -424,9 +424,9 @@ impl<'a, 'm> Statics<'a, 'm> {
     }
 
     /// The design sensitivities `s` of the equilibrium `(q, lambda)` at `t`, solved for
-    /// with the Newton matrix there and pushed into `results` (with `reactions`, a static
-    /// analysis's row; without, a modes analysis's); returns the tangent stiffness and `Phi_q`
-    /// there.
+    /// with the Newton matrix there (its geometric stiffness exact) and pushed into `results`
+    /// (with `reactions`, a static analysis's row; without, a modes analysis's); returns the
+    /// tangent stiffness and `Phi_q` there.
     pub(crate) fn sensitivities(
         &mut self,
         s: &mut EquilibriumSensitivity<'_>,
@@ -434,7 +434,10 @@ impl<'a, 'm> Statics<'a, 'm> {
         (q, lambda, t): (&[f64], &[f64], f64),
         reactions: bool,
     ) -> Result<(Mat<f64>, Mat<f64>), Error> {
-        let (k, _) = self.tangent(q, &vec![0.0; self.n], lambda, t);
+        self.dae.positions(q, t);
+        self.dae.load_jacobians(q, &vec![0.0; self.n], t, self.dq.as_mut(), self.dv.as_mut());
+        let geo = s.geometric_stiffness(q, lambda, t);
+        let k = Mat::from_fn(self.n, self.n, |i, j| geo[(i, j)] - self.dq[(i, j)]);
         self.dae.jacobian_dense(self.jac.as_mut());
         s.solve(self.dae, (k.as_ref(), self.jac.as_ref()), q, lambda, t)?;
         s.push(results, self.dae, (q, lambda, t), reactions)?;

@@ -68,10 +68,45 @@ impl<'m> EquilibriumSensitivity<'m> {
         Ok(EquilibriumSensitivity { base, dq: Vec::new(), dlambda: Vec::new() })
     }
 
+    /// The geometric stiffness `d(Phi_q^T lambda)/dq` at `(q, lambda, t)`, `(n x n)`, exact: the
+    /// Hessian of `lambda^T Phi`, each element's rows over hyper-dual numbers seeded with two
+    /// unit coordinates of its columns (the static solver's Newton matrix takes a central
+    /// difference of `Phi_q` instead, `crate::analysis::statics::geometric_stiffness`).
+    pub(crate) fn geometric_stiffness(&mut self, q: &[f64], lambda: &[f64], t: f64) -> Mat<f64> {
+        let (model, b) = (self.base.model, &mut self.base.velocity);
+        let n = q.len();
+        let mut h = Mat::zeros(n, n);
+        for (x, &v) in b.q.iter_mut().zip(q) {
+            *x = HyperDual::constant(v);
+        }
+        for (x, &v) in b.params.iter_mut().zip(model.parameters.values()) {
+            *x = HyperDual::constant(v);
+        }
+        for e in &self.base.elements {
+            b.data.clear();
+            b.data.extend(e.data.iter().map(|&v| HyperDual::constant(v)));
+            let rows = e.row..e.row + e.constraint.rows();
+            for &c in e.constraint.columns() {
+                for &d in e.constraint.columns() {
+                    b.q[c].e1 = 1.0;
+                    b.q[d].e2 = 1.0;
+                    let at = At { q: &b.q, t: HyperDual::constant(t), params: &b.params };
+                    let supported = e.constraint.phi_hyper(&at, &b.data, &mut b.full[e.row..]);
+                    debug_assert!(supported, "{} was checked to have derivatives", e.name);
+                    b.q[c].e1 = 0.0;
+                    b.q[d].e2 = 0.0;
+                    h[(c, d)] += rows.clone().map(|r| lambda[r] * b.full[r].e12).sum::<f64>();
+                }
+            }
+        }
+        h
+    }
+
     /// `q_p` and `lambda_p` of every parameter asked at the equilibrium `(q, lambda)` at `t`,
-    /// with `k` the tangent stiffness there (`Statics::tangent`) and `jac = Phi_q`: one
-    /// minimum-norm solve (SVD) of the Newton matrix for all the parameters, as the static
-    /// solver's Newton step (redundant rows and their multipliers as it treats them).
+    /// with `k` the tangent stiffness there (with the exact
+    /// [`EquilibriumSensitivity::geometric_stiffness`]) and `jac = Phi_q`: one minimum-norm solve
+    /// (SVD) of the Newton matrix for all the parameters, as the static solver's Newton step
+    /// (redundant rows and their multipliers as it treats them).
     pub(crate) fn solve(
         &mut self,
         dae: &Dae<'_>,
