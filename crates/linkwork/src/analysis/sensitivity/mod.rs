@@ -296,20 +296,36 @@ fn level<S: Level>(
     rows: &[usize],
     rhs: &mut [f64],
 ) {
+    let seed = |i: usize| S::coordinate([q[i], qdot[i], qddot[i]], [dq[0][i], dq[1][i], dq[2][i]]);
+    over(b, elements, model, p, S::time(t), seed);
+    for (r, &row) in rhs.iter_mut().zip(rows) {
+        *r = -b.full[row].part();
+    }
+}
+
+/// Every element's rows over the numbers `S` into `b.full`, with coordinate `i` seeded
+/// `seed(i)`, the time `t`, the elements' numbers and the parameters along parameter `p`'s
+/// direction ([`Level::fixed`]); returns the rows.
+fn over<'b, S: Level>(
+    b: &'b mut Buffers<S>,
+    elements: &[Seeded<'_>],
+    model: &Model,
+    p: usize,
+    t: S,
+    seed: impl Fn(usize) -> S,
+) -> &'b [S] {
     for (i, x) in b.q.iter_mut().enumerate() {
-        *x = S::coordinate([q[i], qdot[i], qddot[i]], [dq[0][i], dq[1][i], dq[2][i]]);
+        *x = seed(i);
     }
     seed_parameters(&mut b.params, model, p);
-    let at = At { q: &b.q, t: S::time(t), params: &b.params };
+    let at = At { q: &b.q, t, params: &b.params };
     for e in elements {
         b.data.clear();
         b.data.extend(e.data.iter().zip(e.grads).map(|(&v, g)| S::fixed(v, g[p])));
         let supported = S::rows(e.constraint, &at, &b.data, &mut b.full[e.row..]);
         debug_assert!(supported, "{} was checked to have derivatives", e.name);
     }
-    for (r, &row) in rhs.iter_mut().zip(rows) {
-        *r = -b.full[row].part();
-    }
+    &b.full
 }
 
 /// The model's parameters over `S`, each along its derivative with respect to parameter `p`

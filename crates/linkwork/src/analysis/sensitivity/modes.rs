@@ -26,14 +26,12 @@
 //! yet), but a parameter may move it: the damping ratio's derivative is then
 //! `x^T C_p x / (2 omega x^T M x)`.
 
+use super::over;
 use super::statics::EquilibriumSensitivity;
-use super::{seed_parameters, Buffers, Level, Seeded};
 use crate::analysis::dynamic::Dae;
-use crate::constraints::{At, Constraint};
 use crate::error::Error;
 use crate::expr::{HyperDual, Scalar, Tri};
 use crate::linalg::dense::min_norm_solve;
-use crate::model::Model;
 use crate::results::{Mode, ModeKind};
 use faer::MatRef;
 use indexmap::IndexMap;
@@ -75,11 +73,11 @@ pub(crate) fn mode_derivatives(
             let (p, dq, dl) = (eq.base.asked[j], &eq.dq[j], &eq.dlambda[j]);
             let b = &mut eq.base;
             let tri = |i: usize| Tri::trajectory([q[i], x[i], 0.0], [dq[i], 0.0, 0.0]);
-            let rows = over(&mut b.acceleration, &b.elements, b.model, p, t, tri);
+            let rows = over(&mut b.acceleration, &b.elements, b.model, p, Tri::constant(t), tri);
             let weight = |r: usize| Tri::trajectory([lambda[r], 0.0, 0.0], [dl[r], 0.0, 0.0]);
             let geometric = rows.iter().enumerate().fold(Tri::constant(0.0), |a, (r, &v)| a + weight(r) * v).e123;
             let hyper = |i: usize| HyperDual::new(q[i], x[i], dq[i], 0.0);
-            let rows = over(&mut b.velocity, &b.elements, b.model, p, t, hyper);
+            let rows = over(&mut b.velocity, &b.elements, b.model, p, HyperDual::constant(t), hyper);
             let borders: f64 = rows.iter().zip(&mu).map(|(r, m)| r.e12 * m).sum();
             let mut along = vec![0.0; n];
             let state = (q, zero.as_slice(), t);
@@ -117,29 +115,4 @@ pub(crate) fn mode_derivatives(
 /// `a . b`.
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(a, b)| a * b).sum()
-}
-
-/// Every element's rows over the numbers `S` with coordinate `i` seeded `seed(i)`, the
-/// elements' numbers and the parameters along parameter `p`'s direction ([`Level::fixed`]), at
-/// the fixed time `t`.
-fn over<'b, S: Level>(
-    b: &'b mut Buffers<S>,
-    elements: &[Seeded<'_>],
-    model: &Model,
-    p: usize,
-    t: f64,
-    seed: impl Fn(usize) -> S,
-) -> &'b [S] {
-    for (i, x) in b.q.iter_mut().enumerate() {
-        *x = seed(i);
-    }
-    seed_parameters(&mut b.params, model, p);
-    let at = At { q: &b.q, t: S::constant(t), params: &b.params };
-    for e in elements {
-        b.data.clear();
-        b.data.extend(e.data.iter().zip(e.grads).map(|(&v, g)| S::fixed(v, g[p])));
-        let supported = S::rows(e.constraint as &dyn Constraint, &at, &b.data, &mut b.full[e.row..]);
-        debug_assert!(supported, "{} was checked to have derivatives", e.name);
-    }
-    &b.full
 }
