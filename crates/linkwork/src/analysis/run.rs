@@ -234,9 +234,9 @@ impl Model {
         if names.is_empty() {
             return Ok(Vec::new());
         }
-        if analysis.kind != AnalysisKind::Kinematic {
+        if !matches!(analysis.kind, AnalysisKind::Kinematic | AnalysisKind::Inverse) {
             return Err(problem(format!(
-                "analysis '{}' has type {}: design sensitivities are computed for kinematic analyses so far",
+                "analysis '{}' has type {}: design sensitivities are computed for kinematic and inverse analyses so far",
                 analysis.name,
                 analysis.kind.name()
             )));
