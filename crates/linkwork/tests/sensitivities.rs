@@ -64,6 +64,38 @@ fn step(model: &Model, name: &str) -> f64 {
     3e-4 * model.parameters[name].abs().max(1e-3)
 }
 
+/// Where the derivatives of `results` (a run of `analysis` with sensitivities with respect to
+/// `parameters`) disagree with the finite differences of whole runs: to 1e-7 of the column's
+/// largest derivative, or, where the derivative is zero (a parameter that does not move the
+/// column), beyond the differences' round-off. A run whose largest value is `|c|` computes each
+/// column to about `eps |c|`, so a difference quotient to about `eps |c| / h`; the floor is 100
+/// times that, or 1e-10, whichever is larger. One message per column, at its first
+/// disagreement.
+fn disagreements(model: &Model, analysis: &str, parameters: &[String], results: &Results) -> Vec<String> {
+    let sens = results.sensitivities.as_ref().expect("the sensitivities asked for");
+    // The run's size: its largest value (every column is computed with the others).
+    let size = results.columns.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    let mut failures = Vec::new();
+    for (k, p) in parameters.iter().enumerate() {
+        let fd = finite_differences(model, analysis, p, &results.time);
+        for (c, column) in sens.values[k].iter().enumerate() {
+            let scale = fd[c].iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+            let floor = (100.0 * f64::EPSILON * size / step(model, p)).max(1e-10);
+            let rows = column.iter().zip(&fd[c]).enumerate();
+            let first = rows
+                .filter_map(|(row, (&exact, approx))| approx.map(|a| (row, exact, a)))
+                .find(|&(_, exact, approx)| (exact - approx).abs() > 1e-7 * scale + floor);
+            if let Some((row, exact, approx)) = first {
+                failures.push(format!(
+                    "d({})/d({p}) at t = {}: {exact:e}, differences {approx:e}",
+                    results.names[c], results.time[row]
+                ));
+            }
+        }
+    }
+    failures
+}
+
 /// The analyses of examples with parameters that have no sensitivities yet, each with the
 /// element the run names: the cam joints (this increment differentiates the geometric joints and
 /// the drivers), the forces whose loads have no derivatives with respect to their numbers yet
@@ -80,13 +112,11 @@ const NOT_YET: &[(&str, &str, &str)] = &[
 
 /// Every kinematic and inverse analysis of every example with parameters: the derivative of
 /// every column with respect to every parameter agrees with the finite differences of whole runs
-/// to 1e-7 of the column's largest derivative: what the issue asks, and 100 times the
-/// differences' own truncation and convergence error above. Where the derivative is zero (a
-/// parameter that does not move the column) the differences are round-off: a run whose largest
-/// value is `|c|` (the quick-return's accelerations, 60 m/s^2; an inverse analysis's largest
-/// reaction) computes each column to about `eps |c|`, so a difference quotient to about
-/// `eps |c| / h`; the floor is 100 times that, or 1e-10, whichever is larger (2e-9 for the
-/// quick-return's step of 6e-4 m).
+/// ([`disagreements`]) to 1e-7 of the column's largest derivative: what the issue asks, and 100
+/// times the differences' own truncation and convergence error above. Where the derivative is
+/// zero the floor is the differences' round-off: 2e-9 for the quick-return's kinematics
+/// (accelerations of 60 m/s^2, a step of 6e-4 m); an inverse analysis's largest value is its
+/// largest reaction.
 #[test]
 fn every_example_agrees_with_finite_differences_of_whole_runs() {
     let dir = format!("{}/../../examples", env!("CARGO_MANIFEST_DIR"));
@@ -124,26 +154,9 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
                 }
             };
             let sens = results.sensitivities.as_ref().expect("the sensitivities asked for");
-            // The run's size: its largest value (every column is computed with the others).
-            let size = results.columns.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
             assert_eq!(sens.names, results.names, "{file}: every column has its derivatives");
-            for (k, p) in parameters.iter().enumerate() {
-                let fd = finite_differences(&model, name, p, &results.time);
-                for (c, column) in sens.values[k].iter().enumerate() {
-                    let scale = fd[c].iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-                    let floor = (100.0 * f64::EPSILON * size / step(&model, p)).max(1e-10);
-                    for (row, (&exact, approx)) in column.iter().zip(&fd[c]).enumerate() {
-                        let Some(approx) = approx else { continue };
-                        if (exact - approx).abs() > 1e-7 * scale + floor {
-                            failures.push(format!(
-                                "{file} {name}: d({})/d({p}) at t = {}: {exact:e}, differences {approx:e}",
-                                results.names[c], results.time[row]
-                            ));
-                            break;
-                        }
-                    }
-                }
-            }
+            let disagreements = disagreements(&model, name, &parameters, &results);
+            failures.extend(disagreements.into_iter().map(|d| format!("{file} {name}: {d}")));
             checked.push(format!("{file} {name}"));
         }
     }
@@ -357,25 +370,6 @@ analyses:
     let results = run_with(&model, "inverse", &parameters).expect("the run");
     let redundant = results.summary.redundant_rows.as_ref().map_or(0, Vec::len);
     assert_eq!(redundant, 1, "one row is redundant");
-    let sens = results.sensitivities.as_ref().expect("asked for");
-    let size = results.columns.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-    let mut failures = Vec::new();
-    for (k, p) in parameters.iter().enumerate() {
-        let fd = finite_differences(&model, "inverse", p, &results.time);
-        for (c, column) in sens.values[k].iter().enumerate() {
-            let scale = fd[c].iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-            let floor = (100.0 * f64::EPSILON * size / step(&model, p)).max(1e-10);
-            for (row, (&exact, approx)) in column.iter().zip(&fd[c]).enumerate() {
-                let Some(approx) = approx else { continue };
-                if (exact - approx).abs() > 1e-7 * scale + floor {
-                    failures.push(format!(
-                        "d({})/d({p}) at t = {}: {exact:e}, differences {approx:e}",
-                        results.names[c], results.time[row]
-                    ));
-                    break;
-                }
-            }
-        }
-    }
+    let failures = disagreements(&model, "inverse", &parameters, &results);
     assert!(failures.is_empty(), "{} disagreements:\n{}", failures.len(), failures.join("\n"));
 }

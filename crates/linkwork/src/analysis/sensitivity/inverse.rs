@@ -95,7 +95,7 @@ impl InverseSensitivity {
         let zero = vec![0.0; n];
         let mut out = vec![0.0; n];
         for &p in &s.asked {
-            dae.add_forces_along(&q, &zero, analysis.t_start, &zero, &zero, p, &mut out)
+            dae.add_forces_along((&q, &zero, analysis.t_start), (&zero, &zero), p, &mut out)
                 .map_err(|name| unsupported(format!("forces.{name}"), "this force"))?;
             let potential = |name: String| unsupported(format!("forces.{name}"), "this force's potential energy");
             dae.potential_energy_along(&q, &zero, p).map_err(potential)?;
@@ -141,7 +141,7 @@ impl InverseSensitivity {
         // b_p = Q_p - M_p qddot - M qddot_p - (Phi_q)_p^T lambda.
         self.forces.fill(0.0);
         let force = |name: String| unsupported(format!("forces.{name}"), "this force");
-        dae.add_forces_along(q, qdot, t, &dq, &dv, p, &mut self.forces).map_err(force)?;
+        dae.add_forces_along((q, qdot, t), (&dq, &dv), p, &mut self.forces).map_err(force)?;
         self.rhs.copy_from_slice(&self.forces);
         dae.add_gravity_along(p, &mut self.rhs);
         self.scratch.fill(0.0);

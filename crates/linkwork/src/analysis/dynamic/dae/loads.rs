@@ -114,7 +114,7 @@ impl Dae<'_> {
         out: &mut [f64],
     ) -> Result<(), String> {
         self.add_gravity_along(p, out);
-        self.add_forces_along(q, qdot, t, dq, dv, p, out)
+        self.add_forces_along((q, qdot, t), (dq, dv), p, out)
     }
 
     /// The derivative of gravity's generalised force with respect to parameter `p` (file
@@ -167,18 +167,14 @@ impl Dae<'_> {
 
     /// The derivative of the active forces' generalised force (the part of [`Dae::load`] that
     /// is not gravity) with respect to parameter `p`, added to `out: (n)`: each force's through
-    /// its coordinates (moving along `dq`, velocities along `dv`), its numbers
+    /// its coordinates at `(q, qdot, t)` (moving along `dq`, velocities along `dv`), its numbers
     /// ([`crate::forces::Force::data`], along their gradients) and the parameters its
     /// expressions read; one dual pass per force, exact. `Err` names the first force that has
     /// no derivatives with respect to its numbers yet.
-    #[allow(clippy::too_many_arguments)]
     pub fn add_forces_along(
         &self,
-        q: &[f64],
-        qdot: &[f64],
-        t: f64,
-        dq: &[f64],
-        dv: &[f64],
+        (q, qdot, t): (&[f64], &[f64], f64),
+        (dq, dv): (&[f64], &[f64]),
         p: usize,
         out: &mut [f64],
     ) -> Result<(), String> {
