@@ -26,8 +26,8 @@ mod rolling;
 mod schema;
 mod translational;
 
+pub(crate) use crate::element::{vector, Frame, Pose, Source, AXIS_I, AXIS_J, POINT, POINT_I, POINT_J};
 pub use crate::element::{BodyIx, PointRef, Tagged, DEFAULT_TRANSITION_VELOCITY};
-pub(crate) use crate::element::{Frame, Pose};
 use crate::expr::{Dual, HyperDual, Scalar, Tri};
 pub use absolute::{Absolute, AbsoluteAngleJoint, AbsoluteKind, AbsolutePoint};
 pub(crate) use cam::cam_row;
@@ -200,75 +200,6 @@ macro_rules! phi_tri_generic {
     };
 }
 pub(crate) use phi_tri_generic;
-
-/// Where a constant of an element comes from (a distance's length, a line's offset, a held
-/// coordinate's value, and the constants of gears, belts and rolling joints, which only the
-/// initial configuration gives).
-///
-/// Written in the model file, it is one of the element's data (a parameter can move it). Fixed by
-/// the initial configuration, it is what the element's rows are at the bodies' initial poses
-/// `q0`: those poses are held (a derivative does not move the starting guess), and the constant
-/// follows the element's data through them (a distance's default length moves with its points).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum Source {
-    /// The model file's field: a data slot named after it.
-    File,
-    /// The initial configuration: `(x, y, phi)` of the element's two bodies there (ground's is
-    /// zero).
-    Start([[f64; 3]; 2]),
-    /// No such field: zero (a pin in a slot has no offset; a driver's coordinate no value).
-    Zero,
-}
-
-impl Source {
-    /// The initial poses of bodies `i` and `j` in `q0`.
-    pub(crate) fn start(i: BodyIx, j: BodyIx, q0: &[f64]) -> Source {
-        Source::Start([i.coords(q0), j.coords(q0)])
-    }
-    /// Body i's and body j's poses there, held constant.
-    pub(crate) fn poses<S: Scalar>(start: [[f64; 3]; 2]) -> [Pose<S>; 2] {
-        start.map(Pose::held)
-    }
-    /// An element's `data` with its constant `(name, value)` last when the file gives it.
-    pub(crate) fn data(
-        self,
-        mut data: Vec<(&'static str, f64)>,
-        name: &'static str,
-        value: f64,
-    ) -> Vec<(&'static str, f64)> {
-        if self == Source::File {
-            data.push((name, value));
-        }
-        data
-    }
-    /// The constant over any [`Scalar`]: the last of `data` from the file, `at_start` of the held
-    /// initial poses (body i's, body j's) from the initial configuration, or zero.
-    pub(crate) fn value<S: Scalar>(self, data: &[S], at_start: impl FnOnce([Pose<S>; 2]) -> S) -> S {
-        match self {
-            Source::File => data[data.len() - 1],
-            Source::Start(start) => at_start(Source::poses(start)),
-            Source::Zero => S::constant(0.0),
-        }
-    }
-}
-
-/// The data names of a vector field's two components.
-pub(crate) type Components = [&'static str; 2];
-/// `point`'s components (a single body's point: held coordinates, point drivers).
-pub(crate) const POINT: Components = ["point[0]", "point[1]"];
-/// `point_i`'s components.
-pub(crate) const POINT_I: Components = ["point_i[0]", "point_i[1]"];
-/// `point_j`'s components.
-pub(crate) const POINT_J: Components = ["point_j[0]", "point_j[1]"];
-/// `axis_i`'s components.
-pub(crate) const AXIS_I: Components = ["axis_i[0]", "axis_i[1]"];
-/// `axis_j`'s components.
-pub(crate) const AXIS_J: Components = ["axis_j[0]", "axis_j[1]"];
-
-/// The data entries of a vector `v` named `names` (see [`Constraint::data`]).
-pub(crate) fn vector(names: Components, v: [f64; 2]) -> [(&'static str, f64); 2] {
-    [(names[0], v[0]), (names[1], v[1])]
-}
 
 /// `data[k..k + 2]`: a vector among an element's data.
 #[inline]

@@ -256,14 +256,36 @@ pub fn check_rebuilt<C: GenericPhi + Constraint>(c: &C, build: &dyn Fn(&[f64]) -
     });
 }
 
-/// Each of `c`'s data names is a field of its model-file entry `T` (the name before `[`), under
-/// which the model's compiler finds the number's gradient.
+/// Each of `c`'s data names is a field of its model-file entry `T` ([`assert_fields`]).
 pub fn assert_data_fields<T: schemars::JsonSchema>(c: &dyn Constraint) {
+    assert_fields::<T>(&c.data(), &format!("{c:?}"));
+}
+
+/// Each of the data names `data` of `owner` (an element, for the message) is a field of its
+/// model-file entry `T`, under which the model's compiler finds the number's gradient: the name
+/// before `[` (`point_i[0]`), or a path into the entry's nested fields (`shape_j.circle.radius`,
+/// `friction.mu`).
+pub fn assert_fields<T: schemars::JsonSchema>(data: &[(&'static str, f64)], owner: &str) {
     let schema = serde_json::to_value(schemars::schema_for!(T)).expect("a schema is JSON");
-    for (name, _) in c.data() {
-        let field = name.split('[').next().unwrap_or(name);
-        let known = schema["properties"].get(field).is_some();
-        assert!(known, "{c:?}: data {name} is not a field of {}", std::any::type_name::<T>());
+    // A field's schema, through a reference to a definition or an optional's `anyOf`.
+    fn resolve<'a>(schema: &'a serde_json::Value, mut node: &'a serde_json::Value) -> &'a serde_json::Value {
+        loop {
+            if let Some(r) = node.get("$ref").and_then(|r| r.as_str()) {
+                node = schema.pointer(r.trim_start_matches('#')).expect("a reference within the schema");
+            } else if let Some(first) = node.get("anyOf").and_then(|a| a.get(0)) {
+                node = first;
+            } else {
+                return node;
+            }
+        }
+    }
+    for (name, _) in data {
+        let mut node = Some(&schema);
+        for part in name.split('.') {
+            let field = part.split('[').next().unwrap_or(part);
+            node = node.and_then(|n| resolve(&schema, n)["properties"].get(field));
+        }
+        assert!(node.is_some(), "{owner}: data {name} is not a field of {}", std::any::type_name::<T>());
     }
 }
 

@@ -78,7 +78,7 @@ mod scalar;
 pub mod spline;
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 use std::fmt;
 use std::str::FromStr;

@@ -1286,8 +1286,9 @@ fn a_spline_through_a_cubic_has_the_cubics_third_derivative() {
 
 // ---------------------------------------------------------------- parameters
 
-/// A model's parameters for the tests: `(name, value)` in file order, each a parameter.
-struct Params(Vec<(&'static str, f64)>);
+/// A model's parameters for the tests: `(name, value)` in file order, each a parameter (also
+/// the force elements' tests').
+pub(crate) struct Params(pub(crate) Vec<(&'static str, f64)>);
 
 impl Names for Params {
     fn constant(&self, name: &str) -> Option<f64> {

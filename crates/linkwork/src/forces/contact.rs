@@ -18,11 +18,13 @@
 //! vanishes at first touch and at separation, and the clamp keeps it from pulling as the bodies
 //! part. Polylines are two-sided: the penetration must stay below the circle's radius.
 
-use super::{cross, layout, rotate, Force, ForceContext, ForceLaw, Local};
+use super::{cross, layout, rotate, Data, Force, ForceContext, ForceLaw, Local};
 use crate::element::{BodyIx, Context, DEFAULT_TRANSITION_VELOCITY};
 use crate::expr::Scalar;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
+use std::collections::HashSet;
+use std::sync::{Mutex, OnceLock};
 
 /// The shape of body b.
 #[derive(Debug, Clone, PartialEq)]
@@ -65,6 +67,9 @@ pub struct Contact {
     mu: f64,
     transition_velocity: f64,
     max_penetration: f64,
+    /// The model-file fields of the circle and of body b's shape (`shape_i.circle`,
+    /// `shape_j.polyline`, ...), which name its data.
+    fields: [&'static str; 2],
     columns: Vec<usize>,
 }
 
@@ -85,6 +90,7 @@ impl Contact {
         max_penetration: f64,
     ) -> Contact {
         let (columns, l) = layout(&[a, b], &mut []);
+        let other = if matches!(shape, Shape::Circle(..)) { "shape_j.circle" } else { "shape_j.polyline" };
         Contact {
             a: l[0],
             centre,
@@ -97,8 +103,16 @@ impl Contact {
             mu,
             transition_velocity,
             max_penetration,
+            fields: ["shape_i.circle", other],
             columns,
         }
+    }
+
+    /// The same contact with the circle given at the model-file field `circle` and body b's
+    /// shape at `other` (`shape_j.polyline`, ...), which name its data.
+    pub(crate) fn with_fields(mut self, circle: &'static str, other: &'static str) -> Contact {
+        self.fields = [circle, other];
+        self
     }
 
     /// The smallest radius of the pair, m.
@@ -111,27 +125,65 @@ impl Contact {
 
     /// The circle's centre, global frame.
     fn centre<S: Scalar>(&self, x: &[S]) -> [S; 2] {
+        self.centre_at(x, self.centre.map(S::constant))
+    }
+
+    /// The circle's centre `centre` (body a's frame) in the global frame.
+    fn centre_at<S: Scalar>(&self, x: &[S], centre: [S; 2]) -> [S; 2] {
         let pa = self.a.pose(x);
-        let s = rotate(pa[2], self.centre);
+        let s = rotate(pa[2], centre);
         [pa[0] + s[0], pa[1] + s[1]]
+    }
+
+    /// Its own numbers, as constants.
+    fn own<S: Scalar>(&self) -> Numbers<S, impl Fn(usize) -> [S; 2] + '_> {
+        let (circle, points): (_, &[[f64; 2]]) = match &self.shape {
+            Shape::Circle(c, r) => (Some((c.map(S::constant), S::constant(*r))), &[]),
+            Shape::Polyline(points) => (None, points),
+        };
+        Numbers {
+            centre: self.centre.map(S::constant),
+            radius: S::constant(self.radius),
+            circle,
+            vertex: move |k: usize| points[k].map(S::constant),
+            stiffness: S::constant(self.stiffness),
+            exponent_shift: None,
+            damping: S::constant(self.damping),
+            mu: S::constant(self.mu),
+            transition_velocity: S::constant(self.transition_velocity),
+            friction: self.mu > 0.0,
+        }
+    }
+
+    /// How many vertices body b's polyline has (none for a circle).
+    fn vertices(&self) -> usize {
+        match &self.shape {
+            Shape::Circle(..) => 0,
+            Shape::Polyline(points) => points.len(),
+        }
     }
 
     /// Where the shapes touch; `None` when they do not overlap (or the centres coincide, where
     /// the normal has no direction).
     fn touch<S: Scalar>(&self, x: &[S]) -> Option<Touch<S>> {
-        let ca = self.centre(x);
+        self.touch_with(x, &self.own())
+    }
+
+    /// [`Contact::touch`] with the numbers `nums`.
+    fn touch_with<S: Scalar>(&self, x: &[S], nums: &Numbers<S, impl Fn(usize) -> [S; 2]>) -> Option<Touch<S>> {
+        let ca = self.centre_at(x, nums.centre);
         let pb = self.b.pose(x);
-        let global = |s: [f64; 2]| {
+        let global = |s: [S; 2]| {
             let r = rotate(pb[2], s);
             [pb[0] + r[0], pb[1] + r[1]]
         };
-        let (q, reach) = match &self.shape {
-            Shape::Circle(c, r) => (global(*c), self.radius + r),
-            Shape::Polyline(points) => {
+        let (q, reach) = match nums.circle {
+            Some((c, r)) => (global(c), nums.radius + r),
+            None => {
                 let mut best: Option<([S; 2], f64)> = None;
-                let mut from = global(points[0]);
-                for p in &points[1..] {
-                    let to = global(*p);
+                let mut from = global((nums.vertex)(0));
+                for k in 1..self.vertices() {
+                    let to = global((nums.vertex)(k));
                     let e = [to[0] - from[0], to[1] - from[1]];
                     let u = ((ca[0] - from[0]) * e[0] + (ca[1] - from[1]) * e[1]) / (e[0] * e[0] + e[1] * e[1]);
                     let u = if u.value() < 0.0 {
@@ -148,24 +200,34 @@ impl Contact {
                     }
                     from = to;
                 }
-                (best.map(|b| b.0).unwrap_or(from), self.radius)
+                (best.map(|b| b.0).unwrap_or(from), nums.radius)
             }
         };
         let d = [ca[0] - q[0], ca[1] - q[1]];
         let l = (d[0] * d[0] + d[1] * d[1]).sqrt();
-        let delta = S::constant(reach) - l;
+        let delta = reach - l;
         if delta.value() <= 0.0 || l.value() < 1e-300 {
             return None;
         }
         let n = [d[0] / l, d[1] / l];
         // P = c_a - n (r_a - delta / 2): the middle of the overlap, for either shape of b.
-        let back = S::constant(self.radius) - delta * S::constant(0.5);
+        let back = nums.radius - delta * S::constant(0.5);
         Some(Touch { delta, n, p: [ca[0] - n[0] * back, ca[1] - n[1] * back] })
     }
 
     /// `(F_n, F_t)` and the touch, from the velocities `v`.
     fn forces<S: Scalar>(&self, x: &[S], v: &[S]) -> Option<(S, S, Touch<S>)> {
-        let touch = self.touch(x)?;
+        self.forces_with(x, v, &self.own())
+    }
+
+    /// [`Contact::forces`] with the numbers `nums`.
+    fn forces_with<S: Scalar>(
+        &self,
+        x: &[S],
+        v: &[S],
+        nums: &Numbers<S, impl Fn(usize) -> [S; 2]>,
+    ) -> Option<(S, S, Touch<S>)> {
+        let touch = self.touch_with(x, nums)?;
         let (pa, pb, va, vb) = (self.a.pose(x), self.b.pose(x), self.a.pose(v), self.b.pose(v));
         let p = touch.p;
         // v(P) = rdot + omega R90 (P - r), for a minus for b.
@@ -175,14 +237,19 @@ impl Contact {
         ];
         let n = touch.n;
         let rate = -(n[0] * w[0] + n[1] * w[1]);
-        let elastic = S::constant(self.stiffness) * touch.delta.powf(self.exponent);
-        let normal = elastic * (S::constant(1.0) + S::constant(self.damping) * rate);
+        let mut power = touch.delta.powf(self.exponent);
+        if let Some(shift) = nums.exponent_shift {
+            // delta^e = delta^e0 exp((e - e0) ln delta), exact in every derivative part.
+            power = power * (shift * touch.delta.ln()).exp();
+        }
+        let elastic = nums.stiffness * power;
+        let normal = elastic * (S::constant(1.0) + nums.damping * rate);
         if normal.value() <= 0.0 {
             return None;
         }
         let slip = n[0] * w[1] - n[1] * w[0];
-        let friction = if self.mu > 0.0 {
-            -(S::constant(self.mu) * normal * (slip / S::constant(self.transition_velocity)).tanh())
+        let friction = if nums.friction {
+            -(nums.mu * normal * (slip / nums.transition_velocity).tanh())
         } else {
             S::constant(0.0)
         };
@@ -263,16 +330,7 @@ impl ForceLaw for Contact {
         &self.columns
     }
     fn load<S: Scalar>(&self, x: &[S], v: &[S], _t: f64, out: &mut [S]) {
-        out.fill(S::constant(0.0));
-        let Some((normal, friction, touch)) = self.forces(x, v) else {
-            return;
-        };
-        let (n, p) = (touch.n, touch.p);
-        let f = [normal * n[0] - friction * n[1], normal * n[1] + friction * n[0]];
-        let (pa, pb) = (self.a.pose(x), self.b.pose(x));
-        self.a.add(out, [f[0], f[1], cross([p[0] - pa[0], p[1] - pa[1]], f)]);
-        let g = [-f[0], -f[1]];
-        self.b.add(out, [g[0], g[1], cross([p[0] - pb[0], p[1] - pb[1]], g)]);
+        self.law(x, v, &self.own(), out);
     }
     fn potential<S: Scalar>(&self, x: &[S]) -> S {
         match self.touch(x) {
@@ -283,6 +341,115 @@ impl ForceLaw for Contact {
     fn contact(&self) -> Option<&Contact> {
         Some(self)
     }
+    /// The circle's `centre` and `radius`, the other shape's (a circle's, or each point of a
+    /// segment or polyline), `stiffness`, `exponent`, `damping`, `friction.mu` and
+    /// `friction.transition_velocity` (a default, or friction not given, has no derivatives).
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        let [circle, other] = self.fields;
+        let named = |field: &str, v: f64| (interned(field), v);
+        let mut data = vec![
+            named(&format!("{circle}.centre[0]"), self.centre[0]),
+            named(&format!("{circle}.centre[1]"), self.centre[1]),
+            named(&format!("{circle}.radius"), self.radius),
+        ];
+        match &self.shape {
+            Shape::Circle(c, r) => data.extend([
+                named(&format!("{other}.centre[0]"), c[0]),
+                named(&format!("{other}.centre[1]"), c[1]),
+                named(&format!("{other}.radius"), *r),
+            ]),
+            Shape::Polyline(points) => {
+                for (k, p) in points.iter().enumerate() {
+                    data.extend([0, 1].map(|c| named(&format!("{other}[{k}][{c}]"), p[c])));
+                }
+            }
+        }
+        data.extend([
+            ("stiffness", self.stiffness),
+            ("exponent", self.exponent),
+            ("damping", self.damping),
+            ("friction.mu", self.mu),
+            ("friction.transition_velocity", self.transition_velocity),
+        ]);
+        data
+    }
+    /// Along the data, friction is evaluated also at `mu = 0`: its derivative with respect to
+    /// `mu` there is that of the side `mu > 0`, the only one.
+    fn load_data<S: Scalar>(&self, x: &[S], v: &[S], _t: f64, data: &[S], _params: &[S], out: &mut [S]) -> bool {
+        let mut d = Data::new(data);
+        let (centre, radius) = (d.pair(), d.next());
+        let circle = match self.shape {
+            Shape::Circle(..) => Some((d.pair(), d.next())),
+            Shape::Polyline(_) => None,
+        };
+        let vertices = d.take(2 * self.vertices());
+        let nums = Numbers {
+            centre,
+            radius,
+            circle,
+            vertex: |k: usize| [vertices[2 * k], vertices[2 * k + 1]],
+            stiffness: d.next(),
+            exponent_shift: Some(d.next() - S::constant(self.exponent)),
+            damping: d.next(),
+            mu: d.next(),
+            transition_velocity: d.next(),
+            friction: true,
+        };
+        self.law(x, v, &nums, out);
+        true
+    }
+}
+
+impl Contact {
+    /// `Q_e` at `(x, v)` with the numbers `nums`.
+    fn law<S: Scalar>(&self, x: &[S], v: &[S], nums: &Numbers<S, impl Fn(usize) -> [S; 2]>, out: &mut [S]) {
+        out.fill(S::constant(0.0));
+        let Some((normal, friction, touch)) = self.forces_with(x, v, nums) else {
+            return;
+        };
+        let (n, p) = (touch.n, touch.p);
+        let f = [normal * n[0] - friction * n[1], normal * n[1] + friction * n[0]];
+        let (pa, pb) = (self.a.pose(x), self.b.pose(x));
+        self.a.add(out, [f[0], f[1], cross([p[0] - pa[0], p[1] - pa[1]], f)]);
+        let g = [-f[0], -f[1]];
+        self.b.add(out, [g[0], g[1], cross([p[0] - pb[0], p[1] - pb[1]], g)]);
+    }
+}
+
+/// A contact's numbers over any [`Scalar`]: its own as constants ([`ForceLaw::load`]) or its
+/// data ([`ForceLaw::load_data`]).
+struct Numbers<S, V> {
+    /// The circle's centre (body a's frame) and radius.
+    centre: [S; 2],
+    radius: S,
+    /// Body b's circle, centre and radius; `None` for a polyline, whose vertices `vertex` gives.
+    circle: Option<([S; 2], S)>,
+    /// Body b's polyline's vertex `k` (its frame).
+    vertex: V,
+    stiffness: S,
+    /// The exponent's departure from its own value, along the data (`None`: its own value).
+    exponent_shift: Option<S>,
+    damping: S,
+    mu: S,
+    transition_velocity: S,
+    /// Whether the friction is evaluated.
+    friction: bool,
+}
+
+/// `name` as a `&'static str`, for the data names a contact builds from its shapes' fields (a
+/// polyline has as many vertices as the file gives): each distinct name is allocated once and
+/// kept for the program's life, so their number is bounded by the fields and the longest
+/// polyline ever compiled, not by the number of runs.
+fn interned(name: &str) -> &'static str {
+    static NAMES: OnceLock<Mutex<HashSet<&'static str>>> = OnceLock::new();
+    // A poisoned lock still holds a valid set: only a finished insertion is ever seen.
+    let mut names = NAMES.get_or_init(Default::default).lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(&known) = names.get(name) {
+        return known;
+    }
+    let kept: &'static str = Box::leak(name.to_string().into_boxed_str());
+    names.insert(kept);
+    kept
 }
 
 /// The exponent of a contact's penetration when none is given: 1.5, Hertz's for two cylinders'
@@ -409,9 +576,13 @@ pub(crate) fn compile(spec: &ContactSpec, cx: &mut impl ForceContext, path: &str
         cx.problem(format!("{path}.body_j"), "both shapes are on ground: name a moving body");
         return None;
     }
-    let ((a, (centre, radius)), (b, other)) = match (si, sj) {
-        (Shape::Circle(centre, radius), other) => ((bi, (centre, radius)), (bj, other)),
-        (other, Shape::Circle(centre, radius)) => ((bj, (centre, radius)), (bi, other)),
+    let ((a, (centre, radius)), (b, other), fields) = match (si, sj) {
+        (Shape::Circle(centre, radius), other) => {
+            ((bi, (centre, radius)), (bj, other), ["shape_i.circle", shape_field("shape_j", &spec.shape_j)])
+        }
+        (other, Shape::Circle(centre, radius)) => {
+            ((bj, (centre, radius)), (bi, other), ["shape_j.circle", shape_field("shape_i", &spec.shape_i)])
+        }
         _ => {
             cx.problem(
                 format!("{path}.shape_j"),
@@ -428,7 +599,21 @@ pub(crate) fn compile(spec: &ContactSpec, cx: &mut impl ForceContext, path: &str
         Some(d) => d?,
         None => DEFAULT_PENETRATION_FRACTION * smallest,
     };
-    Some(Box::new(Contact::new(a.0, centre, radius, b.0, other, (k, e, c), friction, depth)))
+    let contact = Contact::new(a.0, centre, radius, b.0, other, (k, e, c), friction, depth);
+    Some(Box::new(contact.with_fields(fields[0], fields[1])))
+}
+
+/// The model-file field of the shape `spec` at `side` (`shape_i`, `shape_j`): `<side>.circle`,
+/// `<side>.segment` or `<side>.polyline`.
+fn shape_field(side: &'static str, spec: &ShapeSpec) -> &'static str {
+    let kind = if spec.circle.is_some() {
+        "circle"
+    } else if spec.segment.is_some() {
+        "segment"
+    } else {
+        "polyline"
+    };
+    interned(&format!("{side}.{kind}"))
 }
 
 /// A contact shape, in its body's frame.
@@ -476,7 +661,7 @@ fn polyline(cx: &mut impl Context, path: &str, points: &[[f64; 2]]) -> Option<Sh
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::forces::testing::{check_conservative, check_derivatives};
+    use crate::forces::testing::{assert_data_fields, check_conservative, check_data, check_derivatives};
     use crate::forces::Force;
 
     fn disc_on_floor(friction: (f64, f64)) -> Contact {
@@ -525,6 +710,40 @@ mod tests {
             let x = [0.3, -0.2, 0.4, -0.5, 0.6, 1.1];
             assert!(c.state(&x[..c.columns.len()], &[0.0; 6][..c.columns.len()]).normal > 0.0);
             check_derivatives(c as &dyn Force, 6, seed);
+        }
+    }
+
+    /// The load over the data (design sensitivities): each pair of shapes of
+    /// `derivatives_match_finite_differences`, and one without friction (its derivative with
+    /// respect to `mu` is taken all the same).
+    #[test]
+    fn load_over_data() {
+        let law = (50.0, 1.5, 0.3);
+        let circles =
+            Contact::new(Some(0), [0.2, 0.1], 3.0, Some(3), Shape::Circle([-0.3, 0.4], 2.5), law, (0.4, 0.7), 1e-3);
+        let chain = Shape::Polyline(vec![[-3.0, -0.5], [0.0, 0.5], [3.0, 0.0]]);
+        let poly = Contact::new(Some(3), [0.1, -0.2], 5.0, Some(0), chain.clone(), law, (0.4, 0.7), 1e-3);
+        let grounded = Contact::new(Some(0), [0.1, -0.2], 5.0, None, chain, law, (0.0, 0.7), 1e-3)
+            .with_fields("shape_j.circle", "shape_i.segment");
+        let names = |c: &Contact| ForceLaw::data(c).iter().map(|d| d.0).collect::<Vec<_>>();
+        let tail = ["stiffness", "exponent", "damping", "friction.mu", "friction.transition_velocity"];
+        let circle = ["shape_i.circle.centre[0]", "shape_i.circle.centre[1]", "shape_i.circle.radius"];
+        let other = ["shape_j.circle.centre[0]", "shape_j.circle.centre[1]", "shape_j.circle.radius"];
+        assert_eq!(names(&circles), [&circle[..], &other[..], &tail[..]].concat());
+        assert_eq!(
+            names(&grounded)[3..9],
+            [
+                "shape_i.segment[0][0]",
+                "shape_i.segment[0][1]",
+                "shape_i.segment[1][0]",
+                "shape_i.segment[1][1]",
+                "shape_i.segment[2][0]",
+                "shape_i.segment[2][1]"
+            ]
+        );
+        for (c, seed) in [(&circles, 44), (&poly, 45), (&grounded, 46)] {
+            check_data(c, &[], seed);
+            assert_data_fields::<ContactSpec>(c);
         }
     }
 

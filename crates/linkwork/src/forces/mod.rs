@@ -181,9 +181,43 @@ impl Local {
 
 /// `A(phi) s'` for a scalar angle: a body-frame vector in the global frame.
 #[inline]
-pub(crate) fn rotate<S: Scalar>(phi: S, s: [f64; 2]) -> [S; 2] {
+pub(crate) fn rotate<S: Scalar>(phi: S, s: [S; 2]) -> [S; 2] {
     let (c, sn) = (phi.cos(), phi.sin());
-    [c * S::constant(s[0]) - sn * S::constant(s[1]), sn * S::constant(s[0]) + c * S::constant(s[1])]
+    [c * s[0] - sn * s[1], sn * s[0] + c * s[1]]
+}
+
+/// A force's numbers ([`ForceLaw::data`] order) read one after the other by
+/// [`ForceLaw::load_data`].
+pub(crate) struct Data<'a, S> {
+    data: &'a [S],
+    at: usize,
+}
+
+impl<'a, S: Scalar> Data<'a, S> {
+    /// The numbers `data`, from the first.
+    pub fn new(data: &'a [S]) -> Data<'a, S> {
+        Data { data, at: 0 }
+    }
+    /// The next number.
+    #[inline]
+    pub fn next(&mut self) -> S {
+        self.at += 1;
+        self.data[self.at - 1]
+    }
+    /// The next two numbers (a vector's components).
+    #[inline]
+    pub fn pair(&mut self) -> [S; 2] {
+        [self.next(), self.next()]
+    }
+    /// The next `n` numbers.
+    pub fn take(&mut self, n: usize) -> &'a [S] {
+        self.at += n;
+        &self.data[self.at - n..self.at]
+    }
+    /// All the numbers (for [`crate::element::Source::value`], which reads the last).
+    pub fn all(&self) -> &'a [S] {
+        self.data
+    }
 }
 
 /// `a x b`, the z component.

@@ -8,8 +8,8 @@
 //! ```
 //! The moment term is `dr_P/dphi . f = (B_i s'_P) . f = (A_i s'_P) x f` (Haug 1989 section 6.2).
 
-use super::{cross, layout, rotate, Force, ForceContext, ForceLaw, Load, Local, Quantity};
-use crate::element::PointRef;
+use super::{cross, layout, rotate, Data, Force, ForceContext, ForceLaw, Load, Local, Quantity};
+use crate::element::{vector, PointRef, POINT};
 use crate::expr::Scalar;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -41,15 +41,8 @@ impl ForceLaw for PointLoad {
         &self.columns
     }
     fn load<S: Scalar>(&self, x: &[S], v: &[S], t: f64, out: &mut [S]) {
-        out.fill(S::constant(0.0));
-        let [_, _, phi] = self.body.pose(x);
-        let mut f = [self.fx.value(x, v, t), self.fy.value(x, v, t)];
-        if self.follower {
-            let (c, s) = (phi.cos(), phi.sin());
-            f = [c * f[0] - s * f[1], s * f[0] + c * f[1]];
-        }
-        let arm = rotate(phi, self.s);
-        self.body.add(out, [f[0], f[1], cross(arm, f)]);
+        let f = [self.fx.value(x, v, t), self.fy.value(x, v, t)];
+        self.law(x, self.s.map(S::constant), f, out);
     }
     fn potential<S: Scalar>(&self, _x: &[S]) -> S {
         S::constant(0.0)
@@ -59,6 +52,33 @@ impl ForceLaw for PointLoad {
     }
     fn expressions(&self) -> Vec<(&'static str, &str)> {
         [("fx", &self.fx), ("fy", &self.fy)].into_iter().filter_map(|(k, l)| Some((k, l.source()?))).collect()
+    }
+    /// `point`, and `fx` and `fy` when they are numbers.
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        let loads = [self.fx.data("fx"), self.fy.data("fy")];
+        vector(POINT, self.s).into_iter().chain(loads.into_iter().flatten()).collect()
+    }
+    fn load_data<S: Scalar>(&self, x: &[S], v: &[S], t: f64, data: &[S], params: &[S], out: &mut [S]) -> bool {
+        let mut data = Data::new(data);
+        let s = data.pair();
+        let f = [self.fx.value_data(x, v, t, &mut data, params), self.fy.value_data(x, v, t, &mut data, params)];
+        self.law(x, s, f, out);
+        true
+    }
+}
+
+impl PointLoad {
+    /// `Q_e` of the force `f` (global, or body frame for a follower) at `s` (body frame).
+    #[inline]
+    fn law<S: Scalar>(&self, x: &[S], s: [S; 2], mut f: [S; 2], out: &mut [S]) {
+        out.fill(S::constant(0.0));
+        let [_, _, phi] = self.body.pose(x);
+        if self.follower {
+            let (c, s) = (phi.cos(), phi.sin());
+            f = [c * f[0] - s * f[1], s * f[0] + c * f[1]];
+        }
+        let arm = rotate(phi, s);
+        self.body.add(out, [f[0], f[1], cross(arm, f)]);
     }
 }
 
@@ -78,14 +98,31 @@ impl Torque {
     }
 }
 
+impl Torque {
+    /// `Q_e` of the torque `torque`.
+    #[inline]
+    fn law<S: Scalar>(&self, torque: S, out: &mut [S]) {
+        out.fill(S::constant(0.0));
+        let zero = S::constant(0.0);
+        self.body.add(out, [zero, zero, torque]);
+    }
+}
+
 impl ForceLaw for Torque {
     fn columns(&self) -> &[usize] {
         &self.columns
     }
     fn load<S: Scalar>(&self, x: &[S], v: &[S], t: f64, out: &mut [S]) {
-        out.fill(S::constant(0.0));
-        let zero = S::constant(0.0);
-        self.body.add(out, [zero, zero, self.torque.value(x, v, t)]);
+        self.law(self.torque.value(x, v, t), out);
+    }
+    /// `torque` when it is a number.
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        self.torque.data("torque").into_iter().collect()
+    }
+    fn load_data<S: Scalar>(&self, x: &[S], v: &[S], t: f64, data: &[S], params: &[S], out: &mut [S]) -> bool {
+        let torque = self.torque.value_data(x, v, t, &mut Data::new(data), params);
+        self.law(torque, out);
+        true
     }
     fn applied(&self) -> bool {
         true
@@ -159,7 +196,7 @@ pub(crate) fn compile_torque(spec: &TorqueSpec, cx: &mut impl ForceContext, path
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::forces::testing::{check_derivatives, expression};
+    use crate::forces::testing::{assert_data_fields, check_data, check_derivatives, expression, expression_with};
 
     /// Hand-derived: a unit force along +y at `s' = (1, 0)` on a body at angle 0 gives moment
     /// `1 x 1 = 1`; along the body's own y (follower) at angle pi/2 it points along -x and its
@@ -186,5 +223,28 @@ mod tests {
         }
         let tq = Torque::new(3, expression("-5*b1.omega*abs(b1.omega) + 2*b0.y", 2));
         check_derivatives(&tq, 6, 12);
+    }
+
+    /// The load over the data and the parameters (design sensitivities): a force with an
+    /// expression of a parameter and time and a number, in either frame, and a torque as a
+    /// number and as an expression of parameters.
+    #[test]
+    fn load_over_data_and_parameters() {
+        let params = [("g", 2.5), ("w", 0.7)];
+        let values = params.map(|p| p.1);
+        let fx = expression_with("-g*b0.vx + 3*sin(w*t) + b1.phi", 2, &params);
+        for follower in [false, true] {
+            let f = PointLoad::new(0, [0.3, -0.2], follower, fx.clone(), Load::Constant(4.0));
+            assert_eq!(ForceLaw::data(&f).iter().map(|d| d.0).collect::<Vec<_>>(), ["point[0]", "point[1]", "fy"]);
+            check_data(&f, &values, 13);
+            assert_data_fields::<PointForce>(&f);
+        }
+        let tq = Torque::new(3, Load::Constant(-2.0));
+        assert_eq!(ForceLaw::data(&tq), [("torque", -2.0)]);
+        check_data(&tq, &values, 14);
+        assert_data_fields::<TorqueSpec>(&tq);
+        let te = Torque::new(3, expression_with("g*b1.omega + w^2*b0.x", 2, &params));
+        assert!(ForceLaw::data(&te).is_empty());
+        check_data(&te, &values, 15);
     }
 }

@@ -4,6 +4,7 @@
 //! time); the force element then maps the coordinates onto its local columns
 //! ([`Load::localize`]), so that evaluation reads only the element's `x` and `v`.
 
+use super::Data;
 use crate::expr::MAX_SLOTS;
 use crate::expr::{Expr, Scalar};
 
@@ -147,18 +148,41 @@ impl Load {
     pub(crate) fn value<S: Scalar>(&self, x: &[S], v: &[S], t: f64) -> S {
         match self {
             Load::Constant(c) => S::constant(*c),
-            Load::Expression(e) => {
-                let mut z = [S::constant(0.0); MAX_SLOTS];
-                for (zk, var) in z.iter_mut().zip(&e.vars) {
-                    *zk = match *var {
-                        StateVar::Position(k) => x[k],
-                        StateVar::Velocity(k) => v[k],
-                        StateVar::Acceleration(_) | StateVar::Reaction(_) => S::constant(f64::NAN),
-                        StateVar::Time => S::constant(t),
-                    };
-                }
-                e.expr.eval(&z[..e.vars.len()])
-            }
+            Load::Expression(e) => e.expr.eval(&Load::local_slots(e, x, v, t)[..e.vars.len()]),
         }
+    }
+
+    /// Its number as one of the force's data, named `field` (a constant); none for an
+    /// expression, whose numbers are the model's parameters ([`crate::forces::ForceLaw::data`]).
+    pub(crate) fn data(&self, field: &'static str) -> Option<(&'static str, f64)> {
+        match self {
+            Load::Constant(c) => Some((field, *c)),
+            Load::Expression(_) => None,
+        }
+    }
+
+    /// As [`Load::value`] with the numbers as inputs: a constant is the next of `data`, an
+    /// expression reads the model's parameters from `params` ([`Expr::eval_params`]).
+    #[inline]
+    pub(crate) fn value_data<S: Scalar>(&self, x: &[S], v: &[S], t: f64, data: &mut Data<'_, S>, params: &[S]) -> S {
+        match self {
+            Load::Constant(_) => data.next(),
+            Load::Expression(e) => e.expr.eval_params(&Load::local_slots(e, x, v, t)[..e.vars.len()], params),
+        }
+    }
+
+    /// The value of each slot of `e` from local `x`, `v` and `t`.
+    #[inline]
+    fn local_slots<S: Scalar>(e: &StateExpr, x: &[S], v: &[S], t: f64) -> [S; MAX_SLOTS] {
+        let mut z = [S::constant(0.0); MAX_SLOTS];
+        for (zk, var) in z.iter_mut().zip(&e.vars) {
+            *zk = match *var {
+                StateVar::Position(k) => x[k],
+                StateVar::Velocity(k) => v[k],
+                StateVar::Acceleration(_) | StateVar::Reaction(_) => S::constant(f64::NAN),
+                StateVar::Time => S::constant(t),
+            };
+        }
+        z
     }
 }
