@@ -87,40 +87,52 @@ fn step(model: &Model, analysis: &str, name: &str) -> f64 {
     (if modes { 1e-2 } else { 3e-4 }) * model.parameters[name].abs().max(1e-3)
 }
 
-/// The examples with parameters whose analyses have no sensitivities yet, each with the
-/// element the run names: the cam joints (this increment differentiates the geometric joints
-/// and the drivers).
-const NOT_YET: &[(&str, &str)] = &[("cam_profile.yaml", "joints."), ("cam_roller.yaml", "joints.")];
+/// The analyses of examples with parameters that have no sensitivities yet, each with the
+/// element the run names: the cam joints (this increment differentiates the geometric joints and
+/// the drivers), a mechanical advantage that reads a torque force, and joint friction in an
+/// inverse analysis.
+const NOT_YET: &[(&str, &str, &str)] = &[
+    ("cam_profile.yaml", "drive", "joints."),
+    ("cam_profile.yaml", "motion", "joints."),
+    ("cam_roller.yaml", "drive", "joints."),
+    ("cam_roller.yaml", "motion", "joints."),
+    ("fourbar_measures.yaml", "inverse", "measures.ma"),
+    ("slider_crank_friction.yaml", "inverse", "joints.O.friction"),
+];
 
 /// The analysis types whose sensitivities are checked against finite differences.
-const DIFFERENTIATED: [AnalysisKind; 3] = [AnalysisKind::Kinematic, AnalysisKind::Static, AnalysisKind::Modes];
+const DIFFERENTIATED: [AnalysisKind; 4] =
+    [AnalysisKind::Kinematic, AnalysisKind::Inverse, AnalysisKind::Static, AnalysisKind::Modes];
 
 /// A quantity of a mode, where it has one.
 type Quantity = fn(&linkwork::results::Mode) -> Option<f64>;
 
-/// Check the sensitivities of `analysis` of `model` (from `file`) with respect to every
-/// parameter against the finite differences of whole runs, each disagreement into `failures`:
-/// every column, and a modes analysis's frequencies, damped frequencies and growth rates
-/// (`modes.<k>.<quantity>` of the summary, the modes in the order the analysis sorts them).
-/// Each to 1e-7 of the quantity's largest derivative: what the issue asks, and 100 times the
-/// differences' own truncation and convergence error. Where the derivative is zero (a
-/// parameter that does not move the quantity) the differences are round-off: a run whose
-/// largest value is `|c|` (the quick-return's accelerations, 60 m/s^2) computes each column to
-/// about `eps |c|`, so a difference quotient to about `eps |c| / h`; the floor is 100 times
-/// that, or 1e-10, whichever is larger (2e-9 for the quick-return's step of 6e-4 m).
-fn check(model: &Model, file: &str, name: &str, results: &Results, failures: &mut Vec<String>) {
-    let parameters: Vec<String> = model.parameters.keys().cloned().collect();
+/// Where the derivatives of `results` (a run of `analysis` of `model` with sensitivities)
+/// disagree with the finite differences of whole runs, one message per quantity at its first
+/// disagreement: every column, and a modes analysis's frequencies, damped frequencies and
+/// growth rates (`modes.<k>.<quantity>` of the summary, the modes in the order the analysis
+/// sorts them). Each to 1e-7 of the quantity's largest derivative: what the issue asks, and 100
+/// times the differences' own truncation and convergence error. Where the derivative is zero
+/// (a parameter that does not move the quantity) the differences are round-off: a run whose
+/// largest value is `|c|` (the quick-return's accelerations, 60 m/s^2; an inverse analysis's
+/// largest reaction) computes each column to about `eps |c|`, so a difference quotient to about
+/// `eps |c| / h`; the floor is 100 times that, or 1e-10, whichever is larger (2e-9 for the
+/// quick-return's step of 6e-4 m).
+fn disagreements(model: &Model, name: &str, results: &Results) -> Vec<String> {
+    let mut failures = Vec::new();
+    let failures = &mut failures;
     let sens = results.sensitivities.as_ref().expect("the sensitivities asked for");
+    let parameters = &sens.parameters;
     // The run's size: its largest value (every column is computed with the others).
     let size = results.columns.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-    assert_eq!(sens.names, results.names, "{file}: every column has its derivatives");
+    assert_eq!(sens.names, results.names, "{name}: every column has its derivatives");
     let compare =
         |failures: &mut Vec<String>, what: &dyn Fn(usize) -> String, exact: &[f64], fd: &[Option<f64>], floor: f64| {
             let scale = fd.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
             for (row, (&exact, approx)) in exact.iter().zip(fd).enumerate() {
                 let Some(approx) = approx else { continue };
                 if (exact - approx).abs() > 1e-7 * scale + floor {
-                    failures.push(format!("{file} {name}: {}: {exact:e}, differences {approx:e}", what(row)));
+                    failures.push(format!("{}: {exact:e}, differences {approx:e}", what(row)));
                     break;
                 }
             }
@@ -158,18 +170,19 @@ fn check(model: &Model, file: &str, name: &str, results: &Results, failures: &mu
                         );
                     }
                     (None, _, Some(_)) if mode.kind != linkwork::results::ModeKind::Neutral => {
-                        failures.push(format!("{file} {name}: no derivative {key}/d({p})"));
+                        failures.push(format!("no derivative {key}/d({p})"));
                     }
                     _ => {}
                 }
             }
         }
     }
+    std::mem::take(failures)
 }
 
-/// Every kinematic, static and modes analysis of every example with parameters: the derivative
-/// of every column (and mode) with respect to every parameter agrees with the finite
-/// differences of whole runs ([`check`]).
+/// Every kinematic, inverse, static and modes analysis of every example with parameters: the
+/// derivative of every column (and mode) with respect to every parameter agrees with the finite
+/// differences of whole runs ([`disagreements`]).
 #[test]
 fn every_example_agrees_with_finite_differences_of_whole_runs() {
     let dir = format!("{}/../../examples", env!("CARGO_MANIFEST_DIR"));
@@ -196,9 +209,9 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
             let results = match run_with(&model, name, &parameters) {
                 Ok(r) => r,
                 Err(Error::Model(problems))
-                    if NOT_YET.iter().any(|(f, p)| *f == file && problems[0].path.starts_with(p)) =>
+                    if NOT_YET.iter().any(|(f, a, p)| *f == file && a == name && problems[0].path.starts_with(p)) =>
                 {
-                    refused.push(file.clone());
+                    refused.push((file.clone(), name.clone()));
                     continue;
                 }
                 Err(e) => {
@@ -206,13 +219,17 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
                     continue;
                 }
             };
-            check(&model, &file, name, &results, &mut failures);
+            let failures_here = disagreements(&model, name, &results);
+            failures.extend(failures_here.into_iter().map(|d| format!("{file} {name}: {d}")));
             checked.push(format!("{file} {name}"));
         }
     }
     assert!(failures.is_empty(), "{} disagreements:\n{}", failures.len(), failures.join("\n"));
-    // The list of what is not differentiated yet stays true: each example on it is refused.
-    assert_eq!(refused, NOT_YET.iter().map(|(f, _)| f.to_string()).collect::<Vec<_>>());
+    // The list of what is not differentiated yet stays true: each analysis on it is refused.
+    refused.sort();
+    let mut expected: Vec<(String, String)> = NOT_YET.iter().map(|(f, a, _)| (f.to_string(), a.to_string())).collect();
+    expected.sort();
+    assert_eq!(refused, expected);
     for expected in [
         "slider_crank_param.yaml kinematics",
         "quick_return_a.yaml kinematics",
@@ -220,6 +237,10 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
         "hanging_fourbar.yaml rest",
         "hanging_fourbar.yaml vibration",
         "ellipse_trammel.yaml equilibrium",
+        "slider_crank_param.yaml inverse",
+        "quick_return_a.yaml inverse",
+        "motion_laws.yaml drive",
+        "cam_table.yaml drive",
     ] {
         assert!(checked.iter().any(|c| c == expected), "{expected} was checked; checked: {checked:?}");
     }
@@ -227,7 +248,7 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
 
 /// A four-bar hanging under gravity alone (the hanging four-bar example without its spring and
 /// load), its lengths, masses and a pivot as parameters: its rest and its modes agree with the
-/// finite differences of whole runs ([`check`]): the reactions' levers, the anchor points'
+/// finite differences of whole runs ([`disagreements`]): the reactions' levers, the anchor points'
 /// gradients, the geometric stiffness's derivative and the masses' all enter.
 #[test]
 fn a_four_bar_hanging_under_gravity_agrees_with_finite_differences() {
@@ -255,7 +276,7 @@ analyses:
     let mut failures = Vec::new();
     for name in ["rest", "vibration"] {
         let results = run_with(&model, name, &parameters).expect("the run");
-        check(&model, "hanging four-bar", name, &results, &mut failures);
+        failures.extend(disagreements(&model, name, &results).into_iter().map(|d| format!("{name}: {d}")));
     }
     assert!(failures.is_empty(), "{} disagreements:\n{}", failures.len(), failures.join("\n"));
 }
@@ -355,9 +376,11 @@ fn unknown_parameters_and_other_analyses_are_refused() {
         "{}",
         problems[0].message
     );
-    let Err(Error::Model(problems)) = run_with(&model, "inverse", &["r".to_string()]) else {
-        panic!("an inverse analysis is refused for now")
+    let model = Model::load(common::example("quick_return_a.yaml")).expect("the example");
+    let Err(Error::Model(problems)) = run_with(&model, "dynamics", &["crank".to_string()]) else {
+        panic!("a dynamic analysis is refused for now")
     };
+    assert_eq!(problems[0].path, "sensitivities");
     assert!(problems[0].message.contains("analyses so far"), "{}", problems[0].message);
 }
 
@@ -482,4 +505,129 @@ analyses:
             );
         }
     }
+}
+
+/// A crank turning at constant speed `w` about a fixed pin O, carrying a point mass `m` at
+/// radius `r` under gravity `g` (its centre of mass at `r (cos theta, sin theta)`, `theta = w
+/// t`). Its angular momentum about O is constant, so the motor's effort balances gravity's
+/// moment about O, `tau = m g r cos(theta)`, and the pin's reaction on the crank is the mass's
+/// acceleration less gravity, `F = (-m w^2 r cos(theta), m g - m w^2 r sin(theta))`. Their
+/// derivatives with respect to `m` and `r` (and the values, which fix the signs of the effort
+/// convention), to 1e-12 of the largest value: both are products of the parameters with
+/// `cos` and `sin` of an angle the drivers give exactly, so only round-off separates them.
+#[test]
+fn crank_effort_and_reaction_match_their_closed_forms() {
+    let text = "
+name: crank with a point mass
+parameters: {m: 2.5, r: 0.4}
+gravity: [0, -9.81]
+bodies:
+  crank: {mass: m, inertia: 1e-3, position: [r, 0], angle: 0, points: {O: [-r, 0]}}
+joints:
+  O: {type: revolute, body_i: crank, point_i: O, body_j: ground, point_j: [0, 0]}
+drivers:
+  motor: {type: angle, body: crank, function: 3*t}
+measures:
+  power: motor.effort * crank.omega
+analyses:
+  inverse: {type: inverse, drivers: [motor], t_end: 2.5, step: 0.05}
+";
+    let model = Model::from_yaml(text).expect("the crank");
+    let names: Vec<String> = ["m", "r"].map(String::from).to_vec();
+    let results = run_with(&model, "inverse", &names).expect("the run");
+    let sens = results.sensitivities.as_ref().expect("asked for");
+    let column = |name: &str| results.names.iter().position(|n| n == name).unwrap_or_else(|| panic!("{name}"));
+    let [effort, fx, fy, torque, power] = ["motor.effort", "O.fx", "O.fy", "O.torque", "power"].map(column);
+    let (m, r, g, w) = (2.5, 0.4, 9.81, 3.0);
+    let size = m * (g + w * w * r) * w;
+    for (k, &t) in results.time.iter().enumerate() {
+        let (c, s) = ((w * t).cos(), (w * t).sin());
+        let checks = [
+            // (column, value, d/dm, d/dr)
+            (effort, m * g * r * c, g * r * c, m * g * c),
+            (fx, -m * w * w * r * c, -w * w * r * c, -m * w * w * c),
+            (fy, m * g - m * w * w * r * s, g - w * w * r * s, -m * w * w * s),
+            (torque, 0.0, 0.0, 0.0),
+            (power, m * g * r * c * w, g * r * c * w, m * g * c * w),
+        ];
+        for (col, value, dm, dr) in checks {
+            let name = &results.names[col];
+            let got = [results.columns[col][k], sens.values[0][col][k], sens.values[1][col][k]];
+            for (what, got, expected) in [("value", got[0], value), ("d/dm", got[1], dm), ("d/dr", got[2], dr)] {
+                assert!(
+                    (got - expected).abs() <= 1e-12 * size,
+                    "{what} of {name} at t = {t}: {got} against {expected}"
+                );
+            }
+        }
+    }
+}
+
+/// A double parallelogram (three parallel cranks of length `L`, pivots at 0, `d` and `e`, one coupler)
+/// has a redundant row throughout its motion, so its multipliers are the minimum-norm ones and
+/// their derivatives carry the pseudo-inverse's second term (docs/sensitivities.md, "Inverse
+/// dynamics"): every column against the finite differences of whole runs, as for the examples
+/// (same steps, tolerance and floor).
+#[test]
+fn redundant_rows_take_the_minimum_norm_derivative() {
+    let text = "
+name: double parallelogram
+parameters: {L: 0.3, d: 0.5, e: 1.3, m: 1.2}
+gravity: [0, -9.81]
+bodies:
+  c1: {mass: m, inertia: m*L^2/12, position: [0, 0], angle: 1, points: {O: [-L/2, 0], T: [L/2, 0]}}
+  c2: {mass: 2*m, inertia: m*L^2/6, position: [d, 0], angle: 1, points: {O: [-L/2, 0], T: [L/2, 0]}}
+  c3: {mass: 0.5, inertia: 0.01, position: [1.3, 0], angle: 1, points: {O: [-L/2, 0], T: [L/2, 0]}}
+  coupler: {mass: 3, inertia: 0.2, position: [0.6, 0.25], angle: 0, points: {A: [-d, 0], B: [0, 0], C: [e - d, 0]}}
+joints:
+  O1: {type: revolute, body_i: c1, point_i: O, body_j: ground, point_j: [0, 0]}
+  O2: {type: revolute, body_i: c2, point_i: O, body_j: ground, point_j: [d, 0]}
+  O3: {type: revolute, body_i: c3, point_i: O, body_j: ground, point_j: [e, 0]}
+  A: {type: revolute, body_i: c1, point_i: T, body_j: coupler, point_j: A}
+  B: {type: revolute, body_i: c2, point_i: T, body_j: coupler, point_j: B}
+  C: {type: revolute, body_i: c3, point_i: T, body_j: coupler, point_j: C}
+drivers:
+  motor: {type: angle, body: c1, function: 0.6 + 1.5*t}
+analyses:
+  inverse: {type: inverse, drivers: [motor], t_end: 1.2, step: 0.1}
+";
+    let model = tight(Model::from_yaml(text).expect("the double parallelogram"));
+    let parameters: Vec<String> = ["L", "d", "e", "m"].map(String::from).to_vec();
+    let results = run_with(&model, "inverse", &parameters).expect("the run");
+    let redundant = results.summary.redundant_rows.as_ref().map_or(0, Vec::len);
+    assert_eq!(redundant, 1, "one row is redundant");
+    let failures = disagreements(&model, "inverse", &results);
+    assert!(failures.is_empty(), "{} disagreements:\n{}", failures.len(), failures.join("\n"));
+}
+
+/// Forces in an inverse analysis: the crank above with a force at its mass written with a
+/// parameter (in the crank's frame, so that its moment turns with it), a damping torque whose
+/// coefficient is one, and a spring to ground whose numbers no parameter writes (its potential
+/// moves only with the coordinates): every column (the effort, the reactions, the applied
+/// power and the potential energy among them) against the finite differences of whole runs, as
+/// for the examples (same steps, tolerance and floor).
+#[test]
+fn forces_in_an_inverse_analysis_agree_with_finite_differences() {
+    let text = "
+name: crank with forces
+parameters: {m: 2.5, r: 0.4, P: 3, c: 0.7}
+gravity: [0, -9.81]
+bodies:
+  crank: {mass: m, inertia: 1e-3, position: [r, 0], angle: 0, points: {O: [-r, 0]}}
+joints:
+  O: {type: revolute, body_i: crank, point_i: O, body_j: ground, point_j: [0, 0]}
+drivers:
+  motor: {type: angle, body: crank, function: 3*t}
+forces:
+  push: {type: force, body: crank, point: [0, 0], frame: body, fx: P, fy: 1.5}
+  damper: {type: torque, body: crank, torque: -c*crank.omega}
+  spring: {type: spring_damper, body_i: ground, point_i: [0.2, 0.5], body_j: crank, point_j: [0, 0], stiffness: 40, free_length: 0.3}
+analyses:
+  inverse: {type: inverse, drivers: [motor], t_end: 2.5, step: 0.1}
+";
+    let model = tight(Model::from_yaml(text).expect("the crank with forces"));
+    let parameters: Vec<String> = ["m", "r", "P", "c"].map(String::from).to_vec();
+    let results = run_with(&model, "inverse", &parameters).expect("the run");
+    let failures = disagreements(&model, "inverse", &results);
+    assert!(failures.is_empty(), "{} disagreements:\n{}", failures.len(), failures.join("\n"));
 }

@@ -118,7 +118,7 @@ pub(crate) fn run_modes(model: &Model, analysis: &Analysis, run: &mut Run<'_>) -
                 return Err(Error::Model(vec![crate::Problem::new(path.clone(), message)]));
             }
             let mut s = EquilibriumSensitivity::new(model, analysis, &run.sensitivities, st.dae, &q, t)?;
-            let (k, jac) = st.sensitivities(&mut s, &mut results, (&q, &lambda, t), false)?;
+            let (k, jac) = st.sensitivities(&mut s, &mut results, (&q, &lambda, t), None)?;
             mode_derivatives(&mut s, st.dae, (k.as_ref(), jac.as_ref()), (&q, &lambda, t), &modes, &names)
         };
         match derivatives() {

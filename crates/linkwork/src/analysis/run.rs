@@ -234,9 +234,12 @@ impl Model {
         if names.is_empty() {
             return Ok(Vec::new());
         }
-        if !matches!(analysis.kind, AnalysisKind::Kinematic | AnalysisKind::Static | AnalysisKind::Modes) {
+        if !matches!(
+            analysis.kind,
+            AnalysisKind::Kinematic | AnalysisKind::Inverse | AnalysisKind::Static | AnalysisKind::Modes
+        ) {
             return Err(problem(format!(
-                "analysis '{}' has type {}: design sensitivities are computed for kinematic, static and modes analyses so far",
+                "analysis '{}' has type {}: design sensitivities are computed for kinematic, inverse, static and modes analyses so far",
                 analysis.name,
                 analysis.kind.name()
             )));

@@ -425,14 +425,14 @@ impl<'a, 'm> Statics<'a, 'm> {
 
     /// The design sensitivities `s` of the equilibrium `(q, lambda)` at `t`, solved for
     /// with the Newton matrix there (its geometric stiffness exact) and pushed into `results`
-    /// (with `reactions`, a static analysis's row; without, a modes analysis's); returns the
-    /// tangent stiffness and `Phi_q` there.
+    /// (with `react`, a static analysis's row with these reactions; without, a modes
+    /// analysis's); returns the tangent stiffness and `Phi_q` there.
     pub(crate) fn sensitivities(
         &mut self,
         s: &mut EquilibriumSensitivity<'_>,
         results: &mut Results,
         (q, lambda, t): (&[f64], &[f64], f64),
-        reactions: bool,
+        react: Option<&[f64]>,
     ) -> Result<(Mat<f64>, Mat<f64>), Error> {
         self.dae.positions(q, t);
         self.dae.load_jacobians(q, &vec![0.0; self.n], t, self.dq.as_mut(), self.dv.as_mut());
@@ -440,7 +440,7 @@ impl<'a, 'm> Statics<'a, 'm> {
         let k = Mat::from_fn(self.n, self.n, |i, j| geo[(i, j)] - self.dq[(i, j)]);
         self.dae.jacobian_dense(self.jac.as_mut());
         s.solve(self.dae, (k.as_ref(), self.jac.as_ref()), q, lambda, t)?;
-        s.push(results, self.dae, (q, lambda, t), reactions)?;
+        s.push(results, self.dae, (q, lambda, t), react)?;
         Ok((k, self.jac.clone()))
     }
 
@@ -712,7 +712,7 @@ pub(crate) fn run_static(model: &Model, analysis: &Analysis, run: &mut Run<'_>) 
                     break;
                 }
                 if let Some(s) = &mut sensitivity {
-                    if let Err(e) = st.sensitivities(s, &mut results, (&eq.q, &eq.lambda, t), true) {
+                    if let Err(e) = st.sensitivities(s, &mut results, (&eq.q, &eq.lambda, t), Some(&react)) {
                         error = Some(e);
                         break;
                     }

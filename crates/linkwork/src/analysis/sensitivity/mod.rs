@@ -21,6 +21,10 @@
 //! the independent rows is the one the analysis solves; rows it found redundant hold
 //! implicitly. The measures follow from one more evaluation over the same numbers.
 
+mod inverse;
+
+pub(crate) use inverse::{InverseAt, InverseSensitivity};
+
 use crate::constraints::{At, Constraint};
 use crate::error::{Error, Problem};
 use crate::expr::{Dual, HyperDual, Scalar, Tri};
@@ -222,7 +226,7 @@ impl<'m> Sensitivity<'m> {
         }
         for m in &self.model.measures {
             let data: Vec<Dual> = m.kind.data().iter().map(|&(_, v)| Dual::constant(v)).collect();
-            if m.value_generic(&b.q, &b.q, &b.q, Dual::constant(0.0), &data, &b.params).is_none() {
+            if m.value_generic(&b.q, &b.q, &b.q, &[], Dual::constant(0.0), &data, &b.params).is_none() {
                 return unsupported(format!("measures.{}", m.name), "this measure");
             }
         }
@@ -230,7 +234,11 @@ impl<'m> Sensitivity<'m> {
     }
 
     /// The derivatives of every column at the output `(t, q, qdot, qddot)`, with `lu` the
-    /// factorization of `Phi_q`'s independent `rows` there, pushed into `results`.
+    /// factorization of `Phi_q`'s independent `rows` there, pushed into `results`: for each
+    /// parameter asked, `q_p`, `qdot_p` and `qddot_p` ([`Sensitivity::motion`]), each body's
+    /// quantities from them, then what `extra(self, p, row)` appends for the analysis's own
+    /// columns (the measures, [`Sensitivity::measures`], and an inverse analysis's reactions).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn push(
         &mut self,
         results: &mut Results,
@@ -238,6 +246,7 @@ impl<'m> Sensitivity<'m> {
         rows: &[usize],
         t: f64,
         x: (&[f64], &[f64], &[f64]),
+        mut extra: impl FnMut(&mut Sensitivity<'m>, usize, &mut Vec<f64>) -> Result<(), Error>,
     ) -> Result<(), Error> {
         for k in 0..self.asked.len() {
             let p = self.asked[k];
@@ -253,19 +262,38 @@ impl<'m> Sensitivity<'m> {
             lu.solve(&mut rhs);
             self.dq[2].copy_from_slice(&rhs);
             self.rhs = rhs;
-            self.rows[k] = self.columns(p, t, x);
+            let mut row = std::mem::take(&mut self.rows[k]);
+            row.clear();
+            let [dq, dv, da] = &self.dq;
+            let bodies = x.0.len() / 3;
+            row.extend(
+                (0..bodies)
+                    .flat_map(|b| [dq, dv, da].into_iter().flat_map(move |v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]])),
+            );
+            let outcome = extra(self, p, &mut row);
+            self.rows[k] = row;
+            outcome?;
         }
         results.push_sensitivities(t, &self.names, &self.rows)
     }
 
-    /// The derivatives of the columns (each body's quantities, then the measures) with respect
-    /// to parameter `p`, from `q_p`, `qdot_p`, `qddot_p`.
-    fn columns(&mut self, p: usize, t: f64, (q, qdot, qddot): (&[f64], &[f64], &[f64])) -> Vec<f64> {
+    /// `[q_p, qdot_p, qddot_p]` of the parameter being pushed ([`Sensitivity::push`]).
+    pub(crate) fn motion(&self) -> &[Vec<f64>; 3] {
+        &self.dq
+    }
+
+    /// The derivatives of the measures with respect to parameter `p` at `(t, q, qdot, qddot)`,
+    /// from the motion's ([`Sensitivity::motion`]) and the reactions row `reactions` (values
+    /// along their derivatives; empty in an analysis that has none), appended to `row`.
+    pub(crate) fn measures(
+        &mut self,
+        p: usize,
+        t: f64,
+        (q, qdot, qddot): (&[f64], &[f64], &[f64]),
+        reactions: &[Dual],
+        row: &mut Vec<f64>,
+    ) {
         let [dq, dv, da] = &self.dq;
-        let bodies = q.len() / 3;
-        let mut row: Vec<f64> = (0..bodies)
-            .flat_map(|b| [dq, dv, da].into_iter().flat_map(move |v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]]))
-            .collect();
         let along = |x: &[f64], d: &[f64]| -> Vec<Dual> { x.iter().zip(d).map(|(&v, &e)| Dual::new(v, e)).collect() };
         let (q, qdot, qddot) = (along(q, dq), along(qdot, dv), along(qddot, da));
         let b = &mut self.position;
@@ -274,10 +302,9 @@ impl<'m> Sensitivity<'m> {
         for ((m, data), grads) in measures {
             b.data.clear();
             b.data.extend(data.iter().zip(grads).map(|(&v, g)| Dual::new(v, g[p])));
-            let value = m.value_generic(&q, &qdot, &qddot, Dual::constant(t), &b.data, &b.params);
+            let value = m.value_generic(&q, &qdot, &qddot, reactions, Dual::constant(t), &b.data, &b.params);
             row.push(value.map_or(f64::NAN, |v| v.d));
         }
-        row
     }
 }
 

@@ -19,11 +19,12 @@
 //! the same evaluations with the coordinates moving along `q_p` and the multipliers along
 //! `lambda_p`.
 
+use super::inverse::anchor_point;
 use super::{level, seed_parameters, unsupported, Buffers, Level, Seeded, Sensitivity};
 use crate::analysis::dynamic::Dae;
+use crate::analysis::measure_reactions;
 use crate::analysis::statics::newton_matrix;
-use crate::constraints::{reaction_about, At, BodyIx};
-use crate::element::Pose;
+use crate::constraints::{lever, reaction_about, At};
 use crate::error::Error;
 use crate::expr::{Dual, HyperDual, Scalar};
 use crate::linalg::dense::min_norm_solve_columns;
@@ -40,6 +41,8 @@ pub(crate) struct EquilibriumSensitivity<'m> {
     pub(super) dq: Vec<Vec<f64>>,
     /// (parameters asked) `lambda_p`, `(m)` each.
     pub(super) dlambda: Vec<Vec<f64>>,
+    /// The analysis's drivers (indices into the model's), for the measures' reactions row.
+    drivers: Vec<usize>,
 }
 
 impl<'m> EquilibriumSensitivity<'m> {
@@ -61,11 +64,13 @@ impl<'m> EquilibriumSensitivity<'m> {
         }
         let zero = vec![0.0; q.len()];
         let mut load = zero.clone();
-        if let Some(&p) = asked.first() {
+        for &p in asked {
             dae.add_load_along(q, &zero, t, &zero, &zero, p, &mut load)
                 .map_err(|name| unsupported_force(model, &name))?;
+            let potential = |name: String| unsupported(format!("forces.{name}"), "this force's potential energy");
+            dae.potential_energy_along(q, &zero, p).map_err(potential)?;
         }
-        Ok(EquilibriumSensitivity { base, dq: Vec::new(), dlambda: Vec::new() })
+        Ok(EquilibriumSensitivity { base, dq: Vec::new(), dlambda: Vec::new(), drivers: analysis.drivers.clone() })
     }
 
     /// The geometric stiffness `d(Phi_q^T lambda)/dq` at `(q, lambda, t)`, `(n x n)`, exact: the
@@ -151,28 +156,39 @@ impl<'m> EquilibriumSensitivity<'m> {
 
     /// The derivatives of the row just pushed at the equilibrium `(q, lambda)` at `t` (after
     /// [`EquilibriumSensitivity::solve`] there), pushed into `results`: each body's columns
-    /// (the velocities and accelerations zero), then with `reactions` (a static analysis) each
-    /// joint's reaction, each driver's effort and the potential energy, then the measures.
+    /// (the velocities and accelerations zero), then with `react` (a static analysis: its
+    /// reactions row, [`Dae::reactions`]) each joint's reaction, each driver's effort and the
+    /// potential energy, then the measures.
     pub(crate) fn push(
         &mut self,
         results: &mut Results,
         dae: &Dae<'_>,
         (q, lambda, t): (&[f64], &[f64], f64),
-        reactions: bool,
+        react: Option<&[f64]>,
     ) -> Result<(), Error> {
         let n = q.len();
         let zero = vec![0.0; n];
         for j in 0..self.base.asked.len() {
             let p = self.base.asked[j];
+            let mut row: Vec<f64> =
+                (0..n / 3).flat_map(|b| [&self.dq[j][3 * b..3 * b + 3], &zero[..3], &zero[..3]].concat()).collect();
+            let mut reactions = Vec::new();
+            if let Some(react) = react {
+                let derivatives = self.reactions(q, lambda, t, j);
+                row.extend_from_slice(&derivatives);
+                let potential = dae.potential_energy_along(q, &self.dq[j], p);
+                row.push(
+                    potential.map_err(|name| unsupported(format!("forces.{name}"), "this force's potential energy"))?,
+                );
+                let (mut values, mut along) = (Vec::new(), Vec::new());
+                measure_reactions(self.base.model, &self.drivers, react, &mut values);
+                measure_reactions(self.base.model, &self.drivers, &derivatives, &mut along);
+                reactions = values.iter().zip(&along).map(|(&v, &d)| Dual::new(v, d)).collect();
+            }
             self.base.dq[0].copy_from_slice(&self.dq[j]);
             self.base.dq[1].fill(0.0);
             self.base.dq[2].fill(0.0);
-            let mut row = self.base.columns(p, t, (q, &zero, &zero));
-            if reactions {
-                let mut extra = self.reactions(q, lambda, t, j);
-                extra.push(self.potential_energy(dae, q, j)?);
-                row.splice(3 * n..3 * n, extra);
-            }
+            self.base.measures(p, t, (q, &zero, &zero), &reactions, &mut row);
             self.base.rows[j] = row;
         }
         results.push_sensitivities(t, &self.base.names, &self.base.rows)
@@ -188,69 +204,30 @@ impl<'m> EquilibriumSensitivity<'m> {
         let p = b.asked[j];
         let (dq, dl) = (&self.dq[j], &self.dlambda[j]);
         let joints = b.model.joints.len();
-        let mut g: Vec<Vec<Dual>> = vec![Vec::new(); joints];
-        by_column(&mut b.velocity, &b.elements[..joints], b.model, p, t, (q, dq), |k, e, _, rows| {
-            let (l, d) = (&lambda[e.row..], &dl[e.row..]);
-            let value: f64 = rows.iter().zip(l).map(|(r, l)| r.e1 * l).sum();
-            let derivative: f64 = rows.iter().zip(l).zip(d).map(|((r, l), d)| r.e12 * l + r.e1 * d).sum();
-            g[k].push(Dual::new(-value, -derivative));
+        // Each joint's Jacobian block (rows x columns, row-major) along its derivative.
+        let mut blocks: Vec<Vec<Dual>> = b.elements[..joints]
+            .iter()
+            .map(|e| vec![Dual::constant(0.0); e.constraint.rows() * e.constraint.columns().len()])
+            .collect();
+        by_column(&mut b.velocity, &b.elements[..joints], b.model, p, t, (q, dq), |k, e, c, rows| {
+            let w = e.constraint.columns().len();
+            for (r, h) in rows.iter().enumerate() {
+                blocks[k][r * w + c] = Dual::new(h.e1, h.e12);
+            }
         });
         let qd: Vec<Dual> = q.iter().zip(dq).map(|(&v, &d)| Dual::new(v, d)).collect();
         let mut out = Vec::with_capacity(3 * joints + b.elements.len() - joints);
-        for (e, g) in b.elements.iter().zip(&g) {
+        for (e, block) in b.elements.iter().zip(&blocks) {
+            let rows = e.row..e.row + e.constraint.rows();
+            let l: Vec<Dual> = rows.map(|r| Dual::new(lambda[r], dl[r])).collect();
             let anchor = e.constraint.anchor();
-            let columns = e.constraint.columns();
-            let on = |body: BodyIx| -> [Dual; 3] {
-                let at = |k: usize| body.0.and_then(|o| columns.iter().position(|&c| c == o + k));
-                [0, 1, 2].map(|k| at(k).map_or(Dual::constant(0.0), |c| g[c]))
-            };
             let point = anchor_point(e, anchor.point, p);
-            let (f, m) = if anchor.i.0.is_some() {
-                reaction_about(true, on(anchor.i), Pose::of(anchor.i, &qd).rotate(point))
-            } else {
-                let o = Pose::of(anchor.j, &qd).o;
-                reaction_about(false, on(anchor.j), [o[0] - point[0], o[1] - point[1]])
-            };
+            let columns = e.constraint.columns();
+            let (f, m) = reaction_about(anchor, columns, |i| block[i], &l, lever(anchor, point, &qd));
             out.extend([f[0].d, f[1].d, m.d]);
         }
         out.extend(b.elements[joints..].iter().map(|e| -dl[e.row]));
         out
-    }
-
-    /// The derivative along the `j`-th parameter asked of the potential energy
-    /// ([`Dae::potential_energy`]) at `q`: gravity's through the masses, gravity and `q_p`, each
-    /// active force's through its coordinates and (`potential_data`) its numbers. A force whose
-    /// numbers the parameter moves and whose potential has no derivatives with respect to them
-    /// yet is an error naming it.
-    fn potential_energy(&self, dae: &Dae<'_>, q: &[f64], j: usize) -> Result<f64, Error> {
-        let model = self.base.model;
-        let (p, dq) = (self.base.asked[j], &self.dq[j]);
-        let grads = &model.gradients;
-        let mut d = 0.0;
-        for (k, (body, g)) in model.bodies.iter().zip(&grads.bodies).enumerate() {
-            for c in 0..2 {
-                let weight = body.mass * model.gravity[c];
-                let along = g[0][p] * model.gravity[c] + body.mass * grads.gravity[c][p];
-                d -= along * q[3 * k + c] + weight * dq[3 * k + c];
-            }
-        }
-        let params: Vec<Dual> =
-            model.parameters.values().zip(&grads.params).map(|(&v, g)| Dual::new(v, g[p])).collect();
-        for f in &dae.forces {
-            let k = model.forces.iter().position(|e| std::ptr::eq(e, *f)).expect("an active force is the model's");
-            let data: Vec<Dual> =
-                f.force.data().iter().zip(&grads.forces[k]).map(|(&(_, v), g)| Dual::new(v, g[p])).collect();
-            let x: Vec<Dual> = f.force.columns().iter().map(|&c| Dual::new(q[c], dq[c])).collect();
-            d += match f.force.potential_data_dual(&x, &data, &params) {
-                Some(v) => v.d,
-                None if data.iter().all(|v| v.d == 0.0) => f.force.potential_dual(&x).d,
-                None => {
-                    let what = format!("the potential energy of the {} force", f.kind);
-                    return Err(unsupported(format!("forces.{}", f.name), &what));
-                }
-            };
-        }
-        Ok(d)
     }
 }
 
@@ -258,23 +235,6 @@ impl<'m> EquilibriumSensitivity<'m> {
 pub(super) fn unsupported_force(model: &Model, name: &str) -> Error {
     let kind = model.forces.iter().find(|f| f.name == name).map_or("", |f| f.kind);
     unsupported(format!("forces.{name}"), &format!("the {kind} force"))
-}
-
-/// The anchor point `point` of element `e`'s reaction moment with its derivative along
-/// parameter `p`: that of the element's own point it is (`point_i`, or `point` of a one-body
-/// element), none when it is no number of the element (a point it takes from elsewhere, held).
-fn anchor_point(e: &Seeded<'_>, point: [f64; 2], p: usize) -> [Dual; 2] {
-    let data = e.constraint.data();
-    let slot = |name: &str| data.iter().position(|&(n, _)| n == name);
-    let pairs = [("point_i[0]", "point_i[1]"), ("point[0]", "point[1]")];
-    let found = pairs.iter().find_map(|&(x, y)| {
-        let (x, y) = (slot(x)?, slot(y)?);
-        (data[x].1 == point[0] && data[y].1 == point[1]).then_some((x, y))
-    });
-    match found {
-        Some((x, y)) => [Dual::new(point[0], e.grads[x][p]), Dual::new(point[1], e.grads[y][p])],
-        None => point.map(Dual::constant),
-    }
 }
 
 /// Each of `elements`' rows over hyper-dual numbers, once per column the element touches: the

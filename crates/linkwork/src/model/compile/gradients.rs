@@ -174,10 +174,12 @@ impl Cx<'_> {
     }
 }
 
-/// Whether a section's entry (serialized as its fields, its `type` among them) writes `field`.
+/// Whether a section's entry (serialized as its fields, its `type` among them) writes `field`,
+/// or the nested field at the path `field` (`friction.mu`, `shape_j.circle.radius`).
 fn writes<T: serde::Serialize>(entry: &T, field: &str) -> bool {
     let value = serde_json::to_value(entry).unwrap_or_default();
-    value.get(field).is_some_and(|v| !v.is_null())
+    let at = field.split('.').try_fold(&value, |v, part| v.get(part));
+    at.is_some_and(|v| !v.is_null())
 }
 
 #[cfg(test)]
@@ -245,6 +247,11 @@ mod tests {
                 }
             }
         }
+        for (f, d) in model.forces.iter().zip(&g.forces) {
+            for ((field, v), d) in f.force.data().iter().zip(d) {
+                out.push((format!("forces.{}.{field}", f.name), *v, d.clone()));
+            }
+        }
         for (m, d) in model.measures.iter().zip(&g.measures) {
             for ((field, v), d) in m.kind.data().iter().zip(d) {
                 out.push((format!("measures.{}.{field}", m.name), *v, d.clone()));
@@ -271,32 +278,12 @@ mod tests {
         // not one of zeros against zeros.
         let mut moving = Vec::new();
         for (name, text) in &examples {
-            let (model, handed) = build(name, text, &[]);
-            let base = numbers(&model, &handed);
-            for (k, (param, &p)) in model.parameters.iter().enumerate() {
-                let h = 1e-6 * if p == 0.0 { 1.0 } else { p.abs() };
-                let at = |v: f64| {
-                    let (model, handed) = build(name, text, &[(param.clone(), format!("{v}"))]);
-                    numbers(&model, &handed)
-                };
-                let (up, down) = (at(p + h), at(p - h));
-                assert_eq!(up.len(), base.len(), "{name}: {param}");
-                for ((what, v, d), ((_, a, _), (_, b, _))) in base.iter().zip(up.iter().zip(&down)) {
-                    let fd = (a - b) / ((p + h) - (p - h));
-                    let scale = d[k].abs().max(v.abs() / p.abs().max(1e-300)).max(fd.abs());
-                    let err = (fd - d[k]).abs();
-                    assert!(
-                        err <= 1e-8 * scale || err <= 1e-12,
-                        "{name}: d {what} / d {param}: {} against central differences {fd} (error {err:e}, scale {scale:e})",
-                        d[k]
-                    );
-                }
-                let handed = base.iter().filter(|(what, ..)| what.starts_with("handed "));
-                moving.push((name, handed.filter(|(_, _, d)| d[k] != 0.0).count()));
+            for (param, handed) in against_compiles(name, text) {
+                moving.push((name, param, handed.iter().filter(|w| w.starts_with("handed ")).count()));
             }
         }
         let at_least = |example: &str, count: usize| {
-            let found: usize = moving.iter().filter(|(n, _)| *n == example).map(|(_, c)| c).sum();
+            let found: usize = moving.iter().filter(|(n, ..)| *n == example).map(|(.., c)| c).sum();
             assert!(found >= count, "{example}: {found} numbers handed to elements move with a parameter");
         };
         // quick_return_a: 6 points named by its joints move; fourbar_placed: its joints' `at`
@@ -304,6 +291,81 @@ mod tests {
         at_least("quick_return_a.yaml", 6);
         at_least("fourbar_placed.yaml", 8);
         at_least("sixbar_leg.yaml", 8);
+    }
+
+    /// The check of [`every_examples_derivatives_are_central_differences_of_its_compiles`] on
+    /// the model `text` (named `name` in messages): for each parameter, the names of the numbers
+    /// whose derivative with respect to it is not zero.
+    fn against_compiles(name: &str, text: &str) -> Vec<(String, Vec<String>)> {
+        let (model, handed) = build(name, text, &[]);
+        let base = numbers(&model, &handed);
+        let mut moving = Vec::new();
+        for (k, (param, &p)) in model.parameters.iter().enumerate() {
+            let h = 1e-6 * if p == 0.0 { 1.0 } else { p.abs() };
+            let at = |v: f64| {
+                let (model, handed) = build(name, text, &[(param.clone(), format!("{v}"))]);
+                numbers(&model, &handed)
+            };
+            let (up, down) = (at(p + h), at(p - h));
+            assert_eq!(up.len(), base.len(), "{name}: {param}");
+            for ((what, v, d), ((_, a, _), (_, b, _))) in base.iter().zip(up.iter().zip(&down)) {
+                let fd = (a - b) / ((p + h) - (p - h));
+                let scale = d[k].abs().max(v.abs() / p.abs().max(1e-300)).max(fd.abs());
+                let err = (fd - d[k]).abs();
+                assert!(
+                    err <= 1e-8 * scale || err <= 1e-12,
+                    "{name}: d {what} / d {param}: {} against central differences {fd} (error {err:e}, scale {scale:e})",
+                    d[k]
+                );
+            }
+            let nonzero = base.iter().filter(|(_, _, d)| d[k] != 0.0).map(|(what, ..)| what.clone()).collect();
+            moving.push((param.clone(), nonzero));
+        }
+        moving
+    }
+
+    /// Every force's numbers written with parameters (`tests/models/forces_param.yaml`): their
+    /// derivatives against central differences of compiling the model again, as the examples';
+    /// the ones that must move do (a spring's points, stiffness and damping, a rotational
+    /// spring's, a number of a force, a contact's law and friction), and those a parameter does
+    /// not write (a contact's shapes and exponent, numbers written as such) are zero.
+    #[test]
+    fn every_forces_numbers_are_central_differences_of_its_compiles() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/models/forces_param.yaml");
+        let text = std::fs::read_to_string(path).expect("the model");
+        let moving: Vec<String> =
+            against_compiles("forces_param", &text).into_iter().flat_map(|(_, names)| names).collect();
+        let must = [
+            "forces.spring.point_i[1]",
+            "forces.spring.point_j[0]",
+            "forces.spring.stiffness",
+            "forces.spring.damping",
+            "forces.coil.stiffness",
+            "forces.coil.free_angle",
+            "forces.push.point[0]",
+            "forces.floor.stiffness",
+            "forces.floor.damping",
+            "forces.floor.friction.mu",
+        ];
+        for name in must {
+            assert!(moving.iter().any(|m| m == name), "{name} has no derivative");
+        }
+        let (model, _) = build("forces_param", &text, &[]);
+        let data: Vec<String> = model
+            .forces
+            .iter()
+            .flat_map(|f| f.force.data().into_iter().map(move |(d, _)| format!("forces.{}.{d}", f.name)))
+            .collect();
+        for name in [
+            "forces.floor.exponent",
+            "forces.floor.shape_j.circle.radius",
+            "forces.floor.shape_i.segment[1][0]",
+            "forces.push.fy",
+            "forces.coil.damping",
+        ] {
+            assert!(data.iter().any(|d| d == name), "{name} is a datum");
+            assert!(!moving.iter().any(|m| m == name), "{name} moves");
+        }
     }
 
     /// The recording itself, by hand: quick_return_a's joint A holds the rocker to ground at
@@ -325,7 +387,8 @@ mod tests {
     }
 
     /// A field is written when the entry gives it: a distance joint's length, left out, is
-    /// taken from the initial configuration (held); its points are written.
+    /// taken from the initial configuration (held); its points are written; a contact's
+    /// `friction.mu` is written, its `friction.transition_velocity` left to its default.
     #[test]
     fn an_entry_writes_the_fields_it_gives() {
         let joint = |text: &str| -> JointSpec { serde_yaml_ng::from_str(text).expect("a joint") };
@@ -333,6 +396,15 @@ mod tests {
         let long = joint("{type: distance, body_i: a, point_i: [0, 0], body_j: b, point_j: [1, 0], length: 2}");
         assert!(!writes(&bare, "length") && writes(&long, "length"));
         assert!(writes(&bare, "point_i") && writes(&bare, "body_j") && !writes(&bare, "radius"));
+        // A nested field: a contact's friction and shapes.
+        let contact: crate::forces::ForceSpec = serde_yaml_ng::from_str(
+            "{type: contact, body_i: a, shape_i: {circle: {radius: 1}}, body_j: b, \
+             shape_j: {segment: [[0, 0], [1, 0]]}, stiffness: 1, friction: {mu: 0.3}}",
+        )
+        .expect("a contact");
+        assert!(writes(&contact, "friction.mu") && !writes(&contact, "friction.transition_velocity"));
+        assert!(writes(&contact, "shape_j.segment") && !writes(&contact, "shape_j.circle"));
+        assert!(writes(&contact, "shape_i.circle.radius") && !writes(&contact, "exponent"));
     }
 
     /// A file without parameters computes no derivatives at all.
@@ -344,19 +416,23 @@ mod tests {
         assert_eq!(model.gradients, DataGradients::default());
     }
 
-    /// Every example compiles with its derivatives, and each joint's and driver's data has
-    /// one (a name its element lists that the compiler did not keep fails the compile).
+    /// Every example compiles with its derivatives, and each joint's, driver's and force's data
+    /// has one (a name its element lists that the compiler did not keep fails the compile).
     #[test]
     fn every_elements_data_has_derivatives() {
         for (name, text) in with_parameters() {
             let (model, _) = build(&name, &text, &[]);
             let g = &model.gradients;
+            let mut counts = Vec::new();
             for (elements, gradients) in [(&model.joints, &g.joints), (&model.drivers, &g.drivers)] {
                 assert_eq!(elements.len(), gradients.len(), "{name}");
-                for (e, d) in elements.iter().zip(gradients) {
-                    assert_eq!(e.constraint.data().len(), d.len(), "{name}: {}", e.name);
-                    assert!(d.iter().all(|d| d.len() == model.parameters.len()), "{name}: {}", e.name);
-                }
+                counts.extend(elements.iter().map(|e| (e.name.as_str(), e.constraint.data().len())).zip(gradients));
+            }
+            assert_eq!(model.forces.len(), g.forces.len(), "{name}");
+            counts.extend(model.forces.iter().map(|f| (f.name.as_str(), f.force.data().len())).zip(&g.forces));
+            for ((element, count), d) in counts {
+                assert_eq!(count, d.len(), "{name}: {element}");
+                assert!(d.iter().all(|d| d.len() == model.parameters.len()), "{name}: {element}");
             }
         }
     }

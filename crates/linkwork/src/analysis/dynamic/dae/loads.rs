@@ -139,11 +139,10 @@ impl Dae<'_> {
 
     /// `dQ/dp`, the derivative of [`Dae::load`] with respect to parameter `p` (file order),
     /// added to `out: (n)`: with the coordinates and velocities moving along `dq` and `dv` (their
-    /// derivatives with respect to `p`), gravity's through each body's mass and gravity itself,
-    /// each active force's through its coordinates, its numbers ([`crate::forces::Force::data`],
-    /// along their gradients) and the parameters its expressions read; one dual pass per force,
-    /// exact. `Err` names the first force that has no derivatives with respect to its numbers
-    /// yet (docs/sensitivities.md).
+    /// derivatives with respect to `p`), gravity's through each body's mass and gravity itself
+    /// ([`Dae::add_gravity_along`]), each active force's through its coordinates, its numbers and
+    /// the parameters its expressions read ([`Dae::add_forces_along`]). `Err` names the first
+    /// force that has no derivatives with respect to its numbers yet (docs/sensitivities.md).
     #[allow(clippy::too_many_arguments)]
     pub fn add_load_along(
         &self,
@@ -155,16 +154,79 @@ impl Dae<'_> {
         p: usize,
         out: &mut [f64],
     ) -> Result<(), String> {
-        let (model, s) = (self.model, self.external_scale);
-        let grads = &model.gradients;
-        for ((o, b), g) in out.chunks_exact_mut(3).zip(&model.bodies).zip(&grads.bodies) {
-            for k in 0..2 {
-                o[k] += s * (g[0][p] * model.gravity[k] + b.mass * grads.gravity[k][p]);
-            }
+        self.add_gravity_along(p, out);
+        self.add_forces_along((q, qdot, t), (dq, dv), p, out)
+    }
+
+    /// The derivative of gravity's generalised force with respect to parameter `p` (file
+    /// order), through each body's mass and gravity itself, added to `out: (n)`.
+    pub fn add_gravity_along(&self, p: usize, out: &mut [f64]) {
+        let s = self.external_scale;
+        for (o, g) in out.chunks_exact_mut(3).zip(self.gravity_along(p)) {
+            o[0] += s * g[0];
+            o[1] += s * g[1];
         }
+    }
+
+    /// Each body's `d(m g)/dp`, gravity's force on it differentiated with respect to parameter
+    /// `p` through its mass and gravity itself.
+    fn gravity_along(&self, p: usize) -> impl Iterator<Item = [f64; 2]> + '_ {
+        let (model, grads) = (self.model, &self.model.gradients);
+        model
+            .bodies
+            .iter()
+            .zip(&grads.bodies)
+            .map(move |(b, g)| [0, 1].map(|k| g[0][p] * model.gravity[k] + b.mass * grads.gravity[k][p]))
+    }
+
+    /// The derivative of [`Dae::potential_energy`] with respect to parameter `p`, with the
+    /// coordinates moving along `dq`: gravity's through the masses, gravity and the coordinates,
+    /// each active force's through its coordinates and its numbers
+    /// ([`crate::forces::ForceLaw::potential_data`]). `Err` names the first force whose
+    /// potential a parameter moves through its numbers and that has no such derivatives yet (a
+    /// contact). An applied force or torque has no potential.
+    pub fn potential_energy_along(&self, q: &[f64], dq: &[f64], p: usize) -> Result<f64, String> {
+        let mut v = 0.0;
+        for (g, x) in self.gravity_along(p).zip(q.chunks_exact(3)) {
+            v -= g[0] * x[0] + g[1] * x[1];
+        }
+        v -= self.gravity.iter().zip(dq).map(|(g, d)| g * d).sum::<f64>();
+        let (model, grads) = (self.model, &self.model.gradients);
+        let params: Vec<Dual> =
+            model.parameters.values().zip(&grads.params).map(|(&v, g)| Dual::new(v, g[p])).collect();
+        for f in &self.forces {
+            if f.force.applied() {
+                continue;
+            }
+            let k = self.model.forces.iter().position(|e| std::ptr::eq(e, *f)).expect("an active force is the model's");
+            let data: Vec<Dual> =
+                f.force.data().iter().zip(&grads.forces[k]).map(|(&(_, v), g)| Dual::new(v, g[p])).collect();
+            let x: Vec<Dual> = f.force.columns().iter().map(|&c| Dual::new(q[c], dq[c])).collect();
+            v += match f.force.potential_data_dual(&x, &data, &params) {
+                Some(potential) => potential.d,
+                None if data.iter().all(|d| d.d == 0.0) => f.force.potential_dual(&x).d,
+                None => return Err(f.name.clone()),
+            };
+        }
+        Ok(v)
+    }
+
+    /// The derivative of the active forces' generalised force (the part of [`Dae::load`] that
+    /// is not gravity) with respect to parameter `p`, added to `out: (n)`: each force's through
+    /// its coordinates at `(q, qdot, t)` (moving along `dq`, velocities along `dv`), its numbers
+    /// ([`crate::forces::Force::data`], along their gradients) and the parameters its
+    /// expressions read; one dual pass per force, exact. `Err` names the first force that has
+    /// no derivatives with respect to its numbers yet.
+    pub fn add_forces_along(
+        &self,
+        (q, qdot, t): (&[f64], &[f64], f64),
+        (dq, dv): (&[f64], &[f64]),
+        p: usize,
+        out: &mut [f64],
+    ) -> Result<(), String> {
         let x = |c: usize| Dual::new(q[c], dq[c]);
         let v = |c: usize| Dual::new(qdot[c], dv[c]);
-        self.add_forces_along(t, p, x, v, |c, l: Dual| out[c] += l.d)
+        self.forces_along(t, p, x, v, |c, l: Dual| out[c] += l.d)
     }
 
     /// `d/dp (Q_q a + Q_qdot b)`: the derivative with respect to parameter `p` (file order) of
@@ -186,14 +248,14 @@ impl Dae<'_> {
     ) -> Result<(), String> {
         let x = |c: usize| HyperDual::new(q[c], a[c], dq[c], 0.0);
         let v = |c: usize| HyperDual::new(qdot[c], b[c], dv[c], 0.0);
-        self.add_forces_along(t, p, x, v, |c, l: HyperDual| out[c] += l.e12)
+        self.forces_along(t, p, x, v, |c, l: HyperDual| out[c] += l.e12)
     }
 
     /// Every active force's load over the numbers `S` ([`Along`]) at the coordinates `x(column)`
     /// and velocities `v(column)`, its numbers and the parameters along their derivatives with
     /// respect to parameter `p`, each entry scaled as in [`Dae::load`] and given to
     /// `add(column, load)`. `Err` names the first force without derivatives.
-    fn add_forces_along<S: Along>(
+    fn forces_along<S: Along>(
         &self,
         t: f64,
         p: usize,
@@ -201,6 +263,9 @@ impl Dae<'_> {
         v: impl Fn(usize) -> S,
         mut add: impl FnMut(usize, S),
     ) -> Result<(), String> {
+        if self.forces.is_empty() {
+            return Ok(());
+        }
         let (model, s) = (self.model, self.external_scale);
         let grads = &model.gradients;
         let params: Vec<S> = model.parameters.values().zip(&grads.params).map(|(&v, g)| S::along(v, g[p])).collect();
@@ -221,6 +286,11 @@ impl Dae<'_> {
             }
         }
         Ok(())
+    }
+
+    /// Gravity's generalised force `(m g, 0)` per body, `(n)`, before [`Dae::external_scale`].
+    pub fn gravity_load(&self) -> &[f64] {
+        &self.gravity
     }
 
     /// `dM/dp a`, the derivative of the mass matrix with respect to parameter `p` (file order)
