@@ -344,11 +344,10 @@ pub(crate) fn compile_rotational(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::Lcg;
     use crate::element::BodyIx;
     use crate::expr::Dual;
     use crate::forces::testing::{
-        assert_data_fields, check_conservative, check_data, check_derivatives, expression, expression_with,
+        assert_data_fields, check_conservative, check_data, check_derivatives, expression, expression_with, Lcg,
     };
 
     /// Hand-derived: points 2 m apart along x with free length 1.5 and stiffness 10: the spring

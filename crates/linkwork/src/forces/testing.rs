@@ -4,7 +4,7 @@
 //! central finite differences.
 
 use super::{derivatives, potential_rate, DualWork, Force, ForceLaw, Load, StateExpr, StateVar};
-use crate::constraints::testing::Lcg;
+pub use crate::constraints::testing::Lcg;
 use crate::expr::tests::Params;
 use crate::expr::{Dual, Expr, HyperDual, Scalar};
 
