@@ -563,7 +563,8 @@ impl Results {
     /// summaries' and the peaks' derivatives ([`Summary::sensitivities`]).
     pub(crate) fn summarise(&mut self) -> Result<(), Error> {
         let summaries = std::mem::take(&mut self.summaries);
-        let mut derivatives = IndexMap::new();
+        // The analysis's own derivatives (a modes analysis's modes) first.
+        let mut derivatives = self.summary.sensitivities.take().unwrap_or_default();
         if let Summaries::Reading { span, functionals, copies, gradients } = &summaries {
             let copy = |name: &str| copies.iter().find(|(n, _, _)| n == name).map(|(_, _, v)| v.as_slice());
             let time = copy(TIME).unwrap_or(&self.time);

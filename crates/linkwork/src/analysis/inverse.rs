@@ -16,6 +16,7 @@
 
 use super::dynamic::{factor_error, Dae, FRICTION_RTOL, NEWTON_FRICTION_ITERATIONS};
 use super::kinematic::run_driven;
+use super::sensitivity::{InverseAt, InverseSensitivity, Sensitivity};
 use super::{element_names, row_space, Run};
 use crate::error::Error;
 use crate::linalg::rows::RowSpace;
@@ -24,6 +25,7 @@ use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
 use faer::linalg::solvers::Solve;
 use faer::Mat;
+use std::cell::RefCell;
 
 /// The largest force or moment left unbalanced by the multipliers, relative to the largest
 /// load or inertia force, before the position counts as singular: `1e-5`. A backward-stable
@@ -37,11 +39,20 @@ pub use crate::model::INVERSE_COLUMNS;
 /// Run an inverse dynamic analysis. On failure the results up to the last good output time are
 /// kept.
 pub(crate) fn run_inverse(model: &Model, analysis: &Analysis, run: &mut Run<'_>) -> Result<Results, Box<Failure>> {
-    let mut dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
+    let dae = match Dae::new(model, &analysis.drivers, &analysis.forces) {
         Ok(d) => d,
         Err(e) => {
             let error = factor_error(e, analysis.t_start);
             return Err(Box::new(Failure { error, results: Results::new(model, analysis) }));
+        }
+    };
+    let derivatives = match run.sensitivities.as_slice() {
+        [] => None,
+        asked => {
+            match Sensitivity::new(model, analysis, asked).and_then(|s| InverseSensitivity::new(&s, &dae, analysis)) {
+                Ok(d) => Some(d),
+                Err(error) => return Err(Box::new(Failure { error, results: Results::new(model, analysis) })),
+            }
         }
     };
     let (n, m) = (dae.n, dae.m);
@@ -50,11 +61,14 @@ pub(crate) fn run_inverse(model: &Model, analysis: &Analysis, run: &mut Run<'_>)
     names.extend(model.measures.iter().map(|m| m.name.clone()));
     let mut rhs = vec![0.0; n];
     let mut nu = vec![0.0; m];
-    let mut react = Vec::new();
     let mut reactions = Vec::new();
     let pattern = Pattern::new(m, n, dae.jacobian_entries().0.iter().map(|&e| Some(e)));
     let mut indeterminate: Option<Vec<String>> = None;
-    let outcome = run_driven(model, analysis, run, names, |t, q, qdot, qddot, extra| {
+    // What the values of an output time leave for its derivatives (read by the second closure).
+    let state = RefCell::new(Solved { dae, derivatives, lambda: Vec::new(), react: Vec::new(), space: None });
+    let values = |t: f64, q: &[f64], qdot: &[f64], qddot: &[f64], extra: &mut Vec<f64>| {
+        let solved = &mut *state.borrow_mut();
+        let dae = &mut solved.dae;
         dae.positions(q, t);
         dae.load(q, qdot, t, &mut rhs);
         let mut size = 0.0f64;
@@ -65,7 +79,7 @@ pub(crate) fn run_inverse(model: &Model, analysis: &Analysis, run: &mut Run<'_>)
         let jac = ColMatrix::from_entries(&pattern, dae.jacobian_entries().1);
         let mut space = row_space(&jac, t)?;
         let lambda = if dae.has_friction() {
-            let lambda = with_friction(&dae, &mut space, (t, q, qdot), &rhs)?;
+            let lambda = with_friction(dae, &mut space, (t, q, qdot), &rhs)?;
             dae.add_friction(q, qdot, &lambda, 1.0, &mut rhs, None);
             lambda
         } else {
@@ -89,18 +103,30 @@ pub(crate) fn run_inverse(model: &Model, analysis: &Analysis, run: &mut Run<'_>)
         if indeterminate.is_none() {
             indeterminate = Some(element_names(&dae.sys, &space.dependent_rows()));
         }
-        dae.reactions(q, qdot, &lambda, &mut react);
-        super::measure_reactions(model, &analysis.drivers, &react, &mut reactions);
+        let react = &mut solved.react;
+        dae.reactions(q, qdot, &lambda, react);
+        super::measure_reactions(model, &analysis.drivers, react, &mut reactions);
         extra.clear();
-        extra.extend_from_slice(&react);
+        extra.extend_from_slice(react);
         let kinetic = dae.kinetic_energy(qdot);
         let potential = dae.potential_energy(q);
         let driver = dae.driver_power(q, t, &lambda, &mut nu);
         let applied = dae.applied_power(q, qdot, t);
         extra.extend([kinetic, potential, driver, applied]);
         extra.extend(model.measures.iter().map(|m| m.value(q, qdot, qddot, &reactions, t)));
+        solved.lambda = lambda;
+        solved.space = Some(space);
         Ok(())
-    });
+    };
+    let derivatives = |s: &mut Sensitivity<'_>, p: usize, t: f64, x: (&[f64], &[f64], &[f64]), row: &mut Vec<f64>| {
+        let solved = &mut *state.borrow_mut();
+        let Solved { dae, derivatives: Some(d), lambda, react, space: Some(space) } = solved else {
+            unreachable!("a run with sensitivities has their buffers, and its values come first")
+        };
+        let at = InverseAt { t, x, lambda, react };
+        d.push(s, dae, space, &at, p, row)
+    };
+    let outcome = run_driven(model, analysis, run, names, values, derivatives);
     let finish = |results: &mut Results| {
         results.summary.indeterminate_joints = Some(indeterminate.clone().unwrap_or_default());
         results.insert_reaction_summary(model);
@@ -115,6 +141,17 @@ pub(crate) fn run_inverse(model: &Model, analysis: &Analysis, run: &mut Run<'_>)
             Err(failure)
         }
     }
+}
+
+/// What the values of an output time of an inverse analysis leave for its derivatives: the
+/// equations at its positions, the multipliers, the reactions and the row space of `Phi_q`.
+struct Solved<'m> {
+    dae: Dae<'m>,
+    /// The sensitivities' buffers, when the run asked for them.
+    derivatives: Option<InverseSensitivity>,
+    lambda: Vec<f64>,
+    react: Vec<f64>,
+    space: Option<RowSpace>,
 }
 
 /// `lambda` solving `Phi_q^T lambda = rhs` (minimum norm) in the row space `space` at `t`.

@@ -194,9 +194,13 @@ fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
 /// Run a kinematic analysis. On failure the results up to the last good output time are kept.
 pub(crate) fn run_kinematic(model: &Model, analysis: &Analysis, run: &mut Run<'_>) -> Result<Results, Box<Failure>> {
     let names = model.measures.iter().map(|m| m.name.clone()).collect();
-    run_driven(model, analysis, run, names, |t, q, qdot, qddot, extra| {
+    let values = |t: f64, q: &[f64], qdot: &[f64], qddot: &[f64], extra: &mut Vec<f64>| {
         extra.clear();
         extra.extend(model.measures.iter().map(|m| m.value(q, qdot, qddot, &[], t)));
+        Ok(())
+    };
+    run_driven(model, analysis, run, names, values, |s, p, t, x, row| {
+        s.measures(p, t, x, &[], row);
         Ok(())
     })
 }
@@ -204,13 +208,23 @@ pub(crate) fn run_kinematic(model: &Model, analysis: &Analysis, run: &mut Run<'_
 /// The kinematic solution of a fully driven mechanism, with the columns `names` after the body
 /// quantities, whose values at each output time `extra(t, q, qdot, qddot, values)` writes into
 /// `values`, each output point pushed as `run`. Shared by the kinematic and the inverse dynamic
-/// analyses.
+/// analyses. A run asked for sensitivities also pushes the derivatives of every column: the
+/// bodies' from the motion's ([`Sensitivity::push`]), then those of `names`, which
+/// `extra_derivatives(sensitivity, p, t, (q, qdot, qddot), row)` appends to `row` for parameter
+/// `p`, right after the values of the same output time.
 pub(crate) fn run_driven(
     model: &Model,
     analysis: &Analysis,
     run: &mut Run<'_>,
     names: Vec<String>,
     mut extra_values: impl FnMut(f64, &[f64], &[f64], &[f64], &mut Vec<f64>) -> Result<(), Error>,
+    mut extra_derivatives: impl FnMut(
+        &mut Sensitivity<'_>,
+        usize,
+        f64,
+        (&[f64], &[f64], &[f64]),
+        &mut Vec<f64>,
+    ) -> Result<(), Error>,
 ) -> Result<Results, Box<Failure>> {
     let mut results = run.results(model, analysis);
     let mut extra = Vec::with_capacity(names.len());
@@ -297,7 +311,9 @@ pub(crate) fn run_driven(
         extra_values(t0, &s.q, &s.qdot, &s.qddot, &mut extra)?;
         run.push(&mut results, t0, &s.q, &s.qdot, &s.qddot, &extra)?;
         if let Some(sensitivity) = &mut sensitivity {
-            sensitivity.push(&mut results, &mut s.lu, &s.rows, t0, (&s.q, &s.qdot, &s.qddot))?;
+            let x = (s.q.as_slice(), s.qdot.as_slice(), s.qddot.as_slice());
+            sensitivity
+                .push(&mut results, &mut s.lu, &s.rows, t0, x, |d, p, row| extra_derivatives(d, p, t0, x, row))?;
         }
         let mut dt = h;
         let mut q_pred = vec![0.0; n];
@@ -367,7 +383,9 @@ pub(crate) fn run_driven(
             extra_values(target, &s.q, &s.qdot, &s.qddot, &mut extra)?;
             run.push(&mut results, target, &s.q, &s.qdot, &s.qddot, &extra)?;
             if let Some(sensitivity) = &mut sensitivity {
-                sensitivity.push(&mut results, &mut s.lu, &s.rows, target, (&s.q, &s.qdot, &s.qddot))?;
+                let x = (s.q.as_slice(), s.qdot.as_slice(), s.qddot.as_slice());
+                let extra = |d: &mut Sensitivity<'_>, p, row: &mut Vec<f64>| extra_derivatives(d, p, target, x, row);
+                sensitivity.push(&mut results, &mut s.lu, &s.rows, target, x, extra)?;
             }
         }
         Ok(())

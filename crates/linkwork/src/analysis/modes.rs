@@ -24,6 +24,7 @@
 //! damping ratio.
 
 use super::dynamic::{factor_error, Dae};
+use super::sensitivity::{mode_derivatives, EquilibriumSensitivity};
 use super::setup::{coordinate_names, fail, held, unmet_freedom};
 use super::statics::{solve, Statics, ZERO_STIFFNESS};
 use super::{assemble_into, element_names, independent_rows, indeterminate_rows, Run};
@@ -109,6 +110,21 @@ pub(crate) fn run_modes(model: &Model, analysis: &Analysis, run: &mut Run<'_>) -
     let extra: Vec<f64> = model.measures.iter().map(|m| m.value(&q, &qdot, &zero, &[], t)).collect();
     if let Err(e) = run.push(&mut results, t, &q, &qdot, &zero, &extra) {
         return Err(fail(results, e));
+    }
+    if !run.sensitivities.is_empty() {
+        let mut derivatives = || {
+            if !(undamped && symmetric) {
+                let message = "the modes of a mechanism with damping or a non-symmetric stiffness (solved in state space) have no design sensitivities yet";
+                return Err(Error::Model(vec![crate::Problem::new(path.clone(), message)]));
+            }
+            let mut s = EquilibriumSensitivity::new(model, analysis, &run.sensitivities, st.dae, &q, t)?;
+            let (k, jac) = st.sensitivities(&mut s, &mut results, (&q, &lambda, t), None)?;
+            mode_derivatives(&mut s, st.dae, (k.as_ref(), jac.as_ref()), (&q, &lambda, t), &modes, &names)
+        };
+        match derivatives() {
+            Ok(d) => results.summary.sensitivities = Some(d),
+            Err(e) => return Err(fail(results, e)),
+        }
     }
     st.dae.positions(&q, t);
     let mut jac = Mat::<f64>::zeros(st.dae.m, n);

@@ -5,7 +5,7 @@
 
 use super::{dynamic, run_inverse, run_kinematic, run_modes, run_static, tolerance_warnings};
 use crate::error::{Error, Problem};
-use crate::model::spec::{AnalysisKind, AnalysisSpec, IntegratorKind, SolverSpec};
+use crate::model::spec::{AnalysisKind, AnalysisSpec, IntegratorKind, LinearisePoint, SolverSpec};
 use crate::model::{revise, Analysis, Model};
 use crate::progress::{Progress, StopToken};
 use crate::results::stream::{CsvSink, RowSink, Stream};
@@ -234,27 +234,22 @@ impl Model {
         if names.is_empty() {
             return Ok(Vec::new());
         }
-        match analysis.kind {
-            AnalysisKind::Kinematic => {}
-            // The dynamic sensitivities are integrated with the state by the BDF integrator
-            // (analysis/sensitivity/dynamic.rs); the others have none yet.
-            AnalysisKind::Dynamic if analysis.integrator.kind == IntegratorKind::Bdf => {}
-            AnalysisKind::Dynamic => {
-                return Err(Error::Model(vec![Problem::new(
-                    format!("analyses.{}.integrator", analysis.name),
-                    format!(
-                        "integrator {} has no design sensitivities (asked for with `sensitivities`): use bdf",
-                        analysis.integrator.kind.name()
-                    ),
-                )]))
-            }
-            _ => {
-                return Err(problem(format!(
-                    "analysis '{}' has type {}: design sensitivities are computed for kinematic and dynamic analyses so far",
-                    analysis.name,
-                    analysis.kind.name()
-                )))
-            }
+        // The dynamic sensitivities are integrated with the state by the BDF integrator
+        // (analysis/sensitivity/dynamic.rs); every other analysis type has its own.
+        if analysis.kind == AnalysisKind::Dynamic && analysis.integrator.kind != IntegratorKind::Bdf {
+            return Err(Error::Model(vec![Problem::new(
+                format!("analyses.{}.integrator", analysis.name),
+                format!(
+                    "integrator {} has no design sensitivities (asked for with `sensitivities`): use bdf",
+                    analysis.integrator.kind.name()
+                ),
+            )]));
+        }
+        if analysis.kind == AnalysisKind::Modes && analysis.about != LinearisePoint::Equilibrium {
+            return Err(problem(format!(
+                "analysis '{}' linearises about the initial state: design sensitivities of modes are computed about an equilibrium (`about: equilibrium`) so far",
+                analysis.name
+            )));
         }
         names
             .iter()

@@ -45,6 +45,7 @@
 //! damping do not matter.
 
 use super::dynamic::{factor_error, Dae};
+use super::sensitivity::EquilibriumSensitivity;
 use super::setup::{coordinate_name, fail, held, output_times};
 use super::{assemble, assemble_into, element_names, independent_rows, indeterminate_rows, residual_floor, Run, Start};
 use crate::constraints::ConfigBuf;
@@ -273,18 +274,7 @@ impl<'a, 'm> Statics<'a, 'm> {
             }
             let (k, _) = self.tangent(&x[..n], &zero, &x[n..], t);
             self.dae.jacobian_dense(self.jac.as_mut());
-            self.big.fill(0.0);
-            for i in 0..n {
-                for j in 0..n {
-                    self.big[(i, j)] = -k[(i, j)];
-                }
-            }
-            for r in 0..m {
-                for c in 0..n {
-                    self.big[(n + r, c)] = self.jac[(r, c)];
-                    self.big[(c, n + r)] = -self.jac[(r, c)];
-                }
-            }
+            newton_matrix(k.as_ref(), self.jac.as_ref(), self.big.as_mut());
             // `self.residual` still holds R(x): the tangent leaves it alone and restores the
             // positions at x.
             let rhs: Vec<f64> = self.residual.iter().map(|r| -r).collect();
@@ -433,6 +423,27 @@ impl<'a, 'm> Statics<'a, 'm> {
         Ok(())
     }
 
+    /// The design sensitivities `s` of the equilibrium `(q, lambda)` at `t`, solved for
+    /// with the Newton matrix there (its geometric stiffness exact) and pushed into `results`
+    /// (with `react`, a static analysis's row with these reactions; without, a modes
+    /// analysis's); returns the tangent stiffness and `Phi_q` there.
+    pub(crate) fn sensitivities(
+        &mut self,
+        s: &mut EquilibriumSensitivity<'_>,
+        results: &mut Results,
+        (q, lambda, t): (&[f64], &[f64], f64),
+        react: Option<&[f64]>,
+    ) -> Result<(Mat<f64>, Mat<f64>), Error> {
+        self.dae.positions(q, t);
+        self.dae.load_jacobians(q, &vec![0.0; self.n], t, self.dq.as_mut(), self.dv.as_mut());
+        let geo = s.geometric_stiffness(q, lambda, t);
+        let k = Mat::from_fn(self.n, self.n, |i, j| geo[(i, j)] - self.dq[(i, j)]);
+        self.dae.jacobian_dense(self.jac.as_mut());
+        s.solve(self.dae, (k.as_ref(), self.jac.as_ref()), q, lambda, t)?;
+        s.push(results, self.dae, (q, lambda, t), react)?;
+        Ok((k, self.jac.clone()))
+    }
+
     /// The tangent stiffness reduced to the free directions, `N^T K N`, and `N`, at `(q, lambda)`.
     pub fn reduced(&mut self, k: MatRef<'_, f64>, q: &[f64], t: f64) -> (Mat<f64>, Mat<f64>) {
         self.dae.positions(q, t);
@@ -440,6 +451,25 @@ impl<'a, 'm> Statics<'a, 'm> {
         let basis = null_space(self.jac.as_ref());
         let kr = basis.transpose() * k * &basis;
         (kr, basis)
+    }
+}
+
+/// `big ((n + m) x (n + m))`: the Newton matrix of the equilibrium `[-K, -Phi_q^T; Phi_q, 0]`
+/// from the tangent stiffness `k (n x n)` and `jac = Phi_q (m x n)`, the derivative of
+/// `R = [Q - Phi_q^T lambda; Phi]` with respect to `(q, lambda)`.
+pub(crate) fn newton_matrix(k: MatRef<'_, f64>, jac: MatRef<'_, f64>, mut big: MatMut<'_, f64>) {
+    let (m, n) = (jac.nrows(), jac.ncols());
+    big.fill(0.0);
+    for i in 0..n {
+        for j in 0..n {
+            big[(i, j)] = -k[(i, j)];
+        }
+    }
+    for r in 0..m {
+        for c in 0..n {
+            big[(n + r, c)] = jac[(r, c)];
+            big[(c, n + r)] = -jac[(r, c)];
+        }
     }
 }
 
@@ -640,6 +670,13 @@ pub(crate) fn run_static(model: &Model, analysis: &Analysis, run: &mut Run<'_>) 
     let (independent, redundant) = independent_rows(equilibrated(jac.as_ref(), &scales).as_ref());
     results.summary.dof = Some(n - independent.len());
     results.summary.redundant_rows = Some(redundant.iter().map(|&r| dae.sys.row_name(r)).collect());
+    let mut sensitivity = match run.sensitivities.as_slice() {
+        [] => None,
+        asked => match EquilibriumSensitivity::new(model, analysis, asked, &dae, &assembly.q, t0) {
+            Ok(s) => Some(s),
+            Err(e) => return Err(fail(results, e)),
+        },
+    };
     let mut st = Statics::new(&mut dae, analysis.settings.tolerance, &assembly.q, t0);
     let zero = vec![0.0; n];
     let mut react = Vec::new();
@@ -673,6 +710,12 @@ pub(crate) fn run_static(model: &Model, analysis: &Analysis, run: &mut Run<'_>) 
                 if let Err(e) = run.push(&mut results, t, &eq.q, &zero, &zero, &row) {
                     error = Some(e);
                     break;
+                }
+                if let Some(s) = &mut sensitivity {
+                    if let Err(e) = st.sensitivities(s, &mut results, (&eq.q, &eq.lambda, t), Some(&react)) {
+                        error = Some(e);
+                        break;
+                    }
                 }
             }
             Err(e) => {

@@ -324,6 +324,28 @@ pub fn reaction<S: Scalar>(
     lambda: &[S],
     q: &Config<'_>,
 ) -> ([S; 2], S) {
+    let Anchor { i, j, point } = anchor;
+    let lever = match i.0 {
+        Some(_) => Frame::of(i, q).rotate(point),
+        None => {
+            let rj = j.coords(q);
+            [rj[0] - point[0], rj[1] - point[1]]
+        }
+    };
+    reaction_about(anchor, columns, |k| S::constant(block[k]), lambda, lever.map(S::constant))
+}
+
+/// [`reaction`] with everything it reads over `S` (design sensitivities differentiate it along
+/// the Jacobian's, the multipliers' and the point's derivatives): `block(k)` the `k`-th entry of
+/// the joint's Jacobian block (row-major), and `lever` the vector the moment is moved by: body i
+/// moving, `A_i s'_P` (global frame, from its centre to `P`); body i ground, `r_j - P` ([`lever`]).
+pub fn reaction_about<S: Scalar>(
+    anchor: Anchor,
+    columns: &[usize],
+    block: impl Fn(usize) -> S,
+    lambda: &[S],
+    lever: [S; 2],
+) -> ([S; 2], S) {
     let w = columns.len();
     // g = -Phi_q,b^T lambda on the body's columns. The sum starts at -0.0, as `f64`'s `Sum`
     // does, so that the result is bit for bit that of the sum it replaced.
@@ -332,29 +354,36 @@ pub fn reaction<S: Scalar>(
         let Some(b) = body.0 else { return g };
         for (ci, &col) in columns.iter().enumerate() {
             if (b..b + 3).contains(&col) {
-                let sum = lambda
-                    .iter()
-                    .enumerate()
-                    .fold(S::constant(-0.0), |a, (ri, &l)| a + S::constant(block[ri * w + ci]) * l);
+                let sum = lambda.iter().enumerate().fold(S::constant(-0.0), |a, (ri, &l)| a + block(ri * w + ci) * l);
                 g[col - b] = -sum;
             }
         }
         g
     };
-    let Anchor { i, j, point } = anchor;
+    let Anchor { i, j, .. } = anchor;
+    let a = lever;
     match i.0 {
         Some(_) => {
-            let [fx, fy, m] = generalised(i);
             // Moment about P = moment about the centre of mass - (A s'_P) x f.
-            let a = Frame::of(i, q).rotate(point);
-            ([fx, fy], m - (S::constant(a[0]) * fy - S::constant(a[1]) * fx))
+            let [fx, fy, m] = generalised(i);
+            ([fx, fy], m - (a[0] * fy - a[1] * fx))
         }
         None => {
             // On ground: the opposite of the reaction on body j, its moment taken about P.
             let [fx, fy, m] = generalised(j);
-            let rj = j.coords(q);
-            let d = [rj[0] - point[0], rj[1] - point[1]];
-            ([-fx, -fy], -(m + S::constant(d[0]) * fy - S::constant(d[1]) * fx))
+            ([-fx, -fy], -(m + a[0] * fy - a[1] * fx))
+        }
+    }
+}
+
+/// The lever of [`reaction_about`] over any [`Scalar`], from all coordinates `q (n)` and the
+/// reaction point `point` (body i frame).
+pub fn lever<S: Scalar>(anchor: Anchor, point: [S; 2], q: &[S]) -> [S; 2] {
+    match anchor.i.0 {
+        Some(_) => Pose::of(anchor.i, q).rotate(point),
+        None => {
+            let rj = Pose::of(anchor.j, q).o;
+            [rj[0] - point[0], rj[1] - point[1]]
         }
     }
 }

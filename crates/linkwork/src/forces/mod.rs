@@ -68,6 +68,12 @@ pub trait ForceLaw: Debug + Send + Sync {
     fn load_data<S: Scalar>(&self, _x: &[S], _v: &[S], _t: f64, _data: &[S], _params: &[S], _out: &mut [S]) -> bool {
         false
     }
+    /// [`ForceLaw::potential`] with the force's numbers `data` ([`ForceLaw::data`] order) and
+    /// the model's parameters `params` as inputs too, for the potential energy's design
+    /// sensitivity. `None` when the force has no such derivatives yet (the default).
+    fn potential_data<S: Scalar>(&self, _x: &[S], _data: &[S], _params: &[S]) -> Option<S> {
+        None
+    }
 }
 
 /// An applied force or force element, object-safe (see [`ForceLaw`]).
@@ -106,6 +112,9 @@ pub trait Force: Debug + Send + Sync {
         params: &[HyperDual],
         out: &mut [HyperDual],
     ) -> bool;
+    /// [`ForceLaw::potential_data`] over dual numbers: its derivative along one direction of the
+    /// coordinates, the data and the parameters.
+    fn potential_data_dual(&self, x: &[Dual], data: &[Dual], params: &[Dual]) -> Option<Dual>;
 }
 
 impl<T: ForceLaw> Force for T {
@@ -152,6 +161,9 @@ impl<T: ForceLaw> Force for T {
         out: &mut [HyperDual],
     ) -> bool {
         ForceLaw::load_data(self, x, v, t, data, params, out)
+    }
+    fn potential_data_dual(&self, x: &[Dual], data: &[Dual], params: &[Dual]) -> Option<Dual> {
+        ForceLaw::potential_data(self, x, data, params)
     }
 }
 

@@ -47,6 +47,10 @@ impl ForceLaw for PointLoad {
     fn potential<S: Scalar>(&self, _x: &[S]) -> S {
         S::constant(0.0)
     }
+    /// None: its work is not counted in the potential energy.
+    fn potential_data<S: Scalar>(&self, _x: &[S], _data: &[S], _params: &[S]) -> Option<S> {
+        Some(S::constant(0.0))
+    }
     fn applied(&self) -> bool {
         true
     }
@@ -132,6 +136,10 @@ impl ForceLaw for Torque {
     }
     fn potential<S: Scalar>(&self, _x: &[S]) -> S {
         S::constant(0.0)
+    }
+    /// None: its work is not counted in the potential energy.
+    fn potential_data<S: Scalar>(&self, _x: &[S], _data: &[S], _params: &[S]) -> Option<S> {
+        Some(S::constant(0.0))
     }
 }
 

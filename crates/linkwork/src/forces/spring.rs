@@ -145,11 +145,28 @@ impl ForceLaw for SpringDamper {
         let (s_p, s_q) = (d.pair(), d.pair());
         let (neg_stiffness, damping) = (-d.next(), d.next());
         let actuator = self.actuator.value_data(x, v, t, &mut d, params);
-        let free_length = self.free_length_from.value(d.all(), |[fi, fj]| {
-            SpringDamper::geometry([fi.o[0], fi.o[1], fi.phi], [fj.o[0], fj.o[1], fj.phi], s_p, s_q).1
-        });
+        let free_length = self.free_length_data(d.all(), s_p, s_q);
         self.law(x, v, SpringNumbers { s_p, s_q, neg_stiffness, damping, free_length, actuator }, out);
         true
+    }
+    /// `k (l - l0)^2 / 2` with the points, the stiffness and the free length from `data`.
+    fn potential_data<S: Scalar>(&self, x: &[S], data: &[S], _params: &[S]) -> Option<S> {
+        let mut d = Data::new(data);
+        let (s_p, s_q) = (d.pair(), d.pair());
+        let stiffness = d.next();
+        let (_, l, _, _) = SpringDamper::geometry(self.i.pose(x), self.j.pose(x), s_p, s_q);
+        let e = l - self.free_length_data(d.all(), s_p, s_q);
+        Some(S::constant(0.5) * stiffness * e * e)
+    }
+}
+
+impl SpringDamper {
+    /// The free length over the numbers `data` ([`ForceLaw::data`]) with the points `s_p`,
+    /// `s_q` among them: the file's, or the points' distance at the held initial poses.
+    fn free_length_data<S: Scalar>(&self, data: &[S], s_p: [S; 2], s_q: [S; 2]) -> S {
+        self.free_length_from.value(data, |[fi, fj]| {
+            SpringDamper::geometry([fi.o[0], fi.o[1], fi.phi], [fj.o[0], fj.o[1], fj.phi], s_p, s_q).1
+        })
     }
 }
 
@@ -229,6 +246,12 @@ impl ForceLaw for RotationalSpringDamper {
     fn potential<S: Scalar>(&self, x: &[S]) -> S {
         let e = self.i.pose(x)[2] - self.j.pose(x)[2] - S::constant(self.free_angle);
         S::constant(0.5 * self.stiffness) * e * e
+    }
+    /// `k (theta - theta0)^2 / 2` with the stiffness and the free angle from `data`.
+    fn potential_data<S: Scalar>(&self, x: &[S], data: &[S], _params: &[S]) -> Option<S> {
+        let free_angle = self.free_angle_from.value(data, |[fi, fj]| fi.phi - fj.phi);
+        let e = self.i.pose(x)[2] - self.j.pose(x)[2] - free_angle;
+        Some(S::constant(0.5) * data[0] * e * e)
     }
 }
 

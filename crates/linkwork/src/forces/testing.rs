@@ -169,6 +169,10 @@ fn which(inputs: &Inputs, mut k: usize) -> (usize, usize) {
 ///   stiffness's derivative along a parameter) against the central difference, over the datum
 ///   or parameter, of the dual derivative along the coordinate: the same step, to `1e-6` of the
 ///   scale `1 + max |d2 Q|` (a difference of exact derivatives: truncation and round-off only).
+/// - `potential`: where the force gives its potential over its data
+///   ([`ForceLaw::potential_data`]), over `f64` it is [`ForceLaw::potential`] to `1e-13` of
+///   `1 + |V|`, and its dual derivative along each coordinate, datum and parameter agrees with
+///   a central difference of it (the step and tolerance of `x`, `v`, `data`, `params`).
 pub fn check_data<F: ForceLaw>(f: &F, params: &[f64], seed: u64) {
     const NAMES: [&str; 4] = ["x", "v", "data", "params"];
     let w = f.columns().len();
@@ -253,6 +257,40 @@ pub fn check_data<F: ForceLaw>(f: &F, params: &[f64], seed: u64) {
                 }
             }
         }
+        check_potential_data(f, &base, step);
+    }
+}
+
+/// The `potential` check of [`check_data`] at the inputs `base` (the velocities unused), with
+/// the difference step `step(k)` of flat input `k`.
+fn check_potential_data<F: ForceLaw>(f: &F, base: &Inputs, step: impl Fn(usize) -> f64) {
+    let w = base[0].len();
+    let at = |inputs: &Inputs, k: usize| -> Option<Dual> {
+        let seed = |j: usize, a: f64| Dual::new(a, if j == k { 1.0 } else { 0.0 });
+        let x: Vec<Dual> = inputs[0].iter().enumerate().map(|(j, &a)| seed(j, a)).collect();
+        let data: Vec<Dual> = inputs[2].iter().enumerate().map(|(j, &a)| seed(2 * w + j, a)).collect();
+        let offset = 2 * w + inputs[2].len();
+        let params: Vec<Dual> = inputs[3].iter().enumerate().map(|(j, &a)| seed(offset + j, a)).collect();
+        f.potential_data(&x, &data, &params)
+    };
+    let Some(value) = at(base, usize::MAX) else { return };
+    let own = f.potential(&base[0]);
+    assert!((value.v - own).abs() <= 1e-13 * (1.0 + own.abs()), "potential: {f:?}: over its data {} vs {own}", value.v);
+    let all = base.iter().map(Vec::len).sum::<usize>();
+    for k in (0..all).filter(|&k| !(w..2 * w).contains(&k)) {
+        let (g, j) = which(base, k);
+        let h = step(k);
+        let moved = |by: f64| {
+            let mut inputs = base.clone();
+            inputs[g][j] += by;
+            at(&inputs, usize::MAX).map_or(f64::NAN, |v| v.v)
+        };
+        let fd = (moved(h) - moved(-h)) / (2.0 * h);
+        let exact = at(base, k).map_or(f64::NAN, |v| v.d);
+        assert!(
+            (exact - fd).abs() <= 1e-7 * (1.0 + own.abs()),
+            "potential: {f:?}: d V / d input {k}: dual {exact} vs fd {fd}"
+        );
     }
 }
 

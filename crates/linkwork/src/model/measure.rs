@@ -1,31 +1,29 @@
 //! A measure over any number type, with its own numbers given: what design sensitivities
 //! differentiate (docs/sensitivities.md). [`Measure::value`] is the plain evaluation.
 
-use super::{spec, Measure, MeasureKind};
+use super::{spec, Effort, Measure, MeasureKind};
 use crate::expr::{Nestable, Scalar};
 
 impl Measure {
-    /// The value at `(q, qdot, qddot, t)` over `S`, with the measure's numbers `data` in the order
-    /// of [`MeasureKind::data`] and the model's parameters `params` (file order): each may carry
-    /// derivatives. `None` for a kind that has no derivatives yet (the pressure angle of a cam
-    /// given by its working surface, a mechanical advantage, an expression that reads
-    /// reactions).
+    /// The value at `(q, qdot, qddot, t)` over `S`, with the reactions row `reactions` (as
+    /// [`Measure::value`]'s: empty in an analysis that has none), the measure's numbers `data`
+    /// in the order of [`MeasureKind::data`] and the model's parameters `params` (file order):
+    /// each may carry derivatives. `None` for a kind that has no derivatives yet (the pressure
+    /// angle of a cam given by its working surface, a mechanical advantage that reads a torque
+    /// force).
+    #[allow(clippy::too_many_arguments)]
     pub fn value_generic<S: Nestable>(
         &self,
         q: &[S],
         qdot: &[S],
         qddot: &[S],
+        reactions: &[S],
         t: S,
         data: &[S],
         params: &[S],
     ) -> Option<S> {
         match &self.kind {
-            MeasureKind::Expression(e) => {
-                if e.reactions().next().is_some() {
-                    return None;
-                }
-                Some(e.eval_params(q, qdot, qddot, &[], t, params))
-            }
+            MeasureKind::Expression(e) => Some(e.eval_params(q, qdot, qddot, reactions, t, params)),
             MeasureKind::Point { body: b, component, .. } => {
                 Some(point_component(q, qdot, qddot, *b, [data[0], data[1]], *component))
             }
@@ -47,6 +45,13 @@ impl Measure {
                 qdot[*output] / qdot[*input]
             }),
             MeasureKind::PressureAngle(cam) => cam.pressure_angle_generic(q, qdot, data, params),
+            MeasureKind::MechanicalAdvantage {
+                input: Effort::Driver { slot: input },
+                output: Effort::Driver { slot: output },
+            } => {
+                let effort = |slot: &usize| reactions.get(*slot).copied().unwrap_or(S::constant(f64::NAN));
+                Some(-effort(output) / effort(input))
+            }
             MeasureKind::MechanicalAdvantage { .. } => None,
         }
     }

@@ -409,6 +409,11 @@ impl Measure {
         }
     }
 
+    /// Whether it reads anything besides the motion (reactions, efforts, forces).
+    pub(crate) fn reads_beyond_motion(&self) -> bool {
+        !self.reads().is_empty()
+    }
+
     /// What it reads besides the motion, each with the field of its entry that names it (`""`:
     /// the entry itself).
     fn reads(&self) -> Vec<(&'static str, Reads)> {

@@ -89,6 +89,14 @@ impl<'m> DynamicSensitivity<'m> {
         if let Some(j) = model.joints.iter().find(|j| j.friction.is_some()) {
             return Err(refuse(format!("joints.{}", j.name), "joint friction"));
         }
+        // The reactions of a dynamic run have no derivatives yet, nor have the measures that
+        // read them.
+        if let Some(m) = model.measures.iter().find(|m| m.reads_beyond_motion()) {
+            return Err(refuse(
+                format!("measures.{}", m.name),
+                "in a dynamic analysis, a measure that reads reactions or efforts",
+            ));
+        }
         let (n, m) = (dae.n, dae.m);
         let zero = vec![0.0; n];
         if let Err(name) = dae.add_load_along(&model.q0(), &zero, analysis.t_start, &zero, &zero, 0, &mut vec![0.0; n])

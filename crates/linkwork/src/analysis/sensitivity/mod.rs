@@ -21,6 +21,10 @@
 //! the independent rows is the one the analysis solves; rows it found redundant hold
 //! implicitly. The measures follow from one more evaluation over the same numbers.
 
+mod inverse;
+
+pub(crate) use inverse::{InverseAt, InverseSensitivity};
+
 use crate::constraints::{At, Constraint};
 use crate::error::{Error, Problem};
 use crate::expr::{Dual, HyperDual, Scalar, Tri};
@@ -29,7 +33,20 @@ use crate::model::{Analysis, Model};
 use crate::results::Results;
 
 mod dynamic;
+mod modes;
+mod statics;
+
 pub(crate) use dynamic::{DynamicSensitivity, Track};
+pub(crate) use modes::mode_derivatives;
+pub(crate) use statics::EquilibriumSensitivity;
+
+/// The model error of an element at `path` (`what` it is) that has no design sensitivities yet.
+fn unsupported(path: String, what: &str) -> Error {
+    Error::Model(vec![Problem::new(
+        path,
+        format!("{what} has no design sensitivities yet (asked for with `sensitivities`)"),
+    )])
+}
 
 /// The numbers of one level of the sensitivity equations: how a coordinate, the time and a
 /// number that depends on the parameters only are seeded, the element's rows over them, and
@@ -197,12 +214,7 @@ impl<'m> Sensitivity<'m> {
 
     /// An error naming the first element or measure that has no derivatives yet.
     fn supported(&self) -> Result<(), Error> {
-        let unsupported = |path: String, what: &str| {
-            Err(Error::Model(vec![Problem::new(
-                path,
-                format!("{what} has no design sensitivities yet (asked for with `sensitivities`)"),
-            )]))
-        };
+        let unsupported = |path: String, what: &str| Err(unsupported(path, what));
         let b = &self.position;
         let at = At { q: &b.q, t: Dual::constant(0.0), params: &b.params };
         let mut out = b.full.clone();
@@ -216,7 +228,7 @@ impl<'m> Sensitivity<'m> {
         }
         for m in &self.model.measures {
             let data: Vec<Dual> = m.kind.data().iter().map(|&(_, v)| Dual::constant(v)).collect();
-            if m.value_generic(&b.q, &b.q, &b.q, Dual::constant(0.0), &data, &b.params).is_none() {
+            if m.value_generic(&b.q, &b.q, &b.q, &[], Dual::constant(0.0), &data, &b.params).is_none() {
                 return unsupported(format!("measures.{}", m.name), "this measure");
             }
         }
@@ -224,7 +236,11 @@ impl<'m> Sensitivity<'m> {
     }
 
     /// The derivatives of every column at the output `(t, q, qdot, qddot)`, with `lu` the
-    /// factorization of `Phi_q`'s independent `rows` there, pushed into `results`.
+    /// factorization of `Phi_q`'s independent `rows` there, pushed into `results`: for each
+    /// parameter asked, `q_p`, `qdot_p` and `qddot_p` ([`Sensitivity::motion`]), each body's
+    /// quantities from them, then what `extra(self, p, row)` appends for the analysis's own
+    /// columns (the measures, [`Sensitivity::measures`], and an inverse analysis's reactions).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn push(
         &mut self,
         results: &mut Results,
@@ -232,6 +248,7 @@ impl<'m> Sensitivity<'m> {
         rows: &[usize],
         t: f64,
         x: (&[f64], &[f64], &[f64]),
+        mut extra: impl FnMut(&mut Sensitivity<'m>, usize, &mut Vec<f64>) -> Result<(), Error>,
     ) -> Result<(), Error> {
         for k in 0..self.asked.len() {
             let p = self.asked[k];
@@ -247,19 +264,54 @@ impl<'m> Sensitivity<'m> {
             lu.solve(&mut rhs);
             self.dq[2].copy_from_slice(&rhs);
             self.rhs = rhs;
-            self.rows[k] = self.columns(p, t, x);
+            let mut row = std::mem::take(&mut self.rows[k]);
+            row.clear();
+            self.bodies(&mut row);
+            let outcome = extra(self, p, &mut row);
+            self.rows[k] = row;
+            outcome?;
         }
         results.push_sensitivities(t, &self.names, &self.rows)
     }
 
-    /// The derivatives of the columns (each body's quantities, then the measures) with respect
-    /// to parameter `p`, from `q_p`, `qdot_p`, `qddot_p`.
-    fn columns(&mut self, p: usize, t: f64, (q, qdot, qddot): (&[f64], &[f64], &[f64])) -> Vec<f64> {
+    /// Each body's `x, y, phi`, their rates and accelerations (the results' order), from the
+    /// motion's derivatives ([`Sensitivity::motion`]), appended to `row`.
+    fn bodies(&self, row: &mut Vec<f64>) {
         let [dq, dv, da] = &self.dq;
-        let bodies = q.len() / 3;
-        let mut row: Vec<f64> = (0..bodies)
-            .flat_map(|b| [dq, dv, da].into_iter().flat_map(move |v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]]))
-            .collect();
+        let bodies = dq.len() / 3;
+        row.extend(
+            (0..bodies)
+                .flat_map(|b| [dq, dv, da].into_iter().flat_map(move |v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]])),
+        );
+    }
+
+    /// The derivatives of every body's quantities, then of the measures that read no reactions,
+    /// with respect to parameter `p` at `(t, x)`, from the motion's ([`Sensitivity::motion`],
+    /// set by the caller).
+    pub(crate) fn columns(&mut self, p: usize, t: f64, x: (&[f64], &[f64], &[f64])) -> Vec<f64> {
+        let mut row = Vec::new();
+        self.bodies(&mut row);
+        self.measures(p, t, x, &[], &mut row);
+        row
+    }
+
+    /// `[q_p, qdot_p, qddot_p]` of the parameter being pushed ([`Sensitivity::push`]).
+    pub(crate) fn motion(&self) -> &[Vec<f64>; 3] {
+        &self.dq
+    }
+
+    /// The derivatives of the measures with respect to parameter `p` at `(t, q, qdot, qddot)`,
+    /// from the motion's ([`Sensitivity::motion`]) and the reactions row `reactions` (values
+    /// along their derivatives; empty in an analysis that has none), appended to `row`.
+    pub(crate) fn measures(
+        &mut self,
+        p: usize,
+        t: f64,
+        (q, qdot, qddot): (&[f64], &[f64], &[f64]),
+        reactions: &[Dual],
+        row: &mut Vec<f64>,
+    ) {
+        let [dq, dv, da] = &self.dq;
         let along = |x: &[f64], d: &[f64]| -> Vec<Dual> { x.iter().zip(d).map(|(&v, &e)| Dual::new(v, e)).collect() };
         let (q, qdot, qddot) = (along(q, dq), along(qdot, dv), along(qddot, da));
         let b = &mut self.position;
@@ -268,10 +320,9 @@ impl<'m> Sensitivity<'m> {
         for ((m, data), grads) in measures {
             b.data.clear();
             b.data.extend(data.iter().zip(grads).map(|(&v, g)| Dual::new(v, g[p])));
-            let value = m.value_generic(&q, &qdot, &qddot, Dual::constant(t), &b.data, &b.params);
+            let value = m.value_generic(&q, &qdot, &qddot, reactions, Dual::constant(t), &b.data, &b.params);
             row.push(value.map_or(f64::NAN, |v| v.d));
         }
-        row
     }
 }
 
@@ -290,20 +341,36 @@ fn level<S: Level>(
     rows: &[usize],
     rhs: &mut [f64],
 ) {
+    let seed = |i: usize| S::coordinate([q[i], qdot[i], qddot[i]], [dq[0][i], dq[1][i], dq[2][i]]);
+    over(b, elements, model, p, S::time(t), seed);
+    for (r, &row) in rhs.iter_mut().zip(rows) {
+        *r = -b.full[row].part();
+    }
+}
+
+/// Every element's rows over the numbers `S` into `b.full`, with coordinate `i` seeded
+/// `seed(i)`, the time `t`, the elements' numbers and the parameters along parameter `p`'s
+/// direction ([`Level::fixed`]); returns the rows.
+fn over<'b, S: Level>(
+    b: &'b mut Buffers<S>,
+    elements: &[Seeded<'_>],
+    model: &Model,
+    p: usize,
+    t: S,
+    seed: impl Fn(usize) -> S,
+) -> &'b [S] {
     for (i, x) in b.q.iter_mut().enumerate() {
-        *x = S::coordinate([q[i], qdot[i], qddot[i]], [dq[0][i], dq[1][i], dq[2][i]]);
+        *x = seed(i);
     }
     seed_parameters(&mut b.params, model, p);
-    let at = At { q: &b.q, t: S::time(t), params: &b.params };
+    let at = At { q: &b.q, t, params: &b.params };
     for e in elements {
         b.data.clear();
         b.data.extend(e.data.iter().zip(e.grads).map(|(&v, g)| S::fixed(v, g[p])));
         let supported = S::rows(e.constraint, &at, &b.data, &mut b.full[e.row..]);
         debug_assert!(supported, "{} was checked to have derivatives", e.name);
     }
-    for (r, &row) in rhs.iter_mut().zip(rows) {
-        *r = -b.full[row].part();
-    }
+    &b.full
 }
 
 /// The model's parameters over `S`, each along its derivative with respect to parameter `p`

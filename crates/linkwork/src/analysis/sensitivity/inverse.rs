@@ -1,0 +1,314 @@
+//! Design sensitivities of an inverse dynamic analysis: the derivatives of the multipliers, and
+//! from them of the reactions, the efforts, the energies and powers and the measures, at each
+//! output time (docs/sensitivities.md, "Inverse dynamics").
+//!
+//! The motion's derivatives `q_p`, `qdot_p`, `qddot_p` are the kinematic analysis's
+//! ([`Sensitivity::motion`]). Differentiating `Phi_q^T lambda = Q - M qddot` with respect to `p`:
+//!
+//! ```text
+//! Phi_q^T lambda_p = Q_p - M_p qddot - M qddot_p - (Phi_q)_p^T lambda = b_p
+//! ```
+//!
+//! with `Q_p` total (gravity through the masses, the forces through their coordinates, numbers
+//! and parameters: [`Dae::add_load_along`]), `M_p` along the masses' gradients
+//! ([`Dae::add_mass_along`]) and `(Phi_q)_p` the total derivative of the Jacobian along `q_p`,
+//! the elements' numbers and the parameters: each element's rows over [`HyperDual`] numbers,
+//! one direction a coordinate of the element, the other the parameter. The analysis takes the
+//! minimum-norm `lambda = A^+ b` of `A = Phi_q^T` (full row rank); its derivative is
+//!
+//! ```text
+//! lambda_p = A^+ (b_p - (Phi_q)_p^T lambda) + (I - A^+ A) (Phi_q)_p y,   Phi_q y = lambda
+//! ```
+//!
+//! (the derivative of the pseudo-inverse of a matrix of constant full row rank); the second term
+//! is zero without redundant rows (`m = n`, where `A^+ A = I`), and is computed only with them,
+//! as `z - A^+ (Phi_q^T z)` with `z = (Phi_q)_p y`. Every solve is the analysis's own minimum-norm
+//! solve in the row space it has already factored.
+
+use super::{Seeded, Sensitivity};
+use crate::analysis::dynamic::Dae;
+use crate::analysis::measure_reactions;
+use crate::constraints::{lever, reaction_about, At, POINT, POINT_I};
+use crate::error::{Error, Problem};
+use crate::expr::{Dual, HyperDual, Scalar};
+use crate::linalg::rows::RowSpace;
+use crate::model::Analysis;
+
+/// Where an output time's values are, for its derivatives: the time, the motion, the
+/// multipliers and the reactions row of [`Dae::reactions`].
+pub(crate) struct InverseAt<'a> {
+    /// The time and `(q, qdot, qddot)`.
+    pub t: f64,
+    pub x: (&'a [f64], &'a [f64], &'a [f64]),
+    /// `(m)` the multipliers.
+    pub lambda: &'a [f64],
+    /// The reactions and efforts, [`Dae::reactions`]' row.
+    pub react: &'a [f64],
+}
+
+/// The buffers of an inverse analysis's sensitivities.
+pub(crate) struct InverseSensitivity {
+    /// Each element's Jacobian block (rows x columns, row-major, elements in the system's order)
+    /// and its derivative along the parameter.
+    block: Vec<f64>,
+    dblock: Vec<f64>,
+    /// (m) `-d(Phi_t)/dp` of the drivers' rows (`nu_p`; zero on the joints').
+    dnu: Vec<f64>,
+    /// The coordinates, parameters, an element's numbers and its rows over [`HyperDual`].
+    hq: Vec<HyperDual>,
+    hparams: Vec<HyperDual>,
+    hdata: Vec<HyperDual>,
+    hout: Vec<HyperDual>,
+    /// (n) scratch: the right-hand side, the forces' derivative, `M_p` times a vector.
+    rhs: Vec<f64>,
+    forces: Vec<f64>,
+    scratch: Vec<f64>,
+    /// (m) scratch: `(Phi_q)_p y` with redundant rows, and the derivatives of the reactions
+    /// row in the measures' layout.
+    z: Vec<f64>,
+    react: Vec<f64>,
+    measured: Vec<f64>,
+    nu: Vec<f64>,
+    /// The analysis's drivers (indices into the model's), for the measures' reactions row.
+    drivers: Vec<usize>,
+}
+
+/// The error at `path` for something asked to have design sensitivities that has none yet.
+fn unsupported(path: String, what: &str) -> Error {
+    Error::Model(vec![Problem::new(
+        path,
+        format!("{what} has no design sensitivities yet (asked for with `sensitivities`)"),
+    )])
+}
+
+impl InverseSensitivity {
+    /// The buffers for `s`'s elements on `dae`; an error at `sensitivities`' cause when
+    /// something in the analysis has no derivatives yet: a joint with friction (at its
+    /// `friction`), an active force whose load or potential has none (at the force).
+    pub(crate) fn new(s: &Sensitivity<'_>, dae: &Dae<'_>, analysis: &Analysis) -> Result<InverseSensitivity, Error> {
+        let model = dae.model;
+        if let Some(j) = model.joints.iter().find(|j| j.friction.is_some()) {
+            return Err(unsupported(format!("joints.{}.friction", j.name), "joint friction"));
+        }
+        let (n, m) = (dae.n, dae.m);
+        let q = model.q0();
+        let zero = vec![0.0; n];
+        let mut out = vec![0.0; n];
+        for &p in &s.asked {
+            dae.add_forces_along((&q, &zero, analysis.t_start), (&zero, &zero), p, &mut out)
+                .map_err(|name| unsupported(format!("forces.{name}"), "this force"))?;
+            let potential = |name: String| unsupported(format!("forces.{name}"), "this force's potential energy");
+            dae.potential_energy_along(&q, &zero, p).map_err(potential)?;
+        }
+        let entries: usize = s.elements.iter().map(|e| e.constraint.rows() * e.constraint.columns().len()).sum();
+        let widest = s.elements.iter().map(|e| e.constraint.rows()).max().unwrap_or(0);
+        let zero = HyperDual::new(0.0, 0.0, 0.0, 0.0);
+        Ok(InverseSensitivity {
+            block: vec![0.0; entries],
+            dblock: vec![0.0; entries],
+            dnu: vec![0.0; m],
+            hq: vec![zero; n],
+            hparams: vec![zero; model.parameters.len()],
+            hdata: Vec::new(),
+            hout: vec![zero; widest],
+            rhs: vec![0.0; n],
+            forces: vec![0.0; n],
+            scratch: vec![0.0; n],
+            z: vec![0.0; m],
+            react: Vec::new(),
+            measured: Vec::new(),
+            nu: vec![0.0; m],
+            drivers: analysis.drivers.clone(),
+        })
+    }
+
+    /// The derivatives with respect to parameter `p` of the inverse analysis's columns after the
+    /// bodies' at `at` (the reactions and efforts, the energies and powers, the measures),
+    /// appended to `row`; `dae` at `at`'s positions, `space` the row space of `Phi_q` there.
+    pub(crate) fn push(
+        &mut self,
+        s: &mut Sensitivity<'_>,
+        dae: &mut Dae<'_>,
+        space: &mut RowSpace,
+        at: &InverseAt<'_>,
+        p: usize,
+        row: &mut Vec<f64>,
+    ) -> Result<(), Error> {
+        let (t, (q, qdot, qddot), lambda) = (at.t, at.x, at.lambda);
+        let (n, m) = (dae.n, dae.m);
+        let [dq, dv, da] = s.motion().clone();
+        self.jacobian_along(&s.elements, s.model, p, t, q, &dq);
+        // b_p = Q_p - M_p qddot - M qddot_p - (Phi_q)_p^T lambda.
+        self.forces.fill(0.0);
+        let force = |name: String| unsupported(format!("forces.{name}"), "this force");
+        dae.add_forces_along((q, qdot, t), (&dq, &dv), p, &mut self.forces).map_err(force)?;
+        self.rhs.copy_from_slice(&self.forces);
+        dae.add_gravity_along(p, &mut self.rhs);
+        self.scratch.fill(0.0);
+        dae.add_mass_along(p, qddot, &mut self.scratch);
+        for (k, b) in self.rhs.iter_mut().enumerate() {
+            *b -= self.scratch[k] + dae.mass[k] * da[k];
+        }
+        let rhs = &mut self.rhs;
+        for_blocks(&s.elements, &self.dblock, |cols, rows, block| {
+            for (r, row) in rows.enumerate() {
+                for (ci, &c) in cols.iter().enumerate() {
+                    rhs[c] -= block[r * cols.len() + ci] * lambda[row];
+                }
+            }
+        });
+        let solve_failed = || Error::Singular {
+            time: t,
+            rows: vec![],
+            detail: "the singular value decomposition of the constraint Jacobian failed (a non-finite entry)".into(),
+        };
+        // With redundant rows: z = (Phi_q)_p y, and b_p - Phi_q^T z.
+        let redundant = m > n;
+        if redundant {
+            let y = space.min_norm_solve(lambda).ok_or_else(solve_failed)?;
+            let z = &mut self.z;
+            for_blocks(&s.elements, &self.dblock, |cols, rows, block| {
+                for (r, row) in rows.enumerate() {
+                    z[row] = cols.iter().enumerate().map(|(ci, &c)| block[r * cols.len() + ci] * y[c]).sum::<f64>();
+                }
+            });
+            self.scratch.fill(0.0);
+            dae.add_jt(&self.z, &mut self.scratch);
+            self.rhs.iter_mut().zip(&self.scratch).for_each(|(b, a)| *b -= a);
+        }
+        let mut dlambda = space.min_norm_transpose_solve(&self.rhs).ok_or_else(solve_failed)?;
+        if redundant {
+            dlambda.iter_mut().zip(&self.z).for_each(|(l, z)| *l += z);
+        }
+        // The reactions and efforts, in the layout of [`Dae::reactions`].
+        let qd: Vec<Dual> = q.iter().zip(&dq).map(|(&v, &d)| Dual::new(v, d)).collect();
+        self.react.clear();
+        let joints = s.model.joints.len();
+        let mut offset = 0;
+        for (k, e) in s.elements.iter().enumerate() {
+            let c = e.constraint;
+            let (cols, rows) = (c.columns(), e.row..e.row + c.rows());
+            let size = rows.len() * cols.len();
+            let (block, dblock) = (&self.block[offset..offset + size], &self.dblock[offset..offset + size]);
+            offset += size;
+            if k >= joints {
+                self.react.push(-dlambda[e.row]);
+                continue;
+            }
+            let l: Vec<Dual> = rows.clone().map(|r| Dual::new(lambda[r], dlambda[r])).collect();
+            let anchor = c.anchor();
+            let point = anchor_point(e, anchor.point, p);
+            let (f, torque) =
+                reaction_about(anchor, cols, |i| Dual::new(block[i], dblock[i]), &l, lever(anchor, point, &qd));
+            self.react.extend([f[0].d, f[1].d, torque.d]);
+        }
+        row.extend_from_slice(&self.react);
+        // The energies and powers (INVERSE_COLUMNS).
+        self.scratch.fill(0.0);
+        dae.add_mass_along(p, qdot, &mut self.scratch);
+        let kinetic: f64 = (0..n).map(|k| 0.5 * self.scratch[k] * qdot[k] + dae.mass[k] * qdot[k] * dv[k]).sum();
+        let potential = dae
+            .potential_energy_along(q, &dq, p)
+            .map_err(|name| unsupported(format!("forces.{name}"), "this force's potential energy"))?;
+        let first_driver = s.elements.get(joints).map_or(m, |e| e.row);
+        dae.nu(q, t, &mut self.nu);
+        let driver: f64 = -(first_driver..m).map(|r| dlambda[r] * self.nu[r] + lambda[r] * self.dnu[r]).sum::<f64>();
+        let applied = if dae.forces.is_empty() {
+            0.0
+        } else {
+            // The forces' load is the total less gravity's.
+            dae.load(q, qdot, t, &mut self.scratch);
+            let forces = self.scratch.iter().zip(dae.gravity_load()).map(|(a, g)| a - g);
+            self.forces.iter().zip(qdot).map(|(f, v)| f * v).sum::<f64>()
+                + forces.zip(&dv).map(|(f, d)| f * d).sum::<f64>()
+        };
+        row.extend([kinetic, potential, driver, applied]);
+        // The measures, with the reactions row along its derivatives.
+        if !s.model.measures.is_empty() {
+            measure_reactions(s.model, &self.drivers, &self.react, &mut self.measured);
+            let mut values = Vec::new();
+            measure_reactions(s.model, &self.drivers, at.react, &mut values);
+            let reactions: Vec<Dual> = values.iter().zip(&self.measured).map(|(&v, &d)| Dual::new(v, d)).collect();
+            s.measures(p, t, at.x, &reactions, row);
+        }
+        Ok(())
+    }
+
+    /// Each element's Jacobian block and its derivative along parameter `p` at `(q, t)`, the
+    /// coordinates moving along `dq` ([`InverseSensitivity::block`], `dblock`), and the
+    /// drivers' `nu_p` ([`InverseSensitivity::dnu`]): per element, one [`HyperDual`]
+    /// evaluation of its rows per column (the first direction that coordinate, the second the
+    /// parameter), and for a driver one more with the first direction the time.
+    #[allow(clippy::too_many_arguments)]
+    fn jacobian_along(
+        &mut self,
+        elements: &[Seeded<'_>],
+        model: &crate::model::Model,
+        p: usize,
+        t: f64,
+        q: &[f64],
+        dq: &[f64],
+    ) {
+        for (h, (&v, &d)) in self.hq.iter_mut().zip(q.iter().zip(dq)) {
+            *h = HyperDual::new(v, 0.0, d, 0.0);
+        }
+        for ((h, g), &v) in self.hparams.iter_mut().zip(&model.gradients.params).zip(model.parameters.values()) {
+            *h = HyperDual::new(v, 0.0, g[p], 0.0);
+        }
+        let joints = model.joints.len();
+        let mut offset = 0;
+        for (k, e) in elements.iter().enumerate() {
+            let c = e.constraint;
+            let (cols, rows) = (c.columns(), c.rows());
+            self.hdata.clear();
+            self.hdata.extend(e.data.iter().zip(e.grads).map(|(&v, g)| HyperDual::new(v, 0.0, g[p], 0.0)));
+            for (ci, &col) in cols.iter().enumerate() {
+                self.hq[col].e1 = 1.0;
+                let at = At { q: &self.hq, t: HyperDual::new(t, 0.0, 0.0, 0.0), params: &self.hparams };
+                let supported = c.phi_hyper(&at, &self.hdata, &mut self.hout[..rows]);
+                debug_assert!(supported, "{} was checked to have derivatives", e.name);
+                self.hq[col].e1 = 0.0;
+                for (r, h) in self.hout[..rows].iter().enumerate() {
+                    self.block[offset + r * cols.len() + ci] = h.e1;
+                    self.dblock[offset + r * cols.len() + ci] = h.e12;
+                }
+            }
+            offset += rows * cols.len();
+            if k >= joints {
+                let at = At { q: &self.hq, t: HyperDual::new(t, 1.0, 0.0, 0.0), params: &self.hparams };
+                c.phi_hyper(&at, &self.hdata, &mut self.hout[..rows]);
+                for (r, h) in self.hout[..rows].iter().enumerate() {
+                    self.dnu[e.row + r] = -h.e12;
+                }
+            }
+        }
+    }
+}
+
+/// `f(columns, rows, block)` for each element, with its part of `blocks` (the elements' Jacobian
+/// blocks, or their derivatives, one after the other).
+fn for_blocks(elements: &[Seeded<'_>], blocks: &[f64], mut f: impl FnMut(&[usize], std::ops::Range<usize>, &[f64])) {
+    let mut offset = 0;
+    for e in elements {
+        let c = e.constraint;
+        let size = c.rows() * c.columns().len();
+        f(c.columns(), e.row..e.row + c.rows(), &blocks[offset..offset + size]);
+        offset += size;
+    }
+}
+
+/// The point of element `e` about which its reaction's moment is taken (`point`, its anchor's),
+/// along its derivative with respect to parameter `p`: the element's `point_i` (or `point`, an
+/// absolute joint's) when that is one of its numbers, as every joint with a point has it; held
+/// otherwise (the origin of a belt's, an expression's or a relative angle's first body).
+pub(super) fn anchor_point(e: &Seeded<'_>, point: [f64; 2], p: usize) -> [Dual; 2] {
+    let names: Vec<&str> = e.constraint.data().iter().map(|&(name, _)| name).collect();
+    let slot = names.iter().position(|&name| name == POINT_I[0] || name == POINT[0]);
+    match slot {
+        Some(k) => {
+            debug_assert_eq!([e.data[k], e.data[k + 1]], point, "{}: the anchor is its point", e.name);
+            [Dual::new(point[0], e.grads[k][p]), Dual::new(point[1], e.grads[k + 1][p])]
+        }
+        None => point.map(Dual::constant),
+    }
+}
