@@ -227,7 +227,7 @@ impl<'m> Sensitivity<'m> {
     /// The derivatives of every column at the output `(t, q, qdot, qddot)`, with `lu` the
     /// factorization of `Phi_q`'s independent `rows` there, pushed into `results`: for each
     /// parameter asked, `q_p`, `qdot_p` and `qddot_p` ([`Sensitivity::motion`]), each body's
-    /// quantities from them, then what `extra(self, p, row)` appends for the analysis's own
+    /// quantities from them, then what `extra(self, p, lu, row)` appends for the analysis's own
     /// columns (the measures, [`Sensitivity::measures`], and an inverse analysis's reactions).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn push(
@@ -237,7 +237,7 @@ impl<'m> Sensitivity<'m> {
         rows: &[usize],
         t: f64,
         x: (&[f64], &[f64], &[f64]),
-        mut extra: impl FnMut(&mut Sensitivity<'m>, usize, &mut Vec<f64>) -> Result<(), Error>,
+        mut extra: impl FnMut(&mut Sensitivity<'m>, usize, &mut SparseLu, &mut Vec<f64>) -> Result<(), Error>,
     ) -> Result<(), Error> {
         for k in 0..self.asked.len() {
             let p = self.asked[k];
@@ -261,7 +261,7 @@ impl<'m> Sensitivity<'m> {
                 (0..bodies)
                     .flat_map(|b| [dq, dv, da].into_iter().flat_map(move |v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]])),
             );
-            let outcome = extra(self, p, &mut row);
+            let outcome = extra(self, p, lu, &mut row);
             self.rows[k] = row;
             outcome?;
         }
