@@ -2,8 +2,8 @@
 //!
 //! `cargo bench -p linkwork --bench kinematics`. Two runs: the analysis as the model file gives it
 //! (0 to 2 s every 0.05 s: 41 points, so assembly and the symbolic factorization weigh in), and
-//! the same mechanism over 100 s (2001 points), where the time loop dominates; and the 2 s run
-//! with design sensitivities. Criterion reports
+//! the same mechanism over 100 s (2001 points), where the time loop dominates; and the 2 s run,
+//! kinematic and inverse, with design sensitivities. Criterion reports
 //! time per element = per output point. Figures are recorded in `docs/performance.md`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
@@ -25,20 +25,23 @@ fn quick_return(c: &mut Criterion) {
     group.finish();
 }
 
-/// The same 2 s analysis with the derivatives of every column with respect to P = 1, 4 and 16
-/// parameters (the six of the file in turn, repeated: the cost of a parameter does not depend on
-/// which it is), against the run without them: `docs/performance.md`, "Design sensitivities".
+/// The same 2 s analysis, and the inverse analysis over the same motion, with the derivatives of
+/// every column with respect to P = 1, 4 and 16 parameters (those of the file in turn, repeated:
+/// the cost of a parameter does not depend on which it is), against the run without them:
+/// `docs/performance.md`, "Design sensitivities".
 fn sensitivities(c: &mut Criterion) {
     let path = format!("{}/../../examples/quick_return_a.yaml", env!("CARGO_MANIFEST_DIR"));
     let model = Model::load(&path).expect("the example loads");
     let names: Vec<String> = model.parameters.keys().cloned().collect();
     let mut group = c.benchmark_group("quick_return_a_sensitivities");
-    for p in [0, 1, 4, 16] {
-        let options =
-            RunOptions { sensitivities: names.iter().cycle().take(p).cloned().collect(), ..Default::default() };
-        group.bench_function(format!("kinematics_2s_P{p}"), |b| {
-            b.iter(|| black_box(&model).run("kinematics", &options).map(|r| r.len()).ok())
-        });
+    for analysis in ["kinematics", "inverse"] {
+        for p in [0, 1, 4, 16] {
+            let options =
+                RunOptions { sensitivities: names.iter().cycle().take(p).cloned().collect(), ..Default::default() };
+            group.bench_function(format!("{analysis}_2s_P{p}"), |b| {
+                b.iter(|| black_box(&model).run(analysis, &options).map(|r| r.len()).ok())
+            });
+        }
     }
     group.finish();
 }

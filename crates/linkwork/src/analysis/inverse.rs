@@ -20,7 +20,7 @@ use super::sensitivity::{InverseAt, InverseSensitivity, Sensitivity};
 use super::{element_names, row_space, Run};
 use crate::error::Error;
 use crate::linalg::rows::RowSpace;
-use crate::linalg::{ColMatrix, Pattern};
+use crate::linalg::{ColMatrix, Pattern, SparseLu};
 use crate::model::{Analysis, Model};
 use crate::results::{Failure, Results};
 use faer::linalg::solvers::Solve;
@@ -118,13 +118,18 @@ pub(crate) fn run_inverse(model: &Model, analysis: &Analysis, run: &mut Run<'_>)
         solved.space = Some(space);
         Ok(())
     };
-    let derivatives = |s: &mut Sensitivity<'_>, p: usize, t: f64, x: (&[f64], &[f64], &[f64]), row: &mut Vec<f64>| {
+    let derivatives = |s: &mut Sensitivity<'_>,
+                       p: usize,
+                       t: f64,
+                       x: (&[f64], &[f64], &[f64]),
+                       lu: &mut SparseLu,
+                       row: &mut Vec<f64>| {
         let solved = &mut *state.borrow_mut();
         let Solved { dae, derivatives: Some(d), lambda, react, space: Some(space) } = solved else {
             unreachable!("a run with sensitivities has their buffers, and its values come first")
         };
         let at = InverseAt { t, x, lambda, react };
-        d.push(s, dae, space, &at, p, row)
+        d.push(s, dae, (space, lu), &at, p, row)
     };
     let outcome = run_driven(model, analysis, run, names, values, derivatives);
     let finish = |results: &mut Results| {

@@ -199,7 +199,7 @@ pub(crate) fn run_kinematic(model: &Model, analysis: &Analysis, run: &mut Run<'_
         extra.extend(model.measures.iter().map(|m| m.value(q, qdot, qddot, &[], t)));
         Ok(())
     };
-    run_driven(model, analysis, run, names, values, |s, p, t, x, row| {
+    run_driven(model, analysis, run, names, values, |s, p, t, x, _, row| {
         s.measures(p, t, x, &[], row);
         Ok(())
     })
@@ -210,8 +210,9 @@ pub(crate) fn run_kinematic(model: &Model, analysis: &Analysis, run: &mut Run<'_
 /// `values`, each output point pushed as `run`. Shared by the kinematic and the inverse dynamic
 /// analyses. A run asked for sensitivities also pushes the derivatives of every column: the
 /// bodies' from the motion's ([`Sensitivity::push`]), then those of `names`, which
-/// `extra_derivatives(sensitivity, p, t, (q, qdot, qddot), row)` appends to `row` for parameter
-/// `p`, right after the values of the same output time.
+/// `extra_derivatives(sensitivity, p, t, (q, qdot, qddot), lu, row)` appends to `row` for
+/// parameter `p`, right after the values of the same output time (`lu` the factorization of
+/// `Phi_q`'s independent rows there).
 pub(crate) fn run_driven(
     model: &Model,
     analysis: &Analysis,
@@ -223,6 +224,7 @@ pub(crate) fn run_driven(
         usize,
         f64,
         (&[f64], &[f64], &[f64]),
+        &mut SparseLu,
         &mut Vec<f64>,
     ) -> Result<(), Error>,
 ) -> Result<Results, Box<Failure>> {
@@ -312,8 +314,9 @@ pub(crate) fn run_driven(
         run.push(&mut results, t0, &s.q, &s.qdot, &s.qddot, &extra)?;
         if let Some(sensitivity) = &mut sensitivity {
             let x = (s.q.as_slice(), s.qdot.as_slice(), s.qddot.as_slice());
-            sensitivity
-                .push(&mut results, &mut s.lu, &s.rows, t0, x, |d, p, row| extra_derivatives(d, p, t0, x, row))?;
+            sensitivity.push(&mut results, &mut s.lu, &s.rows, t0, x, |d, p, lu, row| {
+                extra_derivatives(d, p, t0, x, lu, row)
+            })?;
         }
         let mut dt = h;
         let mut q_pred = vec![0.0; n];
@@ -384,7 +387,9 @@ pub(crate) fn run_driven(
             run.push(&mut results, target, &s.q, &s.qdot, &s.qddot, &extra)?;
             if let Some(sensitivity) = &mut sensitivity {
                 let x = (s.q.as_slice(), s.qdot.as_slice(), s.qddot.as_slice());
-                let extra = |d: &mut Sensitivity<'_>, p, row: &mut Vec<f64>| extra_derivatives(d, p, target, x, row);
+                let extra = |d: &mut Sensitivity<'_>, p, lu: &mut SparseLu, row: &mut Vec<f64>| {
+                    extra_derivatives(d, p, target, x, lu, row)
+                };
                 sensitivity.push(&mut results, &mut s.lu, &s.rows, target, x, extra)?;
             }
         }

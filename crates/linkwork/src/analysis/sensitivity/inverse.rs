@@ -22,8 +22,10 @@
 //!
 //! (the derivative of the pseudo-inverse of a matrix of constant full row rank); the second term
 //! is zero without redundant rows (`m = n`, where `A^+ A = I`), and is computed only with them,
-//! as `z - A^+ (Phi_q^T z)` with `z = (Phi_q)_p y`. Every solve is the analysis's own minimum-norm
-//! solve in the row space it has already factored.
+//! as `z - A^+ (Phi_q^T z)` with `z = (Phi_q)_p y`. Without redundant rows `Phi_q` is square and
+//! regular and `A^+ b_p` is one transposed solve with the kinematic analysis's factorization;
+//! with them every solve is the analysis's own minimum-norm solve in the row space it has
+//! already factored.
 
 use super::{Seeded, Sensitivity};
 use crate::analysis::dynamic::Dae;
@@ -32,6 +34,7 @@ use crate::constraints::{lever, reaction_about, At, POINT, POINT_I};
 use crate::error::{Error, Problem};
 use crate::expr::{Dual, HyperDual, Scalar};
 use crate::linalg::rows::RowSpace;
+use crate::linalg::SparseLu;
 use crate::model::Analysis;
 
 /// Where an output time's values are, for its derivatives: the time, the motion, the
@@ -124,12 +127,14 @@ impl InverseSensitivity {
 
     /// The derivatives with respect to parameter `p` of the inverse analysis's columns after the
     /// bodies' at `at` (the reactions and efforts, the energies and powers, the measures),
-    /// appended to `row`; `dae` at `at`'s positions, `space` the row space of `Phi_q` there.
+    /// appended to `row`; `dae` at `at`'s positions, `space` the row space of `Phi_q` there and
+    /// `lu` the kinematic analysis's factorization of its independent rows (all of them when
+    /// none is redundant, in order).
     pub(crate) fn push(
         &mut self,
         s: &mut Sensitivity<'_>,
         dae: &mut Dae<'_>,
-        space: &mut RowSpace,
+        (space, lu): (&mut RowSpace, &mut SparseLu),
         at: &InverseAt<'_>,
         p: usize,
         row: &mut Vec<f64>,
@@ -176,10 +181,16 @@ impl InverseSensitivity {
             dae.add_jt(&self.z, &mut self.scratch);
             self.rhs.iter_mut().zip(&self.scratch).for_each(|(b, a)| *b -= a);
         }
-        let mut dlambda = space.min_norm_transpose_solve(&self.rhs).ok_or_else(solve_failed)?;
-        if redundant {
+        let dlambda = if redundant {
+            let mut dlambda = space.min_norm_transpose_solve(&self.rhs).ok_or_else(solve_failed)?;
             dlambda.iter_mut().zip(&self.z).for_each(|(l, z)| *l += z);
-        }
+            dlambda
+        } else {
+            // Square and regular: the one solution, with the kinematic analysis's factors.
+            let mut dlambda = self.rhs.clone();
+            lu.solve_transpose(&mut dlambda);
+            dlambda
+        };
         // The reactions and efforts, in the layout of [`Dae::reactions`].
         let qd: Vec<Dual> = q.iter().zip(&dq).map(|(&v, &d)| Dual::new(v, d)).collect();
         self.react.clear();

@@ -238,7 +238,7 @@ impl<'m> Sensitivity<'m> {
     /// The derivatives of every column at the output `(t, q, qdot, qddot)`, with `lu` the
     /// factorization of `Phi_q`'s independent `rows` there, pushed into `results`: for each
     /// parameter asked, `q_p`, `qdot_p` and `qddot_p` ([`Sensitivity::motion`]), each body's
-    /// quantities from them, then what `extra(self, p, row)` appends for the analysis's own
+    /// quantities from them, then what `extra(self, p, lu, row)` appends for the analysis's own
     /// columns (the measures, [`Sensitivity::measures`], and an inverse analysis's reactions).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn push(
@@ -248,7 +248,7 @@ impl<'m> Sensitivity<'m> {
         rows: &[usize],
         t: f64,
         x: (&[f64], &[f64], &[f64]),
-        mut extra: impl FnMut(&mut Sensitivity<'m>, usize, &mut Vec<f64>) -> Result<(), Error>,
+        mut extra: impl FnMut(&mut Sensitivity<'m>, usize, &mut SparseLu, &mut Vec<f64>) -> Result<(), Error>,
     ) -> Result<(), Error> {
         for k in 0..self.asked.len() {
             let p = self.asked[k];
@@ -267,7 +267,7 @@ impl<'m> Sensitivity<'m> {
             let mut row = std::mem::take(&mut self.rows[k]);
             row.clear();
             self.bodies(&mut row);
-            let outcome = extra(self, p, &mut row);
+            let outcome = extra(self, p, lu, &mut row);
             self.rows[k] = row;
             outcome?;
         }
