@@ -200,7 +200,11 @@ impl Model {
                 .map_err(|error| Box::new(Failure { error, results: Results::new(self, a) }))?,
             Err(error) => return Err(Box::new(Failure { error, results: Results::of_model(self) })),
         };
-        let sensitivities = match self.sensitivity_parameters(&analysis, &options.sensitivities) {
+        let sensitivities = match self.sensitivity_parameters(
+            &analysis,
+            &options.sensitivities,
+            options.overrides.integrator.is_some(),
+        ) {
             Ok(k) => k,
             Err(error) => return Err(Box::new(Failure { error, results: Results::new(self, &analysis) })),
         };
@@ -228,8 +232,14 @@ impl Model {
 
     /// The indices of the parameters named `names` (file order of the names given), for the
     /// sensitivities of `analysis`: an error at the field `sensitivities` for a name the model
-    /// does not define, or an analysis whose type has no sensitivities yet.
-    fn sensitivity_parameters(&self, analysis: &Analysis, names: &[String]) -> Result<Vec<usize>, Error> {
+    /// does not define; at its integrator (`--integrator` when `overridden`) for a dynamic
+    /// analysis integrated by a method that has none yet.
+    fn sensitivity_parameters(
+        &self,
+        analysis: &Analysis,
+        names: &[String],
+        overridden: bool,
+    ) -> Result<Vec<usize>, Error> {
         let problem = |message: String| Error::Model(vec![Problem::new("sensitivities", message)]);
         if names.is_empty() {
             return Ok(Vec::new());
@@ -237,8 +247,10 @@ impl Model {
         // The dynamic sensitivities are integrated with the state by the BDF integrator
         // (analysis/sensitivity/dynamic.rs); every other analysis type has its own.
         if analysis.kind == AnalysisKind::Dynamic && analysis.integrator.kind != IntegratorKind::Bdf {
+            let path =
+                if overridden { "--integrator".into() } else { format!("analyses.{}.integrator", analysis.name) };
             return Err(Error::Model(vec![Problem::new(
-                format!("analyses.{}.integrator", analysis.name),
+                path,
                 format!(
                     "integrator {} has no design sensitivities (asked for with `sensitivities`): use bdf",
                     analysis.integrator.kind.name()
