@@ -323,6 +323,27 @@ def test_the_report_draws_the_sensitivity_panel_scaled_by_tolerance_or_size(link
         assert bars["y"][0].startswith("r (× tolerance 0.0001)") and bars["x"][0] == pytest.approx(2e-4, rel=1e-9)
         assert [abs(v) for v in bars["x"]] == sorted((abs(v) for v in bars["x"]), reverse=True)
         assert any(label.startswith("speed (× value") for label in bars["y"])
+        # Drawn, not only given: one bar a parameter, each labelled on the axis.
+        assert page.locator("#sensitivity0 .trace.bars .point").count() == len(bars["y"])
+        ticks = page.locator("#sensitivity0 .ytick text").all_text_contents()
+        assert sorted(ticks) == sorted(bars["y"])
+        # Each label whole inside the figure (the margin holds it).
+        left = page.evaluate("() => document.getElementById('sensitivity0').getBoundingClientRect().left")
+        assert min(box["x"] for box in (t.bounding_box() for t in page.locator("#sensitivity0 .ytick text").all()) if box) >= left
+    finally:
+        page.close()
+    # A summary no parameter moves (a pin's reaction torque, zero by construction) is named in a
+    # line, not drawn as an empty chart; the others are drawn.
+    out = linkwork("run", EXAMPLES / "quick_return_a.yaml", "--analysis", "inverse", "--sensitivities", "crank", "--out", "q")
+    assert out.code == 0, out.output
+    page, _, errors = open_report(browser, tmp_path / "q" / "report.html")
+    try:
+        assert errors == []
+        line = page.locator("#constant-summaries").text_content() or ""
+        assert "A.torque" in line and "A.force" not in line
+        titles = page.evaluate("() => [...document.querySelectorAll('[id^=sensitivity]')].filter(e => e.data)"
+                               ".map(e => e.layout.title.text)")
+        assert "A.force" in titles and "A.torque" not in titles
     finally:
         page.close()
     # Without sensitivities there is no panel.

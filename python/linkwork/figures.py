@@ -807,11 +807,15 @@ def sensitivity_figures(run: Run) -> list[dict[str, Any]]:
     derivatives, a bar a parameter of its derivative times the parameter's tolerance when it
     has one, else times its size (its value's magnitude; 1 SI unit for a parameter of value 0):
     what the summary changes by when the parameter moves by that much, to first order. Largest
-    magnitude first, horizontal bars read top down."""
+    magnitude first, horizontal bars read top down. A summary whose derivatives are all zero
+    (:func:`constant_summaries`) has no figure."""
     by_summary = run.summary.sensitivities or {}
     values = run.summary.parameters or {}
     out = []
+    constant = set(constant_summaries(run))
     for name, by_parameter in by_summary.items():
+        if name in constant:
+            continue
         scaled = []
         for parameter, derivative in by_parameter.items():
             if parameter in run.tolerances:
@@ -824,10 +828,20 @@ def sensitivity_figures(run: Run) -> list[dict[str, Any]]:
         bar = {"type": "bar", "orientation": "h", "y": [label for label, _ in scaled], "x": _num([v for _, v in scaled]),
                "name": name}
         layout = _plot_layout(f"{name} (its derivative times each parameter's tolerance or size)", f"change of {name} (SI)", "")
-        layout["yaxis"]["autorange"] = "reversed"
+        # The parameters are categories (`_plot_layout`'s linear axis would place no bar at all),
+        # their labels long: the margin grows to hold them.
+        layout["yaxis"].update(type="category", autorange="reversed", automargin=True)
         layout["height"] = max(200, 90 + 28 * len(scaled))
         out.append({"data": [bar], "layout": layout})
     return out
+
+
+def constant_summaries(run: Run) -> list[str]:
+    """The summaries whose derivative with respect to every parameter asked is exactly zero (a pin's
+    reaction torque, a quantity no parameter moves): the sensitivity panel names them in a line
+    rather than drawing empty charts."""
+    by_summary = run.summary.sensitivities or {}
+    return [name for name, by_parameter in by_summary.items() if all(v == 0.0 for v in by_parameter.values())]
 
 
 def tolerance_figures(

@@ -21,7 +21,7 @@ import numpy as np
 
 from .folder import write_text
 from .figures import (
-    Run, _frame_rows, _num, _text, driver_coordinate, mechanism_figure, mode_figures, paths_figure, plots, sensitivity_figures,
+    Run, _frame_rows, _num, _text, constant_summaries, driver_coordinate, mechanism_figure, mode_figures, paths_figure, plots, sensitivity_figures,
 )
 from .summary import Summary, branch_words
 from .units import UNKNOWN, Units
@@ -221,10 +221,14 @@ def page(run: Run, plotly_js: str) -> str:
                         f'time</label> <label><input type="radio" name="against" value="driver"> {html.escape(against)}'
                         "</label></p>")
         body.append('<div class="plots">' + "".join(f'<div id="plot{k}"></div>' for k in range(len(plot_list))) + "</div>")
-    if sensitivities:
+    constant = constant_summaries(run)
+    if sensitivities or constant:
         body.append('<h2 id="sensitivity-panel">Sensitivities</h2><p>Each summary\'s derivative with respect to each '
                     "parameter, times the parameter's tolerance where the model gives one, else its size: the change "
                     "of the summary, to first order, when the parameter moves by that much.</p>")
+    if constant:
+        body.append(f'<p id="constant-summaries">Zero with respect to every parameter: {html.escape(", ".join(constant))}.</p>')
+    if sensitivities:
         body.append('<div class="plots">' + "".join(f'<div id="sensitivity{k}"></div>' for k in range(len(sensitivities))) + "</div>")
     body += ["<h2>Summary</h2>", summary_html(s, run.units)]
     return document(title, body, figures, plotly_js, _SCRIPT)
