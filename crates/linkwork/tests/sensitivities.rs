@@ -123,15 +123,15 @@ const NOT_YET: &[(&str, &str, &str)] = &[
     ("slider_crank_friction.yaml", "inverse", "joints.O.friction"),
 ];
 
-/// The dynamic analyses not compared with finite differences yet, the differences of whole runs
-/// failing to resolve their derivatives. The quick-return under its crank torque accelerates to
-/// `6e4` m/s^2: the differences at steps of 1e-3, 3e-3 and 1e-2 of `guide` scatter by `2e-4` of
-/// `d(slider_d.vx)/d(guide)` at 1.7 s (runs at rtol 1e-12, also with the step held at 1e-4),
-/// while the sensitivities move by `3e-6` of it from rtol 1e-10 to 1e-12. With respect to
-/// `crank` the angular accelerations differ by up to `3e-3` at a step of 1e-3: the differences'
-/// truncation, which falls to `3.2e-5` at 3e-4 (as `h^4`), below which the runs' noise takes
-/// over (docs/sensitivities.md, "Verification"). The forces' part of the equations is checked
-/// against the closed form of a mass on a spring.
+/// The dynamic analyses not compared with finite differences yet: their reference, the runs at
+/// [`FINEST_RTOL`], is wrong. The quick-return under its crank torque does not converge below
+/// rtol 1e-11 (`slider_d.x` at 2 s: `-0.20188050`, `-0.20188093`, `-0.20190104`, `-0.20199446` at
+/// 1e-10, 1e-11, 1e-12, 1e-13), and on a grid of `guide` its state at 2 s is smooth plus noise
+/// of `5.4e-6` m at 1e-12 (`9.2e-7` at 1e-10), which the differences divide by their step: SI2's
+/// Newton fails at regular positions near the quick stroke and the index-3 corrector takes the
+/// step, leaving the velocities out of the error test (1402 such attempts at 1e-12, 75 at 1e-10).
+/// Measured, with what would resolve it, in docs/sensitivities.md ("Verification"). The forces'
+/// part of the equations is checked against the closed form of a mass on a spring.
 const UNRESOLVED: &[(&str, &str)] = &[("quick_return_a.yaml", "dynamics_loaded")];
 
 /// The analysis types whose sensitivities are checked against finite differences.
