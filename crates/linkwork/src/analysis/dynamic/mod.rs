@@ -412,7 +412,7 @@ pub(crate) fn run_dynamic(model: &Model, analysis: &Analysis, run: &mut Run<'_>)
         Err(e) => (DynamicStats::default(), Err(e)),
         // Sensitivities are integrated by bdf and abam (analysis/run.rs refuses hht).
         Ok(Some((eq, tracks))) if settings.kind == IntegratorKind::Abam => {
-            abam::run_sensitive(&mut dae, &mut out, &settings, start, eq, tracks)
+            abam::integrate(&mut dae, &mut out, &settings, start, Some((eq, tracks)))
         }
         Ok(Some((eq, tracks))) => bdf::run_sensitive(&mut dae, &mut out, &settings, start, eq, tracks),
         Ok(None) => match settings.kind {

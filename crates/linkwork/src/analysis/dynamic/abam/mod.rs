@@ -199,21 +199,9 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     integrate(dae, out, settings, start, None)
 }
 
-/// [`run`] with design sensitivities: `eq` their equations and `tracks` each parameter's at the
-/// start ([`DynamicSensitivity::start`]); the outputs get their derivatives.
-pub(crate) fn run_sensitive<'m>(
-    dae: &mut Dae<'m>,
-    out: &mut Output,
-    settings: &IntegratorSettings,
-    start: Start,
-    eq: &mut DynamicSensitivity<'m>,
-    tracks: Vec<Track>,
-) -> Outcome {
-    integrate(dae, out, settings, start, Some((eq, tracks)))
-}
-
-/// [`run`], with the sensitivities of [`run_sensitive`] when given.
-fn integrate<'m>(
+/// [`run`], with design sensitivities when given: their equations and each parameter's at the
+/// start ([`DynamicSensitivity::start`]); the outputs then get their derivatives.
+pub(crate) fn integrate<'m>(
     dae: &mut Dae<'m>,
     out: &mut Output,
     settings: &IntegratorSettings,
