@@ -44,7 +44,8 @@
 //! `newton.rs` (this Newton), `partition.rs` and `pivots.rs` (the partition), `block.rs` (the
 //! dependent block, its factors and the blocks kept), `reduced.rs` (the reduced accelerations),
 //! `norm.rs` (the error norm), `noise.rs` (the noise test), `accepted.rs` (the accepted states),
-//! `split.rs` (the state that holds them).
+//! `split.rs` (the state that holds them), `sensitivities.rs` (design sensitivities integrated with
+//! the state as more components of `y`, docs/sensitivities.md).
 //!
 //! **Integrator.** Shampine and Gordon's STEP and INTRP on `y` (`adams.rs`: variable order
 //! 1 to `max_order`, default 12).
