@@ -212,7 +212,7 @@ def _parser() -> argparse.ArgumentParser:
         metavar="NAME,NAME...|all",
         help="also write sensitivities.csv (sensitivities.parquet with --stream parquet): time, then "
         "d(<column>)/d(<parameter>) for these parameters (all: every one), SI per SI; summary.json gets the "
-        "summaries' derivatives under sensitivities (every analysis type; dynamic ones integrated by bdf)",
+        "summaries' derivatives under sensitivities (every analysis type; dynamic ones integrated by bdf or abam)",
     )
     run.add_argument("--no-report", action="store_true", help="do not write report.html")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")

@@ -244,15 +244,16 @@ impl Model {
         if names.is_empty() {
             return Ok(Vec::new());
         }
-        // The dynamic sensitivities are integrated with the state by the BDF integrator
-        // (analysis/sensitivity/dynamic.rs); every other analysis type has its own.
-        if analysis.kind == AnalysisKind::Dynamic && analysis.integrator.kind != IntegratorKind::Bdf {
+        // The dynamic sensitivities are integrated with the state by the BDF and ABAM integrators
+        // (analysis/sensitivity/dynamic.rs, analysis/dynamic/abam/sensitivities.rs); every other
+        // analysis type has its own.
+        if analysis.kind == AnalysisKind::Dynamic && analysis.integrator.kind == IntegratorKind::Hht {
             let path =
                 if overridden { "--integrator".into() } else { format!("analyses.{}.integrator", analysis.name) };
             return Err(Error::Model(vec![Problem::new(
                 path,
                 format!(
-                    "integrator {} has no design sensitivities (asked for with `sensitivities`): use bdf",
+                    "integrator {} has no design sensitivities (asked for with `sensitivities`): use bdf or abam",
                     analysis.integrator.kind.name()
                 ),
             )]));

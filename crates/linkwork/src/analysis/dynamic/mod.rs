@@ -410,7 +410,10 @@ pub(crate) fn run_dynamic(model: &Model, analysis: &Analysis, run: &mut Run<'_>)
     });
     let (mut stats, outcome) = match pushed {
         Err(e) => (DynamicStats::default(), Err(e)),
-        // Sensitivities are integrated by bdf (analysis/run.rs refuses the others).
+        // Sensitivities are integrated by bdf and abam (analysis/run.rs refuses hht).
+        Ok(Some((eq, tracks))) if settings.kind == IntegratorKind::Abam => {
+            abam::integrate(&mut dae, &mut out, &settings, start, Some((eq, tracks)))
+        }
         Ok(Some((eq, tracks))) => bdf::run_sensitive(&mut dae, &mut out, &settings, start, eq, tracks),
         Ok(None) => match settings.kind {
             IntegratorKind::Hht => hht::run(&mut dae, &mut out, &settings, start),

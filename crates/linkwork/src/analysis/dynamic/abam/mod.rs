@@ -44,7 +44,8 @@
 //! `newton.rs` (this Newton), `partition.rs` and `pivots.rs` (the partition), `block.rs` (the
 //! dependent block, its factors and the blocks kept), `reduced.rs` (the reduced accelerations),
 //! `norm.rs` (the error norm), `noise.rs` (the noise test), `accepted.rs` (the accepted states),
-//! `split.rs` (the state that holds them).
+//! `split.rs` (the state that holds them), `sensitivities.rs` (design sensitivities integrated with
+//! the state as more components of `y`, docs/sensitivities.md).
 //!
 //! **Integrator.** Shampine and Gordon's STEP and INTRP on `y` (`adams.rs`: variable order
 //! 1 to `max_order`, default 12).
@@ -98,6 +99,7 @@ mod norm;
 mod partition;
 mod pivots;
 mod reduced;
+mod sensitivities;
 mod split;
 
 use super::adams::{Adams, MAX_ORDER};
@@ -105,8 +107,10 @@ use super::{
     step_failure, Dae, DynamicStats, IntegratorKind, IntegratorSettings, Outcome, Output, Span, Start,
     CONTACT_UNRESOLVED,
 };
+use crate::analysis::sensitivity::{DynamicSensitivity, Track};
 use crate::error::Error;
 use newton::{Eval, Purpose};
+use sensitivities::Sensitivities;
 use split::Split;
 
 /// More Newton iterations than this at an accepted step mean the dependent coordinates are badly
@@ -128,10 +132,14 @@ const CROSSING_STEPS: f64 = 16.0;
 /// Decay per accepted step of the recent step size (the largest recent step): about the last 20
 /// steps count.
 const RECENT_DECAY: f64 = 0.9;
-/// (Re)start the Adams method at the accepted state in the coordinates of the partition.
-fn begin(s: &Split<'_, '_>, ad: &mut Adams) {
-    ad.resize(2 * s.part.ind.len());
+/// (Re)start the Adams method at the accepted state in the coordinates of the partition (with
+/// the sensitivities after the state when the run has them).
+fn begin(s: &Split<'_, '_>, sens: Option<&Sensitivities<'_, '_>>, ad: &mut Adams) {
+    ad.resize(Sensitivities::width(sens, s.part.ind.len()));
     s.state(&mut ad.y, &mut ad.yp);
+    if let Some(z) = sens {
+        z.state(&s.part.ind, &mut ad.y, &mut ad.yp);
+    }
     ad.restart(s.accepted.ta);
 }
 
@@ -139,21 +147,74 @@ fn begin(s: &Split<'_, '_>, ad: &mut Adams) {
 /// order, step and history kept: the differences of the new coordinates are rebuilt from their
 /// derivatives at the past accepted states ([`Adams::rebase`]). The number of independent
 /// coordinates is the rank's complement and does not change; if it did, a restart.
-fn carry(s: &Split<'_, '_>, ad: &mut Adams) {
-    if ad.neq != 2 * s.part.ind.len() {
-        begin(s, ad);
+fn carry(s: &Split<'_, '_>, sens: Option<&Sensitivities<'_, '_>>, ad: &mut Adams) {
+    if ad.neq != Sensitivities::width(sens, s.part.ind.len()) {
+        begin(s, sens, ad);
         return;
     }
     debug_assert_eq!(ad.x, s.accepted.ta);
     s.state(&mut ad.y, &mut ad.yp);
-    ad.rebase(&mut |j, t, out| s.past(j, t, out));
+    if let Some(z) = sens {
+        z.state(&s.part.ind, &mut ad.y, &mut ad.yp);
+    }
+    ad.rebase(&mut |j, t, out| {
+        s.past(j, t, out);
+        if let Some(z) = sens {
+            z.past(j, t, &s.part.ind, out);
+        }
+    });
+}
+
+/// [`Split::evaluate`] at `(t, y)` with `y'` into `yp`, and the sensitivities' part of `y'` when
+/// the run has them (a failure when their derivatives cannot be made there).
+fn evaluate(
+    s: &mut Split<'_, '_>,
+    sens: Option<&mut Sensitivities<'_, '_>>,
+    t: f64,
+    y: &[f64],
+    yp: &mut [f64],
+    purpose: Purpose,
+) -> Result<Eval, Error> {
+    let eval = s.evaluate(t, y, Some(&mut *yp), purpose)?;
+    if let (Eval::Done { .. }, Some(z)) = (eval, sens) {
+        if !z.derivatives(s, t, y, yp)? {
+            return Ok(Eval::Failed { residual: s.dae.phi.iter().fold(0.0f64, |a, x| a.max(x.abs())) });
+        }
+    }
+    Ok(eval)
+}
+
+/// The error norm of a change `x` of `y`: the state's ([`Split::norm`]), and the largest of it and
+/// the sensitivities' when the run has them (IDAS's `errconS`).
+fn norm(s: &mut Split<'_, '_>, sens: Option<&Sensitivities<'_, '_>>, x: &[f64]) -> f64 {
+    let w = 2 * s.part.ind.len();
+    let state = s.norm(&x[..w]);
+    match sens {
+        None => state,
+        Some(z) => state.max(z.norm(s, &x[w..])),
+    }
 }
 
 /// Integrate from `start` to the output's end time.
 pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, start: Start) -> Outcome {
+    integrate(dae, out, settings, start, None)
+}
+
+/// [`run`], with design sensitivities when given: their equations and each parameter's at the
+/// start ([`DynamicSensitivity::start`]); the outputs then get their derivatives.
+pub(crate) fn integrate<'m>(
+    dae: &mut Dae<'m>,
+    out: &mut Output,
+    settings: &IntegratorSettings,
+    start: Start,
+    sensitivities: Option<(&mut DynamicSensitivity<'m>, Vec<Track>)>,
+) -> Outcome {
     let run = Span::new(settings, &start, out.t_end(), 0);
     let (t_end, h_max, h_start) = (run.t_end, run.h_max, run.h_start);
     let mut stats = DynamicStats::default();
+    let (t0, m) = (start.t, dae.m);
+    let mut sens =
+        sensitivities.map(|(eq, tracks)| Sensitivities::new(eq, tracks, t0, (settings.rtol, settings.atol), m));
     let mut s = Split::new(dae, settings, start);
     let mut ad = Adams::new(settings.order_limit().clamp(1, MAX_ORDER));
     let mut h = h_start;
@@ -162,10 +223,10 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
     // Partition at the start and (y, y') there.
     s.choose();
     stats.partitions += 1;
-    begin(&s, &mut ad);
+    begin(&s, sens.as_ref(), &mut ad);
     let mut chosen_at = 0;
-    let n = s.dae.n;
-    let (mut yo, mut ypo) = (vec![0.0; 2 * n], vec![0.0; 2 * n]);
+    let width = Sensitivities::width(sens.as_ref(), s.dae.n);
+    let (mut yo, mut ypo) = (vec![0.0; width], vec![0.0; width]);
     let outcome = (|| -> Result<(), Error> {
         while run.before_end(ad.x) {
             // Adams' accepted steps shrink the step only by a bounded factor; the error test
@@ -177,24 +238,24 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             ad.coefficients(h);
             ad.predict(h);
             let t1 = ad.x;
-            let mut eval = s.evaluate(t1, &ad.p, Some(&mut ad.yp), Purpose::Prediction)?;
+            let mut eval = evaluate(&mut s, sens.as_mut(), t1, &ad.p, &mut ad.yp, Purpose::Prediction)?;
             let mut err = f64::NAN;
             let mut noise = false;
             if let Eval::Done { .. } = eval {
-                err = ad.error_test(h, &mut |x| s.norm(x));
+                err = ad.error_test(h, &mut |x| norm(&mut s, sens.as_ref(), x));
                 if err > 1.0 {
                     // Judged on the prediction converged as every other evaluation is: the noise
                     // test samples one more Newton correction, and the prediction's looser stop
                     // would be that sample's size.
-                    eval = s.evaluate(t1, &ad.p, Some(&mut ad.yp), Purpose::Judged)?;
+                    eval = evaluate(&mut s, sens.as_mut(), t1, &ad.p, &mut ad.yp, Purpose::Judged)?;
                     if let Eval::Done { .. } = eval {
-                        err = ad.error_test(h, &mut |x| s.norm(x));
+                        err = ad.error_test(h, &mut |x| norm(&mut s, sens.as_ref(), x));
                     }
                 }
                 if err <= 1.0 {
                     // (p, y'(p)) => corrected yc => y'(yc).
                     ad.correct(h);
-                    eval = s.evaluate(t1, &ad.yc, Some(&mut ad.yp), Purpose::State)?;
+                    eval = evaluate(&mut s, sens.as_mut(), t1, &ad.yc, &mut ad.yp, Purpose::State)?;
                 } else if let Eval::Done { .. } = eval {
                     noise = s.noise_dominates(t1, &ad.d);
                 }
@@ -206,6 +267,10 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                 // across it from the last accepted step, then the method restarts.
                 ad.reject(h);
                 stats.rejected_steps += 1;
+                if sens.is_some() {
+                    let cause = "the error estimate is the round-off noise of a singular position, which abam crosses with bdf: its design sensitivities do not cross it (run with --integrator bdf)";
+                    return Err(step_failure(s.dae, &s.accepted.qa, s.accepted.ta, h, cause));
+                }
                 let stop = (s.accepted.ta + CROSSING_STEPS * h_recent).min(t_end);
                 if stop - s.accepted.ta < h_min {
                     let cause = "the error estimate is the round-off noise of a singular position, and the step left to cross it is below the smallest";
@@ -231,7 +296,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                 if s.choose() {
                     stats.partitions += 1;
                 }
-                begin(&s, &mut ad);
+                begin(&s, sens.as_ref(), &mut ad);
                 h = h_start.min(h_recent);
                 continue;
             }
@@ -254,7 +319,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                     if stats.steps > chosen_at && s.choose() {
                         // The dependent coordinates may be the trouble: new ones.
                         stats.partitions += 1;
-                        carry(&s, &mut ad);
+                        carry(&s, sens.as_ref(), &mut ad);
                     }
                     chosen_at = stats.steps;
                     if h < h_min {
@@ -280,8 +345,11 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
             // Accept: differences, order and next step; the state; work; output times.
             let h_used = h;
             h_recent = h_used.max(RECENT_DECAY * h_recent);
-            h = ad.accept(h, &mut |x| s.norm(x)).min(h_max);
+            h = ad.accept(h, &mut |x| norm(&mut s, sens.as_ref(), x)).min(h_max);
             let singular = !s.commit(ad.x);
+            if let Some(z) = &mut sens {
+                z.commit(ad.x);
+            }
             stats.accept(h_used);
             stats.max_order_used = stats.max_order_used.max(ad.kold);
             // The sensitivity at the next step, extrapolated from its growth over this one: the
@@ -297,8 +365,13 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                 // With the accelerations: the reduced solve where it applies is cheaper than
                 // the augmented one the output would make (the same solution, to its
                 // regularisation).
-                match s.evaluate(to, &yo[..neq], Some(&mut ypo[..neq]), Purpose::State)? {
-                    Eval::Done { .. } => out.push_solved(s.dae, to, &s.q, &s.v, &s.sol)?,
+                match evaluate(&mut s, sens.as_mut(), to, &yo[..neq], &mut ypo[..neq], Purpose::State)? {
+                    Eval::Done { .. } => {
+                        out.push_solved(s.dae, to, &s.q, &s.v, &s.sol)?;
+                        if let Some(z) = &mut sens {
+                            z.push(&mut s, out, to)?;
+                        }
+                    }
                     // The interpolated q_I leaves no nearby q_D (a partition near its fold inside
                     // a long step): the output is the quintic Hermite interpolant of the whole
                     // state between the step's ends, within the step's error, its constraint
@@ -306,7 +379,10 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                     Eval::Failed { .. } if s.accepted.ta > s.accepted.tp && to >= s.accepted.tp => {
                         s.accepted.interpolate(to, &mut s.q, &mut s.v);
                         s.t_last = f64::NAN;
-                        out.push(s.dae, to, &s.q, &s.v)?
+                        out.push(s.dae, to, &s.q, &s.v)?;
+                        if let Some(z) = &mut sens {
+                            z.push_interpolated(&mut s, out, to)?;
+                        }
                     }
                     Eval::Failed { residual } => {
                         let cause = format!(
@@ -320,7 +396,7 @@ pub fn run(dae: &mut Dae<'_>, out: &mut Output, settings: &IntegratorSettings, s
                 chosen_at = stats.steps;
                 if s.choose() {
                     stats.partitions += 1;
-                    carry(&s, &mut ad);
+                    carry(&s, sens.as_ref(), &mut ad);
                 }
             }
         }

@@ -69,10 +69,21 @@ impl Split<'_, '_> {
     /// attempt's map (`2p` columns built at its first norm; an attempt asks for three to five
     /// norms, each of which otherwise evaluates `Phi_q` twice).
     pub(super) fn norm(&mut self, x: &[f64]) -> f64 {
+        let (wq, wv) = (std::mem::take(&mut self.error.wq), std::mem::take(&mut self.error.wv));
+        let s = self.norm_weighted(x, &wq, &wv);
+        (self.error.wq, self.error.wv) = (wq, wv);
+        s
+    }
+
+    /// [`Split::norm`] with the reciprocal weights `wq` and `wv` (n each) of the positions and
+    /// velocities: those of a parameter's sensitivities, whose changes the same map gives (the
+    /// dependent sensitivities follow the independent ones through the same linearised
+    /// constraints as the state's changes, abam/sensitivities.rs).
+    pub(super) fn norm_weighted(&mut self, x: &[f64], wq: &[f64], wv: &[f64]) -> f64 {
         let (p, r) = (self.part.ind.len(), self.part.dep.len());
         let mut s = 0.0f64;
         for (j, &c) in self.part.ind.iter().enumerate() {
-            s = s.max((x[j] * self.error.wq[c]).abs()).max((x[p + j] * self.error.wv[c]).abs());
+            s = s.max((x[j] * wq[c]).abs()).max((x[p + j] * wv[c]).abs());
         }
         if r == 0 {
             return s;
@@ -118,7 +129,7 @@ impl Split<'_, '_> {
         }
         let (dq, dv) = changes.split_at(r);
         for ((&c, a), b) in self.part.dep.iter().zip(dq).zip(dv) {
-            s = s.max((a * self.error.wq[c]).abs()).max((b * self.error.wv[c]).abs());
+            s = s.max((a * wq[c]).abs()).max((b * wv[c]).abs());
         }
         self.error.changes = changes;
         s
