@@ -353,6 +353,19 @@ fn every_example_agrees_with_finite_differences_of_whole_runs() {
     }
 }
 
+/// The quick-return's free motion with one parameter, where each iteration of the sensitivities
+/// evaluates the derivative of `Phi_q^T lambda` whole (with two or more, the table above, it
+/// comes from the geometric stiffness assembled once per step): against the finite differences
+/// of whole runs ([`disagreements`]), as in the table.
+#[test]
+fn a_dynamic_analysis_with_one_parameter_agrees_with_finite_differences() {
+    let path = format!("{}/../../examples/quick_return_a.yaml", env!("CARGO_MANIFEST_DIR"));
+    let model = tight(Model::load(&path).expect("the quick-return"), SENSITIVITY_RTOL);
+    let results = run_with(&model, "dynamics", &["crank".to_string()]).expect("the run");
+    let failures = disagreements(&model, "dynamics", &results);
+    assert!(failures.is_empty(), "{} disagreements:\n{}", failures.len(), failures.join("\n"));
+}
+
 /// A four-bar hanging under gravity alone (the hanging four-bar example without its spring and
 /// load), its lengths, masses and a pivot as parameters: its rest and its modes agree with the
 /// finite differences of whole runs ([`disagreements`]): the reactions' levers, the anchor points'

@@ -225,6 +225,9 @@ impl CamRow {
 }
 
 impl Constraint for Cam {
+    fn reads_parameters(&self) -> bool {
+        true
+    }
     fn anchor(&self) -> Anchor {
         self.at.anchor()
     }

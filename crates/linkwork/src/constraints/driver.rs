@@ -117,6 +117,9 @@ impl Driver {
 }
 
 impl Constraint for Driver {
+    fn reads_parameters(&self) -> bool {
+        true
+    }
     fn time_function(&self) -> Option<&TimeFunction> {
         Some(&self.f)
     }

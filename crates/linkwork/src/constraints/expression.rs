@@ -109,6 +109,9 @@ impl GeneralConstraint {
 }
 
 impl Constraint for GeneralConstraint {
+    fn reads_parameters(&self) -> bool {
+        true
+    }
     fn anchor(&self) -> Anchor {
         Anchor {
             i: self.columns.first().map_or(BodyIx::GROUND, |&c| BodyIx(Some(c - c % 3))),

@@ -148,6 +148,13 @@ pub trait Constraint: Debug + Send + Sync {
     fn driven(&self) -> Option<&DriverKind> {
         None
     }
+    /// Whether the rows read the model's parameters at run time (`At::params`: a driver's
+    /// prescribed function, a cam's radius, a general constraint's expression) beside the
+    /// element's own numbers ([`Constraint::data`]). A design sensitivity along a parameter skips
+    /// an element whose numbers do not move with it only when this is `false`.
+    fn reads_parameters(&self) -> bool {
+        false
+    }
     /// The numbers of this element that a parameter can move (its points, lengths, radii,
     /// axes), each named as its field in the model file, with the component for a vector:
     /// `point_i[0]`, `point_i[1]`, `length`. The model's compiler gives each its derivative with

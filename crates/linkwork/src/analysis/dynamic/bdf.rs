@@ -550,6 +550,7 @@ impl Bdf<'_, '_> {
     /// state once. Returns whether every parameter's iteration converged.
     fn sensitivities(&mut self, k: usize, t1: f64, c: f64, vscale: f64) -> Result<bool, Error> {
         let Some(eq) = self.sens.take() else { return Ok(true) };
+        eq.prepare(t1, &self.q1, &self.lam1, self.si2.then_some(&self.mu1[..]));
         let mut tracks = std::mem::take(&mut self.tracks);
         let mut outcome = Ok(true);
         for (j, tr) in tracks.iter_mut().enumerate() {
@@ -619,7 +620,7 @@ impl Bdf<'_, '_> {
             p1.fill(0.0);
             let projection = if self.si2 { Some((&self.mu1[..], &mut *p1)) } else { None };
             let state = (&self.q1[..], &self.v1[..], &self.a1[..]);
-            eq.dynamics_along(self.dae, j, t1, state, &self.lam1, now, r1, projection);
+            eq.along(self.dae, j, t1, state, &self.lam1, now, r1, projection, true);
             self.work.fill(0.0);
             self.dae.add_jt(&now.lambda, &mut self.work);
             for i in 0..n {

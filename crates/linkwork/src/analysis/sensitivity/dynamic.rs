@@ -20,7 +20,7 @@
 //! follow from the state as the run's own (`[M, Phi_q^T; Phi_q, 0]` with the factorization the
 //! output has just made).
 
-use super::{add_jacobian_transpose_along, level, Buffers, Sensitivity};
+use super::{add_jacobian_transpose_along, hessians, level, Buffers, Sensitivity};
 use crate::analysis::dynamic::Dae;
 use crate::error::{Error, Problem};
 use crate::expr::{Dual, HyperDual, Tri};
@@ -43,12 +43,34 @@ pub(crate) struct Track {
     pub lambda: Vec<f64>,
 }
 
+/// The parts of `(d/dp Phi_q)^T w` at one step's converged state, for `w` the multipliers
+/// `lambda` and the projection's `mu` (SI2): linear in the sensitivities `s`, it is
+/// `K_w s + (Phi_q^T w)_p`, with `K_w = (w^T Phi)_qq` the geometric stiffness, the same for every
+/// parameter and iteration, and the second part evaluated once per parameter, over the elements
+/// whose numbers move with it.
+struct StepParts {
+    /// Each element's `K_lambda` and `K_mu` blocks (columns x columns, row-major, elements in the
+    /// system's order), and each element's first entry in them.
+    stiffness: [Vec<f64>; 2],
+    offsets: Vec<usize>,
+    /// (parameters asked) the elements whose rows move with the parameter at fixed coordinates
+    /// (their numbers do, or they read the parameters).
+    moving: Vec<Vec<usize>>,
+    /// (parameters asked) `(Phi_q^T lambda)_p` and `(Phi_q^T mu)_p`, `(n)` each.
+    fixed: Vec<[Vec<f64>; 2]>,
+    /// (n) zeros: the coordinates held for `fixed`.
+    zero: Vec<f64>,
+}
+
 /// The sensitivity equations of a dynamic analysis and their scratch.
 pub(crate) struct DynamicSensitivity<'m> {
     /// The elements, the parameters asked and the kinematic levels' buffers.
     base: Sensitivity<'m>,
     /// The buffers of the Jacobian's derivative.
     jacobian: Buffers<HyperDual>,
+    /// The step's parts of `(d/dp Phi_q)^T w` ([`DynamicSensitivity::prepare`]), or `None` when
+    /// the derivative is evaluated whole in every iteration (the cheaper with few parameters).
+    step: Option<StepParts>,
     /// Every constraint row, `0..m`.
     all: Vec<usize>,
     /// (n) scratch.
@@ -120,7 +142,39 @@ impl<'m> DynamicSensitivity<'m> {
         differentiated.extend(std::iter::repeat_n(true, model.measures.len()));
         let contacts = analysis.forces.iter().filter(|&&k| model.forces[k].force.contact().is_some()).count();
         differentiated.extend(std::iter::repeat_n(false, 3 * contacts));
+        // The geometric stiffness costs one evaluation per pair of an element's columns at each
+        // step; the derivative whole, one per column per parameter and iteration, of which a step
+        // takes at least two (no contraction is known before the second): the stiffness when it
+        // is the cheaper.
+        let columns = base.elements.iter().map(|e| e.constraint.columns().len());
+        let (pairs, per_column) = columns.fold((0, 0), |(a, b), w| (a + w * (w + 1) / 2, b + w));
+        let step = (2 * asked.len() * per_column >= pairs).then(|| {
+            let mut offsets = Vec::with_capacity(base.elements.len());
+            let size = base.elements.iter().fold(0, |offset, e| {
+                offsets.push(offset);
+                offset + e.constraint.columns().len().pow(2)
+            });
+            let grads = &model.gradients;
+            let moving = asked
+                .iter()
+                .map(|&p| {
+                    let parameters = grads.params.iter().any(|g| g[p] != 0.0);
+                    let moves = |e: &super::Seeded<'_>| {
+                        e.grads.iter().any(|g| g[p] != 0.0) || (parameters && e.constraint.reads_parameters())
+                    };
+                    (0..base.elements.len()).filter(|&k| moves(&base.elements[k])).collect()
+                })
+                .collect();
+            StepParts {
+                stiffness: [vec![0.0; size], vec![0.0; size]],
+                offsets,
+                moving,
+                fixed: vec![[vec![0.0; n], vec![0.0; n]]; asked.len()],
+                zero: vec![0.0; n],
+            }
+        });
         Ok(DynamicSensitivity {
+            step,
             jacobian: Buffers::new(n, model.parameters.len(), m),
             base,
             all: (0..m).collect(),
@@ -291,11 +345,56 @@ impl<'m> DynamicSensitivity<'m> {
         dae: &Dae<'_>,
         k: usize,
         t: f64,
+        state: (&[f64], &[f64], &[f64]),
+        lambda: &[f64],
+        track: &Track,
+        out: &mut [f64],
+        projection: Option<(&[f64], &mut [f64])>,
+    ) {
+        self.along(dae, k, t, state, lambda, track, out, projection, false);
+    }
+
+    /// The step's parts of `(d/dp Phi_q)^T w` at the converged state `(t, q)` with the
+    /// multipliers `lambda` and (SI2) the projection's `mu`, when the run uses them
+    /// ([`StepParts`]): every element's geometric stiffness for both, and each parameter's part at
+    /// fixed coordinates over the elements that move with it.
+    pub(crate) fn prepare(&mut self, t: f64, q: &[f64], lambda: &[f64], mu: Option<&[f64]>) {
+        let Some(step) = self.step.as_mut() else { return };
+        let b = &self.base;
+        let weights = [lambda, mu.unwrap_or(lambda)];
+        let StepParts { stiffness: [kl, km], offsets, moving, fixed, zero } = step;
+        hessians(&mut self.jacobian, &b.elements, b.model, t, q, &weights, |e, c, d, [l, m]| {
+            let width = b.elements[e].constraint.columns().len();
+            for (block, value) in [(&mut *kl, l), (&mut *km, m)] {
+                block[offsets[e] + c * width + d] = value;
+                block[offsets[e] + d * width + c] = value;
+            }
+        });
+        for (k, &p) in b.asked.iter().enumerate() {
+            let [fl, fm] = &mut fixed[k];
+            fl.fill(0.0);
+            fm.fill(0.0);
+            let elements = moving[k].iter().map(|&e| (e, &b.elements[e]));
+            let mut pairs = [(lambda, &mut fl[..]), (weights[1], &mut fm[..])];
+            add_jacobian_transpose_along(&mut self.jacobian, elements, b.model, p, t, q, zero, &mut pairs);
+        }
+    }
+
+    /// [`DynamicSensitivity::dynamics_along`]; with `in_step`, at the state of the last
+    /// [`DynamicSensitivity::prepare`] (its `t`, `q`, `lambda` and `mu`), `(d/dp Phi_q)^T w` from
+    /// the step's parts when it made them: the same numbers to rounding.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn along(
+        &mut self,
+        dae: &Dae<'_>,
+        k: usize,
+        t: f64,
         (q, qdot, qddot): (&[f64], &[f64], &[f64]),
         lambda: &[f64],
         track: &Track,
         out: &mut [f64],
         projection: Option<(&[f64], &mut [f64])>,
+        in_step: bool,
     ) {
         let p = self.base.asked[k];
         out.fill(0.0);
@@ -304,9 +403,15 @@ impl<'m> DynamicSensitivity<'m> {
         self.work.fill(0.0);
         dae.add_mass_along(p, qddot, &mut self.work);
         let b = &self.base;
-        let mut pairs: Vec<(&[f64], &mut [f64])> = vec![(lambda, &mut self.work)];
-        pairs.extend(projection);
-        add_jacobian_transpose_along(&mut self.jacobian, &b.elements, b.model, p, t, q, &track.q, &mut pairs);
+        match self.step.as_ref().filter(|_| in_step) {
+            Some(step) => step.add_times(k, &b.elements, &track.q, &mut self.work, projection),
+            None => {
+                let mut pairs: Vec<(&[f64], &mut [f64])> = vec![(lambda, &mut self.work)];
+                pairs.extend(projection);
+                let elements = b.elements.iter().enumerate();
+                add_jacobian_transpose_along(&mut self.jacobian, elements, b.model, p, t, q, &track.q, &mut pairs);
+            }
+        }
         for (i, o) in out.iter_mut().enumerate() {
             *o -= dae.mass[i] * track.a[i] + self.work[i];
         }
@@ -390,5 +495,39 @@ impl<'m> DynamicSensitivity<'m> {
             rows.push(row);
         }
         results.push_sensitivities_of(t, &self.base.names, Some(&self.differentiated), &rows)
+    }
+}
+
+impl StepParts {
+    /// `out (n) += K_lambda s + (Phi_q^T lambda)_p` for parameter `k` (asked order), and with
+    /// `projection = (_, extra)` `extra (n) += K_mu s + (Phi_q^T mu)_p`: `(d/dp Phi_q)^T w` along
+    /// `s` and the parameter at the prepared state.
+    fn add_times(
+        &self,
+        k: usize,
+        elements: &[super::Seeded<'_>],
+        s: &[f64],
+        out: &mut [f64],
+        projection: Option<(&[f64], &mut [f64])>,
+    ) {
+        let [kl, km] = &self.stiffness;
+        let [fl, fm] = &self.fixed[k];
+        let mut extra = projection.map(|(_, extra)| extra);
+        for (e, &offset) in elements.iter().zip(&self.offsets) {
+            let columns = e.constraint.columns();
+            let width = columns.len();
+            for (c, &i) in columns.iter().enumerate() {
+                let row = offset + c * width..offset + (c + 1) * width;
+                let times = |block: &[f64]| block[row.clone()].iter().zip(columns).map(|(h, &j)| h * s[j]).sum::<f64>();
+                out[i] += times(kl);
+                if let Some(extra) = extra.as_deref_mut() {
+                    extra[i] += times(km);
+                }
+            }
+        }
+        out.iter_mut().zip(fl).for_each(|(o, f)| *o += f);
+        if let Some(extra) = extra {
+            extra.iter_mut().zip(fm).for_each(|(o, f)| *o += f);
+        }
     }
 }

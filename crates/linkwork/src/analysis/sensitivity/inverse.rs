@@ -27,7 +27,7 @@
 //! with them every solve is the analysis's own minimum-norm solve in the row space it has
 //! already factored.
 
-use super::{Seeded, Sensitivity};
+use super::{by_column, Level, Seeded, Sensitivity};
 use crate::analysis::dynamic::Dae;
 use crate::analysis::measure_reactions;
 use crate::constraints::{lever, reaction_about, At, POINT, POINT_I};
@@ -57,11 +57,6 @@ pub(crate) struct InverseSensitivity {
     dblock: Vec<f64>,
     /// (m) `-d(Phi_t)/dp` of the drivers' rows (`nu_p`; zero on the joints').
     dnu: Vec<f64>,
-    /// The coordinates, parameters, an element's numbers and its rows over [`HyperDual`].
-    hq: Vec<HyperDual>,
-    hparams: Vec<HyperDual>,
-    hdata: Vec<HyperDual>,
-    hout: Vec<HyperDual>,
     /// (n) scratch: the right-hand side, the forces' derivative, `M_p` times a vector.
     rhs: Vec<f64>,
     forces: Vec<f64>,
@@ -104,16 +99,10 @@ impl InverseSensitivity {
             dae.potential_energy_along(&q, &zero, p).map_err(potential)?;
         }
         let entries: usize = s.elements.iter().map(|e| e.constraint.rows() * e.constraint.columns().len()).sum();
-        let widest = s.elements.iter().map(|e| e.constraint.rows()).max().unwrap_or(0);
-        let zero = HyperDual::new(0.0, 0.0, 0.0, 0.0);
         Ok(InverseSensitivity {
             block: vec![0.0; entries],
             dblock: vec![0.0; entries],
             dnu: vec![0.0; m],
-            hq: vec![zero; n],
-            hparams: vec![zero; model.parameters.len()],
-            hdata: Vec::new(),
-            hout: vec![zero; widest],
             rhs: vec![0.0; n],
             forces: vec![0.0; n],
             scratch: vec![0.0; n],
@@ -142,7 +131,7 @@ impl InverseSensitivity {
         let (t, (q, qdot, qddot), lambda) = (at.t, at.x, at.lambda);
         let (n, m) = (dae.n, dae.m);
         let [dq, dv, da] = s.motion().clone();
-        self.jacobian_along(&s.elements, s.model, p, t, q, &dq);
+        self.jacobian_along(s, p, t, q, &dq);
         // b_p = Q_p - M_p qddot - M qddot_p - (Phi_q)_p^T lambda.
         self.forces.fill(0.0);
         let force = |name: String| unsupported(format!("forces.{name}"), "this force");
@@ -250,47 +239,30 @@ impl InverseSensitivity {
     /// drivers' `nu_p` ([`InverseSensitivity::dnu`]): per element, one [`HyperDual`]
     /// evaluation of its rows per column (the first direction that coordinate, the second the
     /// parameter), and for a driver one more with the first direction the time.
-    #[allow(clippy::too_many_arguments)]
-    fn jacobian_along(
-        &mut self,
-        elements: &[Seeded<'_>],
-        model: &crate::model::Model,
-        p: usize,
-        t: f64,
-        q: &[f64],
-        dq: &[f64],
-    ) {
-        for (h, (&v, &d)) in self.hq.iter_mut().zip(q.iter().zip(dq)) {
-            *h = HyperDual::new(v, 0.0, d, 0.0);
-        }
-        for ((h, g), &v) in self.hparams.iter_mut().zip(&model.gradients.params).zip(model.parameters.values()) {
-            *h = HyperDual::new(v, 0.0, g[p], 0.0);
-        }
-        let joints = model.joints.len();
-        let mut offset = 0;
-        for (k, e) in elements.iter().enumerate() {
-            let c = e.constraint;
-            let (cols, rows) = (c.columns(), c.rows());
-            self.hdata.clear();
-            self.hdata.extend(e.data.iter().zip(e.grads).map(|(&v, g)| HyperDual::new(v, 0.0, g[p], 0.0)));
-            for (ci, &col) in cols.iter().enumerate() {
-                self.hq[col].e1 = 1.0;
-                let at = At { q: &self.hq, t: HyperDual::new(t, 0.0, 0.0, 0.0), params: &self.hparams };
-                let supported = c.phi_hyper(&at, &self.hdata, &mut self.hout[..rows]);
-                debug_assert!(supported, "{} was checked to have derivatives", e.name);
-                self.hq[col].e1 = 0.0;
-                for (r, h) in self.hout[..rows].iter().enumerate() {
-                    self.block[offset + r * cols.len() + ci] = h.e1;
-                    self.dblock[offset + r * cols.len() + ci] = h.e12;
-                }
+    fn jacobian_along(&mut self, s: &mut Sensitivity<'_>, p: usize, t: f64, q: &[f64], dq: &[f64]) {
+        let Sensitivity { model, elements, velocity: b, .. } = s;
+        let mut offsets = Vec::with_capacity(elements.len());
+        elements.iter().fold(0, |offset, e| {
+            offsets.push(offset);
+            offset + e.constraint.rows() * e.constraint.columns().len()
+        });
+        let (block, dblock) = (&mut self.block, &mut self.dblock);
+        by_column(b, elements.iter().enumerate(), model, p, t, (q, dq), |k, e, c, rows| {
+            let width = e.constraint.columns().len();
+            for (r, h) in rows.iter().enumerate() {
+                block[offsets[k] + r * width + c] = h.e1;
+                dblock[offsets[k] + r * width + c] = h.e12;
             }
-            offset += rows * cols.len();
-            if k >= joints {
-                let at = At { q: &self.hq, t: HyperDual::new(t, 1.0, 0.0, 0.0), params: &self.hparams };
-                c.phi_hyper(&at, &self.hdata, &mut self.hout[..rows]);
-                for (r, h) in self.hout[..rows].iter().enumerate() {
-                    self.dnu[e.row + r] = -h.e12;
-                }
+        });
+        // The drivers' rows once more with the first direction the time (`by_column` left the
+        // coordinates and the parameters seeded along the parameter).
+        for e in &elements[model.joints.len()..] {
+            b.data.clear();
+            b.data.extend(e.data.iter().zip(e.grads).map(|(&v, g)| HyperDual::fixed(v, g[p])));
+            let at = At { q: &b.q, t: HyperDual::new(t, 1.0, 0.0, 0.0), params: &b.params };
+            e.constraint.phi_hyper(&at, &b.data, &mut b.full[e.row..]);
+            for r in e.row..e.row + e.constraint.rows() {
+                self.dnu[r] = -b.full[r].e12;
             }
         }
     }

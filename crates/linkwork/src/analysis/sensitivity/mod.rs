@@ -383,14 +383,14 @@ fn seed_parameters<S: Level>(params: &mut [S], model: &Model, p: usize) {
 
 /// `out (n) += (d/dp Phi_q)^T w` at `(t, q)` for each pair `(w, out)` of `pairs` (rows'
 /// weights `w (m)`): the derivative of the Jacobian along parameter `p` (the coordinates moving
-/// along `dq`, each element's numbers and the parameters along their gradients) times `w`. Each
-/// element's rows over [`HyperDual`] numbers, the first direction along one of its columns, the
-/// second along the parameter: the mixed part of row `r` is `d/dp Phi_q[r, column]`. One
-/// evaluation per column of each element for every pair, exact.
+/// along `dq`, each element's numbers and the parameters along their gradients) times `w`, over
+/// `elements` (index and element: all of them, or those that move with `p` when `dq` is zero).
+/// The mixed part of row `r` in [`by_column`] is `d/dp Phi_q[r, column]`. One evaluation per
+/// column of each element for every pair, exact.
 #[allow(clippy::too_many_arguments)]
-fn add_jacobian_transpose_along(
+fn add_jacobian_transpose_along<'e, 'm: 'e>(
     b: &mut Buffers<HyperDual>,
-    elements: &[Seeded<'_>],
+    elements: impl IntoIterator<Item = (usize, &'e Seeded<'m>)>,
     model: &Model,
     p: usize,
     t: f64,
@@ -398,23 +398,87 @@ fn add_jacobian_transpose_along(
     dq: &[f64],
     pairs: &mut [(&[f64], &mut [f64])],
 ) {
-    for ((x, &v), &d) in b.q.iter_mut().zip(q).zip(dq) {
+    by_column(b, elements, model, p, t, (q, dq), |_, e, c, rows| {
+        let column = e.constraint.columns()[c];
+        for (w, out) in pairs.iter_mut() {
+            out[column] += rows.iter().zip(&w[e.row..]).map(|(h, w)| w * h.e12).sum::<f64>();
+        }
+    });
+}
+
+/// Each of `elements`' rows (index and element) over hyper-dual numbers, once per column the
+/// element touches: the first direction the unit coordinate of that column, the second parameter
+/// `p`'s (the coordinates along `dq`, the element's numbers and the parameters along their
+/// gradients), at the fixed time `t`; `f(element index, element, local column, rows)`. The one
+/// per-column pass of the dynamic, static and inverse sensitivities: the mixed part of a row is
+/// the derivative of its Jacobian entry along the parameter, the first part the entry.
+fn by_column<'e, 'm: 'e>(
+    b: &mut Buffers<HyperDual>,
+    elements: impl IntoIterator<Item = (usize, &'e Seeded<'m>)>,
+    model: &Model,
+    p: usize,
+    t: f64,
+    (q, dq): (&[f64], &[f64]),
+    mut f: impl FnMut(usize, &Seeded<'_>, usize, &[HyperDual]),
+) {
+    for (x, (&v, &d)) in b.q.iter_mut().zip(q.iter().zip(dq)) {
         *x = HyperDual::new(v, 0.0, d, 0.0);
     }
     seed_parameters(&mut b.params, model, p);
-    let time = HyperDual::new(t, 0.0, 0.0, 0.0);
-    for e in elements {
+    for (k, e) in elements {
         b.data.clear();
         b.data.extend(e.data.iter().zip(e.grads).map(|(&v, g)| HyperDual::fixed(v, g[p])));
-        let rows = e.row..e.row + e.constraint.rows();
-        for &column in e.constraint.columns() {
+        let rows = e.constraint.rows();
+        for (c, &column) in e.constraint.columns().iter().enumerate() {
             b.q[column].e1 = 1.0;
-            let at = At { q: &b.q, t: time, params: &b.params };
+            let at = At { q: &b.q, t: HyperDual::constant(t), params: &b.params };
             let supported = e.constraint.phi_hyper(&at, &b.data, &mut b.full[e.row..]);
             debug_assert!(supported, "{} was checked to have derivatives", e.name);
             b.q[column].e1 = 0.0;
-            for (w, out) in pairs.iter_mut() {
-                out[column] += rows.clone().map(|r| w[r] * b.full[r].e12).sum::<f64>();
+            f(k, e, c, &b.full[e.row..e.row + rows]);
+        }
+    }
+}
+
+/// The Hessians of `w^T Phi` over each element's columns at `(q, t)` (every number at its value),
+/// for the row weights `w (m)` of `weights` (at most two): the geometric stiffness
+/// `d(Phi_q^T w)/dq` element by element. Each element's rows over hyper-dual numbers seeded with
+/// two unit coordinates of its columns, once per pair `c <= d` (the Hessian is symmetric);
+/// `f(element index, c, d, [w_1^T Phi_cd, w_2^T Phi_cd])` with `c`, `d` local columns.
+fn hessians(
+    b: &mut Buffers<HyperDual>,
+    elements: &[Seeded<'_>],
+    model: &Model,
+    t: f64,
+    q: &[f64],
+    weights: &[&[f64]],
+    mut f: impl FnMut(usize, usize, usize, [f64; 2]),
+) {
+    debug_assert!(weights.len() <= 2, "at most two weights");
+    for (x, &v) in b.q.iter_mut().zip(q) {
+        *x = HyperDual::constant(v);
+    }
+    for (x, &v) in b.params.iter_mut().zip(model.parameters.values()) {
+        *x = HyperDual::constant(v);
+    }
+    for (k, e) in elements.iter().enumerate() {
+        b.data.clear();
+        b.data.extend(e.data.iter().map(|&v| HyperDual::constant(v)));
+        let (rows, columns) = (e.row..e.row + e.constraint.rows(), e.constraint.columns());
+        for (c, &i) in columns.iter().enumerate() {
+            for (d, &j) in columns.iter().enumerate().skip(c) {
+                b.q[i].e1 = 1.0;
+                b.q[j].e2 = 1.0;
+                let at = At { q: &b.q, t: HyperDual::constant(t), params: &b.params };
+                let supported = e.constraint.phi_hyper(&at, &b.data, &mut b.full[e.row..]);
+                debug_assert!(supported, "{} was checked to have derivatives", e.name);
+                b.q[i].e1 = 0.0;
+                b.q[j].e2 = 0.0;
+                let mut values = [0.0; 2];
+                for (value, w) in values.iter_mut().zip(weights) {
+                    *value = rows.clone().map(|r| w[r] * b.full[r].e12).sum::<f64>();
+                }
+                f(k, c, d, values);
             }
         }
     }

@@ -14,19 +14,19 @@
 //! [`Dae::add_load_along`] (gravity through the masses and gravity, each force through its
 //! numbers and the parameters), `Phi_p` the position level of a kinematic sensitivity (the
 //! [`Dual`] part along the parameter), and `(Phi_q^T lambda)_p` the mixed part of `lambda^T Phi`
-//! over [`HyperDual`] numbers seeded with a unit coordinate in one direction and the parameter
+//! over [`HyperDual`](crate::expr::HyperDual) numbers seeded with a unit coordinate in one direction and the parameter
 //! in the other, one evaluation of an element per column it touches. The reactions follow from
 //! the same evaluations with the coordinates moving along `q_p` and the multipliers along
 //! `lambda_p`.
 
 use super::inverse::anchor_point;
-use super::{level, seed_parameters, unsupported, Buffers, Level, Seeded, Sensitivity};
+use super::{by_column, hessians, level, unsupported, Sensitivity};
 use crate::analysis::dynamic::Dae;
 use crate::analysis::measure_reactions;
 use crate::analysis::statics::newton_matrix;
-use crate::constraints::{lever, reaction_about, At};
+use crate::constraints::{lever, reaction_about};
 use crate::error::Error;
-use crate::expr::{Dual, HyperDual, Scalar};
+use crate::expr::{Dual, Scalar};
 use crate::linalg::dense::min_norm_solve_columns;
 use crate::model::{Analysis, Model};
 use crate::results::Results;
@@ -74,36 +74,21 @@ impl<'m> EquilibriumSensitivity<'m> {
     }
 
     /// The geometric stiffness `d(Phi_q^T lambda)/dq` at `(q, lambda, t)`, `(n x n)`, exact: the
-    /// Hessian of `lambda^T Phi`, each element's rows over hyper-dual numbers seeded with two
-    /// unit coordinates of its columns (the static solver's Newton matrix takes a central
+    /// Hessian of `lambda^T Phi` ([`hessians`]: each element's rows over hyper-dual numbers seeded
+    /// with two unit coordinates of its columns; the static solver's Newton matrix takes a central
     /// difference of `Phi_q` instead, `crate::analysis::statics::geometric_stiffness`).
     pub(crate) fn geometric_stiffness(&mut self, q: &[f64], lambda: &[f64], t: f64) -> Mat<f64> {
         let (model, b) = (self.base.model, &mut self.base.velocity);
-        let n = q.len();
-        let mut h = Mat::zeros(n, n);
-        for (x, &v) in b.q.iter_mut().zip(q) {
-            *x = HyperDual::constant(v);
-        }
-        for (x, &v) in b.params.iter_mut().zip(model.parameters.values()) {
-            *x = HyperDual::constant(v);
-        }
-        for e in &self.base.elements {
-            b.data.clear();
-            b.data.extend(e.data.iter().map(|&v| HyperDual::constant(v)));
-            let rows = e.row..e.row + e.constraint.rows();
-            for &c in e.constraint.columns() {
-                for &d in e.constraint.columns() {
-                    b.q[c].e1 = 1.0;
-                    b.q[d].e2 = 1.0;
-                    let at = At { q: &b.q, t: HyperDual::constant(t), params: &b.params };
-                    let supported = e.constraint.phi_hyper(&at, &b.data, &mut b.full[e.row..]);
-                    debug_assert!(supported, "{} was checked to have derivatives", e.name);
-                    b.q[c].e1 = 0.0;
-                    b.q[d].e2 = 0.0;
-                    h[(c, d)] += rows.clone().map(|r| lambda[r] * b.full[r].e12).sum::<f64>();
-                }
+        let elements = &self.base.elements;
+        let mut h = Mat::zeros(q.len(), q.len());
+        hessians(b, elements, model, t, q, &[lambda], |k, c, d, [value, _]| {
+            let columns = elements[k].constraint.columns();
+            let (i, j) = (columns[c], columns[d]);
+            h[(i, j)] += value;
+            if c != d {
+                h[(j, i)] += value;
             }
-        }
+        });
         h
     }
 
@@ -132,7 +117,7 @@ impl<'m> EquilibriumSensitivity<'m> {
             force.fill(0.0);
             dae.add_load_along(q, &zero, t, &zero, &zero, p, &mut force)
                 .map_err(|name| unsupported_force(b.model, &name))?;
-            by_column(&mut b.velocity, &b.elements, b.model, p, t, (q, &zero), |_, e, c, rows| {
+            by_column(&mut b.velocity, b.elements.iter().enumerate(), b.model, p, t, (q, &zero), |_, e, c, rows| {
                 let mixed: f64 = rows.iter().zip(&lambda[e.row..]).map(|(r, l)| r.e12 * l).sum();
                 force[e.constraint.columns()[c]] -= mixed;
             });
@@ -209,7 +194,7 @@ impl<'m> EquilibriumSensitivity<'m> {
             .iter()
             .map(|e| vec![Dual::constant(0.0); e.constraint.rows() * e.constraint.columns().len()])
             .collect();
-        by_column(&mut b.velocity, &b.elements[..joints], b.model, p, t, (q, dq), |k, e, c, rows| {
+        by_column(&mut b.velocity, b.elements[..joints].iter().enumerate(), b.model, p, t, (q, dq), |k, e, c, rows| {
             let w = e.constraint.columns().len();
             for (r, h) in rows.iter().enumerate() {
                 blocks[k][r * w + c] = Dual::new(h.e1, h.e12);
@@ -235,36 +220,4 @@ impl<'m> EquilibriumSensitivity<'m> {
 pub(super) fn unsupported_force(model: &Model, name: &str) -> Error {
     let kind = model.forces.iter().find(|f| f.name == name).map_or("", |f| f.kind);
     unsupported(format!("forces.{name}"), &format!("the {kind} force"))
-}
-
-/// Each of `elements`' rows over hyper-dual numbers, once per column the element touches: the
-/// first direction the unit coordinate of that column, the second parameter `p`'s (the
-/// coordinates along `dq`, the element's numbers and the parameters along their gradients), at
-/// the fixed time `t`; `f(element index, element, local column, rows)`.
-fn by_column(
-    b: &mut Buffers<HyperDual>,
-    elements: &[Seeded<'_>],
-    model: &Model,
-    p: usize,
-    t: f64,
-    (q, dq): (&[f64], &[f64]),
-    mut f: impl FnMut(usize, &Seeded<'_>, usize, &[HyperDual]),
-) {
-    for (x, (&v, &d)) in b.q.iter_mut().zip(q.iter().zip(dq)) {
-        *x = HyperDual::new(v, 0.0, d, 0.0);
-    }
-    seed_parameters(&mut b.params, model, p);
-    for (k, e) in elements.iter().enumerate() {
-        b.data.clear();
-        b.data.extend(e.data.iter().zip(e.grads).map(|(&v, g)| HyperDual::fixed(v, g[p])));
-        let rows = e.constraint.rows();
-        for (c, &column) in e.constraint.columns().iter().enumerate() {
-            b.q[column].e1 = 1.0;
-            let at = At { q: &b.q, t: HyperDual::constant(t), params: &b.params };
-            let supported = e.constraint.phi_hyper(&at, &b.data, &mut b.full[e.row..]);
-            debug_assert!(supported, "{} was checked to have derivatives", e.name);
-            b.q[column].e1 = 0.0;
-            f(k, e, c, &b.full[e.row..e.row + rows]);
-        }
-    }
 }
