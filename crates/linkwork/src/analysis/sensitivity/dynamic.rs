@@ -23,7 +23,7 @@
 use super::{add_jacobian_transpose_along, level, Buffers, Sensitivity};
 use crate::analysis::dynamic::Dae;
 use crate::error::{Error, Problem};
-use crate::expr::{Dual, HyperDual, Tri};
+use crate::expr::{Dual, HyperDual, TimeTri};
 use crate::model::{Analysis, Model};
 use crate::results::Results;
 use faer::linalg::solvers::{PartialPivLu, Solve};
@@ -259,7 +259,7 @@ impl<'m> DynamicSensitivity<'m> {
         dq[0].copy_from_slice(&track.q);
         dq[1].copy_from_slice(&track.v);
         dq[2].fill(0.0);
-        level::<Tri>(acceleration, elements, model, p, t, (q, qdot, qddot), dq, &self.all, r2);
+        level::<TimeTri>(acceleration, elements, model, p, t, (q, qdot, qddot), dq, &self.all, r2);
         self.x.fill(0.0);
         for _ in 0..3 {
             let (xa, xl) = self.x.split_at(n);
