@@ -478,12 +478,16 @@ impl Results {
                 return Err(Error::NonFinite { time: t, element, expression: String::new(), value });
             }
         }
+        // Room for as many points as the values have (`Results::reserve`), which each column
+        // would otherwise grow to by reallocations.
+        let room = self.time.capacity();
         let sensitivities = self.sensitivities.get_or_insert_with(|| {
             let names: Vec<String> =
                 names.iter().enumerate().filter(|&(k, _)| wanted(k)).map(|(_, n)| n.clone()).collect();
+            let columns = || names.iter().map(|_| Vec::with_capacity(room)).collect();
             Sensitivities {
                 parameters: parameters.to_vec(),
-                values: vec![vec![Vec::new(); names.len()]; parameters.len()],
+                values: parameters.iter().map(|_| columns()).collect(),
                 names,
             }
         });

@@ -130,6 +130,9 @@ impl Constraint for Absolute {
 }
 
 impl GenericPhi for Absolute {
+    fn parameters(&self) -> &[usize] {
+        &[]
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
         let at_pose = |pose: &Pose<S>| match self.axis() {
             Some(k) => Absolute::position_of(pose, slot2(data, 0))[k],

@@ -97,6 +97,9 @@ impl Constraint for Belt {
 }
 
 impl GenericPhi for Belt {
+    fn parameters(&self) -> &[usize] {
+        &[]
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
         let angles = self.bodies.map(|b| b.pose(at.q)[2]);
         out[0] = self.value_of(angles, data) - self.value_of(self.start.map(S::constant), data);

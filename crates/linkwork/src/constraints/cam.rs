@@ -172,6 +172,9 @@ impl Cam {
 }
 
 impl GenericPhi for Cam {
+    fn parameters(&self) -> &[usize] {
+        self.radius.parameters()
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
         let [dx, dy] = self.at.offset_generic(at.q, slot2(data, 0), slot2(data, 2));
         out[0] = dx.hypot(dy) - self.radius.eval_params(&[dy.atan2(dx)], at.params);
@@ -225,9 +228,6 @@ impl CamRow {
 }
 
 impl Constraint for Cam {
-    fn reads_parameters(&self) -> bool {
-        true
-    }
     fn anchor(&self) -> Anchor {
         self.at.anchor()
     }

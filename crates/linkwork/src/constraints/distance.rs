@@ -76,6 +76,9 @@ impl Constraint for Distance {
 }
 
 impl GenericPhi for Distance {
+    fn parameters(&self) -> &[usize] {
+        &[]
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
         let pair = &self.points.pair;
         let (s_p, s_q) = (slot2(data, 0), slot2(data, 2));

@@ -75,6 +75,9 @@ impl Coordinate {
 }
 
 impl GenericPhi for Coordinate {
+    fn parameters(&self) -> &[usize] {
+        &[]
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
         match self {
             Coordinate::Held(c) => c.phi_generic(at, data, out),
@@ -117,9 +120,6 @@ impl Driver {
 }
 
 impl Constraint for Driver {
-    fn reads_parameters(&self) -> bool {
-        true
-    }
     fn time_function(&self) -> Option<&TimeFunction> {
         Some(&self.f)
     }
@@ -158,6 +158,9 @@ impl Constraint for Driver {
 }
 
 impl GenericPhi for Driver {
+    fn parameters(&self) -> &[usize] {
+        self.f.expr().parameters()
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
         self.g.phi_generic(at, data, out);
         out[0] = out[0] - self.prescribed(at);
@@ -192,6 +195,9 @@ impl Constraint for RelativeAngle {
 }
 
 impl GenericPhi for RelativeAngle {
+    fn parameters(&self) -> &[usize] {
+        &[]
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, _data: &[S], out: &mut [S]) {
         out[0] = self.pair.i.pose(at.q)[2] - self.pair.j.pose(at.q)[2];
     }
@@ -237,6 +243,9 @@ impl Constraint for Length {
 }
 
 impl GenericPhi for Length {
+    fn parameters(&self) -> &[usize] {
+        &[]
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
         let pair = &self.0.pair;
         let d = separation(&Pose::of(pair.i, at.q), slot2(data, 0), &Pose::of(pair.j, at.q), slot2(data, 2));

@@ -109,9 +109,6 @@ impl GeneralConstraint {
 }
 
 impl Constraint for GeneralConstraint {
-    fn reads_parameters(&self) -> bool {
-        true
-    }
     fn anchor(&self) -> Anchor {
         Anchor {
             i: self.columns.first().map_or(BodyIx::GROUND, |&c| BodyIx(Some(c - c % 3))),
@@ -170,6 +167,9 @@ impl Constraint for GeneralConstraint {
 
 /// No data: the expression's numbers are parameters, which `At` carries.
 impl GenericPhi for GeneralConstraint {
+    fn parameters(&self) -> &[usize] {
+        self.expr.parameters()
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, _data: &[S], out: &mut [S]) {
         let mut z = [S::constant(0.0); MAX_SLOTS];
         for (zk, v) in z.iter_mut().zip(&self.vars) {

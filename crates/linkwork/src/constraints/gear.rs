@@ -183,6 +183,9 @@ impl Constraint for GearPair {
 }
 
 impl GenericPhi for GearPair {
+    fn parameters(&self) -> &[usize] {
+        &[]
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
         let [hi, hj] = Source::poses(self.start);
         let c = self.raw(&hi, &hj, data);

@@ -28,7 +28,7 @@ mod translational;
 
 pub(crate) use crate::element::{vector, Frame, Pose, Source, AXIS_I, AXIS_J, POINT, POINT_I, POINT_J};
 pub use crate::element::{BodyIx, PointRef, Tagged, DEFAULT_TRANSITION_VELOCITY};
-use crate::expr::{Dual, HyperDual, Scalar, Tri};
+use crate::expr::{Dual, HyperDual, Scalar, TimeTri, Tri};
 pub use absolute::{Absolute, AbsoluteAngleJoint, AbsoluteKind, AbsolutePoint};
 pub(crate) use cam::cam_row;
 pub use cam::{Cam, CamFrame, CamJoint, CamProfileSpec, CamRow, PitchPoint, ProfileColumn};
@@ -148,13 +148,6 @@ pub trait Constraint: Debug + Send + Sync {
     fn driven(&self) -> Option<&DriverKind> {
         None
     }
-    /// Whether the rows read the model's parameters at run time (`At::params`: a driver's
-    /// prescribed function, a cam's radius, a general constraint's expression) beside the
-    /// element's own numbers ([`Constraint::data`]). A design sensitivity along a parameter skips
-    /// an element whose numbers do not move with it only when this is `false`.
-    fn reads_parameters(&self) -> bool {
-        false
-    }
     /// The numbers of this element that a parameter can move (its points, lengths, radii,
     /// axes), each named as its field in the model file, with the component for a vector:
     /// `point_i[0]`, `point_i[1]`, `length`. The model's compiler gives each its derivative with
@@ -180,6 +173,20 @@ pub trait Constraint: Debug + Send + Sync {
     fn phi_hyper(&self, _at: &At<'_, HyperDual>, _data: &[HyperDual], _out: &mut [HyperDual]) -> bool {
         false
     }
+    /// [`Constraint::phi_tri`] over [`TimeTri`] numbers, `Tri` with its first two directions one
+    /// (time): the acceleration level of a kinematic sensitivity, the same parts for less work.
+    fn phi_time_tri(&self, _at: &At<'_, TimeTri>, _data: &[TimeTri], _out: &mut [TimeTri]) -> bool {
+        false
+    }
+    /// The model's parameters (their indices, sorted) the rows read besides the element's
+    /// numbers ([`Constraint::data`]): those of a driver's function or of an expression (the
+    /// generic rows' own list, which every element with them gives). `None` when not known, taken
+    /// as every parameter. A
+    /// parameter that moves none of these nor the data leaves the rows where they are: their
+    /// derivative along it at fixed coordinates and time is zero.
+    fn parameters(&self) -> Option<&[usize]> {
+        None
+    }
 }
 
 /// An element's `Phi` written once over any [`Scalar`], with the element's data in the order of
@@ -189,15 +196,25 @@ pub trait Constraint: Debug + Send + Sync {
 pub(crate) trait GenericPhi {
     /// `(at, data) => Phi`, `out: (rows)`.
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]);
+    /// The model's parameters (their indices, sorted) that [`GenericPhi::phi_generic`] reads
+    /// from `at.params`: those of a driver's function or of an expression. Required, so that
+    /// no element can leave it out: a design sensitivity skips the element for a parameter
+    /// that moves neither these nor its data ([`Constraint::parameters`]).
+    fn parameters(&self) -> &[usize];
 }
 
-/// [`Constraint::phi_tri`], [`Constraint::phi_dual`] and [`Constraint::phi_hyper`] of an element
+/// [`Constraint::phi_tri`], [`Constraint::phi_dual`], [`Constraint::phi_hyper`] and
+/// [`Constraint::phi_time_tri`] of an element, and its [`Constraint::parameters`],
 /// that implements [`GenericPhi`], written inside its `impl Constraint`.
 macro_rules! phi_tri_generic {
     () => {
         $crate::constraints::phi_tri_generic!(phi_tri, $crate::expr::Tri);
         $crate::constraints::phi_tri_generic!(phi_dual, $crate::expr::Dual);
         $crate::constraints::phi_tri_generic!(phi_hyper, $crate::expr::HyperDual);
+        $crate::constraints::phi_tri_generic!(phi_time_tri, $crate::expr::TimeTri);
+        fn parameters(&self) -> Option<&[usize]> {
+            Some($crate::constraints::GenericPhi::parameters(self))
+        }
     };
     ($name:ident, $S:ty) => {
         fn $name(&self, at: &$crate::constraints::At<'_, $S>, data: &[$S], out: &mut [$S]) -> bool {

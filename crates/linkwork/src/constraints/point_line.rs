@@ -86,6 +86,9 @@ impl Constraint for PointOnLine {
 }
 
 impl GenericPhi for PointOnLine {
+    fn parameters(&self) -> &[usize] {
+        &[]
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
         let (s_p, s_q, w) = (slot2(data, 0), slot2(data, 2), perp(unit(slot2(data, 4))));
         let value = |[fi, fj]: [Pose<S>; 2]| projection(w, &fi, s_p, &fj, s_q);

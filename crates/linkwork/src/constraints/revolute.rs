@@ -79,6 +79,9 @@ impl Constraint for Revolute {
 }
 
 impl GenericPhi for Revolute {
+    fn parameters(&self) -> &[usize] {
+        &[]
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
         let (fi, fj) = (Pose::of(self.pair.i, at.q), Pose::of(self.pair.j, at.q));
         let d = separation(&fi, slot2(data, 0), &fj, slot2(data, 2));

@@ -179,6 +179,9 @@ impl<const CONTACT: bool> Constraint for Rolling<CONTACT> {
 }
 
 impl<const CONTACT: bool> GenericPhi for Rolling<CONTACT> {
+    fn parameters(&self) -> &[usize] {
+        &[]
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
         let (s_c, s_l, u) = (slot2(data, 0), slot2(data, 2), unit(slot2(data, 5)));
         let lever = S::constant(self.lever.signum()) * data[4];

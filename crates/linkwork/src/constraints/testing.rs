@@ -409,6 +409,9 @@ mod planted {
     }
 
     impl GenericPhi for Planted {
+        fn parameters(&self) -> &[usize] {
+            &[]
+        }
         fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
             let mut data = data.to_vec();
             if self.1 == Fault::DataSign {

@@ -107,6 +107,9 @@ impl Constraint for Translational {
 }
 
 impl GenericPhi for Translational {
+    fn parameters(&self) -> &[usize] {
+        &[]
+    }
     fn phi_generic<S: Scalar>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
         let (v_i, v_j) = (slot2(data, 4), slot2(data, 6));
         let (fi, fj) = (Pose::of(self.pair.i, at.q), Pose::of(self.pair.j, at.q));

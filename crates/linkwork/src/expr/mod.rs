@@ -87,7 +87,7 @@ use std::sync::Arc;
 use parse::{Binary, Op, MAX_STACK};
 
 pub use parse::MAX_DEPTH;
-pub use scalar::{Dual, HyperDual, Nestable, Scalar, Tri};
+pub use scalar::{Dual, HyperDual, Nestable, Scalar, TimeTri, Tri};
 pub use spline::Spline;
 
 /// The most slots (distinct names of coordinates, velocities and the like) an expression over a

@@ -1,6 +1,6 @@
 //! Number types for forward-mode automatic differentiation.
 //!
-//! An [`Expr`](super::Expr) is evaluated generically over a [`Scalar`]. Four
+//! An [`Expr`](super::Expr) is evaluated generically over a [`Scalar`]. Five
 //! implementations are provided:
 //!
 //! * [`f64`]: the plain value;
@@ -10,7 +10,8 @@
 //! * [`Tri`]: value, three first directional derivatives and every mixed part of them
 //!   (`e12`, `e13`, `e23`, `e123`), for design sensitivities: seeded with `ε1`, `ε2` along time
 //!   and `ε3` along a parameter, it gives the parameter derivative of a function, of its time
-//!   rate and of its second time derivative in one evaluation.
+//!   rate and of its second time derivative in one evaluation;
+//! * [`TimeTri`]: `Tri` with its first two directions one (time), its six distinct parts alone.
 //!
 //! Seeding the inputs of a function `f` with `x = (x0, a, b, 0)` gives a result whose
 //! `e12` component is `aᵀ H b` (`H` the Hessian of `f` at `x0`); with `a = b` this is
@@ -607,6 +608,27 @@ impl Scalar for HyperDual {
     }
 }
 
+/// `+` and `-` of a number type part by part, through its `zip`.
+macro_rules! sum_part_by_part {
+    ($T:ty) => {
+        impl Add for $T {
+            type Output = $T;
+            #[inline]
+            fn add(self, o: $T) -> $T {
+                self.zip(o, |a, b| a + b)
+            }
+        }
+
+        impl Sub for $T {
+            type Output = $T;
+            #[inline]
+            fn sub(self, o: $T) -> $T {
+                self.zip(o, |a, b| a - b)
+            }
+        }
+    };
+}
+
 /// A number with three nilpotent directions and all their mixed parts:
 /// `v + e1 ε1 + e2 ε2 + e3 ε3 + e12 ε1ε2 + e13 ε1ε3 + e23 ε2ε3 + e123 ε1ε2ε3`, with
 /// `ε1² = ε2² = ε3² = 0`.
@@ -681,21 +703,7 @@ impl Tri {
     }
 }
 
-impl Add for Tri {
-    type Output = Tri;
-    #[inline]
-    fn add(self, o: Tri) -> Tri {
-        self.zip(o, |a, b| a + b)
-    }
-}
-
-impl Sub for Tri {
-    type Output = Tri;
-    #[inline]
-    fn sub(self, o: Tri) -> Tri {
-        self.zip(o, |a, b| a - b)
-    }
-}
+sum_part_by_part!(Tri);
 
 impl Mul for Tri {
     type Output = Tri;
@@ -811,6 +819,161 @@ impl Scalar for Tri {
             e13: hess(grad(d13), d1, d3),
             e23: hess(grad(d23), d2, d3),
             e123: hess(hess(hess(grad([u.e123, w.e123]), d1, d23), d2, d13), d3, d12) + third,
+        }
+    }
+}
+
+/// A [`Tri`] whose first two directions are one (`ε1 = ε2`, so `e1 = e2` and `e13 = e23`),
+/// stored once: `v + e1 (ε1 + ε2) + e3 ε3 + e12 ε1ε2 + e13 (ε1ε3 + ε2ε3) + e123 ε1ε2ε3`.
+///
+/// Design sensitivities seed time along both of `Tri`'s first directions and a parameter along
+/// the third ([`Tri::trajectory`]); products and functions keep that symmetry, so two of `Tri`'s
+/// eight parts repeat two others. This type carries the six distinct ones and computes each
+/// with the operations `Tri` uses for it, in the same order (a repeated product is the same
+/// product, computed once): every part equals `Tri`'s bit for bit, for less work.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TimeTri {
+    /// Value.
+    pub v: f64,
+    /// First derivative along the first (and second) direction.
+    pub e1: f64,
+    /// First derivative along the third direction.
+    pub e3: f64,
+    /// Mixed second derivative along the first and second directions.
+    pub e12: f64,
+    /// Mixed second derivative along the first (or second) and third directions.
+    pub e13: f64,
+    /// Mixed third derivative along all three directions.
+    pub e123: f64,
+}
+
+impl TimeTri {
+    /// [`Tri::trajectory`]: `time = [x, dx/dt, d²x/dt²]`, `parameter = [dx/dp, d²x/dt dp,
+    /// d³x/dt² dp]`.
+    #[inline]
+    pub const fn trajectory(time: [f64; 3], parameter: [f64; 3]) -> Self {
+        let [v, e1, e12] = time;
+        let [e3, e13, e123] = parameter;
+        TimeTri { v, e1, e3, e12, e13, e123 }
+    }
+
+    /// The same number as a [`Tri`].
+    #[inline]
+    pub const fn tri(self) -> Tri {
+        Tri::new(self.v, [self.e1, self.e1, self.e3], [self.e12, self.e13, self.e13], self.e123)
+    }
+
+    /// Part by part, `f` of the two numbers' parts.
+    #[inline]
+    fn zip(self, o: TimeTri, f: impl Fn(f64, f64) -> f64) -> TimeTri {
+        TimeTri {
+            v: f(self.v, o.v),
+            e1: f(self.e1, o.e1),
+            e3: f(self.e3, o.e3),
+            e12: f(self.e12, o.e12),
+            e13: f(self.e13, o.e13),
+            e123: f(self.e123, o.e123),
+        }
+    }
+}
+
+sum_part_by_part!(TimeTri);
+
+/// [`Tri`]'s product with `e2 = e1`, `e23 = e13`.
+impl Mul for TimeTri {
+    type Output = TimeTri;
+    #[inline]
+    fn mul(self, o: TimeTri) -> TimeTri {
+        let a = self;
+        let (a1b1, a1b13, a13b1) = (a.e1 * o.e1, a.e1 * o.e13, a.e13 * o.e1);
+        TimeTri {
+            v: a.v * o.v,
+            e1: a.v * o.e1 + a.e1 * o.v,
+            e3: a.v * o.e3 + a.e3 * o.v,
+            e12: a.v * o.e12 + a1b1 + a1b1 + a.e12 * o.v,
+            e13: a.v * o.e13 + a.e1 * o.e3 + a.e3 * o.e1 + a.e13 * o.v,
+            e123: a.v * o.e123 + a1b13 + a1b13 + a.e3 * o.e12 + a.e12 * o.e3 + a13b1 + a13b1 + a.e123 * o.v,
+        }
+    }
+}
+
+/// [`Tri`]'s quotient with `e2 = e1`, `e23 = e13`.
+impl Div for TimeTri {
+    type Output = TimeTri;
+    #[inline]
+    fn div(self, o: TimeTri) -> TimeTri {
+        let a = self;
+        let v = a.v / o.v;
+        let e1 = (a.e1 - v * o.e1) / o.v;
+        let e3 = (a.e3 - v * o.e3) / o.v;
+        let e1b1 = e1 * o.e1;
+        let e12 = (a.e12 - v * o.e12 - e1b1 - e1b1) / o.v;
+        let e13 = (a.e13 - v * o.e13 - e1 * o.e3 - e3 * o.e1) / o.v;
+        let (e1b13, e13b1) = (e1 * o.e13, e13 * o.e1);
+        let e123 = (a.e123 - v * o.e123 - e1b13 - e1b13 - e3 * o.e12 - e12 * o.e3 - e13b1 - e13b1) / o.v;
+        TimeTri { v, e1, e3, e12, e13, e123 }
+    }
+}
+
+impl Neg for TimeTri {
+    type Output = TimeTri;
+    #[inline]
+    fn neg(self) -> TimeTri {
+        let a = self;
+        TimeTri { v: -a.v, e1: -a.e1, e3: -a.e3, e12: -a.e12, e13: -a.e13, e123: -a.e123 }
+    }
+}
+
+/// [`Tri`]'s rules with `e2 = e1`, `e23 = e13`, in its order.
+impl Scalar for TimeTri {
+    const ORDER: u8 = 3;
+
+    #[inline]
+    fn constant(v: f64) -> Self {
+        TimeTri { v, ..TimeTri::default() }
+    }
+
+    #[inline]
+    fn value(self) -> f64 {
+        self.v
+    }
+
+    #[inline]
+    fn lift(self, f0: f64, f1: f64, f2: f64, f3: f64) -> Self {
+        let x = self;
+        let x1x13 = x.e1 * x.e13;
+        TimeTri {
+            v: f0,
+            e1: scale(f1, x.e1),
+            e3: scale(f1, x.e3),
+            e12: scale(f1, x.e12) + scale(f2, x.e1 * x.e1),
+            e13: scale(f1, x.e13) + scale(f2, x.e1 * x.e3),
+            e123: scale(f1, x.e123) + scale(f2, x1x13 + x1x13 + x.e3 * x.e12) + scale(f3, x.e1 * x.e1 * x.e3),
+        }
+    }
+
+    #[inline]
+    fn lift2(self, o: Self, f0: f64, g: [f64; 2], h: [f64; 3], t: [f64; 4]) -> Self {
+        let (u, w) = (self, o);
+        let [d1, d3] = [[u.e1, w.e1], [u.e3, w.e3]];
+        let [d12, d13] = [[u.e12, w.e12], [u.e13, w.e13]];
+        let grad = |a: [f64; 2]| scale(g[0], a[0]) + scale(g[1], a[1]);
+        let hess = |sum: f64, a: [f64; 2], b: [f64; 2]| {
+            sum + scale(h[0], a[0] * b[0]) + scale(h[1], a[0] * b[1] + a[1] * b[0]) + scale(h[2], a[1] * b[1])
+        };
+        let (a, c) = (d1, d3);
+        let third = scale(t[0], a[0] * a[0] * c[0])
+            + scale(t[1], a[0] * a[0] * c[1] + a[0] * a[1] * c[0] + a[1] * a[0] * c[0])
+            + scale(t[2], a[0] * a[1] * c[1] + a[1] * a[0] * c[1] + a[1] * a[1] * c[0])
+            + scale(t[3], a[1] * a[1] * c[1]);
+        let e13 = hess(grad(d13), d1, d3);
+        TimeTri {
+            v: f0,
+            e1: grad(d1),
+            e3: grad(d3),
+            e12: hess(grad(d12), d1, d1),
+            e13,
+            e123: hess(hess(hess(grad([u.e123, w.e123]), d1, d13), d1, d13), d3, d12) + third,
         }
     }
 }
@@ -992,5 +1155,49 @@ mod tests {
         close(h.e1, f2 * 0.3);
         close(h.e2, f2 * -0.5);
         close(h.e12, f3 * 0.3 * -0.5 + f2 * 0.2);
+    }
+    /// A [`TimeTri`] is a [`Tri`] seeded with its first two directions equal, to the bit: every
+    /// operation and elementary function (also the two-argument ones, and the quotient), applied
+    /// to numbers seeded as design sensitivities seed them (each part nonzero, so that every
+    /// product of the rules is exercised), gives the same parts in both types. The comparison is
+    /// exact: the type is meant to repeat `Tri`'s arithmetic, not to approximate it.
+    #[test]
+    fn time_tri_is_tri_with_equal_time_directions() {
+        fn all<S: Scalar>(x: S, y: S) -> Vec<S> {
+            let one = S::constant(1.0);
+            vec![
+                x + y,
+                x - y,
+                x * y,
+                x / y,
+                -x,
+                x.sin(),
+                x.cos(),
+                x.tan(),
+                (x * S::constant(0.5)).asin(),
+                (x * S::constant(0.5)).acos(),
+                x.atan(),
+                x.sinh(),
+                x.cosh(),
+                x.tanh(),
+                x.exp(),
+                x.ln(),
+                x.sqrt(),
+                (-x).abs(),
+                x.powi(3),
+                x.powf(2.5),
+                x.pow(y),
+                x.atan2(y),
+                x.hypot(y),
+                (x * y).sin() / (one + x.hypot(y)) - x.atan2(y * y).exp(),
+            ]
+        }
+        let (x, y) = ([0.7, -0.4, 1.3], [0.2, 0.9, -0.6]);
+        let (dx, dy) = ([0.5, 0.25, -1.1], [-0.3, 0.8, 0.45]);
+        let tri = all(Tri::trajectory(x, dx), Tri::trajectory(y, dy));
+        let time = all(TimeTri::trajectory(x, dx), TimeTri::trajectory(y, dy));
+        for (k, (a, b)) in tri.iter().zip(&time).enumerate() {
+            assert_eq!(a.parts().map(f64::to_bits), b.tri().parts().map(f64::to_bits), "function {k}: {a:?} vs {b:?}");
+        }
     }
 }

@@ -23,7 +23,7 @@
 use super::{add_jacobian_transpose_along, hessians, level, Buffers, Sensitivity};
 use crate::analysis::dynamic::Dae;
 use crate::error::{Error, Problem};
-use crate::expr::{Dual, HyperDual, Tri};
+use crate::expr::{Dual, HyperDual, TimeTri};
 use crate::model::{Analysis, Model};
 use crate::results::Results;
 use faer::linalg::solvers::{PartialPivLu, Solve};
@@ -154,16 +154,9 @@ impl<'m> DynamicSensitivity<'m> {
                 offsets.push(offset);
                 offset + e.constraint.columns().len().pow(2)
             });
-            let grads = &model.gradients;
             let moving = asked
                 .iter()
-                .map(|&p| {
-                    let parameters = grads.params.iter().any(|g| g[p] != 0.0);
-                    let moves = |e: &super::Seeded<'_>| {
-                        e.grads.iter().any(|g| g[p] != 0.0) || (parameters && e.constraint.reads_parameters())
-                    };
-                    (0..base.elements.len()).filter(|&k| moves(&base.elements[k])).collect()
-                })
+                .map(|&p| (0..base.elements.len()).filter(|&k| base.elements[k].moves[p]).collect())
                 .collect();
             StepParts {
                 stiffness: [vec![0.0; size], vec![0.0; size]],
@@ -313,7 +306,7 @@ impl<'m> DynamicSensitivity<'m> {
         dq[0].copy_from_slice(&track.q);
         dq[1].copy_from_slice(&track.v);
         dq[2].fill(0.0);
-        level::<Tri>(acceleration, elements, model, p, t, (q, qdot, qddot), dq, &self.all, r2);
+        level::<TimeTri>(acceleration, elements, model, p, t, (q, qdot, qddot), dq, &self.all, r2);
         self.x.fill(0.0);
         for _ in 0..3 {
             let (xa, xl) = self.x.split_at(n);

@@ -16,10 +16,15 @@
 //! parameter's direction (`q` along `q_p`, `qdot_p`, `qddot_p`; each element's numbers and the
 //! parameters along their gradients), each evaluated with the unknown of its level zero: the
 //! [`Dual`] part along the parameter at the position level, the [`HyperDual`] mixed part of time
-//! and parameter at the velocity level, and the [`Tri`] part `e123` (time twice, then the
+//! and parameter at the velocity level, and the [`TimeTri`] part `e123` (time twice, then the
 //! parameter) at the acceleration level. Each level uses the cheapest type that carries its part. The square system of
 //! the independent rows is the one the analysis solves; rows it found redundant hold
 //! implicitly. The measures follow from one more evaluation over the same numbers.
+//!
+//! The position level evaluates only the elements the parameter moves (the others' rows do not
+//! move at fixed coordinates). With several parameters the upper two levels split into a share
+//! linear in the lower levels' unknowns, by the time derivatives of `Phi_q` made once per output
+//! point, and a share of the elements' numbers and parameters ([`Rates`]).
 
 mod inverse;
 
@@ -27,7 +32,7 @@ pub(crate) use inverse::{InverseAt, InverseSensitivity};
 
 use crate::constraints::{At, Constraint};
 use crate::error::{Error, Problem};
-use crate::expr::{Dual, HyperDual, Scalar, Tri};
+use crate::expr::{Dual, HyperDual, Scalar, TimeTri};
 use crate::linalg::SparseLu;
 use crate::model::{Analysis, Model};
 use crate::results::Results;
@@ -103,22 +108,23 @@ impl Level for HyperDual {
     }
 }
 
-/// Acceleration level: time twice, then the parameter ([`Tri::trajectory`]), the part `e123`.
-impl Level for Tri {
-    fn coordinate(x: [f64; 3], d: [f64; 3]) -> Tri {
-        Tri::trajectory(x, d)
+/// Acceleration level: time twice, then the parameter ([`TimeTri::trajectory`]), the part
+/// `e123`: [`crate::expr::Tri`]'s parts with its two time directions stored once.
+impl Level for TimeTri {
+    fn coordinate(x: [f64; 3], d: [f64; 3]) -> TimeTri {
+        TimeTri::trajectory(x, d)
     }
-    fn time(t: f64) -> Tri {
-        Tri::trajectory([t, 1.0, 0.0], [0.0; 3])
+    fn time(t: f64) -> TimeTri {
+        TimeTri::trajectory([t, 1.0, 0.0], [0.0; 3])
     }
-    fn fixed(v: f64, g: f64) -> Tri {
-        Tri::trajectory([v, 0.0, 0.0], [g, 0.0, 0.0])
+    fn fixed(v: f64, g: f64) -> TimeTri {
+        TimeTri::trajectory([v, 0.0, 0.0], [g, 0.0, 0.0])
     }
     fn part(self) -> f64 {
         self.e123
     }
-    fn rows(c: &dyn Constraint, at: &At<'_, Tri>, data: &[Tri], out: &mut [Tri]) -> bool {
-        c.phi_tri(at, data, out)
+    fn rows(c: &dyn Constraint, at: &At<'_, TimeTri>, data: &[TimeTri], out: &mut [TimeTri]) -> bool {
+        c.phi_time_tri(at, data, out)
     }
 }
 
@@ -134,6 +140,10 @@ struct Seeded<'m> {
     /// Its numbers ([`Constraint::data`]) and, for each, the gradient over the parameters.
     data: Vec<f64>,
     grads: &'m [Vec<f64>],
+    /// For each parameter of the model, whether it moves the element's rows at fixed
+    /// coordinates and time: through its numbers or the parameters its rows read
+    /// ([`Constraint::parameters`]; every parameter when they are not known).
+    moves: Vec<bool>,
 }
 
 /// The buffers of one level: the coordinates, parameters, an element's numbers and the rows.
@@ -163,13 +173,39 @@ pub(crate) struct Sensitivity<'m> {
     measure_data: Vec<Vec<f64>>,
     position: Buffers<Dual>,
     velocity: Buffers<HyperDual>,
-    acceleration: Buffers<Tri>,
+    acceleration: Buffers<TimeTri>,
+    /// (n) the motion and its derivatives along the parameter, as the measures read them.
+    along: [Vec<Dual>; 3],
     /// (n) a right-hand side in the independent rows.
     rhs: Vec<f64>,
     /// (n) `q_p`, `qdot_p`, `qddot_p` of the parameter being solved for.
     dq: [Vec<f64>; 3],
     /// (parameters) each one's row of derivatives of every column.
     rows: Vec<Vec<f64>>,
+    /// The coordinates' share of the velocity and acceleration levels as matrices, when that is
+    /// cheaper than each parameter's evaluation of every element ([`Sensitivity::push`]).
+    rates: Option<Rates>,
+}
+
+/// The velocity and acceleration levels' right-hand sides split in two: the coordinates' share,
+/// linear in the lower levels' unknowns,
+///
+/// ```text
+/// d/dp (Phi_q qdot - nu)     = Phidot_q q_p + (the data's share)
+/// d/dp (Phi_q qddot - gamma) = Phiddot_q q_p + 2 Phidot_q qdot_p + (the data's share)
+/// ```
+///
+/// (`Phidot_q`, `Phiddot_q` the first and second time derivatives of `Phi_q` along the motion:
+/// the derivatives of the two residuals with respect to `q` and `qdot`), made once per output
+/// point for every parameter, and the share of each element's numbers and parameters, from one
+/// evaluation of the elements the parameter moves.
+struct Rates {
+    /// Each element's block of `Phidot_q` and of `Phiddot_q` (rows x columns, row-major,
+    /// elements in the system's order).
+    rate: Vec<f64>,
+    curvature: Vec<f64>,
+    /// (m) the data's share of the three levels (`Phi_p` and its two time derivatives).
+    parts: [Vec<f64>; 3],
 }
 
 impl<'m> Sensitivity<'m> {
@@ -181,8 +217,16 @@ impl<'m> Sensitivity<'m> {
         let drivers = analysis.drivers.iter().map(|&d| (&model.drivers[d], &grads.drivers[d]));
         let mut elements = Vec::new();
         let mut row = 0;
+        let count = model.parameters.len();
         for (element, grads) in joints.chain(drivers) {
             let data: Vec<f64> = element.constraint.data().iter().map(|&(_, v)| v).collect();
+            let read = element.constraint.parameters();
+            let moves = (0..count)
+                .map(|p| {
+                    grads.iter().any(|g| g[p] != 0.0)
+                        || read.is_none_or(|read| read.iter().any(|&j| model.gradients.params[j][p] != 0.0))
+                })
+                .collect();
             elements.push(Seeded {
                 name: &element.name,
                 kind: element.kind,
@@ -190,12 +234,13 @@ impl<'m> Sensitivity<'m> {
                 row,
                 data,
                 grads,
+                moves,
             });
             row += element.constraint.rows();
         }
-        let (n, count) = (model.n(), model.parameters.len());
+        let n = model.n();
         let names = asked.iter().map(|&k| model.parameters.get_index(k).map_or_else(String::new, |(p, _)| p.clone()));
-        let sensitivity = Sensitivity {
+        let mut sensitivity = Sensitivity {
             model,
             asked: asked.to_vec(),
             names: names.collect(),
@@ -206,9 +251,18 @@ impl<'m> Sensitivity<'m> {
             acceleration: Buffers::new(n, count, row),
             rhs: vec![0.0; n],
             dq: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
+            along: [Vec::new(), Vec::new(), Vec::new()],
+            rates: None,
             rows: vec![Vec::new(); asked.len()],
         };
         sensitivity.supported()?;
+        let entries: usize =
+            sensitivity.elements.iter().map(|e| e.constraint.rows() * e.constraint.columns().len()).sum();
+        if by_rates(&sensitivity.elements, asked) {
+            let zero = || vec![0.0; entries];
+            let parts = [vec![0.0; row], vec![0.0; row], vec![0.0; row]];
+            sensitivity.rates = Some(Rates { rate: zero(), curvature: zero(), parts });
+        }
         Ok(sensitivity)
     }
 
@@ -250,19 +304,26 @@ impl<'m> Sensitivity<'m> {
         x: (&[f64], &[f64], &[f64]),
         mut extra: impl FnMut(&mut Sensitivity<'m>, usize, &mut SparseLu, &mut Vec<f64>) -> Result<(), Error>,
     ) -> Result<(), Error> {
+        if let Some(rates) = &mut self.rates {
+            rates.at(&mut self.acceleration, &self.elements, self.model, t, x);
+        }
         for k in 0..self.asked.len() {
             let p = self.asked[k];
             self.dq.iter_mut().for_each(|d| d.fill(0.0));
             let mut rhs = std::mem::take(&mut self.rhs);
-            level(&mut self.position, &self.elements, self.model, p, t, x, &self.dq, rows, &mut rhs);
-            lu.solve(&mut rhs);
-            self.dq[0].copy_from_slice(&rhs);
-            level(&mut self.velocity, &self.elements, self.model, p, t, x, &self.dq, rows, &mut rhs);
-            lu.solve(&mut rhs);
-            self.dq[1].copy_from_slice(&rhs);
-            level(&mut self.acceleration, &self.elements, self.model, p, t, x, &self.dq, rows, &mut rhs);
-            lu.solve(&mut rhs);
-            self.dq[2].copy_from_slice(&rhs);
+            if let Some(rates) = &mut self.rates {
+                rates.levels(&mut self.acceleration, &self.elements, self.model, p, t, x, rows, lu, &mut self.dq);
+            } else {
+                position(&mut self.position, &self.elements, self.model, p, t, x.0, rows, &mut rhs);
+                lu.solve(&mut rhs);
+                self.dq[0].copy_from_slice(&rhs);
+                level(&mut self.velocity, &self.elements, self.model, p, t, x, &self.dq, rows, &mut rhs);
+                lu.solve(&mut rhs);
+                self.dq[1].copy_from_slice(&rhs);
+                level(&mut self.acceleration, &self.elements, self.model, p, t, x, &self.dq, rows, &mut rhs);
+                lu.solve(&mut rhs);
+                self.dq[2].copy_from_slice(&rhs);
+            }
             self.rhs = rhs;
             let mut row = std::mem::take(&mut self.rows[k]);
             row.clear();
@@ -278,11 +339,12 @@ impl<'m> Sensitivity<'m> {
     /// motion's derivatives ([`Sensitivity::motion`]), appended to `row`.
     fn bodies(&self, row: &mut Vec<f64>) {
         let [dq, dv, da] = &self.dq;
-        let bodies = dq.len() / 3;
-        row.extend(
-            (0..bodies)
-                .flat_map(|b| [dq, dv, da].into_iter().flat_map(move |v| [v[3 * b], v[3 * b + 1], v[3 * b + 2]])),
-        );
+        row.reserve(3 * dq.len());
+        for ((q, v), a) in dq.chunks_exact(3).zip(dv.chunks_exact(3)).zip(da.chunks_exact(3)) {
+            row.extend_from_slice(q);
+            row.extend_from_slice(v);
+            row.extend_from_slice(a);
+        }
     }
 
     /// The derivatives of every body's quantities, then of the measures that read no reactions,
@@ -311,16 +373,21 @@ impl<'m> Sensitivity<'m> {
         reactions: &[Dual],
         row: &mut Vec<f64>,
     ) {
-        let [dq, dv, da] = &self.dq;
-        let along = |x: &[f64], d: &[f64]| -> Vec<Dual> { x.iter().zip(d).map(|(&v, &e)| Dual::new(v, e)).collect() };
-        let (q, qdot, qddot) = (along(q, dq), along(qdot, dv), along(qddot, da));
+        if self.model.measures.is_empty() {
+            return;
+        }
+        for ((along, x), d) in self.along.iter_mut().zip([q, qdot, qddot]).zip(&self.dq) {
+            along.clear();
+            along.extend(x.iter().zip(d).map(|(&v, &e)| Dual::new(v, e)));
+        }
+        let [q, qdot, qddot] = &self.along;
         let b = &mut self.position;
         seed_parameters(&mut b.params, self.model, p);
         let measures = self.model.measures.iter().zip(&self.measure_data).zip(&self.model.gradients.measures);
         for ((m, data), grads) in measures {
             b.data.clear();
             b.data.extend(data.iter().zip(grads).map(|(&v, g)| Dual::new(v, g[p])));
-            let value = m.value_generic(&q, &qdot, &qddot, reactions, Dual::constant(t), &b.data, &b.params);
+            let value = m.value_generic(q, qdot, qddot, reactions, Dual::constant(t), &b.data, &b.params);
             row.push(value.map_or(f64::NAN, |v| v.d));
         }
     }
@@ -345,6 +412,172 @@ fn level<S: Level>(
     over(b, elements, model, p, S::time(t), seed);
     for (r, &row) in rhs.iter_mut().zip(rows) {
         *r = -b.full[row].part();
+    }
+}
+
+/// The position level of parameter `p` at `(t, q)` (`-Phi_p` of the independent `rows` into
+/// `rhs`): the rows over [`Dual`] numbers of the elements the parameter moves, zero elsewhere.
+#[allow(clippy::too_many_arguments)]
+fn position(
+    b: &mut Buffers<Dual>,
+    elements: &[Seeded<'_>],
+    model: &Model,
+    p: usize,
+    t: f64,
+    q: &[f64],
+    rows: &[usize],
+    rhs: &mut [f64],
+) {
+    for (x, &v) in b.q.iter_mut().zip(q) {
+        *x = Dual::constant(v);
+    }
+    seed_parameters(&mut b.params, model, p);
+    let at = At { q: &b.q, t: Dual::constant(t), params: &b.params };
+    for e in elements {
+        let out = &mut b.full[e.row..e.row + e.constraint.rows()];
+        if e.moves[p] {
+            b.data.clear();
+            b.data.extend(e.data.iter().zip(e.grads).map(|(&v, g)| Dual::fixed(v, g[p])));
+            let supported = e.constraint.phi_dual(&at, &b.data, out);
+            debug_assert!(supported, "{} was checked to have derivatives", e.name);
+        } else {
+            out.fill(Dual::constant(0.0));
+        }
+    }
+    for (r, &row) in rhs.iter_mut().zip(rows) {
+        *r = -b.full[row].d;
+    }
+}
+
+/// Whether the coordinates' share of the velocity and acceleration levels goes by matrices
+/// ([`Rates`]) for the parameters `asked`: they take, per output point, one [`TimeTri`]
+/// evaluation of each element per column it has; without them each parameter takes two
+/// evaluations of every element (a [`HyperDual`] and a [`TimeTri`] one, counted alike: both are
+/// dominated by the same functions of the same coordinates). Either way each parameter takes
+/// one more evaluation of the elements it moves (the position level, or the data's share), left
+/// out of the comparison. On the quick-return (34 columns, 8 elements) the matrices serve from
+/// 3 parameters on.
+fn by_rates(elements: &[Seeded<'_>], asked: &[usize]) -> bool {
+    let columns: usize = elements.iter().map(|e| e.constraint.columns().len()).sum();
+    columns < 2 * elements.len() * asked.len()
+}
+
+impl Rates {
+    /// `Phidot_q` and `Phiddot_q` at the output `(t, q, qdot, qddot)`: each element's rows over
+    /// [`TimeTri`] numbers, the time along the motion and the third direction one of its
+    /// columns (a unit step held in time), whose parts `e13` and `e123` are that column of the
+    /// two matrices.
+    fn at(
+        &mut self,
+        b: &mut Buffers<TimeTri>,
+        elements: &[Seeded<'_>],
+        model: &Model,
+        t: f64,
+        (q, qdot, qddot): (&[f64], &[f64], &[f64]),
+    ) {
+        for (i, x) in b.q.iter_mut().enumerate() {
+            *x = TimeTri::trajectory([q[i], qdot[i], qddot[i]], [0.0; 3]);
+        }
+        for (x, &v) in b.params.iter_mut().zip(model.parameters.values()) {
+            *x = TimeTri::constant(v);
+        }
+        let mut offset = 0;
+        for e in elements {
+            let c = e.constraint;
+            let (columns, rows) = (c.columns(), c.rows());
+            b.data.clear();
+            b.data.extend(e.data.iter().map(|&v| TimeTri::constant(v)));
+            for (ci, &column) in columns.iter().enumerate() {
+                b.q[column].e3 = 1.0;
+                let at = At { q: &b.q, t: TimeTri::time(t), params: &b.params };
+                let supported = c.phi_time_tri(&at, &b.data, &mut b.full[e.row..e.row + rows]);
+                debug_assert!(supported, "{} was checked to have derivatives", e.name);
+                b.q[column].e3 = 0.0;
+                for (r, x) in b.full[e.row..e.row + rows].iter().enumerate() {
+                    self.rate[offset + r * columns.len() + ci] = x.e13;
+                    self.curvature[offset + r * columns.len() + ci] = x.e123;
+                }
+            }
+            offset += rows * columns.len();
+        }
+    }
+
+    /// `dq = [q_p, qdot_p, qddot_p]` of parameter `p` at `(t, x)` (`lu` the factorization of the
+    /// independent `rows` of `Phi_q`): the data's share of the three levels from one
+    /// [`TimeTri`] evaluation of each element the parameter moves (the coordinates along time
+    /// only; its parts `e3`, `e13`, `e123`), the coordinates' share from the matrices
+    /// ([`Rates::at`]), one solve per level.
+    #[allow(clippy::too_many_arguments)]
+    fn levels(
+        &mut self,
+        b: &mut Buffers<TimeTri>,
+        elements: &[Seeded<'_>],
+        model: &Model,
+        p: usize,
+        t: f64,
+        (q, qdot, qddot): (&[f64], &[f64], &[f64]),
+        rows: &[usize],
+        lu: &mut SparseLu,
+        dq: &mut [Vec<f64>; 3],
+    ) {
+        for (i, x) in b.q.iter_mut().enumerate() {
+            *x = TimeTri::trajectory([q[i], qdot[i], qddot[i]], [0.0; 3]);
+        }
+        seed_parameters(&mut b.params, model, p);
+        let at = At { q: &b.q, t: TimeTri::time(t), params: &b.params };
+        for e in elements {
+            let range = e.row..e.row + e.constraint.rows();
+            if e.moves[p] {
+                b.data.clear();
+                b.data.extend(e.data.iter().zip(e.grads).map(|(&v, g)| TimeTri::fixed(v, g[p])));
+                let supported = e.constraint.phi_time_tri(&at, &b.data, &mut b.full[range.clone()]);
+                debug_assert!(supported, "{} was checked to have derivatives", e.name);
+                for (r, x) in range.zip(&b.full[e.row..]) {
+                    [self.parts[0][r], self.parts[1][r], self.parts[2][r]] = [x.e3, x.e13, x.e123];
+                }
+            } else {
+                self.parts.iter_mut().for_each(|part| part[range.clone()].fill(0.0));
+            }
+        }
+        // Position: -Phi_p. Velocity: -(Phidot_q q_p + its data share). Acceleration:
+        // -(Phiddot_q q_p + 2 Phidot_q qdot_p + its data share).
+        let [position, velocity, acceleration] = &mut self.parts;
+        solve_level(position, rows, lu, &mut dq[0]);
+        for_blocks(elements, |cols, range, offset| {
+            for (r, row) in range.enumerate() {
+                let at = offset + r * cols.len();
+                let (rate, curvature) = (&self.rate[at..at + cols.len()], &self.curvature[at..at + cols.len()]);
+                velocity[row] += cols.iter().zip(rate).map(|(&c, a)| a * dq[0][c]).sum::<f64>();
+                acceleration[row] += cols.iter().zip(curvature).map(|(&c, a)| a * dq[0][c]).sum::<f64>();
+            }
+        });
+        solve_level(velocity, rows, lu, &mut dq[1]);
+        for_blocks(elements, |cols, range, offset| {
+            for (r, row) in range.enumerate() {
+                let rate = &self.rate[offset + r * cols.len()..offset + (r + 1) * cols.len()];
+                acceleration[row] += 2.0 * cols.iter().zip(rate).map(|(&c, a)| a * dq[1][c]).sum::<f64>();
+            }
+        });
+        solve_level(acceleration, rows, lu, &mut dq[2]);
+    }
+}
+
+/// `x` solving `Phi_q x = -part` on the independent `rows` (`lu` their factorization).
+fn solve_level(part: &[f64], rows: &[usize], lu: &mut SparseLu, x: &mut [f64]) {
+    for (x, &row) in x.iter_mut().zip(rows) {
+        *x = -part[row];
+    }
+    lu.solve(x);
+}
+
+/// `f(columns, rows, offset)` for each element: its columns, its rows in the system and the
+/// offset of its block among the elements' blocks (rows x columns each, one after the other).
+fn for_blocks(elements: &[Seeded<'_>], mut f: impl FnMut(&[usize], std::ops::Range<usize>, usize)) {
+    let mut offset = 0;
+    for e in elements {
+        let c = e.constraint;
+        f(c.columns(), e.row..e.row + c.rows(), offset);
+        offset += c.rows() * c.columns().len();
     }
 }
 

@@ -18,7 +18,7 @@
 //! with every derivative total along the parameter: through the equilibrium's `q_p` and
 //! `lambda_p` ([`EquilibriumSensitivity`]), the elements' numbers, the forces' numbers, the
 //! masses and the parameters. `x^T K_p x` is `d/dp (x^T H x)` of the Hessian `H` of
-//! `lambda^T Phi` (the part `e123` of `lambda^T Phi` over [`Tri`] numbers seeded `q + (e1 + e2) x
+//! `lambda^T Phi` (the part `e123` of `lambda^T Phi` over [`TimeTri`] numbers seeded `q + (e1 + e2) x
 //! + e3 q_p`, `lambda + e3 lambda_p`) less `x^T (Q_q)_p x` ([`Dae::add_load_jacobians_along`]);
 //! `mu^T (Phi_q)_p x` the mixed part of `mu^T Phi` over [`HyperDual`] numbers seeded
 //! `q + e1 x + e2 q_p`; `x^T M_p x` from [`Dae::add_mass_along`]. The damping `C = -Q_qdot` is
@@ -30,7 +30,7 @@ use super::over;
 use super::statics::EquilibriumSensitivity;
 use crate::analysis::dynamic::Dae;
 use crate::error::Error;
-use crate::expr::{HyperDual, Scalar, Tri};
+use crate::expr::{HyperDual, Scalar, TimeTri};
 use crate::linalg::dense::min_norm_solve;
 use crate::results::{Mode, ModeKind};
 use faer::MatRef;
@@ -72,10 +72,10 @@ pub(crate) fn mode_derivatives(
         for j in 0..eq.base.asked.len() {
             let (p, dq, dl) = (eq.base.asked[j], &eq.dq[j], &eq.dlambda[j]);
             let b = &mut eq.base;
-            let tri = |i: usize| Tri::trajectory([q[i], x[i], 0.0], [dq[i], 0.0, 0.0]);
-            let rows = over(&mut b.acceleration, &b.elements, b.model, p, Tri::constant(t), tri);
-            let weight = |r: usize| Tri::trajectory([lambda[r], 0.0, 0.0], [dl[r], 0.0, 0.0]);
-            let geometric = rows.iter().enumerate().fold(Tri::constant(0.0), |a, (r, &v)| a + weight(r) * v).e123;
+            let tri = |i: usize| TimeTri::trajectory([q[i], x[i], 0.0], [dq[i], 0.0, 0.0]);
+            let rows = over(&mut b.acceleration, &b.elements, b.model, p, TimeTri::constant(t), tri);
+            let weight = |r: usize| TimeTri::trajectory([lambda[r], 0.0, 0.0], [dl[r], 0.0, 0.0]);
+            let geometric = rows.iter().enumerate().fold(TimeTri::constant(0.0), |a, (r, &v)| a + weight(r) * v).e123;
             let hyper = |i: usize| HyperDual::new(q[i], x[i], dq[i], 0.0);
             let rows = over(&mut b.velocity, &b.elements, b.model, p, HyperDual::constant(t), hyper);
             let borders: f64 = rows.iter().zip(&mu).map(|(r, m)| r.e12 * m).sum();
