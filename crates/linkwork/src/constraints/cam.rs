@@ -20,8 +20,7 @@
 //! Design sensitivities: the pitch-curve cam's numbers are its two points, and `R` reads the
 //! parameters as inputs ([`Expr::eval_params`]); its pressure angle's slope `R'(psi)` at a `psi`
 //! that carries derivatives is one evaluation over a number type with one more direction
-//! ([`Nestable`]). The working-surface cam ([`CamProfile`]) keeps [`Constraint::phi_tri`]'s
-//! default (no derivatives with respect to its numbers) in this increment.
+//! ([`Nestable`]). The working-surface cam ([`CamProfile`]) has its own (cam_profile.rs).
 
 use super::schema::JointContext;
 use super::CompiledJoint;
@@ -71,7 +70,7 @@ impl CamFrame {
     /// `d` over any [`Scalar`] from all coordinates `q` and the two points `si`, `sj` (the cam's
     /// numbers, [`Cam::data`]'s order): [`CamFrame::offset`]'s arithmetic.
     #[inline]
-    fn offset_generic<S: Scalar>(&self, q: &[S], si: [S; 2], sj: [S; 2]) -> [S; 2] {
+    pub(crate) fn offset_generic<S: Scalar>(&self, q: &[S], si: [S; 2], sj: [S; 2]) -> [S; 2] {
         let (fi, fj) = (Pose::of(self.i, q), Pose::of(self.j, q));
         let a = fj.rotate(sj);
         let (gx, gy) = (fj.o[0] + a[0] - fi.o[0], fj.o[1] + a[1] - fi.o[1]);
@@ -80,7 +79,7 @@ impl CamFrame {
     }
 
     /// `point_i` and `point_j`.
-    fn data(&self) -> Vec<(&'static str, f64)> {
+    pub(crate) fn data(&self) -> Vec<(&'static str, f64)> {
         [vector(POINT_I, self.si), vector(POINT_J, self.sj)].concat()
     }
 
@@ -201,12 +200,11 @@ impl CamRow {
     }
 
     /// The pressure angle over a number type that carries derivatives, with the cam's numbers
-    /// `data` ([`Constraint::data`]) and the parameters `params`; `None` on a working surface,
-    /// which has no derivatives yet.
-    pub fn pressure_angle_generic<S: Nestable>(&self, q: &[S], qdot: &[S], data: &[S], params: &[S]) -> Option<S> {
+    /// `data` ([`Constraint::data`]) and the parameters `params`.
+    pub fn pressure_angle_generic<S: Nestable>(&self, q: &[S], qdot: &[S], data: &[S], params: &[S]) -> S {
         match self {
-            CamRow::Pitch(c) => Some(c.pressure_angle_generic(q, qdot, data, params)),
-            CamRow::Surface(_) => None,
+            CamRow::Pitch(c) => c.pressure_angle_generic(q, qdot, data, params),
+            CamRow::Surface(c) => c.pressure_angle_generic(q, qdot, data, params),
         }
     }
 

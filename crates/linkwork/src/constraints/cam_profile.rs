@@ -39,11 +39,17 @@
 //! there, naming the joint and the time ([`Constraint::non_finite_cause`]).
 //! Norton, Design of Machinery, chapter 8 (roller followers, undercutting).
 //!
-//! Design sensitivities: this joint keeps [`Constraint::phi_tri`]'s default (no data, no
-//! derivatives with respect to its numbers) in this increment, as the pitch-curve cam does.
+//! Design sensitivities (docs/sensitivities.md): the joint's numbers are its two points and the
+//! roller's radius, and the curve's expressions read the parameters as inputs. The row over a
+//! number type `S` that carries derivatives ([`Constraint::phi_tri`] and its kin) finds `u*` in
+//! `f64` as above, lifts it onto `S` by `S::ORDER` chord steps `u <- u - g(u, d) / g_u` in `S`
+//! arithmetic (`g_u` the `f64` value's; each step makes one more order of derivatives exact), and
+//! evaluates `n . (d - p(u*)) - r` over `S`: `p'` at a `u` that carries `S`'s derivatives is one
+//! evaluation over a number type with one more direction ([`Nestable`]). The pressure angle
+//! takes the same lifted normal.
 
-use super::{Anchor, BodyIx, CamFrame, Config, Constraint};
-use crate::expr::{Dual, Expr, HyperDual, Scalar, Spline};
+use super::{dot, slot2, Anchor, At, BodyIx, CamFrame, Config, Constraint};
+use crate::expr::{Dual, Expr, HyperDual, Nestable, Scalar, Spline, TimeTri, Tri};
 use std::f64::consts::PI;
 use std::sync::Arc;
 
@@ -200,10 +206,42 @@ impl Curve {
         [[x[0], y[0]], [x[1], y[1]], [x[2], y[2]]]
     }
 
+    /// `u` wrapped into `[start, start + period)`.
+    fn wrap(&self, u: f64) -> f64 {
+        self.start + (u - self.start).rem_euclid(self.period)
+    }
+
     /// `(p, p', p'')` at `u`, wrapped into `[start, start + period)`.
     fn at(&self, u: f64) -> [[f64; 2]; 3] {
-        self.raw(self.start + (u - self.start).rem_euclid(self.period))
+        self.raw(self.wrap(u))
     }
+
+    /// `p(u)` over any [`Scalar`], `u` taken as is and the expressions reading the model's
+    /// parameters `params` ([`Expr::eval_params`]): [`Curve::raw`]'s point with every derivative
+    /// that `u` and `params` carry (a point table's splines hold numbers, not parameters).
+    fn point<S: Scalar>(&self, u: S, params: &[S]) -> [S; 2] {
+        match &self.shape {
+            Shape::Parametric { x, y } => [x.eval_params(&[u], params), y.eval_params(&[u], params)],
+            Shape::Polar { radius } => {
+                let r = radius.eval_params(&[u], params);
+                [r * u.cos(), r * u.sin()]
+            }
+            Shape::Points { x, y } => [x.lifted(u), y.lifted(u)],
+        }
+    }
+
+    /// `p'(u)` over a [`Nestable`] type, `up` the parameters raised to its [`Nestable::Up`]: one
+    /// evaluation of [`Curve::point`] with `u` moving along the new direction.
+    fn tangent<S: Nestable>(&self, u: S, up: &[S::Up]) -> [S; 2] {
+        self.point(u.seed(1.0), up).map(S::slope)
+    }
+}
+
+/// The outward unit normal `sigma R(-90) t / |t|` of a curve whose tangent is `t`.
+#[inline]
+fn normal<S: Scalar>(sigma: f64, t: [S; 2]) -> [S; 2] {
+    let (speed, sigma) = (t[0].hypot(t[1]), S::constant(sigma));
+    [sigma * t[1] / speed, -sigma * t[0] / speed]
 }
 
 /// The nearest point of the curve to the roller's centre.
@@ -254,17 +292,13 @@ impl std::fmt::Debug for CamProfile {
 
 /// `(a - b)`.
 #[inline]
-fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+fn sub<S: Scalar>(a: [S; 2], b: [S; 2]) -> [S; 2] {
     [a[0] - b[0], a[1] - b[1]]
 }
 
+/// `a x b`.
 #[inline]
-fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
-    a[0] * b[0] + a[1] * b[1]
-}
-
-#[inline]
-fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+fn cross<S: Scalar>(a: [S; 2], b: [S; 2]) -> S {
     a[0] * b[1] - a[1] * b[0]
 }
 
@@ -403,9 +437,7 @@ impl CamProfile {
             let (gu, dgu, p) = self.stationarity(u, d);
             let newton = u - gu / dgu;
             if gu == 0.0 || (dgu > 0.0 && (newton - u).abs() <= resolution) || b - a <= resolution {
-                let speed = p[1][0].hypot(p[1][1]);
-                let n = [self.sigma * p[1][1] / speed, -self.sigma * p[1][0] / speed];
-                return Some(Contact { u, p, n, g_u: dgu });
+                return Some(Contact { u, p, n: normal(self.sigma, p[1]), g_u: dgu });
             }
             if gu < 0.0 {
                 a = u;
@@ -519,14 +551,62 @@ impl CamProfile {
     /// while the cam pushes the follower outward, as [`super::Cam::pressure_angle`]. NaN where
     /// the nearest point is not unique or not regular.
     pub fn pressure_angle(&self, q: &[f64], qdot: &[f64]) -> f64 {
+        let (d, sense) = self.moving(q, qdot);
+        let Some(c) = self.nearest(d) else { return f64::NAN };
+        (-sense * cross(d, c.n)).atan2(dot(d, c.n))
+    }
+
+    /// The roller's centre `d` at `(q, qdot)` and the sense of its motion round the cam: `1`
+    /// while its polar angle `psi` rises, else `-1`.
+    fn moving(&self, q: &[f64], qdot: &[f64]) -> ([f64; 2], f64) {
         let [dx, dy] = self.at.offset(q, &|c, v| Dual { v, d: qdot[c] });
-        let Some(c) = self.nearest([dx.v, dy.v]) else { return f64::NAN };
         let d = [dx.v, dy.v];
         // dpsi/dt = (d x d') / |d|^2: only its sign is needed.
         let psi_rate = cross(d, [dx.d, dy.d]);
         // At rest the cam is taken as turning counter-clockwise (psi falling), as for a pitch curve.
-        let sense = if psi_rate > 0.0 { 1.0 } else { -1.0 };
-        (-sense * cross(d, c.n)).atan2(dot(d, c.n))
+        (d, if psi_rate > 0.0 { 1.0 } else { -1.0 })
+    }
+
+    /// [`CamProfile::pressure_angle`] over a number type that carries derivatives, with the cam's
+    /// numbers `data` ([`Constraint::data`]) and the parameters `params`; the sense is that of
+    /// the values.
+    pub(crate) fn pressure_angle_generic<S: Nestable>(&self, q: &[S], qdot: &[S], data: &[S], params: &[S]) -> S {
+        let values = |x: &[S]| x.iter().map(|v| v.value()).collect::<Vec<f64>>();
+        let (_, sense) = self.moving(&values(q), &values(qdot));
+        let d = self.at.offset_generic(q, slot2(data, 0), slot2(data, 2));
+        match self.lifted_contact(d, params) {
+            Some((_, n)) => (S::constant(-sense) * cross(d, n)).atan2(dot(d, n)),
+            None => S::constant(f64::NAN),
+        }
+    }
+
+    /// The nearest point `p(u*)` to `d` and the normal `n(u*)` there over a number type that
+    /// carries derivatives, the curve's expressions reading `params`. `u*` is found in `f64`
+    /// ([`CamProfile::nearest`]), then lifted onto the derivatives of `d` and `params` by
+    /// [`Scalar::ORDER`] chord steps on `g(u) = (p(u) - d) . p'(u) = 0`, `u <- u - g(u) / g_u`
+    /// with `g_u` the `f64` value's: if `u` is exact to order `k - 1`, its error `e` is of order
+    /// `k`, and the step leaves `e (1 - g_u(u*) / g_u) + O(e^2)`, where `1 - g_u(u*) / g_u` has
+    /// no value part: of order `k + 1`. So the steps make every order the type carries exact.
+    /// `None` where the nearest point is not unique or not regular.
+    fn lifted_contact<S: Nestable>(&self, d: [S; 2], params: &[S]) -> Option<([S; 2], [S; 2])> {
+        let c = self.nearest(d.map(S::value))?;
+        let up: Vec<S::Up> = params.iter().map(|p| p.seed(0.0)).collect();
+        let mut u = S::constant(self.curve.wrap(c.u));
+        for _ in 0..S::ORDER {
+            let g = dot(sub(self.curve.point(u, params), d), self.curve.tangent(u, &up));
+            u = u - g / S::constant(c.g_u);
+        }
+        Some((self.curve.point(u, params), normal(self.sigma, self.curve.tangent(u, &up))))
+    }
+
+    /// `Phi = n . (d - p(u*)) - r` over a number type that carries derivatives, with the cam's
+    /// numbers `data` ([`Constraint::data`]): [`Constraint::phi_tri`] and its kin.
+    fn phi_nested<S: Nestable>(&self, at: &At<'_, S>, data: &[S]) -> S {
+        let d = self.at.offset_generic(at.q, slot2(data, 0), slot2(data, 2));
+        match self.lifted_contact(d, at.params) {
+            Some((p, n)) => dot(n, sub(d, p)) - data[4],
+            None => S::constant(f64::NAN),
+        }
     }
 }
 
@@ -574,12 +654,33 @@ impl Constraint for CamProfile {
              below the roller's (an undercut), or at the centre of a circular arc of it",
         )
     }
+    /// `point_i`, `point_j` and `roller_radius`.
+    fn data(&self) -> Vec<(&'static str, f64)> {
+        [self.at.data(), vec![("roller_radius", self.roller)]].concat()
+    }
+    fn phi_tri(&self, at: &At<'_, Tri>, data: &[Tri], out: &mut [Tri]) -> bool {
+        out[0] = self.phi_nested(at, data);
+        true
+    }
+    fn phi_dual(&self, at: &At<'_, Dual>, data: &[Dual], out: &mut [Dual]) -> bool {
+        out[0] = self.phi_nested(at, data);
+        true
+    }
+    fn phi_hyper(&self, at: &At<'_, HyperDual>, data: &[HyperDual], out: &mut [HyperDual]) -> bool {
+        out[0] = self.phi_nested(at, data);
+        true
+    }
+    fn phi_time_tri(&self, at: &At<'_, TimeTri>, data: &[TimeTri], out: &mut [TimeTri]) -> bool {
+        out[0] = self.phi_nested(at, data);
+        true
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::testing::{check_fd, Lcg, OnSlice};
+    use crate::constraints::testing::{assert_data_fields, check_fd, check_generic, Lcg, OnSlice};
+    use crate::constraints::CamJoint;
 
     fn expr(src: &str, var: &str) -> Expr {
         Expr::parse(src, &mut |n| if n == var { Ok(0) } else { Err(format!("unknown {n}")) }).unwrap()
@@ -589,6 +690,15 @@ mod tests {
     fn convex() -> Curve {
         Curve::parametric(expr("0.1 + 1.2*cos(u) + 0.05*cos(3*u)", "u"), expr("-0.05 + 0.8*sin(u)", "u"), 2.0 * PI)
             .unwrap()
+    }
+
+    /// [`convex`] as a table of 200 of its points.
+    fn convex_table() -> Curve {
+        let table: Vec<[f64; 2]> = (0..200)
+            .map(|k| 2.0 * PI * k as f64 / 200.0)
+            .map(|u| [0.1 + 1.2 * u.cos() + 0.05 * (3.0 * u).cos(), -0.05 + 0.8 * u.sin()])
+            .collect();
+        Curve::points(&table).unwrap()
     }
 
     /// A cam with a concave dimple: the limacon `R = 1 + 0.6 cos(psi)` is concave where
@@ -687,11 +797,7 @@ mod tests {
     /// Measured: 4.4e-8 and 5.0e-9.
     #[test]
     fn a_point_tables_derivatives_match_differences() {
-        let table: Vec<[f64; 2]> = (0..200)
-            .map(|k| 2.0 * PI * k as f64 / 200.0)
-            .map(|u| [0.1 + 1.2 * u.cos() + 0.05 * (3.0 * u).cos(), -0.05 + 0.8 * u.sin()])
-            .collect();
-        let curve = Curve::points(&table).unwrap();
+        let curve = convex_table();
         let cam =
             CamProfile::try_new([(BodyIx(Some(0)), [0.1, -0.2]), (BodyIx(Some(3)), [0.3, 0.1])], curve, 0.3).unwrap();
         let states = states(&cam, 0.2, 3, 30);
@@ -778,6 +884,94 @@ mod tests {
         assert!(phi[0].is_nan(), "{phi:?}");
         cam.phi_at(&[0.0, 0.3, 0.0], 0.0, &mut phi);
         assert!((phi[0] + 0.7).abs() < 1e-14, "{phi:?}");
+    }
+
+    impl crate::constraints::testing::Checked for CamProfile {
+        fn phi_checked<S: Nestable>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+            out[0] = self.phi_nested(at, data);
+        }
+    }
+
+    /// The generic row (design sensitivities) by the joints' checker: over `f64` it is `phi`, its
+    /// first-order parts the Jacobian, its second-order part along the motion `-gamma`, and its
+    /// parts along the data (the two points and the roller's radius) central differences of it,
+    /// on the expressions' curve and the point table's, with a roller and with a knife edge.
+    #[test]
+    fn the_generic_row_matches_phi_its_derivatives_and_differences_in_the_data() {
+        for (curve, roller, seed) in [(convex(), 0.3, 21), (convex(), 0.0, 22), (convex_table(), 0.3, 23)] {
+            let ends = [(BodyIx(Some(0)), [0.1, -0.2]), (BodyIx(Some(3)), [0.3, 0.1])];
+            let cam = CamProfile::try_new(ends, curve, roller).unwrap();
+            assert_data_fields::<CamJoint>(&cam);
+            for (q, qdot) in states(&cam, 0.2, seed, 10) {
+                check_generic(&cam, &q, &qdot, 0.0);
+            }
+        }
+    }
+
+    /// The model's parameters `a` (slot 0) and `R` (slot 1) at `values`, for expressions.
+    struct Params([f64; 2]);
+
+    impl crate::expr::Names for Params {
+        fn constant(&self, name: &str) -> Option<f64> {
+            self.parameter(name).map(|k| self.0[k])
+        }
+        fn parameter(&self, name: &str) -> Option<usize> {
+            ["a", "R"].iter().position(|&n| n == name)
+        }
+    }
+
+    /// A circle of radius `R` about `(a, 0.2)`, both parameters, a roller of radius `r` centred
+    /// at `d = (x, y)` (the follower's coordinates; the cam is ground): `Phi = |d - c| - R - r`,
+    /// the contact `p(u*) = c + R (d - c) / |d - c|` and the pressure angle `atan2(-sense d x n,
+    /// d . n)`, `n = (d - c) / |d - c|`, in closed form over [`Tri`] numbers whose three
+    /// directions move the coordinates, the parameters and the radius all at once (mixed parts
+    /// included). The lifted `u*` must carry its derivatives to the third order for `p(u*)` to
+    /// match in every part. Exact derivatives of the same function: to 1e-13 of the parts' size.
+    #[test]
+    fn a_parametric_circle_in_closed_form_to_the_third_order() {
+        let values = [0.3, 1.5];
+        let parse = |src: &str| {
+            Expr::parse_with(src, &Params(values), &mut |n| if n == "u" { Ok(0) } else { Err(format!("unknown {n}")) })
+                .unwrap()
+        };
+        let curve = Curve::parametric(parse("a + R*cos(u)"), parse("0.2 + R*sin(u)"), 2.0 * PI).unwrap();
+        let roller = 0.25;
+        let cam =
+            CamProfile::try_new([(BodyIx::GROUND, [0.0; 2]), (BodyIx(Some(0)), [0.0; 2])], curve, roller).unwrap();
+        let tri = |v: f64, first: [f64; 3], second: [f64; 3], third: f64| Tri::new(v, first, second, third);
+        let q = [
+            tri(2.1, [0.4, -0.3, 0.2], [0.1, 0.05, -0.2], 0.3),
+            tri(-1.2, [0.7, 0.5, -0.1], [-0.3, 0.2, 0.1], -0.1),
+            tri(0.4, [1.0, 0.0, 0.0], [0.0; 3], 0.0),
+        ];
+        let params =
+            [tri(values[0], [0.0, 0.2, 0.5], [0.0, 0.1, 0.0], 0.0), tri(values[1], [0.3, 0.0, -0.4], [0.0; 3], 0.2)];
+        let data = [0.0, 0.0, 0.0, 0.0].map(Tri::constant);
+        let data = [data[0], data[1], data[2], data[3], tri(roller, [0.0, 0.0, 1.0], [0.0; 3], 0.0)];
+        let centre = [params[0], Tri::constant(0.2)];
+        let rel = sub([q[0], q[1]], centre);
+        let dist = rel[0].hypot(rel[1]);
+        let n = [rel[0] / dist, rel[1] / dist];
+        let close = |got: Tri, want: Tri, what: &str| {
+            let size = want.parts().iter().fold(1.0f64, |a, v| a.max(v.abs()));
+            for (k, (g, w)) in got.parts().iter().zip(want.parts()).enumerate() {
+                assert!((g - w).abs() <= 1e-13 * size, "{what}: part {k}: {got:?} vs {want:?}");
+            }
+        };
+        let mut out = [Tri::constant(f64::NAN)];
+        assert!(cam.phi_tri(&At { q: &q, t: Tri::constant(0.0), params: &params }, &data, &mut out));
+        close(out[0], dist - params[1] - data[4], "Phi");
+        let (p, normal) = cam.lifted_contact([q[0], q[1]], &params).unwrap();
+        for k in 0..2 {
+            close(p[k], centre[k] + params[1] * n[k], "p(u*)");
+            close(normal[k], n[k], "n(u*)");
+        }
+        // The follower moves with psi rising: sense 1.
+        let qdot = [-1.0, 2.0, 0.0].map(Tri::constant);
+        let angle = cam.pressure_angle_generic(&q, &qdot, &data, &params);
+        let d = [q[0], q[1]];
+        close(angle, (-cross(d, n)).atan2(dot(d, n)), "pressure angle");
+        assert!((angle.v - cam.pressure_angle(&q.map(Tri::value), &qdot.map(Tri::value))).abs() < 1e-15);
     }
 
     #[test]

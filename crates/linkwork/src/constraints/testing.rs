@@ -4,7 +4,21 @@
 //! the element's data.
 
 use super::{At, ConfigBuf, Constraint, GenericPhi};
-use crate::expr::{HyperDual, Scalar, Tri};
+use crate::expr::{HyperDual, Nestable, Scalar, Tri};
+
+/// An element whose generic `Phi` the checks below evaluate (over `f64` and hyper-dual numbers):
+/// every [`GenericPhi`] element, and one whose rows need [`Nestable`] numbers (a cam's working
+/// surface), which implements it by hand.
+pub trait Checked: Constraint {
+    /// `Phi` at `at` with the element's data `data`: `out: (rows)`.
+    fn phi_checked<S: Nestable>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]);
+}
+
+impl<C: GenericPhi + Constraint> Checked for C {
+    fn phi_checked<S: Nestable>(&self, at: &At<'_, S>, data: &[S], out: &mut [S]) {
+        self.phi_generic(at, data, out);
+    }
+}
 
 /// A small deterministic generator, so that failures reproduce.
 pub struct Lcg(u64);
@@ -123,7 +137,7 @@ fn random_states(
 
 /// `phi_generic` of `c` over hyper-dual numbers at `q` and `t` seeded by `seed(k, value)` for
 /// `q[k]` and `seed(n, t)` for the time, with `data` seeded by `seed_data(k, value)`.
-fn generic_at<C: GenericPhi + Constraint>(
+fn generic_at<C: Checked>(
     c: &C,
     q: &[f64],
     t: f64,
@@ -133,14 +147,14 @@ fn generic_at<C: GenericPhi + Constraint>(
     let qs: Vec<HyperDual> = q.iter().enumerate().map(|(k, &v)| seed(k, v)).collect();
     let data: Vec<HyperDual> = c.data().iter().enumerate().map(|(k, &(_, v))| seed_data(k, v)).collect();
     let mut out = vec![HyperDual::constant(f64::NAN); c.rows()];
-    c.phi_generic(&At { q: &qs, t: seed(q.len(), t), params: &[] }, &data, &mut out);
+    c.phi_checked(&At { q: &qs, t: seed(q.len(), t), params: &[] }, &data, &mut out);
     out
 }
 
 /// `phi_generic::<f64>` of `c` at `q` and `t` with the data `data`.
-fn generic_f64<C: GenericPhi + Constraint>(c: &C, q: &[f64], t: f64, data: &[f64]) -> Vec<f64> {
+fn generic_f64<C: Checked>(c: &C, q: &[f64], t: f64, data: &[f64]) -> Vec<f64> {
     let mut out = vec![f64::NAN; c.rows()];
-    c.phi_generic(&At { q, t, params: &[] }, data, &mut out);
+    c.phi_checked(&At { q, t, params: &[] }, data, &mut out);
     out
 }
 
@@ -161,7 +175,7 @@ fn generic_f64<C: GenericPhi + Constraint>(c: &C, q: &[f64], t: f64, data: &[f64
 ///   `phi_generic::<f64>` with the slot moved by `h = 1e-6` relative: truncation
 ///   `h^2 |Phi'''| / 6 ~ 1e-12` and round-off `eps |Phi| / h ~ 1e-10 (1 + m)^2`, so `1e-8`
 ///   relative to the same scale leaves a wide margin, and a wrong sign or a missing term fails.
-pub fn check_generic<C: GenericPhi + Constraint>(c: &C, q: &[f64], qdot: &[f64], t: f64) {
+pub fn check_generic<C: Checked>(c: &C, q: &[f64], qdot: &[f64], t: f64) {
     let m = c.rows();
     let data: Vec<f64> = c.data().iter().map(|&(_, v)| v).collect();
     let big = q.iter().chain(&data).chain([&t]).fold(0.0f64, |a, v| a.max(v.abs()));
@@ -233,7 +247,7 @@ pub fn check_generic<C: GenericPhi + Constraint>(c: &C, q: &[f64], qdot: &[f64],
 /// from the initial configuration included): central differences of `phi` of `build(data +- h)`
 /// at random states (`q0` held inside `build`), with the step and tolerance of
 /// [`check_generic`]'s data check, for the same reasons.
-pub fn check_rebuilt<C: GenericPhi + Constraint>(c: &C, build: &dyn Fn(&[f64]) -> C, bodies: usize, seed: u64) {
+pub fn check_rebuilt<C: Checked>(c: &C, build: &dyn Fn(&[f64]) -> C, bodies: usize, seed: u64) {
     let data: Vec<f64> = c.data().iter().map(|&(_, v)| v).collect();
     random_states(bodies, seed, &|_| true, |q, _, t| {
         let big = q.iter().chain(&data).chain([&t]).fold(0.0f64, |a, v| a.max(v.abs()));
@@ -298,18 +312,13 @@ pub fn assert_fails(fault: &dyn std::fmt::Debug, check: &str, run: impl FnOnce()
 }
 
 /// Run [`check_generic`] at random states of a system with `bodies` bodies.
-pub fn check_generic_random<C: GenericPhi + Constraint>(c: &C, bodies: usize, seed: u64) {
+pub fn check_generic_random<C: Checked>(c: &C, bodies: usize, seed: u64) {
     check_generic_random_where(c, bodies, seed, &|_| true);
 }
 
 /// As [`check_generic_random`], skipping the states where `accept(q)` is false (see
 /// [`check_fd_random_where`]).
-pub fn check_generic_random_where<C: GenericPhi + Constraint>(
-    c: &C,
-    bodies: usize,
-    seed: u64,
-    accept: &dyn Fn(&[f64]) -> bool,
-) {
+pub fn check_generic_random_where<C: Checked>(c: &C, bodies: usize, seed: u64, accept: &dyn Fn(&[f64]) -> bool) {
     random_states(bodies, seed, accept, |q, qdot, t| check_generic(c, q, qdot, t));
 }
 

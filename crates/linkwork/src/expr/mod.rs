@@ -87,7 +87,7 @@ use std::sync::Arc;
 use parse::{Binary, Op, MAX_STACK};
 
 pub use parse::MAX_DEPTH;
-pub use scalar::{Dual, HyperDual, Nestable, Scalar, TimeTri, Tri};
+pub use scalar::{Dual, HyperDual, Nestable, Quad, Scalar, TimeTri, Tri};
 pub use spline::Spline;
 
 /// The most slots (distinct names of coordinates, velocities and the like) an expression over a
@@ -343,16 +343,7 @@ impl Expr {
                     sp -= arity - 1;
                     stack[sp - 1] = n.apply(&stack[sp - 1..sp - 1 + arity]);
                 }
-                Op::Table(i) => {
-                    let a = stack[sp - 1];
-                    stack[sp - 1] = if S::ORDER >= 3 {
-                        let (f0, f1, f2, f3) = self.tables[i].eval3(a.value());
-                        a.lift(f0, f1, f2, f3)
-                    } else {
-                        let (f0, f1, f2) = self.tables[i].eval(a.value());
-                        a.lift(f0, f1, f2, 0.0)
-                    };
-                }
+                Op::Table(i) => stack[sp - 1] = self.tables[i].lifted(stack[sp - 1]),
             }
         }
         stack[0]

@@ -26,6 +26,7 @@
 //! of its end value and end slope (`s''` = 0 there): values stay bounded by the data's trend,
 //! where continuing an end cubic would grow as the cube of the distance.
 
+use super::Scalar;
 use crate::linalg::{Pattern, SparseLu};
 
 /// How the slopes at the points are chosen.
@@ -146,6 +147,20 @@ impl Spline {
         let e = (m0 + m1 - 2.0 * d) / (h * h);
         let u = x - self.x[i];
         (self.y[i] + u * (m0 + u * (c + u * e)), m0 + u * (2.0 * c + 3.0 * u * e), 2.0 * c + 6.0 * u * e, 6.0 * e)
+    }
+
+    /// `s(x)` over any [`Scalar`]: the value and derivatives of the piece at `x`'s value lifted
+    /// onto `x`'s derivatives (the third derivative for a type that carries it, and a fourth of 0:
+    /// each piece is a cubic).
+    #[inline]
+    pub fn lifted<S: Scalar>(&self, x: S) -> S {
+        if S::ORDER >= 3 {
+            let (f0, f1, f2, f3) = self.eval3(x.value());
+            x.lift_fourth([f0, f1, f2, f3, 0.0])
+        } else {
+            let (f0, f1, f2) = self.eval(x.value());
+            x.lift(f0, f1, f2, 0.0)
+        }
     }
 
     /// `integral s(x) dx` from the first point to the last, exact for the piecewise cubic: the

@@ -8,9 +8,8 @@ impl Measure {
     /// The value at `(q, qdot, qddot, t)` over `S`, with the reactions row `reactions` (as
     /// [`Measure::value`]'s: empty in an analysis that has none), the measure's numbers `data`
     /// in the order of [`MeasureKind::data`] and the model's parameters `params` (file order):
-    /// each may carry derivatives. `None` for a kind that has no derivatives yet (the pressure
-    /// angle of a cam given by its working surface, a mechanical advantage that reads a torque
-    /// force).
+    /// each may carry derivatives. `None` for a kind that has no derivatives yet (a mechanical
+    /// advantage that reads a torque force).
     #[allow(clippy::too_many_arguments)]
     pub fn value_generic<S: Nestable>(
         &self,
@@ -44,7 +43,7 @@ impl Measure {
             } else {
                 qdot[*output] / qdot[*input]
             }),
-            MeasureKind::PressureAngle(cam) => cam.pressure_angle_generic(q, qdot, data, params),
+            MeasureKind::PressureAngle(cam) => Some(cam.pressure_angle_generic(q, qdot, data, params)),
             MeasureKind::MechanicalAdvantage {
                 input: Effort::Driver { slot: input },
                 output: Effort::Driver { slot: output },
