@@ -3,14 +3,14 @@
 
 use super::{spec, Effort, Measure, MeasureKind};
 use crate::expr::{Nestable, Scalar};
+use crate::forces::Data;
 
 impl Measure {
     /// The value at `(q, qdot, qddot, t)` over `S`, with the reactions row `reactions` (as
     /// [`Measure::value`]'s: empty in an analysis that has none), the measure's numbers `data`
     /// in the order of [`MeasureKind::data`] and the model's parameters `params` (file order):
     /// each may carry derivatives. `None` for a kind that has no derivatives yet (the pressure
-    /// angle of a cam given by its working surface, a mechanical advantage that reads a torque
-    /// force).
+    /// angle of a cam given by its working surface).
     #[allow(clippy::too_many_arguments)]
     pub fn value_generic<S: Nestable>(
         &self,
@@ -45,14 +45,27 @@ impl Measure {
                 qdot[*output] / qdot[*input]
             }),
             MeasureKind::PressureAngle(cam) => cam.pressure_angle_generic(q, qdot, data, params),
-            MeasureKind::MechanicalAdvantage {
-                input: Effort::Driver { slot: input },
-                output: Effort::Driver { slot: output },
-            } => {
-                let effort = |slot: &usize| reactions.get(*slot).copied().unwrap_or(S::constant(f64::NAN));
+            MeasureKind::MechanicalAdvantage { input, output } => {
+                let effort = |e: &Effort| e.value_generic(q, qdot, reactions, t, params);
                 Some(-effort(output) / effort(input))
             }
-            MeasureKind::MechanicalAdvantage { .. } => None,
+        }
+    }
+}
+
+impl Effort {
+    /// Its value over `S` (as [`Measure::value`] reads it): a driver's effort from the reactions
+    /// row, a `torque` force's torque from `(q, qdot)` at the time `t` (held) with the model's
+    /// parameters `params`, which its expression reads ([`crate::forces::Load::value_data`]). A
+    /// torque written as a number is a constant: the parameters write a force's `torque` only as
+    /// an expression (`torque: -load`), which reads them.
+    fn value_generic<S: Scalar>(&self, q: &[S], qdot: &[S], reactions: &[S], t: S, params: &[S]) -> S {
+        match self {
+            Effort::Driver { slot } => reactions.get(*slot).copied().unwrap_or(S::constant(f64::NAN)),
+            Effort::Torque { torque, .. } => {
+                let own: Vec<S> = torque.data("torque").map(|(_, c)| S::constant(c)).into_iter().collect();
+                torque.value_data(q, qdot, t.value(), &mut Data::new(&own), params)
+            }
         }
     }
 }

@@ -21,6 +21,7 @@
 //! the independent rows is the one the analysis solves; rows it found redundant hold
 //! implicitly. The measures follow from one more evaluation over the same numbers.
 
+mod friction;
 mod inverse;
 
 pub(crate) use inverse::{InverseAt, InverseSensitivity};
