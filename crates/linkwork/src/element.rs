@@ -341,10 +341,26 @@ impl<S: Scalar> Pose<S> {
             cs: [S::constant(phi.cos()), S::constant(phi.sin())],
         }
     }
+    /// The frame `f` held constant, with its cached rotation (no trigonometry): what an equation
+    /// written over any [`Scalar`] reads on its value path ([`crate::constraints::Friction::load`]).
+    #[inline]
+    pub fn frame(f: &Frame) -> Pose<S> {
+        Pose {
+            o: [S::constant(f.x), S::constant(f.y)],
+            phi: S::constant(f.phi),
+            cs: [S::constant(f.c), S::constant(f.s)],
+        }
+    }
     /// `A s'`: a body-frame vector in the global frame.
     #[inline]
     pub fn rotate(&self, v: [S; 2]) -> [S; 2] {
         rotated(self.cs, v)
+    }
+    /// `A^T (p - r)`: a global point in the body frame ([`Frame::local`]'s arithmetic).
+    #[inline]
+    pub fn local(&self, p: [S; 2]) -> [S; 2] {
+        let (v, [c, s]) = ([p[0] - self.o[0], p[1] - self.o[1]], self.cs);
+        [c * v[0] + s * v[1], -s * v[0] + c * v[1]]
     }
 }
 

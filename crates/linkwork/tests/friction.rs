@@ -329,8 +329,9 @@ fn slider_crank_efficiency() {
     assert_eq!(work("peak_torque"), peak);
 
     let text = example_text("slider_crank_friction.yaml");
-    assert_eq!(text.matches("{mu: 0.1, ").count() + text.matches("{mu: 0.15, ").count(), 4);
-    let text = text.replace("{mu: 0.1, ", "{mu: 0, ").replace("{mu: 0.15, ", "{mu: 0, ");
+    // Every pin's coefficient is `mu_pin`, the guide's `mu_guide`.
+    assert_eq!(text.matches("{mu: mu_pin, ").count() + text.matches("{mu: mu_guide, ").count(), 4);
+    let text = patch(&patch(&text, "mu_pin: 0.1 ", "mu_pin: 0 "), "mu_guide: 0.15", "mu_guide: 0");
     let free =
         Model::from_yaml(&text).unwrap().run("inverse", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let eta_free = summary(&free, "efficiency");
@@ -353,8 +354,7 @@ fn slider_crank_efficiency() {
 /// reaches several times the rod's load along it.
 #[test]
 fn steep_guide_friction_converges_and_matches_free_body_diagrams() {
-    let text =
-        patch(&example_text("slider_crank_friction.yaml"), "{mu: 0.15, length: 50 mm}", "{mu: 2.5, length: 50 mm}");
+    let text = patch(&example_text("slider_crank_friction.yaml"), "mu_guide: 0.15", "mu_guide: 2.5");
     let r =
         Model::from_yaml(&text).unwrap().run("inverse", &Default::default()).unwrap_or_else(|f| panic!("{}", f.error));
     let names = ["O.friction", "A.friction", "B.friction", "guide.friction"];
@@ -385,8 +385,7 @@ fn steep_guide_friction_converges_and_matches_free_body_diagrams() {
 /// effort does on its way to a lock.
 #[test]
 fn self_locking_friction_is_named() {
-    let text =
-        patch(&example_text("slider_crank_friction.yaml"), "{mu: 0.15, length: 50 mm}", "{mu: 4, length: 50 mm}");
+    let text = patch(&example_text("slider_crank_friction.yaml"), "mu_guide: 0.15", "mu_guide: 4");
     let failure = Model::from_yaml(&text).unwrap().run("inverse", &Default::default()).unwrap_err();
     let message = failure.error.to_string();
     assert!(matches!(failure.error, Error::Friction { .. }), "{message}");

@@ -27,7 +27,8 @@
 //! forces"): a block of length `L` carries a couple `M` by two opposite contact forces `M / L` at
 //! its ends. It is taken about `Q`, the sliding body's point, which is the block's centre.
 
-use super::{dot, perp, reaction, Anchor, BodyIx, Config, Frame, Separation};
+use super::{difference, dot, perp, reaction_about, unit, vector, Anchor, BodyIx, Config, Frame, Pose};
+use super::{AXIS_I, POINT_I, POINT_J};
 use crate::expr::{Dual, Scalar};
 
 /// The friction law of a joint: its coefficient and transition velocity.
@@ -45,8 +46,8 @@ enum Contact {
     /// A pin of `radius` (m); its reaction is taken about the joint's anchor.
     Pin { anchor: Anchor, radius: f64 },
     /// A block of `length` (m) centred at `s_q` of body j, sliding on body i's line through `s_p`
-    /// along the unit `u` (body i frame).
-    Slide { i: BodyIx, s_p: [f64; 2], u: [f64; 2], j: BodyIx, s_q: [f64; 2], length: f64 },
+    /// along `axis` (body i frame, as given) whose unit is `u`.
+    Slide { i: BodyIx, s_p: [f64; 2], axis: [f64; 2], u: [f64; 2], j: BodyIx, s_q: [f64; 2], length: f64 },
 }
 
 /// The friction of one revolute or translational joint (built by [`super::Revolute::friction`]
@@ -57,6 +58,22 @@ pub struct Friction {
     contact: Contact,
 }
 
+/// The numbers a friction's law reads, over any [`Scalar`]: its coefficient, transition velocity
+/// and size (the pin's radius, the block's length), and a slider's line (`s_p`, the unit axis
+/// `u`, body i frame) and block centre (`s_q`, body j frame); the pin reads no point.
+struct Numbers<S> {
+    mu: S,
+    v_s: S,
+    size: S,
+    line: [[S; 2]; 3],
+}
+
+/// The data name of a friction's coefficient (its own numbers come after a slider's points and
+/// axis).
+const FRICTION_MU: &str = "friction.mu";
+/// The data name of a friction's transition velocity.
+const FRICTION_VS: &str = "friction.transition_velocity";
+
 impl Friction {
     /// Friction in a pin of `radius` whose reaction is reported at `anchor`.
     pub(crate) fn pin(law: FrictionLaw, anchor: Anchor, radius: f64) -> Friction {
@@ -64,21 +81,37 @@ impl Friction {
     }
 
     /// Friction in a slider: the block of `length` centred at `s_q` of body j on the line of body i
-    /// through `s_p` along `u` (unit).
+    /// through `s_p` along `axis` (not zero; its unit is taken).
     pub(crate) fn slide(
         law: FrictionLaw,
-        (i, s_p, u): (BodyIx, [f64; 2], [f64; 2]),
+        (i, s_p, axis): (BodyIx, [f64; 2], [f64; 2]),
         (j, s_q): (BodyIx, [f64; 2]),
         length: f64,
     ) -> Friction {
-        Friction { law, contact: Contact::Slide { i, s_p, u, j, s_q, length } }
+        Friction { law, contact: Contact::Slide { i, s_p, axis, u: unit(axis), j, s_q, length } }
+    }
+
+    /// The numbers of this friction that a parameter can move, each named as its field in the
+    /// joint's entry (design sensitivities, docs/sensitivities.md): a slider's `point_i`,
+    /// `point_j` and `axis_i` (its line and block centre, the joint's own numbers), then
+    /// `friction.mu`, `friction.transition_velocity` and `friction.radius` (a pin) or
+    /// `friction.length` (a slider). The order [`Friction::load_data`] reads them in.
+    pub fn data(&self) -> Vec<(&'static str, f64)> {
+        let law = [(FRICTION_MU, self.law.mu), (FRICTION_VS, self.law.transition_velocity)];
+        match self.contact {
+            Contact::Pin { radius, .. } => [law.as_slice(), &[("friction.radius", radius)]].concat(),
+            Contact::Slide { s_p, axis, s_q, length, .. } => {
+                let line = [vector(POINT_I, s_p), vector(POINT_J, s_q), vector(AXIS_I, axis)].concat();
+                [line.as_slice(), &law, &[("friction.length", length)]].concat()
+            }
+        }
     }
 
     /// `(q, qdot, lambda) => (Q_f, value)`: the generalised friction force on the joint's `columns`
     /// (`out: (columns)`, body i's `(x, y, phi)` then body j's, ground left out) and the friction
     /// on body i (the torque of a pin, N m; the force along the axis of a slider, N). `block`: the
     /// joint's Jacobian at `q` (`rows x columns`); `v`: `qdot` on `columns`; `lambda`: the joint's
-    /// multipliers.
+    /// multipliers. [`Friction::load_data`] with the friction's own numbers and `q` held.
     pub fn load<S: Scalar>(
         &self,
         q: &Config<'_>,
@@ -88,9 +121,72 @@ impl Friction {
         lambda: &[S],
         out: &mut [S],
     ) -> S {
+        let c = S::constant;
+        let (i, j, line) = match self.contact {
+            Contact::Pin { anchor, .. } => (anchor.i, anchor.j, [[0.0; 2]; 3]),
+            Contact::Slide { i, s_p, u, j, s_q, .. } => (i, j, [s_p, u, s_q]),
+        };
+        let poses = [Pose::frame(&Frame::of(i, q)), Pose::frame(&Frame::of(j, q))];
+        let numbers = Numbers {
+            mu: c(self.law.mu),
+            v_s: c(self.law.transition_velocity),
+            size: c(self.size()),
+            line: line.map(|p| p.map(c)),
+        };
+        self.law(poses, columns, |k| c(block[k]), v, lambda, numbers, out)
+    }
+
+    /// [`Friction::load`] over any [`Scalar`] in everything it reads (design sensitivities):
+    /// all coordinates `q (n)`, `block(k)` the `k`-th entry of the joint's Jacobian block
+    /// (row-major), `v` and `lambda` as there, and the friction's numbers `data` in the order of
+    /// [`Friction::data`] (a slider's axis is normalised here, so that the derivative with
+    /// respect to its raw components is right).
+    #[allow(clippy::too_many_arguments)]
+    pub fn load_data<S: Scalar>(
+        &self,
+        q: &[S],
+        columns: &[usize],
+        block: impl Fn(usize) -> S,
+        v: &[S],
+        lambda: &[S],
+        data: &[S],
+        out: &mut [S],
+    ) -> S {
+        let zero = [S::constant(0.0); 2];
+        let (i, j, line, law) = match self.contact {
+            Contact::Pin { anchor, .. } => (anchor.i, anchor.j, [zero; 3], data),
+            Contact::Slide { i, j, .. } => {
+                let at = |k: usize| [data[k], data[k + 1]];
+                (i, j, [at(0), unit(at(4)), at(2)], &data[6..])
+            }
+        };
+        let numbers = Numbers { mu: law[0], v_s: law[1], size: law[2], line };
+        self.law([Pose::of(i, q), Pose::of(j, q)], columns, block, v, lambda, numbers, out)
+    }
+
+    /// The pin's radius or the block's length.
+    fn size(&self) -> f64 {
+        match self.contact {
+            Contact::Pin { radius, .. } => radius,
+            Contact::Slide { length, .. } => length,
+        }
+    }
+
+    /// The law of [`Friction::load`] with body i's and body j's frames `poses` and the numbers
+    /// `k`, everything over `S`.
+    #[allow(clippy::too_many_arguments)]
+    fn law<S: Scalar>(
+        &self,
+        [fi, fj]: [Pose<S>; 2],
+        columns: &[usize],
+        block: impl Fn(usize) -> S,
+        v: &[S],
+        lambda: &[S],
+        k: Numbers<S>,
+        out: &mut [S],
+    ) -> S {
         let zero = S::constant(0.0);
-        let mu = S::constant(self.law.mu);
-        let coefficient = |speed: S| mu * (speed / S::constant(self.law.transition_velocity)).tanh();
+        let coefficient = |speed: S| k.mu * (speed / k.v_s).tanh();
         let (i, j) = match self.contact {
             Contact::Pin { anchor, .. } => (anchor.i, anchor.j),
             Contact::Slide { i, j, .. } => (i, j),
@@ -100,30 +196,37 @@ impl Friction {
         let rates = |b: BodyIx, at: usize| if b.0.is_some() { [v[at], v[at + 1], v[at + 2]] } else { [zero; 3] };
         let (vi, vj) = (rates(i, 0), rates(j, at_j));
         let (on_i, on_j, value) = match self.contact {
-            Contact::Pin { anchor, radius } => {
-                let (f, _) = reaction(anchor, columns, block, lambda, q);
-                let r = S::constant(radius);
+            Contact::Pin { anchor, .. } => {
+                // The force alone: its moment, about any point, is not read.
+                let (f, _) = reaction_about(anchor, columns, block, lambda, [zero; 2]);
+                let r = k.size;
                 let torque = -coefficient(r * (vi[2] - vj[2])) * r * magnitude(f);
                 ([zero, zero, torque], [zero, zero, -torque], torque)
             }
-            Contact::Slide { s_p, u, s_q, length, .. } => {
-                let (fi, fj) = (Frame::of(i, q), Frame::of(j, q));
-                let (u, sep) = (fi.rotate(u), Separation::of(i, s_p, j, s_q, q));
+            Contact::Slide { .. } => {
+                let [s_p, u, s_q] = k.line;
+                let (u, a_p, a_q) = (fi.rotate(u), fi.rotate(s_p), fj.rotate(s_q));
+                let d = difference(fi.o, a_p, fj.o, a_q);
                 let n = perp(u);
-                let r_q = fj.point(s_q);
+                let r_q = [fj.o[0] + a_q[0], fj.o[1] + a_q[1]];
                 // d' = r_j' + omega_j R90 A_j s'_Q - r_i' - omega_i R90 A_i s'_P.
-                let (bp, bq) = (perp(sep.a_p), perp(sep.a_q));
-                let rate = |k: usize| vj[k] + S::constant(bq[k]) * vj[2] - vi[k] - S::constant(bp[k]) * vi[2];
-                let speed =
-                    S::constant(u[0]) * rate(0) + S::constant(u[1]) * rate(1) + vi[2] * S::constant(dot(n, sep.d));
-                let anchor = Anchor { i, j, point: fi.local(r_q) };
-                let (f, moment) = reaction(anchor, columns, block, lambda, q);
-                let load = magnitude(f) + moment.abs() / S::constant(length);
+                let (bp, bq) = (perp(a_p), perp(a_q));
+                let rate = |k: usize| vj[k] + bq[k] * vj[2] - vi[k] - bp[k] * vi[2];
+                let speed = u[0] * rate(0) + u[1] * rate(1) + vi[2] * dot(n, d);
+                // The reaction's moment about Q, the lever from body i's centre (or from Q to
+                // body j's centre when body i is ground) through Q seen in body i's frame.
+                let anchor = Anchor { i, j, point: [0.0; 2] };
+                let point = fi.local(r_q);
+                let lever = match i.0 {
+                    Some(_) => fi.rotate(point),
+                    None => [fj.o[0] - point[0], fj.o[1] - point[1]],
+                };
+                let (f, moment) = reaction_about(anchor, columns, block, lambda, lever);
+                let load = magnitude(f) + moment.abs() / k.size;
                 let force = coefficient(speed) * load;
-                let (fu, arm_i) =
-                    ([force * S::constant(u[0]), force * S::constant(u[1])], [r_q[0] - fi.x, r_q[1] - fi.y]);
-                let cross = |a: [f64; 2]| S::constant(a[0]) * fu[1] - S::constant(a[1]) * fu[0];
-                ([fu[0], fu[1], cross(arm_i)], [-fu[0], -fu[1], -cross(sep.a_q)], force)
+                let (fu, arm_i) = ([force * u[0], force * u[1]], [r_q[0] - fi.o[0], r_q[1] - fi.o[1]]);
+                let cross = |a: [S; 2]| a[0] * fu[1] - a[1] * fu[0];
+                ([fu[0], fu[1], cross(arm_i)], [-fu[0], -fu[1], -cross(a_q)], force)
             }
         };
         let mut k = 0;
@@ -275,6 +378,115 @@ mod tests {
                 Translational::new(BodyIx::GROUND, [0.5, -2.0], [2.0, 1.0], BodyIx(Some(0)), [0.7, 0.1], [1.0, 1.0]);
             check(&guide.friction(law(), 0.1), &case(&guide, &mut rng, 3));
         }
+    }
+
+    /// [`Friction::load_data`] over its own data is [`Friction::load`] (to 1e-14 of the load: it
+    /// normalises the axis and computes the rotations again, each to round-off), and its
+    /// [`Dual`] derivative along each datum and each coordinate (the Jacobian block held, as the
+    /// law reads it) against central differences of its `f64` values, step `1e-6` of the input's
+    /// size (truncation `~1e-12`, round-off `~1e-10` of loads of order 10; `1e-6` absolute plus
+    /// relative, as [`check`]). Returns, for each datum, whether it moved the load here: a datum
+    /// the law does not read (its constant used instead) moves nothing anywhere.
+    fn check_data(friction: &Friction, c: &Case) -> Vec<bool> {
+        let data: Vec<f64> = friction.data().iter().map(|&(_, v)| v).collect();
+        let w = c.columns.len();
+        let eval = |q: &[f64], d: &[f64]| {
+            let mut out = vec![0.0; w];
+            let value = friction.load_data(q, &c.columns, |k| c.block[k], &c.v, &c.lambda, d, &mut out);
+            out.push(value);
+            out
+        };
+        let mut plain = vec![0.0; w];
+        let value = friction.load(&ConfigBuf::new(&c.q).view(), &c.columns, &c.block, &c.v, &c.lambda, &mut plain);
+        plain.push(value);
+        let scale = plain.iter().fold(1e-3f64, |m, x| m.max(x.abs()));
+        for (a, b) in eval(&c.q, &data).iter().zip(&plain) {
+            assert!((a - b).abs() <= 1e-14 * scale, "load_data {a} against load {b}");
+        }
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 + 1e-6 * b.abs();
+        let dual = |x: &[f64], k: Option<usize>| -> Vec<Dual> {
+            x.iter().enumerate().map(|(i, &v)| Dual::new(v, f64::from(u8::from(Some(i) == k)))).collect()
+        };
+        let derivative = |qk: Option<usize>, dk: Option<usize>| {
+            let (q, d) = (dual(&c.q, qk), dual(&data, dk));
+            let (v, l): (Vec<Dual>, Vec<Dual>) = (
+                c.v.iter().map(|&x| Dual::constant(x)).collect(),
+                c.lambda.iter().map(|&x| Dual::constant(x)).collect(),
+            );
+            let mut out = vec![Dual::constant(0.0); w];
+            let value = friction.load_data(&q, &c.columns, |k| Dual::constant(c.block[k]), &v, &l, &d, &mut out);
+            out.iter().chain([&value]).map(|x| x.d).collect::<Vec<f64>>()
+        };
+        let moved = |x: &[f64], k: usize, by: f64| {
+            let mut x = x.to_vec();
+            x[k] += by;
+            x
+        };
+        let mut moves = vec![false; data.len()];
+        for k in 0..data.len() {
+            let h = 1e-6 * data[k].abs().max(1e-3);
+            let (up, down) = (eval(&c.q, &moved(&data, k, h)), eval(&c.q, &moved(&data, k, -h)));
+            for (i, exact) in derivative(None, Some(k)).iter().enumerate() {
+                let fd = (up[i] - down[i]) / (2.0 * h);
+                assert!(close(*exact, fd), "d out[{i}] / d {}: {exact} vs {fd}", friction.data()[k].0);
+                moves[k] |= *exact != 0.0;
+            }
+        }
+        for k in 0..c.q.len() {
+            let h = 1e-6;
+            let (up, down) = (eval(&moved(&c.q, k, h), &data), eval(&moved(&c.q, k, -h), &data));
+            for (i, exact) in derivative(Some(k), None).iter().enumerate() {
+                let fd = (up[i] - down[i]) / (2.0 * h);
+                assert!(close(*exact, fd), "d out[{i}] / d q[{k}]: {exact} vs {fd}");
+            }
+        }
+        moves
+    }
+
+    #[test]
+    fn load_data_is_the_load_with_its_derivatives_along_the_data_and_coordinates() {
+        let mut rng = Lcg::new(43);
+        let names = |f: &Friction| f.data().iter().map(|&(n, _)| n).collect::<Vec<_>>();
+        let mut moved = [vec![false; 3], vec![false; 3], vec![false; 9], vec![false; 9]];
+        let mut note = |k: usize, moves: Vec<bool>| moved[k].iter_mut().zip(moves).for_each(|(m, x)| *m |= x);
+        for _ in 0..20 {
+            let pin = Revolute::new(BodyIx(Some(0)), [0.3, -0.2], BodyIx(Some(3)), [-0.4, 0.1]);
+            note(0, check_data(&pin.friction(law(), 0.02), &case(&pin, &mut rng, 6)));
+            let grounded = Revolute::new(BodyIx::GROUND, [0.5, -0.2], BodyIx(Some(0)), [-0.4, 0.1]);
+            note(1, check_data(&grounded.friction(law(), 0.02), &case(&grounded, &mut rng, 3)));
+            let slide =
+                Translational::new(BodyIx(Some(0)), [0.3, -0.2], [1.0, 2.0], BodyIx(Some(3)), [-0.4, 0.1], [0.0, -3.0]);
+            note(2, check_data(&slide.friction(law(), 0.1), &case(&slide, &mut rng, 6)));
+            let guide =
+                Translational::new(BodyIx::GROUND, [0.5, -2.0], [2.0, 1.0], BodyIx(Some(0)), [0.7, 0.1], [1.0, 1.0]);
+            note(3, check_data(&guide.friction(law(), 0.1), &case(&guide, &mut rng, 3)));
+        }
+        // Every datum moves the load, but a ground guide's `point_i`: the block's speed along a
+        // line that does not turn is that of its centre, wherever the line passes.
+        let still = |k: usize, d: usize| k == 3 && d < 2;
+        for (k, moves) in moved.iter().enumerate() {
+            for (d, &m) in moves.iter().enumerate() {
+                assert_eq!(m, !still(k, d), "case {k}, datum {d}: {moved:?}");
+            }
+        }
+        let pin = Revolute::new(BodyIx::GROUND, [0.5, -0.2], BodyIx(Some(0)), [-0.4, 0.1]).friction(law(), 0.02);
+        assert_eq!(names(&pin), ["friction.mu", "friction.transition_velocity", "friction.radius"]);
+        let guide =
+            Translational::new(BodyIx::GROUND, [0.5, -2.0], [2.0, 1.0], BodyIx(Some(0)), [0.7, 0.1], [1.0, 1.0]);
+        assert_eq!(
+            names(&guide.friction(law(), 0.1)),
+            [
+                "point_i[0]",
+                "point_i[1]",
+                "point_j[0]",
+                "point_j[1]",
+                "axis_i[0]",
+                "axis_i[1]",
+                "friction.mu",
+                "friction.transition_velocity",
+                "friction.length"
+            ]
+        );
     }
 
     /// Hand-derived: a pin between ground and a wheel turning at 2 rad/s, radius 0.01, reaction

@@ -65,7 +65,7 @@ impl Translational {
     /// ([`Friction`]).
     pub fn friction(&self, law: FrictionLaw, length: f64) -> Friction {
         let l = &self.line;
-        Friction::slide(law, (l.i, l.s_p, l.along()), (l.j, l.s_q), length)
+        Friction::slide(law, (l.i, l.s_p, self.axes[0]), (l.j, l.s_q), length)
     }
 }
 

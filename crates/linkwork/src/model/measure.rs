@@ -3,13 +3,13 @@
 
 use super::{spec, Effort, Measure, MeasureKind};
 use crate::expr::{Nestable, Scalar};
+use crate::forces::Data;
 
 impl Measure {
     /// The value at `(q, qdot, qddot, t)` over `S`, with the reactions row `reactions` (as
     /// [`Measure::value`]'s: empty in an analysis that has none), the measure's numbers `data`
     /// in the order of [`MeasureKind::data`] and the model's parameters `params` (file order):
-    /// each may carry derivatives. `None` for a kind that has no derivatives yet (a mechanical
-    /// advantage that reads a torque force).
+    /// each may carry derivatives.
     #[allow(clippy::too_many_arguments)]
     pub fn value_generic<S: Nestable>(
         &self,
@@ -20,11 +20,11 @@ impl Measure {
         t: S,
         data: &[S],
         params: &[S],
-    ) -> Option<S> {
+    ) -> S {
         match &self.kind {
-            MeasureKind::Expression(e) => Some(e.eval_params(q, qdot, qddot, reactions, t, params)),
+            MeasureKind::Expression(e) => e.eval_params(q, qdot, qddot, reactions, t, params),
             MeasureKind::Point { body: b, component, .. } => {
-                Some(point_component(q, qdot, qddot, *b, [data[0], data[1]], *component))
+                point_component(q, qdot, qddot, *b, [data[0], data[1]], *component)
             }
             MeasureKind::TransmissionAngle { coupler: (c, _), rocker: (r, _) } => {
                 let turn = |body: crate::constraints::BodyIx, v: [S; 2]| match body.0 {
@@ -36,22 +36,37 @@ impl Measure {
                 };
                 let u = turn(*c, [data[0], data[1]]);
                 let v = turn(*r, [data[2], data[3]]);
-                Some(acute_angle(u, v))
+                acute_angle(u, v)
             }
-            MeasureKind::VelocityRatio { input, output } => Some(if qdot[*input].value() == 0.0 {
-                qddot[*output] / qddot[*input]
-            } else {
-                qdot[*output] / qdot[*input]
-            }),
-            MeasureKind::PressureAngle(cam) => Some(cam.pressure_angle_generic(q, qdot, data, params)),
-            MeasureKind::MechanicalAdvantage {
-                input: Effort::Driver { slot: input },
-                output: Effort::Driver { slot: output },
-            } => {
-                let effort = |slot: &usize| reactions.get(*slot).copied().unwrap_or(S::constant(f64::NAN));
-                Some(-effort(output) / effort(input))
+            MeasureKind::VelocityRatio { input, output } => {
+                if qdot[*input].value() == 0.0 {
+                    qddot[*output] / qddot[*input]
+                } else {
+                    qdot[*output] / qdot[*input]
+                }
             }
-            MeasureKind::MechanicalAdvantage { .. } => None,
+            MeasureKind::PressureAngle(cam) => cam.pressure_angle_generic(q, qdot, data, params),
+            MeasureKind::MechanicalAdvantage { input, output } => {
+                let effort = |e: &Effort| e.value_generic(q, qdot, reactions, t, params);
+                -effort(output) / effort(input)
+            }
+        }
+    }
+}
+
+impl Effort {
+    /// Its value over `S` (as [`Measure::value`] reads it): a driver's effort from the reactions
+    /// row, a `torque` force's torque from `(q, qdot)` at the time `t` (held) with the model's
+    /// parameters `params`, which its expression reads ([`crate::forces::Load::value_data`]). A
+    /// torque written as a number is a constant: the parameters write a force's `torque` only as
+    /// an expression (`torque: -load`), which reads them.
+    fn value_generic<S: Scalar>(&self, q: &[S], qdot: &[S], reactions: &[S], t: S, params: &[S]) -> S {
+        match self {
+            Effort::Driver { slot } => reactions.get(*slot).copied().unwrap_or(S::constant(f64::NAN)),
+            Effort::Torque { torque, .. } => {
+                let own: Vec<S> = torque.data("torque").map(|(_, c)| S::constant(c)).into_iter().collect();
+                torque.value_data(q, qdot, t.value(), &mut Data::new(&own), params)
+            }
         }
     }
 }

@@ -79,6 +79,9 @@ pub struct DataGradients {
     pub joints: Vec<Vec<Vec<f64>>>,
     /// Each driver ([`Model::drivers`] order), each of its numbers ([`Constraint::data`] order).
     pub drivers: Vec<Vec<Vec<f64>>>,
+    /// Each joint's friction ([`Model::joints`] order), each of its numbers ([`Friction::data`]
+    /// order; none for a joint without friction).
+    pub friction: Vec<Vec<Vec<f64>>>,
     /// Each body's mass and moment of inertia.
     pub bodies: Vec<[Vec<f64>; 2]>,
     /// Each body's named points ([`Body::points`] order), each coordinate.

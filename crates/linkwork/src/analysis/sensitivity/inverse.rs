@@ -27,6 +27,7 @@
 //! with them every solve is the analysis's own minimum-norm solve in the row space it has
 //! already factored.
 
+use super::friction::FrictionAlong;
 use super::{by_column, Level, Seeded, Sensitivity};
 use crate::analysis::dynamic::Dae;
 use crate::analysis::measure_reactions;
@@ -81,13 +82,10 @@ fn unsupported(path: String, what: &str) -> Error {
 
 impl InverseSensitivity {
     /// The buffers for `s`'s elements on `dae`; an error at `sensitivities`' cause when
-    /// something in the analysis has no derivatives yet: a joint with friction (at its
-    /// `friction`), an active force whose load or potential has none (at the force).
+    /// something in the analysis has no derivatives yet: an active force whose load or potential
+    /// has none (at the force).
     pub(crate) fn new(s: &Sensitivity<'_>, dae: &Dae<'_>, analysis: &Analysis) -> Result<InverseSensitivity, Error> {
         let model = dae.model;
-        if let Some(j) = model.joints.iter().find(|j| j.friction.is_some()) {
-            return Err(unsupported(format!("joints.{}.friction", j.name), "joint friction"));
-        }
         let (n, m) = (dae.n, dae.m);
         let q = model.q0();
         let zero = vec![0.0; n];
@@ -151,6 +149,14 @@ impl InverseSensitivity {
                 }
             }
         });
+        // Joint friction's derivative at the multipliers held; its part through them follows
+        // the solve.
+        let friction = dae
+            .has_friction()
+            .then(|| FrictionAlong::new(s.model, p, (q, &dq), (qdot, &dv), (&self.block, &self.dblock)));
+        if let Some(f) = &friction {
+            f.add_held(dae, lambda, &mut self.rhs);
+        }
         let solve_failed = || Error::Singular {
             time: t,
             rows: vec![],
@@ -180,6 +186,19 @@ impl InverseSensitivity {
             lu.solve_transpose(&mut dlambda);
             dlambda
         };
+        let mut dlambda = dlambda;
+        if friction.is_some() {
+            let transpose_solve = |x: &[f64]| {
+                if redundant {
+                    space.min_norm_transpose_solve(x).ok_or_else(solve_failed)
+                } else {
+                    let mut y = x.to_vec();
+                    lu.solve_transpose(&mut y);
+                    Ok(y)
+                }
+            };
+            FrictionAlong::through_multipliers(dae, (q, qdot, lambda), &mut dlambda, transpose_solve)?;
+        }
         // The reactions and efforts, in the layout of [`Dae::reactions`].
         let qd: Vec<Dual> = q.iter().zip(&dq).map(|(&v, &d)| Dual::new(v, d)).collect();
         self.react.clear();
@@ -201,6 +220,9 @@ impl InverseSensitivity {
             let (f, torque) =
                 reaction_about(anchor, cols, |i| Dual::new(block[i], dblock[i]), &l, lever(anchor, point, &qd));
             self.react.extend([f[0].d, f[1].d, torque.d]);
+        }
+        if let Some(f) = &friction {
+            f.values(dae, lambda, &dlambda, &mut self.react);
         }
         row.extend_from_slice(&self.react);
         // The energies and powers (INVERSE_COLUMNS).

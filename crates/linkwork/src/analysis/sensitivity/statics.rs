@@ -48,8 +48,7 @@ pub(crate) struct EquilibriumSensitivity<'m> {
 impl<'m> EquilibriumSensitivity<'m> {
     /// The sensitivities of the equilibria of `analysis` of `model` (equations `dae`) with
     /// respect to the parameters `asked` (indices, file order), checked at the guess `(q, t)`:
-    /// an element, measure or force with no derivatives yet, or a joint with friction, is an
-    /// error naming it.
+    /// an element, measure or force with no derivatives yet is an error naming it.
     pub(crate) fn new(
         model: &'m Model,
         analysis: &Analysis,
@@ -59,9 +58,6 @@ impl<'m> EquilibriumSensitivity<'m> {
         t: f64,
     ) -> Result<EquilibriumSensitivity<'m>, Error> {
         let base = Sensitivity::new(model, analysis, asked)?;
-        if let Some(j) = model.joints.iter().find(|j| j.friction.is_some()) {
-            return Err(unsupported(format!("joints.{}", j.name), "a joint with friction"));
-        }
         let zero = vec![0.0; q.len()];
         let mut load = zero.clone();
         for &p in asked {
@@ -142,8 +138,8 @@ impl<'m> EquilibriumSensitivity<'m> {
     /// The derivatives of the row just pushed at the equilibrium `(q, lambda)` at `t` (after
     /// [`EquilibriumSensitivity::solve`] there), pushed into `results`: each body's columns
     /// (the velocities and accelerations zero), then with `react` (a static analysis: its
-    /// reactions row, [`Dae::reactions`]) each joint's reaction, each driver's effort and the
-    /// potential energy, then the measures.
+    /// reactions row, [`Dae::reactions`]) each joint's reaction, each driver's effort, each
+    /// joint's friction and the potential energy, then the measures.
     pub(crate) fn push(
         &mut self,
         results: &mut Results,
@@ -161,6 +157,9 @@ impl<'m> EquilibriumSensitivity<'m> {
             if let Some(react) = react {
                 let derivatives = self.reactions(q, lambda, t, j);
                 row.extend_from_slice(&derivatives);
+                // Each joint's friction: none at rest (`tanh(0) = 0`), and with the velocities'
+                // derivatives zero none along any parameter.
+                row.extend(self.base.model.joints.iter().filter(|j| j.friction.is_some()).map(|_| 0.0));
                 let potential = dae.potential_energy_along(q, &self.dq[j], p);
                 row.push(
                     potential.map_err(|name| unsupported(format!("forces.{name}"), "this force's potential energy"))?,

@@ -101,6 +101,13 @@ impl Cx<'_> {
         }
         let spec = self.spec;
         let g = &spec.gradients;
+        let friction = joints
+            .iter()
+            .map(|e| {
+                let data = e.friction.as_ref().map(crate::constraints::Friction::data).unwrap_or_default();
+                self.data(&format!("joints.{}", e.name), &data, spec.joints.get(&e.name))
+            })
+            .collect();
         let joints = joints
             .iter()
             .map(|e| self.data(&format!("joints.{}", e.name), &e.constraint.data(), spec.joints.get(&e.name)))
@@ -131,6 +138,7 @@ impl Cx<'_> {
             params: g.params.clone(),
             joints,
             drivers,
+            friction,
             bodies: bodies
                 .iter()
                 .map(|b| ["mass", "inertia"].map(|f| g.field(&format!("bodies.{}.{f}", b.name))))
@@ -245,6 +253,12 @@ mod tests {
                 for ((field, v), d) in e.constraint.data().iter().zip(d) {
                     out.push((format!("{section}.{}.{field}", e.name), *v, d.clone()));
                 }
+            }
+        }
+        for (e, d) in model.joints.iter().zip(&g.friction) {
+            let data = e.friction.as_ref().map(crate::constraints::Friction::data).unwrap_or_default();
+            for ((field, v), d) in data.iter().zip(d) {
+                out.push((format!("joints.{}.{field} (its friction's)", e.name), *v, d.clone()));
             }
         }
         for (f, d) in model.forces.iter().zip(&g.forces) {

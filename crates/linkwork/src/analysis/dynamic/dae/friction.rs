@@ -52,6 +52,15 @@ impl Dae<'_> {
         !self.friction.is_empty()
     }
 
+    /// Each joint with friction, in the model's order: its friction, its rows in `lambda`, its
+    /// Jacobian block among the Jacobian's values (the elements' blocks one after the other,
+    /// row-major, in the system's order) and its columns.
+    pub(crate) fn friction_joints(
+        &self,
+    ) -> impl Iterator<Item = (&Friction, std::ops::Range<usize>, std::ops::Range<usize>, &[usize])> {
+        self.friction.iter().map(|s| (s.friction, s.rows.clone(), s.block.clone(), s.columns))
+    }
+
     /// The multipliers' rows and the coordinates' columns that joint friction involves, each
     /// ascending without repeats: `Q_f` is zero off `columns` and depends on `lambda` only
     /// through `rows`.
