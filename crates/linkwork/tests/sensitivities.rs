@@ -161,8 +161,6 @@ fn step(model: &Model, analysis: &str, name: &str) -> f64 {
     relative * model.parameters[name].abs().max(1e-3)
 }
 
-/// The analyses of examples with parameters that have no sensitivities yet, each with the
-
 /// The analysis types whose sensitivities are checked against finite differences.
 const DIFFERENTIATED: [AnalysisKind; 5] =
     [AnalysisKind::Kinematic, AnalysisKind::Inverse, AnalysisKind::Static, AnalysisKind::Modes, AnalysisKind::Dynamic];
