@@ -1537,6 +1537,16 @@ mod tests {
         close(t.e13, f3 * x1 * x3 + f2 * x13);
         close(t.e23, f3 * x2 * x3 + f2 * x23);
         close(t.e123, f4 * x1 * x2 * x3 + f3 * (x1 * x23 + x2 * x13 + x3 * x12) + f2 * x123);
+        // A `TimeTri` nests as the `Tri` it is (first two directions equal): its slope has the
+        // same parts, exactly, and those parts follow the chain rule above with `x2 = x1`,
+        // `x23 = x13`.
+        let time = TimeTri::trajectory([x, x1, x12], [x3, x13, x123]);
+        let u = time.seed(1.0);
+        let nested = TimeTri::slope((u * u).sin());
+        let tri = Tri::slope((time.tri().seed(1.0) * time.tri().seed(1.0)).sin());
+        assert_eq!(nested.tri(), tri);
+        close(nested.e13, f3 * x1 * x3 + f2 * x13);
+        close(nested.e123, f4 * x1 * x1 * x3 + f3 * (x1 * x13 + x1 * x13 + x3 * x12) + f2 * x123);
     }
     /// A [`TimeTri`] is a [`Tri`] seeded with its first two directions equal, to the bit: every
     /// operation and elementary function (also the two-argument ones, and the quotient), applied
